@@ -1,0 +1,226 @@
+"""``paragym/CaPaManCollisionFree-v0``: the CaPaMan tour around obstacles (paper 000)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from paragym.envs.base import ParagymEnv
+from paragym.envs.capaman_scenarios import (
+    MAX_OBSTACLES,
+    TOUR,
+    CaPaManScenario,
+    paper_scenario,
+    random_scenario,
+    validate_scenario,
+)
+
+from paragym.mechanisms import capaman
+from paragym.sim import occupancy
+from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.obstacles import ENCODING_SIZE
+
+__all__ = ["CaPaManCollisionFreeEnv"]
+
+DEG = np.pi / 180
+OBS_SIZE = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 1
+
+
+@lru_cache(maxsize=4)
+def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
+    return occupancy.cluster_points(geometry)
+
+
+class CaPaManCollisionFreeEnv(ParagymEnv):
+    """Move the CaPaMan's tool through T.C.1 -> T.C.2 -> T.C.3 -> T.C.1 with no
+    part of the manipulator touching an obstacle.
+
+    ## Description
+    Paper 000 (Carbone, Gomez-Bravo, Selvi), sections 2 and 4: the 3-DOF
+    Cassino Parallel Manipulator carries a tool rod under its movable plate and
+    must visit task configurations placed around obstacles. Collision is
+    checked for the whole manipulator (17 parts: cranks, couplers, bars,
+    rails, plate, tool) by PyBullet; the kinematics is the closed-form model
+    of :mod:`paragym.mechanisms.capaman`.
+
+    ## Action Space
+    ``Box(-1, 1, (3,), float32)``: crank-angle increments, scaled by
+    ``max_joint_step`` (default 2 deg) per step. The result is held inside the
+    mechanical range 45-135 deg (a joint stop, not a clip of bad input:
+    NaN/inf or a wrong shape raise ``ValueError``).
+
+    ## Observation Space
+    ``Box(-1, 1, (38,), float32)``:
+
+    ==========  ==========================================================
+    0-2         crank angles, normalised to [-1, 1] over 45-135 deg
+    3-5         tool-tip position (m, fixed-plate frame)
+    6-8         current target T.P., normalised like 0-2
+    9-11        current target T.C., tool-tip position (m)
+    12-35       three obstacles x [present, is_box, centre (3), half sizes (3)] (m; zeros when absent)
+    36          clearance of the whole manipulator (m, signed, capped at +-``clearance_cap``)
+    37          progress: T.C.s reached / 3
+    ==========  ==========================================================
+
+    ## Rewards
+    After the fitness of paper 000 (eqs 3-5), per step:
+    ``-w_length * |d alpha|`` (joint-space path length, rad)
+    ``- beta * [clearance < delta]`` (too close to an obstacle; the paper's
+    k_i beta, here with the Cartesian clearance)
+    ``+ w_progress * (d_before - d_after)`` (potential-based shaping on the
+    joint distance to the current target: it telescopes, so it does not
+    change which tour is optimal)
+    ``+ reach_bonus`` per T.C. reached ``- collision_penalty`` on collision
+    (the paper's Lambda = infinity, made finite and terminal).
+
+    ## Starting State
+    The manipulator at T.P.1. ``info["scenario"]`` (a frozen
+    :class:`CaPaManScenario`) holds obstacles, T.C.s and T.P.s.
+
+    ## Episode End
+    Terminated on collision (clearance <= 0) or when the tour is complete
+    (``is_success``). Truncated after 400 steps (registration).
+
+    ## Arguments
+    ``scenario``: "random" (default; seeded, generated feasible), "paper",
+    or a :class:`CaPaManScenario`; ``reset(options={"scenario": ...})``
+    overrides it for one episode. ``fidelity``: "kinematic" (the only one
+    in v0). ``max_joint_step`` (rad), ``reach_tolerance`` (rad, joint-space
+    norm), ``delta`` (m), ``beta``, ``w_length``, ``w_progress``,
+    ``reach_bonus``, ``collision_penalty``, ``clearance_cap`` (m),
+    ``geometry``, ``render_mode`` ("rgb_array" or "human").
+
+    ## Version History
+    * v0: initial release.
+    """
+
+    def __init__(self, scenario: str | CaPaManScenario = "random", fidelity: str = "kinematic",
+                 render_mode: str | None = None, max_joint_step: float = 2 * DEG,
+                 reach_tolerance: float = 1 * DEG, delta: float = 0.01, beta: float = 0.1,
+                 w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
+                 collision_penalty: float = 5.0, clearance_cap: float = 0.05,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> None:
+        super().__init__(render_mode)
+        if fidelity != "kinematic":
+            raise ValueError(f"fidelity must be 'kinematic' (the only fidelity of v0); got {fidelity!r}")
+        self._check_scenario_arg(scenario)
+        for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
+                            ("clearance_cap", clearance_cap)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number; got {value!r}")
+        self.scenario_arg = scenario
+        self.fidelity = fidelity
+        self.geometry = geometry
+        self.max_joint_step = float(max_joint_step)
+        self.reach_tolerance = float(reach_tolerance)
+        self.delta, self.beta = float(delta), float(beta)
+        self.w_length, self.w_progress = float(w_length), float(w_progress)
+        self.reach_bonus, self.collision_penalty = float(reach_bonus), float(collision_penalty)
+        self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
+        self.observation_space = spaces.Box(-1.0, 1.0, (OBS_SIZE,), np.float32)
+        self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
+        self._lo, self._hi = geometry.alpha_min, geometry.alpha_max
+        self._mid, self._half = (self._hi + self._lo) / 2, (self._hi - self._lo) / 2
+        self.scenario: CaPaManScenario | None = None
+
+    @staticmethod
+    def _check_scenario_arg(scenario: Any) -> None:
+        if isinstance(scenario, str) and scenario not in ("paper", "random"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a CaPaManScenario; got {scenario!r}")
+        if not isinstance(scenario, str | CaPaManScenario):
+            raise ValueError(f"scenario must be 'paper', 'random' or a CaPaManScenario; got {scenario!r}")
+
+    # --- hooks ---------------------------------------------------------------------------
+    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
+        choice = options.get("scenario", self.scenario_arg)
+        self._check_scenario_arg(choice)
+        if choice == "random":
+            scenario = random_scenario(self.np_random, self.scene, _clusters(self.geometry))
+        else:
+            scenario = paper_scenario(self.geometry) if choice == "paper" else choice
+            validate_scenario(scenario, self.scene)
+        self.scenario = scenario
+        self._tp = scenario.alpha
+        self._tc = np.array(scenario.task_configs) if scenario.task_configs else \
+            capaman.tool_tip(capaman.forward(self._tp, self.geometry), self.geometry)
+        self._obstacle_code = np.zeros(MAX_OBSTACLES * ENCODING_SIZE)
+        for i, o in enumerate(scenario.obstacles):
+            self._obstacle_code[i * ENCODING_SIZE:(i + 1) * ENCODING_SIZE] = o.encode()
+        self._alpha = self._tp[0].copy()
+        self._reached = 0
+        self._path_length = 0.0
+        self._step_length = 0.0
+        self._progress = 0.0
+        self._just_reached = False
+        self.scene.set_configuration(self._alpha)
+        self._clearance, self._near = self.scene.clearance()
+        info = self._info()
+        info["scenario"] = scenario
+        return info
+
+    @property
+    def _target(self) -> int:
+        return TOUR[min(self._reached, len(TOUR) - 1)]
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        target = self._tp[self._target]
+        before = float(np.linalg.norm(target - self._alpha))
+        new = np.clip(self._alpha + action * self.max_joint_step, self._lo, self._hi)
+        self._step_length = float(np.linalg.norm(new - self._alpha))
+        self._path_length += self._step_length
+        self._alpha = new
+        self.scene.set_configuration(new)
+        self._clearance, self._near = self.scene.clearance()
+        after = float(np.linalg.norm(target - new))
+        self._progress = before - after
+        self._just_reached = after <= self.reach_tolerance and not self._collision
+        if self._just_reached:
+            self._reached += 1
+
+    @property
+    def _collision(self) -> bool:
+        return self._clearance <= 0.0
+
+    def _observe(self) -> np.ndarray:
+        t = self._target
+        obs = np.concatenate([
+            (self._alpha - self._mid) / self._half, self.scene.tip,
+            (self._tp[t] - self._mid) / self._half, self._tc[t],
+            self._obstacle_code,
+            [max(self._clearance, -self.scene.clearance_cap), self._reached / len(TOUR)],
+        ])
+        return obs.astype(np.float32)
+
+    def _reward(self) -> float:
+        r = -self.w_length * self._step_length + self.w_progress * self._progress
+        if self._clearance < self.delta:
+            r -= self.beta
+        if self._just_reached:
+            r += self.reach_bonus
+        if self._collision:
+            r -= self.collision_penalty
+        return float(r)
+
+    def _terminated(self) -> bool:
+        return self._collision or self._reached >= len(TOUR)
+
+    def _info(self) -> dict[str, Any]:
+        return {
+            "collision": self._collision,
+            "clearance": float(self._clearance),
+            "nearest_part": self._near,
+            "reached": self._reached,
+            "target_index": self._target,
+            "path_length": self._path_length,
+            "is_success": self._reached >= len(TOUR) and not self._collision,
+            "alpha": self._alpha.copy(),
+            "tool_tip": self.scene.tip.copy(),
+        }
+
+    def _render_rgb(self) -> np.ndarray:
+        return self.scene.render()
+
+    def _close(self) -> None:
+        self.scene.close()

@@ -1,0 +1,24 @@
+"""paragym: a benchmark for motion planning of parallel manipulators.
+
+Importing ``paragym`` registers its environments with Gymnasium::
+
+    import gymnasium as gym
+    import paragym  # noqa: F401
+    env = gym.make("paragym/CaPaManCollisionFree-v0")
+"""
+
+from gymnasium.envs.registration import register, registry
+
+__version__ = "0.1.0"
+
+#: env id -> (entry point, max episode steps, one-line description)
+ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
+    "paragym/CaPaManCollisionFree-v0": (
+        "paragym.envs.capaman:CaPaManCollisionFreeEnv", 400,
+        "CaPaMan 3-DOF: tour T.C.1->2->3->1 around obstacles, whole manipulator collision-free (paper 000)",
+    ),
+}
+
+for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():
+    if _env_id not in registry:
+        register(id=_env_id, entry_point=_entry, max_episode_steps=_steps)

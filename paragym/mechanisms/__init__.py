@@ -1,0 +1,1 @@
+"""Pure kinematics of the paragym mechanisms: numpy only, no PyBullet, no Gymnasium."""

@@ -1,0 +1,611 @@
+"""Kinematics of the Cassino Parallel Manipulator (CaPaMan), batched in numpy.
+
+Paper 000 (Carbone, Gomez-Bravo, Selvi, "An experimental validation of
+collision-free trajectories for parallel manipulators") plans in the joint
+space of CaPaMan, a 3-DOF parallel manipulator whose three legs are
+articulated parallelograms. The paper does not print the kinematic model or
+the prototype's sizes, so this module follows the model written down in the
+project's design notes:
+
+Leg ``k`` sits at angle ``theta_k = 0, 120, 240 deg`` on the fixed plate, at
+radius ``r_f``, with radial unit vector ``e_k``. Its parallelogram (crank
+length ``a``, frame and coupler length ``c``) moves in a vertical plane whose
+horizontal direction is ``u_k = Rz(gamma) e_k``. The connecting bar of length
+``h`` stands vertically on the coupler midpoint (the parallelogram keeps it
+vertical) and carries a prismatic joint ``s_k`` along ``w_k = z x u_k``, whose
+slider holds the ball joint ``H_k`` of the movable plate::
+
+    H_k = r_f e_k + a cos(alpha_k) u_k + s_k w_k + (a sin(alpha_k) + h) z     (M1)
+
+The movable plate has its ball joints at radius ``r_p``: ``H_k = H + R p_k``
+with ``p_k = r_p (cos theta_k, sin theta_k, 0)`` in the plate frame (M2).
+
+Direct kinematics is closed form (``forward``):
+
+* heights: ``z . H_k = a sin(alpha_k) + h`` are three linear equations in
+  ``H_z`` and the plate-frame components of world ``z`` (the tilt);
+* in-plane: ``u_k . H_k = r_f cos(gamma) + a cos(alpha_k)``; writing
+  ``R = Rz(psi) R0`` with ``R0`` the minimal tilt, their sum eliminates
+  ``H_x, H_y`` (the ``u_k`` sum to zero) and leaves ``A cos psi + B sin psi = C``
+  for the yaw ``psi``; the branch continuous with the home pose
+  (``|psi| < 90 deg``) is taken, then ``H_x, H_y`` follow linearly.
+
+All sizes are in metres and angles in radians (the paper's 45-135 deg joint
+range is converted here). The prototype's dimensions are not in the paper:
+the defaults of :class:`CaPaManGeometry` are assumptions, documented as such.
+With ``gamma = 0`` the home pose is singular (the yaw equation has a double
+root), hence the default ``gamma = 90 deg`` (tangential leg planes).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import lru_cache
+from types import SimpleNamespace
+
+import numpy as np
+
+__all__ = [
+    "CaPaManGeometry",
+    "CaPaManPose",
+    "PartShape",
+    "check_joint_angles",
+    "forward",
+    "inverse",
+    "inverse_tool_tip",
+    "jacobian",
+    "part_shapes",
+    "part_frames",
+    "tool_tip",
+]
+
+DEG = np.pi / 180.0
+
+
+@dataclass(frozen=True)
+class CaPaManGeometry:
+    """Dimensions of the CaPaMan model (SI units: m, rad).
+
+    The paper gives no prototype sizes; every default here is an assumption
+    (design notes, "CaPaMan"): ``a = 0.08``, ``h = 0.10``,
+    ``r_f = r_p = 0.20``, ``gamma = 90 deg``. The joint range 45-135 deg is the
+    paper's (section 4). ``c`` (parallelogram frame/coupler length), the
+    tool length and the part cross-sections are drawing and collision sizes,
+    also assumed.
+    """
+
+    a: float = 0.08  # crank length
+    h: float = 0.10  # connecting-bar length
+    r_f: float = 0.20  # leg radius on the fixed plate
+    r_p: float = 0.20  # ball-joint radius on the movable plate
+    gamma: float = 90.0 * DEG  # leg-plane orientation, u_k = Rz(gamma) e_k
+    c: float = 0.10  # frame and coupler length of each parallelogram
+    tool_length: float = 0.12  # rod hanging from the plate centre
+    tool_radius: float = 0.005
+    plate_thickness: float = 0.01
+    link_width: float = 0.012  # square cross-section of cranks, coupler, bar, rail
+    rail_length: float = 0.14  # prismatic rail carried by the connecting bar
+    alpha_min: float = 45.0 * DEG
+    alpha_max: float = 135.0 * DEG
+    leg_angles: tuple[float, float, float] = field(default=(0.0, 120.0 * DEG, 240.0 * DEG))
+
+    @property
+    def alpha_home(self) -> np.ndarray:
+        """Home configuration (all cranks vertical, 90 deg), shape (3,)."""
+        return np.full(3, 90.0 * DEG)
+
+    @property
+    def e(self) -> np.ndarray:
+        """Radial unit vectors e_k of the legs, shape (3, 3)."""
+        t = np.asarray(self.leg_angles)
+        return np.stack([np.cos(t), np.sin(t), np.zeros(3)], axis=1)
+
+    @property
+    def u(self) -> np.ndarray:
+        """In-plane horizontal directions u_k = Rz(gamma) e_k, shape (3, 3)."""
+        t = np.asarray(self.leg_angles) + self.gamma
+        return np.stack([np.cos(t), np.sin(t), np.zeros(3)], axis=1)
+
+    @property
+    def w(self) -> np.ndarray:
+        """Slider directions w_k = z x u_k, shape (3, 3)."""
+        return np.cross(np.array([0.0, 0.0, 1.0]), self.u)
+
+    @property
+    def plate_points(self) -> np.ndarray:
+        """Ball joints p_k in the plate frame, shape (3, 3)."""
+        return self.r_p * self.e
+
+
+DEFAULT_GEOMETRY = CaPaManGeometry()
+
+
+@lru_cache(maxsize=32)
+def _consts(g: CaPaManGeometry) -> SimpleNamespace:
+    """Geometry-derived constant arrays, computed once per geometry."""
+    th = np.asarray(g.leg_angles)
+    beta = th + g.gamma
+    return SimpleNamespace(
+        e=g.e, u=g.u, w=g.w, plate_points=g.plate_points,
+        # heights: (n_x, n_y) = z_k @ tilt_map  (least squares of the three height equations)
+        tilt_map=(2.0 / (3.0 * g.r_p)) * np.stack([np.cos(th), np.sin(th)], axis=1),
+        cos_t=np.cos(th), sin_t=np.sin(th),
+        cos_b=np.cos(beta), sin_b=np.sin(beta),
+        u_xy=(2.0 / 3.0) * g.u[:, :2],
+        c_off=g.r_f * np.cos(g.gamma),
+    )
+
+
+@dataclass(frozen=True)
+class CaPaManPose:
+    """Result of the direct kinematics for a batch of N configurations.
+
+    Attributes (world frame, metres, rad):
+        position: plate centre H, shape (N, 3).
+        rotation: plate orientation R, shape (N, 3, 3).
+        quaternion: the same orientation as (x, y, z, w), shape (N, 4).
+        yaw: psi of R = Rz(psi) R0 (R0 the minimal tilt), shape (N,).
+        geometry: the dimensions it was computed with.
+    """
+
+    position: np.ndarray
+    rotation: np.ndarray
+    quaternion: np.ndarray
+    yaw: np.ndarray
+    geometry: CaPaManGeometry = DEFAULT_GEOMETRY
+
+    @property
+    def ball_joints(self) -> np.ndarray:
+        """H_k = H + R p_k, shape (N, 3 legs, 3)."""
+        return self.position[:, None, :] + np.swapaxes(
+            self.rotation @ self.geometry.plate_points.T, 1, 2)
+
+    @property
+    def sliders(self) -> np.ndarray:
+        """Prismatic displacements s_k = w_k . (H_k - r_f e_k), shape (N, 3), m."""
+        g = self.geometry
+        return np.sum((self.ball_joints - g.r_f * g.e) * g.w, axis=2)
+
+
+def check_joint_angles(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
+                       name: str = "alpha") -> np.ndarray:
+    """Validate crank angles: shape (3,) or (N, 3), finite, inside the limits.
+
+    Returns a float array of shape (N, 3). Raises ``ValueError`` naming the
+    argument and the allowed range (rad; 45-135 deg by default).
+    """
+    arr = np.asarray(alpha, dtype=float)
+    if arr.ndim == 1:
+        arr = arr[None, :]
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (3,) or (N, 3); got {np.shape(alpha)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite; got NaN or inf")
+    tol = 1e-9
+    bad = (arr < geometry.alpha_min - tol) | (arr > geometry.alpha_max + tol)
+    if np.any(bad):
+        worst = arr[bad][0]
+        raise ValueError(
+            f"{name} out of the joint range [{geometry.alpha_min:.6f}, {geometry.alpha_max:.6f}] rad "
+            f"({np.degrees(geometry.alpha_min):.0f}-{np.degrees(geometry.alpha_max):.0f} deg); "
+            f"got {worst:.6f} rad ({np.degrees(worst):.2f} deg)"
+        )
+    return arr
+
+
+def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Hamilton product of (x, y, z, w) quaternions, broadcast over leading axes."""
+    x1, y1, z1, w1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
+    x2, y2, z2, w2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
+    return np.stack([
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+    ], axis=-1)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of unit (x, y, z, w) quaternions (..., 4)."""
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack([
+        1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y),
+    ], axis=-1).reshape(q.shape[:-1] + (3, 3))
+
+
+def forward(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
+            validate: bool = True) -> CaPaManPose:
+    """Closed-form direct kinematics: crank angles -> plate pose.
+
+    Args:
+        alpha: crank angles alpha_1..3 in rad, shape (3,) or (N, 3).
+        geometry: the mechanism's dimensions.
+        validate: check shape, finiteness and joint limits (turn off only for
+            inputs already checked).
+
+    Returns:
+        CaPaManPose with batch size N. Equations (M1)-(M2) of the module doc;
+        the yaw branch continuous with the home pose (cos psi > 0 side).
+    """
+    g = geometry
+    k = _consts(g)
+    al = check_joint_angles(alpha, g) if validate else np.atleast_2d(np.asarray(alpha, float))
+    zk = g.a * np.sin(al) + g.h  # heights of the ball joints (N, 3)
+    ck = k.c_off + g.a * np.cos(al)  # u_k . H_k (N, 3)
+
+    # Heights: H_z + r_p (cos th_k n_x + sin th_k n_y) = z_k with n = R^T z.
+    hz = zk.sum(axis=1) / 3.0
+    nxy = zk @ k.tilt_map
+    nx, ny = nxy[:, :1], nxy[:, 1:]  # (N, 1) columns
+    nz = np.sqrt(1.0 - nx * nx - ny * ny)
+    # R0, the rotation about a horizontal axis with R0 n = z (Rodrigues, written
+    # out): its upper-left block is [[1 - f nx^2, -f nx ny], [-f nx ny, 1 - f ny^2]].
+    f = 1.0 / (1.0 + nz)
+    r01 = -f * nx * ny
+    qx = (1.0 - f * nx * nx) * k.cos_t + r01 * k.sin_t  # x of q_k = R0 e_k, (N, 3)
+    qy = r01 * k.cos_t + (1.0 - f * ny * ny) * k.sin_t
+
+    # In-plane: u_k . H + r_p u_k . Rz(psi) q_k = c_k.
+    coef_c = qx * k.cos_b + qy * k.sin_b  # multiplies cos psi
+    coef_s = qx * k.sin_b - qy * k.cos_b  # multiplies sin psi
+    big_a = g.r_p * coef_c.sum(axis=1)
+    big_b = g.r_p * coef_s.sum(axis=1)
+    ratio = ck.sum(axis=1) / np.hypot(big_a, big_b)
+    if not (np.abs(ratio) <= 1.0).all():
+        raise ValueError("alpha gives no real plate yaw: the configuration is not assemblable")
+    # Two roots base -/+ spread; the one with the larger cos(psi) is the home branch.
+    base = np.arctan2(big_b, big_a)
+    spread = np.arccos(ratio)
+    psi = np.where(np.cos(base - spread) >= np.cos(base + spread), base - spread, base + spread)
+    psi = np.arctan2(np.sin(psi), np.cos(psi))[:, None]
+    resid = ck - g.r_p * (coef_c * np.cos(psi) + coef_s * np.sin(psi))
+    # sum_k u_k u_k^T = 3/2 I in the plane and sum_k resid_k = 0: exact solution.
+    position = np.concatenate([resid @ k.u_xy, hz[:, None]], axis=1)
+    # Orientation Rz(psi) R0 as a quaternion: yaw (0, 0, sz, cz) times the tilt
+    # (ny, -nx, 0)/(2 ch), ch = cos(tilt/2) = sqrt((1 + nz)/2).
+    ch = np.sqrt(0.5 * (1.0 + nz))
+    tx, ty = ny / (2 * ch), -nx / (2 * ch)
+    sz, cz = np.sin(psi / 2), np.cos(psi / 2)
+    quat = np.concatenate([cz * tx - sz * ty, cz * ty + sz * tx, sz * ch, cz * ch], axis=1)
+    return CaPaManPose(position, quat_to_matrix(quat), quat, psi[:, 0], g)
+
+
+def tool_tip(pose: CaPaManPose, geometry: CaPaManGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """World position of the tool tip, shape (N, 3): H - L_tool * (R z)."""
+    return pose.position - geometry.tool_length * pose.rotation[:, :, 2]
+
+
+def inverse(position: np.ndarray, rotation: np.ndarray,
+            geometry: CaPaManGeometry = DEFAULT_GEOMETRY, tol: float = 1e-7
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse kinematics: plate pose -> (crank angles alpha, sliders s).
+
+    A 3-DOF robot reaches only a 3-dimensional set of the 6-D poses; a pose
+    off that set (a crank circle missed by more than ``tol`` metres) raises
+    ``ValueError``, as does one needing a crank angle outside the limits.
+
+    Args:
+        position: plate centre H, shape (3,) or (N, 3), m.
+        rotation: plate orientation, shape (3, 3) or (N, 3, 3).
+
+    Returns:
+        alpha (N, 3) rad and s (N, 3) m, from (M1) solved leg by leg:
+        ``alpha_k = atan2(z.H_k - h, u_k.H_k - r_f cos gamma)``.
+    """
+    g = geometry
+    pos = np.atleast_2d(np.asarray(position, float))
+    rot = np.asarray(rotation, float)
+    rot = rot[None] if rot.ndim == 2 else rot
+    if pos.shape[-1] != 3 or rot.shape[-2:] != (3, 3) or len(pos) != len(rot):
+        raise ValueError(f"position must be (N, 3) and rotation (N, 3, 3); got {pos.shape} and {rot.shape}")
+    if not (np.all(np.isfinite(pos)) and np.all(np.isfinite(rot))):
+        raise ValueError("position and rotation must be finite")
+    ball = pos[:, None, :] + np.einsum("nij,kj->nki", rot, g.plate_points)
+    d = np.einsum("nki,ki->nk", ball, g.u) - g.r_f * np.cos(g.gamma)
+    z = ball[..., 2] - g.h
+    miss = np.abs(np.hypot(d, z) - g.a)
+    if np.any(miss > tol):
+        raise ValueError(
+            f"pose not reachable: a ball joint lies {miss.max():.3g} m off its crank circle "
+            "(CaPaMan has 3 DOF; only poses produced by its legs are reachable)")
+    alpha = np.arctan2(z, d)
+    check_joint_angles(alpha, g, name="alpha (from the pose)")
+    s = np.einsum("nki,ki->nk", ball - g.r_f * g.e[None], g.w)
+    return alpha, s
+
+
+def jacobian(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
+             validate: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity Jacobians at alpha (rad, (3,) or (N, 3)).
+
+    Differentiating (M1)-(M2) with plate twist (v, omega) gives, per leg,
+    ``z.(v + omega x r_k) = a cos(alpha_k) dalpha_k`` and
+    ``u_k.(v + omega x r_k) = -a sin(alpha_k) dalpha_k`` with r_k = R p_k: a
+    6x6 system A [v; omega] = B dalpha (the parallel manipulator's two
+    Jacobians).
+
+    Returns:
+        J_plate (N, 6, 3): [v_H; omega] per unit crank rate (m/rad, 1).
+        J_tip (N, 3, 3): tool-tip velocity per unit crank rate (m/rad).
+    """
+    g = geometry
+    al = check_joint_angles(alpha, g) if validate else np.atleast_2d(np.asarray(alpha, float))
+    pose = forward(al, g, validate=False)
+    n = len(al)
+    r = pose.ball_joints - pose.position[:, None, :]  # (N, 3, 3)
+    zvec = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (n, 3, 3))
+    uvec = np.broadcast_to(g.u, (n, 3, 3))
+    a_mat = np.empty((n, 6, 6))
+    a_mat[:, 0:3, 0:3] = zvec
+    a_mat[:, 0:3, 3:6] = np.cross(r, zvec)
+    a_mat[:, 3:6, 0:3] = uvec
+    a_mat[:, 3:6, 3:6] = np.cross(r, uvec)
+    b_mat = np.zeros((n, 6, 3))
+    idx = np.arange(3)
+    b_mat[:, idx, idx] = g.a * np.cos(al)
+    b_mat[:, 3 + idx, idx] = -g.a * np.sin(al)
+    j_plate = np.linalg.solve(a_mat, b_mat)
+    t = -g.tool_length * pose.rotation[:, :, 2]  # H -> tip, (N, 3)
+    j_v, j_w = j_plate[:, :3], j_plate[:, 3:]
+    j_tip = j_v + np.cross(j_w, t[:, :, None], axisa=1, axisb=1, axisc=1)
+    return j_plate, j_tip
+
+
+def inverse_tool_tip(tip: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
+                     alpha0: np.ndarray | None = None, tol: float = 1e-6,
+                     max_iter: int = 100) -> np.ndarray:
+    """Crank angles that put the tool tip at ``tip`` (m, (3,) or (N, 3)).
+
+    The tip map is not one-to-one over the joint range (a crank at alpha and
+    at 180 deg - alpha gives the same height), so damped Newton iterations
+    with the analytic Jacobian start from ``alpha0`` (default: home) and from
+    the eight corners of {65, 115} deg^3, all targets and starts at once; of
+    the converged solutions inside the range, the one nearest ``alpha0`` is
+    returned. ``tol`` (m) is the accepted tip residual; near the tip map's
+    singular surfaces Newton converges slowly, hence 1 micrometre by default.
+    Raises ``ValueError`` if a target is not reached.
+    """
+    g = geometry
+    target = np.atleast_2d(np.asarray(tip, float))
+    if target.ndim != 2 or target.shape[1] != 3 or not np.all(np.isfinite(target)):
+        raise ValueError(f"tip must be finite with shape (3,) or (N, 3); got {np.shape(tip)}")
+    ref = np.broadcast_to(g.alpha_home if alpha0 is None else np.asarray(alpha0, float),
+                          target.shape)
+    corners = np.array(np.meshgrid(*[[65 * DEG, 115 * DEG]] * 3, indexing="ij")).reshape(3, -1).T
+    n, m = len(target), 1 + len(corners)
+    starts = np.concatenate([ref[:, None], np.broadcast_to(corners, (n, m - 1, 3))], axis=1)
+    al = starts.reshape(-1, 3).copy()
+    goal = np.repeat(target, m, axis=0)
+    lo, hi = g.alpha_min - 5 * DEG, g.alpha_max + 5 * DEG
+    for _ in range(max_iter):
+        err = goal - tool_tip(forward(al, g, validate=False), g)
+        if np.max(np.abs(err)) < 1e-3 * tol:
+            break
+        _, j_tip = jacobian(al, g, validate=False)
+        step = _solve_damped(j_tip, err)
+        al = np.clip(al + np.clip(step, -10 * DEG, 10 * DEG), lo, hi)
+    res = np.linalg.norm(goal - tool_tip(forward(al, g, validate=False), g), axis=1)
+    inside = (al >= g.alpha_min - 1e-9).all(axis=1) & (al <= g.alpha_max + 1e-9).all(axis=1)
+    ok = ((res < tol) & inside).reshape(n, m)
+    if not ok.any(axis=1).all():
+        worst = res.reshape(n, m).min(axis=1).max()
+        raise ValueError(f"tool tip target not reachable inside the joint range: residual {worst:.3g} m")
+    dist = np.linalg.norm(al.reshape(n, m, 3) - ref[:, None], axis=2)
+    best = np.argmin(np.where(ok, dist, np.inf), axis=1)
+    return np.clip(al.reshape(n, m, 3)[np.arange(n), best], g.alpha_min, g.alpha_max)
+
+
+def _solve_damped(jac: np.ndarray, err: np.ndarray, damping: float = 1e-6) -> np.ndarray:
+    """Levenberg-Marquardt step (J^T J + l I)^-1 J^T e, batched over the first axis."""
+    jt = np.swapaxes(jac, 1, 2)
+    lhs = jt @ jac + damping * np.eye(jac.shape[2])
+    return np.linalg.solve(lhs, (jt @ err[..., None]))[..., 0]
+
+
+# --- parts: every link as a box or cylinder, for drawing and collision -------------
+
+
+@dataclass(frozen=True)
+class PartShape:
+    """A rigid part of the manipulator: a box or a cylinder about its local z.
+
+    ``half_extents`` (m) for a box; ``radius`` and ``length`` (m) for a
+    cylinder. Its pose comes from :func:`part_frames`.
+    """
+
+    name: str
+    kind: str  # "box" or "cylinder"
+    half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    length: float = 0.0
+
+
+def part_shapes(geometry: CaPaManGeometry = DEFAULT_GEOMETRY) -> tuple[PartShape, ...]:
+    """The 17 parts: per leg two cranks, coupler, connecting bar, slider rail;
+    then the movable plate and the tool rod. Order matches :func:`part_frames`."""
+    g = geometry
+    hw = g.link_width / 2
+    parts: list[PartShape] = []
+    for k in range(1, 4):
+        parts += [
+            PartShape(f"leg{k}_crank_a", "box", (hw, hw, g.a / 2)),
+            PartShape(f"leg{k}_crank_b", "box", (hw, hw, g.a / 2)),
+            PartShape(f"leg{k}_coupler", "box", (hw, hw, g.c / 2)),
+            PartShape(f"leg{k}_bar", "box", (hw, hw, g.h / 2)),
+            PartShape(f"leg{k}_rail", "box", (hw, hw, g.rail_length / 2)),
+        ]
+    parts.append(PartShape("plate", "cylinder", radius=g.r_p, length=g.plate_thickness))
+    parts.append(PartShape("tool", "cylinder", radius=g.tool_radius, length=g.tool_length))
+    return tuple(parts)
+
+
+def _frame(z_axis: np.ndarray, x_hint: np.ndarray) -> np.ndarray:
+    """Rotation matrix with columns (x, y, z): z given, x = x_hint orthogonalised."""
+    x = x_hint - np.dot(x_hint, z_axis) * z_axis
+    x = x / np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z_axis, x), z_axis])
+
+
+def _matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """(x, y, z, w) of one rotation matrix (used once per geometry, not in hot paths)."""
+    w = np.sqrt(max(0.0, 1.0 + np.trace(m))) / 2
+    if w > 1e-3:
+        return np.array([(m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
+                         (m[1, 0] - m[0, 1]) / (4 * w), w])
+    i = int(np.argmax(np.diag(m)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    v = np.sqrt(max(0.0, 1.0 + m[i, i] - m[j, j] - m[k, k])) / 2
+    q = np.empty(4)
+    q[i], q[j], q[k] = v, (m[j, i] + m[i, j]) / (4 * v), (m[k, i] + m[i, k]) / (4 * v)
+    q[3] = (m[k, j] - m[j, k]) / (4 * v)
+    return q
+
+
+@lru_cache(maxsize=32)
+def _leg_part_table(g: CaPaManGeometry) -> SimpleNamespace:
+    """Affine description of the 15 leg parts in their crank angle.
+
+    A leg part's centre is ``c0 + c1 cos(alpha_k) + c2 sin(alpha_k)``; a crank's
+    frame is ``Rot(w_k, -alpha_k) F0`` (F0 = columns w_k, z, u_k), so its
+    quaternion is ``qc cos(alpha_k/2) + qs sin(alpha_k/2)``; coupler, bar and
+    rail keep a constant orientation (qs = 0 and the half angle forced to 0).
+    """
+    zhat = np.array([0.0, 0.0, 1.0])
+    c0, c1, c2, qc, qs, leg, crank = [], [], [], [], [], [], []
+    for k in range(3):
+        e, u, w = g.e[k], g.u[k], g.w[k]
+        root, half_c = g.r_f * e, (g.c / 2) * u
+        q_f0 = _matrix_to_quat(np.column_stack([w, zhat, u]))
+        q_turn = quat_multiply(np.append(-w, 0.0), q_f0)  # d/d(sin(alpha/2)) of the crank
+        for sign in (-1.0, 1.0):  # cranks a and b
+            c0.append(root + sign * half_c)
+            c1.append((g.a / 2) * u)
+            c2.append((g.a / 2) * zhat)
+            qc.append(q_f0)
+            qs.append(q_turn)
+            crank.append(True)
+        for offset, rot in ((0.0, _frame(u, w)), (g.h / 2, _frame(zhat, u)), (g.h, _frame(w, u))):
+            c0.append(root + offset * zhat)  # coupler, bar, rail
+            c1.append(g.a * u)
+            c2.append(g.a * zhat)
+            qc.append(_matrix_to_quat(rot))
+            qs.append(np.zeros(4))
+            crank.append(False)
+        leg += [k] * 5
+    return SimpleNamespace(c0=np.array(c0), c1=np.array(c1), c2=np.array(c2), qc=np.array(qc),
+                           qs=np.array(qs), leg=np.array(leg), crank=np.array(crank, float))
+
+
+def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
+                pose: CaPaManPose | None = None, validate: bool = True
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Centres (N, 17, 3) and (x, y, z, w) quaternions (N, 17, 4) of every part.
+
+    Order of :func:`part_shapes`. Each part's local z runs along its long axis
+    (cranks along cos(alpha) u_k + sin(alpha) z, coupler along u_k, bar along
+    z, rail along w_k, plate and tool along the plate normal R z). ``pose``
+    may be passed when the direct kinematics is already known.
+    """
+    g = geometry
+    t = _leg_part_table(g)
+    al = check_joint_angles(alpha, g) if validate else np.atleast_2d(np.asarray(alpha, float))
+    if pose is None:
+        pose = forward(al, g, validate=False)
+    a = al[:, t.leg]  # (N, 15)
+    centres = t.c0 + t.c1 * np.cos(a)[..., None] + t.c2 * np.sin(a)[..., None]
+    half = 0.5 * a * t.crank
+    quats = t.qc * np.cos(half)[..., None] + t.qs * np.sin(half)[..., None]
+    tool_c = pose.position - (g.tool_length / 2) * pose.rotation[:, :, 2]
+    centres = np.concatenate([centres, pose.position[:, None], tool_c[:, None]], axis=1)
+    quats = np.concatenate([quats, pose.quaternion[:, None], pose.quaternion[:, None]], axis=1)
+    return centres, quats
+
+
+# --- one configuration in Python floats: the env's per-step path ---------------------
+
+
+def forward_one(alpha: tuple[float, float, float] | np.ndarray,
+                geometry: CaPaManGeometry = DEFAULT_GEOMETRY
+                ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
+    """:func:`forward` for one configuration (no validation): (H, quaternion xyzw).
+
+    The same equations in plain Python floats. At N = 1 numpy's per-call
+    overhead makes the batched function cost ~120 us; this costs ~10 us, which
+    is what lets a single environment step thousands of times per second.
+    A test keeps the two equal to 1e-12.
+    """
+    g = geometry
+    k = _consts_one(g)
+    a1, a2, a3 = float(alpha[0]), float(alpha[1]), float(alpha[2])
+    z1, z2, z3 = g.a * math.sin(a1) + g.h, g.a * math.sin(a2) + g.h, g.a * math.sin(a3) + g.h
+    csum = 3 * k.c_off + g.a * (math.cos(a1) + math.cos(a2) + math.cos(a3))
+    c = (k.c_off + g.a * math.cos(a1), k.c_off + g.a * math.cos(a2), k.c_off + g.a * math.cos(a3))
+    tm = k.tilt_map
+    nx = z1 * tm[0][0] + z2 * tm[1][0] + z3 * tm[2][0]
+    ny = z1 * tm[0][1] + z2 * tm[1][1] + z3 * tm[2][1]
+    nz = math.sqrt(1.0 - nx * nx - ny * ny)
+    f = 1.0 / (1.0 + nz)
+    r00, r01, r11 = 1.0 - f * nx * nx, -f * nx * ny, 1.0 - f * ny * ny
+    coef_c, coef_s = [], []
+    for ct, st, cb, sb in k.leg_trig:
+        qx, qy = r00 * ct + r01 * st, r01 * ct + r11 * st
+        coef_c.append(qx * cb + qy * sb)
+        coef_s.append(qx * sb - qy * cb)
+    big_a, big_b = g.r_p * sum(coef_c), g.r_p * sum(coef_s)
+    ratio = csum / math.hypot(big_a, big_b)
+    if abs(ratio) > 1.0:
+        raise ValueError("alpha gives no real plate yaw: the configuration is not assemblable")
+    base, spread = math.atan2(big_b, big_a), math.acos(ratio)
+    psi = base - spread if math.cos(base - spread) >= math.cos(base + spread) else base + spread
+    cp, sp = math.cos(psi), math.sin(psi)
+    hx = hy = 0.0
+    for j in range(3):
+        r = c[j] - g.r_p * (coef_c[j] * cp + coef_s[j] * sp)
+        hx += r * k.u_xy[j][0]
+        hy += r * k.u_xy[j][1]
+    ch = math.sqrt(0.5 * (1.0 + nz))
+    tx, ty = ny / (2 * ch), -nx / (2 * ch)
+    sz, cz = math.sin(psi / 2), math.cos(psi / 2)
+    return (hx, hy, (z1 + z2 + z3) / 3.0), (cz * tx - sz * ty, cz * ty + sz * tx, sz * ch, cz * ch)
+
+
+@lru_cache(maxsize=32)
+def _consts_one(g: CaPaManGeometry) -> SimpleNamespace:
+    k = _consts(g)
+    t = _leg_part_table(g)
+    return SimpleNamespace(
+        c_off=float(k.c_off), tilt_map=k.tilt_map.tolist(), u_xy=k.u_xy.tolist(),
+        leg_trig=list(zip(k.cos_t.tolist(), k.sin_t.tolist(), k.cos_b.tolist(), k.sin_b.tolist(), strict=False)),
+        parts=list(zip(t.leg.tolist(), t.crank.tolist(), t.c0.tolist(), t.c1.tolist(),
+                       t.c2.tolist(), t.qc.tolist(), t.qs.tolist(), strict=False)),
+    )
+
+
+def part_frames_one(alpha: tuple[float, float, float] | np.ndarray,
+                    geometry: CaPaManGeometry = DEFAULT_GEOMETRY
+                    ) -> tuple[list[list[float]], list[list[float]], tuple[float, float, float]]:
+    """:func:`part_frames` for one configuration as Python lists (no validation).
+
+    Returns the 17 centres, the 17 quaternions and the tool tip. The per-step
+    path of the kinematic simulation (see :func:`forward_one`).
+    """
+    g = geometry
+    k = _consts_one(g)
+    (hx, hy, hz), quat = forward_one(alpha, g)
+    trig = [(math.cos(float(a)), math.sin(float(a)), math.cos(0.5 * float(a)), math.sin(0.5 * float(a)))
+            for a in alpha]
+    centres, quats = [], []
+    for leg, crank, c0, c1, c2, qc, qs in k.parts:
+        ca, sa, ch, sh = trig[leg]
+        centres.append([c0[i] + c1[i] * ca + c2[i] * sa for i in range(3)])
+        quats.append([qc[i] * ch + qs[i] * sh for i in range(4)] if crank else qc)
+    x, y, z, w = quat
+    nrm = (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y))  # plate normal R z
+    half, full = g.tool_length / 2, g.tool_length
+    centres.append([hx, hy, hz])
+    centres.append([hx - half * nrm[0], hy - half * nrm[1], hz - half * nrm[2]])
+    quats += [list(quat), list(quat)]
+    return centres, quats, (hx - full * nrm[0], hy - full * nrm[1], hz - full * nrm[2])

@@ -1,0 +1,82 @@
+"""Static obstacles: vertical cylinders and axis-aligned boxes (SI units, m).
+
+Both are described by their centre and half sizes so that an environment can
+put them in its observation as fixed-length vectors (:meth:`encode`), the
+PyBullet layer can build them (:mod:`paragym.sim.client`), and the occupancy
+grid of paper 000 (eq 1) can test points against them (:meth:`contains`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["Box", "Cylinder", "Obstacle", "ENCODING_SIZE"]
+
+ENCODING_SIZE = 8  # present, is_box, centre (3), half sizes (3)
+
+
+def _vec3(value, name: str) -> tuple[float, float, float]:
+    arr = np.asarray(value, dtype=float)
+    if arr.shape != (3,) or not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be 3 finite numbers; got {value!r}")
+    return tuple(float(v) for v in arr)
+
+
+@dataclass(frozen=True)
+class Cylinder:
+    """A vertical cylinder: ``center`` (m), ``radius`` (m), ``height`` (m)."""
+
+    center: tuple[float, float, float]
+    radius: float
+    height: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _vec3(self.center, "Cylinder.center"))
+        if not (self.radius > 0 and self.height > 0):
+            raise ValueError(f"Cylinder radius and height must be > 0; got {self.radius}, {self.height}")
+
+    @property
+    def half_extents(self) -> tuple[float, float, float]:
+        """Half sizes of the bounding box (m)."""
+        return (self.radius, self.radius, self.height / 2)
+
+    def contains(self, points: np.ndarray, inflate: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+        """Which points (..., 3) lie inside, the radius grown by ``inflate[0]``
+        and the half height by ``inflate[1]`` (m)."""
+        d = points - np.asarray(self.center)
+        r = self.radius + inflate[0]
+        return (d[..., 0] ** 2 + d[..., 1] ** 2 <= r * r) & (np.abs(d[..., 2]) <= self.height / 2 + inflate[1])
+
+    def encode(self) -> np.ndarray:
+        """[present=1, is_box=0, cx, cy, cz, r, r, height/2]."""
+        return np.array([1.0, 0.0, *self.center, *self.half_extents])
+
+
+@dataclass(frozen=True)
+class Box:
+    """An axis-aligned box: ``center`` and ``half_extents`` (m)."""
+
+    center: tuple[float, float, float]
+    half_extents: tuple[float, float, float]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _vec3(self.center, "Box.center"))
+        object.__setattr__(self, "half_extents", _vec3(self.half_extents, "Box.half_extents"))
+        if min(self.half_extents) <= 0:
+            raise ValueError(f"Box.half_extents must be > 0; got {self.half_extents}")
+
+    def contains(self, points: np.ndarray, inflate: tuple[float, float] = (0.0, 0.0)) -> np.ndarray:
+        """Which points (..., 3) lie inside, grown by ``inflate[0]`` sideways and
+        ``inflate[1]`` vertically (m)."""
+        d = np.abs(points - np.asarray(self.center))
+        hx, hy, hz = self.half_extents
+        return (d[..., 0] <= hx + inflate[0]) & (d[..., 1] <= hy + inflate[0]) & (d[..., 2] <= hz + inflate[1])
+
+    def encode(self) -> np.ndarray:
+        """[present=1, is_box=1, cx, cy, cz, hx, hy, hz]."""
+        return np.array([1.0, 1.0, *self.center, *self.half_extents])
+
+
+Obstacle = Cylinder | Box

@@ -1,0 +1,205 @@
+"""Paper 000's own collision test: the Cartesian matrix Psi and cluster points.
+
+Section 2 of paper 000: the environment is a boolean grid Psi over Cartesian
+space (eq 1: a cell is 1 when an obstacle occupies it); the manipulator is a
+set of cluster points C_p regularly spaced on the surfaces of its parts; a
+configuration is collision-free iff no cluster point falls in an occupied
+cell (eq 2). Sweeping eq 2 over an epsilon-grid of the joint space gives the
+joint matrix Theta (Fig 2). Everything here is vectorised over
+configurations and points; no PyBullet.
+
+Resolution (stated for the tests): a cell of size eps is marked occupied when
+its centre lies in the obstacle grown by eps/2 (boxes; cylinders: eps/sqrt(2)
+sideways, eps/2 vertically), so every cell that meets an obstacle is
+occupied. A grid collision therefore means a cluster point within
+(sqrt(2) + sqrt(3))/2 * eps < 1.6 eps of an obstacle; a penetration deeper
+than the cluster spacing is seen (the tests check both against PyBullet).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from paragym.mechanisms import capaman
+from paragym.sim.obstacles import Box, Obstacle
+
+__all__ = ["ClusterPoints", "OccupancyGrid", "cluster_points", "grid_collision", "joint_matrix"]
+
+
+@dataclass(frozen=True)
+class OccupancyGrid:
+    """The Cartesian matrix Psi (eq 1): ``occupied[i, j, k]`` over cells of
+    size ``resolution`` (m) starting at ``origin`` (m). Points outside the
+    grid are free (the grid covers every obstacle)."""
+
+    occupied: np.ndarray
+    origin: np.ndarray
+    resolution: float
+
+    @classmethod
+    def from_obstacles(cls, obstacles: Sequence[Obstacle], resolution: float = 0.005) -> OccupancyGrid:
+        """Rasterise ``obstacles`` on a grid that covers their bounding boxes plus one cell."""
+        if resolution <= 0:
+            raise ValueError(f"resolution must be > 0 m; got {resolution}")
+        if not obstacles:
+            return cls(np.zeros((1, 1, 1), bool), np.zeros(3), resolution)
+        # Bounding box of the obstacles plus two cells: the outer cell stays free (see lookup).
+        lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) - 2 * resolution
+        hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) + 2 * resolution
+        shape = np.ceil((hi - lo) / resolution).astype(int)
+        axes = [lo[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
+        centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+        occupied = np.zeros(tuple(shape), bool)
+        half = resolution / 2
+        for o in obstacles:  # a handful of obstacles; every cell at once
+            side = half if isinstance(o, Box) else half * np.sqrt(2.0)
+            occupied |= o.contains(centres, inflate=(side, half))
+        return cls(occupied, lo, resolution)
+
+    @property
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """Lower and upper corners (m)."""
+        return self.origin, self.origin + np.array(self.occupied.shape) * self.resolution
+
+    def lookup(self, points: np.ndarray) -> np.ndarray:
+        """Psi at points (..., 3): True where occupied (eq 1).
+
+        The grid has a free border one cell wide, so indices are clipped onto
+        it instead of masking points outside.
+        """
+        shape = self.occupied.shape
+        idx = ((points - self.origin) * (1.0 / self.resolution)).astype(np.int64)
+        np.clip(idx, 0, np.array(shape) - 1, out=idx)
+        flat = (idx[..., 0] * shape[1] + idx[..., 1]) * shape[2] + idx[..., 2]
+        return self.occupied.ravel()[flat]
+
+
+@dataclass(frozen=True)
+class ClusterPoints:
+    """Cluster points C_p: ``local`` positions (M, 3) in their part's frame and
+    the ``part`` index (M,) of each, in the order of ``part_shapes``."""
+
+    local: np.ndarray
+    part: np.ndarray
+    spacing: float
+
+    def subset(self, parts: np.ndarray) -> ClusterPoints:
+        """Only the points of the given part indices."""
+        keep = np.isin(self.part, parts)
+        return ClusterPoints(self.local[keep], self.part[keep], self.spacing)
+
+
+def _grid(length: float, spacing: float) -> np.ndarray:
+    n = max(2, int(np.ceil(length / spacing)) + 1)
+    return np.linspace(-length / 2, length / 2, n)
+
+
+def _box_surface(h: Sequence[float], spacing: float) -> np.ndarray:
+    axes = [_grid(2 * v, spacing) for v in h]
+    pts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+    on_face = np.any(np.isclose(np.abs(pts), h), axis=1)
+    return pts[on_face]
+
+
+def _cylinder_surface(radius: float, length: float, spacing: float) -> np.ndarray:
+    z = _grid(length, spacing)
+    n_ring = max(6, int(np.ceil(2 * np.pi * radius / spacing)))
+    ang = np.linspace(0, 2 * np.pi, n_ring, endpoint=False)
+    side = np.stack(np.broadcast_arrays(radius * np.cos(ang)[:, None], radius * np.sin(ang)[:, None],
+                                        z[None, :]), axis=-1).reshape(-1, 3)
+    caps = []
+    for r in np.arange(radius - spacing, 0, -spacing):  # concentric rings on both caps
+        n = max(6, int(np.ceil(2 * np.pi * r / spacing)))
+        a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+        caps.append(np.stack([r * np.cos(a), r * np.sin(a)], axis=1))
+    disc = np.concatenate(caps + [np.zeros((1, 2))])
+    cap_pts = [np.column_stack([disc, np.full(len(disc), zc)]) for zc in (-length / 2, length / 2)]
+    return np.concatenate([side, *cap_pts])
+
+
+def cluster_points(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                   spacing: float = 0.005) -> ClusterPoints:
+    """Points regularly spaced (about ``spacing`` m) on the surface of every part."""
+    if spacing <= 0:
+        raise ValueError(f"spacing must be > 0 m; got {spacing}")
+    local, part = [], []
+    for i, shape in enumerate(capaman.part_shapes(geometry)):
+        pts = (_box_surface(shape.half_extents, spacing) if shape.kind == "box"
+               else _cylinder_surface(shape.radius, shape.length, spacing))
+        local.append(pts)
+        part.append(np.full(len(pts), i))
+    return ClusterPoints(np.concatenate(local), np.concatenate(part), spacing)
+
+
+def reachable_parts(grid: OccupancyGrid, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                    samples_per_axis: int = 7) -> np.ndarray:
+    """Indices of the parts that can reach the grid's box anywhere in the joint range.
+
+    Each part's bounding box is swept over a coarse grid of the joint range
+    and padded by the largest move of that box between neighbouring samples
+    (a heuristic margin, checked by the tests against PyBullet); parts whose
+    swept box misses the grid cannot collide and are skipped by
+    :func:`joint_matrix` (e.g. the plate when the obstacles stand below it).
+    """
+    g = geometry
+    axis = np.linspace(g.alpha_min, g.alpha_max, samples_per_axis)
+    alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    centres, quats = capaman.part_frames(alpha, g, validate=False)
+    half = np.array([s.half_extents if s.kind == "box" else (s.radius, s.radius, s.length / 2)
+                     for s in capaman.part_shapes(g)])
+    extent = np.abs(capaman.quat_to_matrix(quats)) @ half[..., None]  # world AABB half sizes
+    lo_s, hi_s = centres - extent[..., 0], centres + extent[..., 0]  # (samples, parts, 3)
+    cube = (samples_per_axis,) * 3 + lo_s.shape[1:]
+    # Margin per part: the largest change of a box corner between neighbouring samples.
+    step = np.max([np.abs(np.diff(b.reshape(cube), axis=ax)).max(axis=(0, 1, 2, 4))
+                   for b in (lo_s, hi_s) for ax in range(3)], axis=0)
+    lo = lo_s.min(axis=0) - step[:, None]
+    hi = hi_s.max(axis=0) + step[:, None]
+    glo, ghi = grid.bounds
+    hit = np.all((hi >= glo) & (lo <= ghi), axis=1) & grid.occupied.any()
+    return np.flatnonzero(hit)
+
+
+def grid_collision(alpha: np.ndarray, grid: OccupancyGrid, clusters: ClusterPoints,
+                   geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                   chunk_points: int = 2_000_000) -> np.ndarray:
+    """Eq 2 for a batch of configurations (N, 3) rad: True where any cluster
+    point lies in an occupied cell. Evaluated in chunks of about
+    ``chunk_points`` points to bound memory."""
+    al = capaman.check_joint_angles(alpha, geometry)
+    out = np.zeros(len(al), bool)
+    if len(clusters.part) == 0 or not grid.occupied.any():
+        return out
+    step = max(1, chunk_points // len(clusters.part))
+    by_part = [(p, clusters.local[clusters.part == p]) for p in np.unique(clusters.part)]
+    for start in range(0, len(al), step):  # chunks of configurations, not single samples
+        block = al[start:start + step]
+        centres, quats = capaman.part_frames(block, geometry, validate=False)
+        rot_t = np.swapaxes(capaman.quat_to_matrix(quats), -1, -2)  # (n, parts, 3, 3), transposed
+        hit = np.zeros(len(block), bool)
+        for p, local in by_part:  # a loop over the (at most 17) parts, each vectorised
+            world = centres[:, p, None, :] + local @ rot_t[:, p]
+            hit |= grid.lookup(world).any(axis=1)
+        out[start:start + step] = hit
+    return out
+
+
+def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: int,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The joint matrix Theta (Fig 2): collision map on an epsilon-grid of the joint space.
+
+    Returns ``theta`` (n, n, n) bool, True where the configuration collides,
+    and ``axis`` (n,) rad, the grid values of each crank angle (equal for the
+    three). Only parts that can reach the obstacles are tested
+    (:func:`reachable_parts`).
+    """
+    g = geometry
+    axis = np.linspace(g.alpha_min, g.alpha_max, points_per_axis)
+    alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    sub = clusters.subset(reachable_parts(grid, g))
+    theta = grid_collision(alpha, grid, sub, g).reshape((points_per_axis,) * 3)
+    return theta, axis
