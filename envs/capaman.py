@@ -30,7 +30,7 @@ OBS_SIZE = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 1
 
 @lru_cache(maxsize=4)
 def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
-    return occupancy.cluster_points(geometry)
+    return occupancy.cluster_points(geometry, spacing=0.01)
 
 
 class CaPaManCollisionFreeEnv(ParagymEnv):

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 from scipy import ndimage
@@ -76,6 +77,7 @@ def _tuples(a: np.ndarray) -> tuple[tuple[float, float, float], ...]:
     return tuple(tuple(float(v) for v in row) for row in np.asarray(a))
 
 
+@lru_cache(maxsize=8)
 def paper_scenario(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> CaPaManScenario:
     """The paper's case (section 4, Fig 3a), with assumed sizes.
 
@@ -127,16 +129,17 @@ def _random_obstacles(rng: np.random.Generator) -> list[Obstacle]:
 
 def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
                     clusters: occupancy.ClusterPoints | None = None, min_clearance: float = 0.004,
-                    grid_points: int = 13, max_tries: int = 50) -> CaPaManScenario:
+                    grid_points: int = 11, max_tries: int = 50) -> CaPaManScenario:
     """A seeded random feasible scenario (see the module docstring).
 
     T.P.s are drawn in the free cells of a ``grid_points``^3 joint matrix
-    Theta (about 7.5 deg cells), in one connected component (26-neighbours),
+    Theta (9 deg cells by default; cluster points every 10 mm unless
+    ``clusters`` are given), in one connected component (26-neighbours),
     at least 20 deg apart, and each must have ``min_clearance`` (m) in
     PyBullet. Leaves the scene's obstacles set.
     """
     g = scene.geometry
-    clusters = clusters or occupancy.cluster_points(g, spacing=0.005)
+    clusters = clusters or occupancy.cluster_points(g, spacing=0.01)
     for _ in range(max_tries):
         obstacles = _random_obstacles(rng)
         grid = occupancy.OccupancyGrid.from_obstacles(obstacles)

@@ -55,6 +55,10 @@ __all__ = [
     "inverse",
     "inverse_tool_tip",
     "jacobian",
+    "matrix_to_quat",
+    "quat_multiply",
+    "quat_to_matrix",
+    "forward_one",
     "part_shapes",
     "part_frames",
     "tool_tip",
@@ -449,7 +453,7 @@ def _frame(z_axis: np.ndarray, x_hint: np.ndarray) -> np.ndarray:
     return np.column_stack([x, np.cross(z_axis, x), z_axis])
 
 
-def _matrix_to_quat(m: np.ndarray) -> np.ndarray:
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
     """(x, y, z, w) of one rotation matrix (used once per geometry, not in hot paths)."""
     w = np.sqrt(max(0.0, 1.0 + np.trace(m))) / 2
     if w > 1e-3:
@@ -478,7 +482,7 @@ def _leg_part_table(g: CaPaManGeometry) -> SimpleNamespace:
     for k in range(3):
         e, u, w = g.e[k], g.u[k], g.w[k]
         root, half_c = g.r_f * e, (g.c / 2) * u
-        q_f0 = _matrix_to_quat(np.column_stack([w, zhat, u]))
+        q_f0 = matrix_to_quat(np.column_stack([w, zhat, u]))
         q_turn = quat_multiply(np.append(-w, 0.0), q_f0)  # d/d(sin(alpha/2)) of the crank
         for sign in (-1.0, 1.0):  # cranks a and b
             c0.append(root + sign * half_c)
@@ -491,7 +495,7 @@ def _leg_part_table(g: CaPaManGeometry) -> SimpleNamespace:
             c0.append(root + offset * zhat)  # coupler, bar, rail
             c1.append(g.a * u)
             c2.append(g.a * zhat)
-            qc.append(_matrix_to_quat(rot))
+            qc.append(matrix_to_quat(rot))
             qs.append(np.zeros(4))
             crank.append(False)
         leg += [k] * 5
@@ -524,7 +528,7 @@ def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
     return centres, quats
 
 
-# --- one configuration in Python floats: the env's per-step path ---------------------
+# --- one configuration in Python floats: the kinematic simulation's per-step path ------
 
 
 def forward_one(alpha: tuple[float, float, float] | np.ndarray,
@@ -574,38 +578,9 @@ def forward_one(alpha: tuple[float, float, float] | np.ndarray,
 
 @lru_cache(maxsize=32)
 def _consts_one(g: CaPaManGeometry) -> SimpleNamespace:
+    """The constants of :func:`_consts` as Python floats and lists."""
     k = _consts(g)
-    t = _leg_part_table(g)
     return SimpleNamespace(
         c_off=float(k.c_off), tilt_map=k.tilt_map.tolist(), u_xy=k.u_xy.tolist(),
-        leg_trig=list(zip(k.cos_t.tolist(), k.sin_t.tolist(), k.cos_b.tolist(), k.sin_b.tolist(), strict=False)),
-        parts=list(zip(t.leg.tolist(), t.crank.tolist(), t.c0.tolist(), t.c1.tolist(),
-                       t.c2.tolist(), t.qc.tolist(), t.qs.tolist(), strict=False)),
+        leg_trig=list(zip(k.cos_t.tolist(), k.sin_t.tolist(), k.cos_b.tolist(), k.sin_b.tolist(), strict=True)),
     )
-
-
-def part_frames_one(alpha: tuple[float, float, float] | np.ndarray,
-                    geometry: CaPaManGeometry = DEFAULT_GEOMETRY
-                    ) -> tuple[list[list[float]], list[list[float]], tuple[float, float, float]]:
-    """:func:`part_frames` for one configuration as Python lists (no validation).
-
-    Returns the 17 centres, the 17 quaternions and the tool tip. The per-step
-    path of the kinematic simulation (see :func:`forward_one`).
-    """
-    g = geometry
-    k = _consts_one(g)
-    (hx, hy, hz), quat = forward_one(alpha, g)
-    trig = [(math.cos(float(a)), math.sin(float(a)), math.cos(0.5 * float(a)), math.sin(0.5 * float(a)))
-            for a in alpha]
-    centres, quats = [], []
-    for leg, crank, c0, c1, c2, qc, qs in k.parts:
-        ca, sa, ch, sh = trig[leg]
-        centres.append([c0[i] + c1[i] * ca + c2[i] * sa for i in range(3)])
-        quats.append([qc[i] * ch + qs[i] * sh for i in range(4)] if crank else qc)
-    x, y, z, w = quat
-    nrm = (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y))  # plate normal R z
-    half, full = g.tool_length / 2, g.tool_length
-    centres.append([hx, hy, hz])
-    centres.append([hx - half * nrm[0], hy - half * nrm[1], hz - half * nrm[2]])
-    quats += [list(quat), list(quat)]
-    return centres, quats, (hx - full * nrm[0], hy - full * nrm[1], hz - full * nrm[2])

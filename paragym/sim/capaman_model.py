@@ -16,16 +16,60 @@ from collections.abc import Sequence
 import numpy as np
 
 from paragym.mechanisms import capaman
-from paragym.sim.client import PyBulletSim
+from paragym.sim.client import LinkSpec, PyBulletSim
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["CaPaManScene"]
+__all__ = ["CaPaManScene", "capaman_links"]
 
 _LEG_COLORS = ((0.25, 0.45, 0.8, 1.0), (0.25, 0.45, 0.8, 1.0), (0.35, 0.35, 0.4, 1.0),
                (0.35, 0.35, 0.4, 1.0), (0.55, 0.55, 0.6, 1.0))
 _PLATE_COLOR = (0.85, 0.7, 0.2, 1.0)
 _TOOL_COLOR = (0.15, 0.15, 0.15, 1.0)
 _OBSTACLE_COLOR = (0.8, 0.25, 0.25, 1.0)
+
+
+def capaman_links(geometry: capaman.CaPaManGeometry) -> list[LinkSpec]:
+    """The CaPaMan's kinematic tree, cut open at the ball joints.
+
+    Per leg k (F0 = columns w_k, z, u_k): the two cranks turn about w_k at
+    the frame's pivots ``r_f e_k -/+ (c/2) u_k`` (joint value -alpha_k); the
+    coupler hangs on crank a's tip (joint +alpha_k, so it stays horizontal:
+    the parallelogram); bar and rail are fixed to the coupler. The plate
+    floats on three prismatic joints and a spherical one, placed by the
+    closed-form direct kinematics; the tool is fixed under it. Link frames
+    equal the frames of :func:`paragym.mechanisms.capaman.part_frames` (a test
+    checks it), with cranks and coupler shifted to their joint axes.
+    """
+    g = geometry
+    shapes = {s.name: s for s in capaman.part_shapes(g)}
+    zhat = np.array([0.0, 0.0, 1.0])
+    rel_bar = tuple(capaman.matrix_to_quat(np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], float)))
+    rel_rail = tuple(capaman.matrix_to_quat(np.array([[0, 0, 1], [0, -1, 0], [1, 0, 0]], float)))
+    links: list[LinkSpec] = []
+    for k in range(3):
+        e, u, w = g.e[k], g.u[k], g.w[k]
+        f0 = tuple(capaman.matrix_to_quat(np.column_stack([w, zhat, u])))
+        leg = f"leg{k + 1}"
+        for sign, crank in ((-1.0, "crank_a"), (1.0, "crank_b")):
+            pivot = tuple(g.r_f * e + sign * (g.c / 2) * u)
+            links.append(LinkSpec(f"{leg}_{crank}", None, "revolute", pivot, f0, (1.0, 0.0, 0.0),
+                                  shapes[f"{leg}_{crank}"], (0.0, 0.0, g.a / 2), _LEG_COLORS[0]))
+        links.append(LinkSpec(f"{leg}_coupler", f"{leg}_crank_a", "revolute", (0.0, 0.0, g.a),
+                              axis=(1.0, 0.0, 0.0), shape=shapes[f"{leg}_coupler"],
+                              shape_offset=(0.0, 0.0, g.c / 2), rgba=_LEG_COLORS[2]))
+        links.append(LinkSpec(f"{leg}_bar", f"{leg}_coupler", "fixed", (0.0, g.h / 2, g.c / 2), rel_bar,
+                              shape=shapes[f"{leg}_bar"], rgba=_LEG_COLORS[3]))
+        links.append(LinkSpec(f"{leg}_rail", f"{leg}_coupler", "fixed", (0.0, g.h, g.c / 2), rel_rail,
+                              shape=shapes[f"{leg}_rail"], rgba=_LEG_COLORS[4]))
+    links += [
+        LinkSpec("plate_x", None, "prismatic", axis=(1.0, 0.0, 0.0)),
+        LinkSpec("plate_y", "plate_x", "prismatic", axis=(0.0, 1.0, 0.0)),
+        LinkSpec("plate_z", "plate_y", "prismatic", axis=(0.0, 0.0, 1.0)),
+        LinkSpec("plate", "plate_z", "spherical", shape=shapes["plate"], rgba=_PLATE_COLOR),
+        LinkSpec("tool", "plate", "fixed", (0.0, 0.0, -g.tool_length / 2), shape=shapes["tool"],
+                 rgba=_TOOL_COLOR),
+    ]
+    return links
 
 
 class CaPaManScene:
@@ -47,16 +91,23 @@ class CaPaManScene:
         g = geometry
         base = Cylinder(center=(0.0, 0.0, -0.005), radius=g.r_f + g.c / 2 + 0.03, height=0.01)
         self.sim.add_static("fixed_plate", base, rgba=(0.6, 0.6, 0.6, 1.0))
-        shapes = capaman.part_shapes(g)
-        colors = list(_LEG_COLORS) * 3 + [_PLATE_COLOR, _TOOL_COLOR]
-        self.sim.add_parts_body(self.ROBOT, shapes, colors)
+        self.sim.add_tree_body(self.ROBOT, capaman_links(g))
+        idx = lambda link: self.sim.link_index(self.ROBOT, link)  # noqa: E731
+        self._legs = [(idx(f"leg{k}_crank_a"), idx(f"leg{k}_crank_b"), idx(f"leg{k}_coupler")) for k in (1, 2, 3)]
+        self._joints = [j for leg in self._legs for j in leg] + [
+            idx("plate_x"), idx("plate_y"), idx("plate_z"), idx("plate")]
         self._obstacles: list[str] = []
+        self.obstacles: tuple[Obstacle, ...] = ()
         self.alpha = g.alpha_home.copy()
         self.tip = np.zeros(3)
         self.set_configuration(self.alpha)
 
     def set_obstacles(self, obstacles: Sequence[Obstacle]) -> None:
-        """Replace the obstacles of the scene."""
+        """Replace the obstacles of the scene (kept as they are when unchanged)."""
+        obstacles = tuple(obstacles)
+        if obstacles == self.obstacles:
+            return
+        self.obstacles = obstacles
         for name in self._obstacles:
             self.sim.remove(name)
         self._obstacles = []
@@ -68,11 +119,24 @@ class CaPaManScene:
     def set_configuration(self, alpha: Sequence[float]) -> np.ndarray:
         """Place every part for crank angles ``alpha`` (rad, trusted: the caller
         validated them); returns the tool tip (m)."""
-        centres, quats, tip = capaman.part_frames_one(alpha, self.geometry)
-        self.sim.set_part_poses(self.ROBOT, centres, quats)
-        self.alpha = np.array(alpha, dtype=float)
-        self.tip = np.array(tip)
+        a1, a2, a3 = (float(a) for a in alpha)
+        (hx, hy, hz), quat = capaman.forward_one((a1, a2, a3), self.geometry)
+        values = [[-a1], [-a1], [a1], [-a2], [-a2], [a2], [-a3], [-a3], [a3], [hx], [hy], [hz], quat]
+        self.sim.set_joints(self.ROBOT, self._joints, values)
+        x, y, z, w = quat
+        length = self.geometry.tool_length
+        self.alpha = np.array((a1, a2, a3))
+        self.tip = np.array((hx - length * 2 * (x * z + y * w), hy - length * 2 * (y * z - x * w),
+                             hz - length * (1 - 2 * (x * x + y * y))))
         return self.tip
+
+    def part_frame(self, part: str) -> tuple[np.ndarray, np.ndarray]:
+        """World centre (m) and xyzw quaternion of a part as PyBullet holds it."""
+        pos, quat = self.sim.link_frame(self.ROBOT, part)
+        offset = {"crank_a": self.geometry.a / 2, "crank_b": self.geometry.a / 2,
+                  "coupler": self.geometry.c / 2}.get(part.split("_", 1)[-1], 0.0)
+        rot = capaman.quat_to_matrix(quat)
+        return pos + offset * rot[:, 2], quat
 
     def clearance(self) -> tuple[float, str | None]:
         """Signed distance (m) from the whole manipulator to the nearest

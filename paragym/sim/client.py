@@ -5,17 +5,21 @@ environment: ``DIRECT`` (headless) by default, ``GUI`` on request; ``close()``
 disconnects it. Rendering to an array uses the TinyRenderer, so it works
 without a display.
 
-Kinematic bodies made of several rigid parts (a parallel manipulator whose
-link poses come from an analytic model) are built as *one* multibody whose
-parts float on dummy joints (three prismatic, then one spherical, per part):
-one ``resetJointStatesMultiDof`` call places all parts and one
+A manipulator is *one* multibody, a tree of links (:class:`LinkSpec`): for
+a parallel manipulator, the spanning tree of its closed chain, cut open where
+the analytic model closes it. Its joint values come from that model; one
+``resetJointStatesMultiDof`` call places every part and one
 ``getClosestPoints`` call per obstacle answers clearance for the whole
-manipulator. That is about four times faster than a body per part.
+manipulator (measured: 5 us for 20 links, against 170 us for a body per
+part).
 """
 
 from __future__ import annotations
 
+import os
+import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import pybullet as pb
@@ -23,10 +27,46 @@ import pybullet as pb
 from paragym.mechanisms.capaman import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["PyBulletSim"]
+__all__ = ["LinkSpec", "PyBulletSim"]
 
 _IDENTITY = (0.0, 0.0, 0.0, 1.0)
-_LINKS_PER_PART = 4  # prismatic x, y, z, then spherical (carries the shape)
+_JOINT_TYPES = {"revolute": pb.JOINT_REVOLUTE, "prismatic": pb.JOINT_PRISMATIC,
+                "spherical": pb.JOINT_SPHERICAL, "fixed": pb.JOINT_FIXED}
+
+
+@dataclass(frozen=True)
+class LinkSpec:
+    """One link of a tree body: its joint to ``parent`` (None: the base) of
+    type ``joint`` ("revolute", "prismatic", "spherical", "fixed") about
+    ``axis`` (link frame), the joint frame at ``position``/``orientation``
+    (xyzw) in the parent's link frame, and an optional shape (a part or an
+    obstacle-like primitive) at ``shape_offset`` in the link frame."""
+
+    name: str
+    parent: str | None
+    joint: str
+    position: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    orientation: tuple[float, float, float, float] = _IDENTITY
+    axis: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    shape: PartShape | None = None
+    shape_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rgba: tuple[float, float, float, float] = (0.5, 0.5, 0.5, 1.0)
+
+
+def _depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
+    """Links in depth-first pre-order (children in the order given)."""
+    children: dict[str | None, list[LinkSpec]] = {}
+    for link in links:
+        children.setdefault(link.parent, []).append(link)
+    out: list[LinkSpec] = []
+    stack = list(reversed(children.get(None, [])))
+    while stack:
+        link = stack.pop()
+        out.append(link)
+        stack.extend(reversed(children.get(link.name, [])))
+    if len(out) != len(links):
+        raise ValueError("links must form a tree rooted at the base (a parent is missing or a cycle exists)")
+    return out
 
 
 class PyBulletSim:
@@ -37,13 +77,16 @@ class PyBulletSim:
     """
 
     def __init__(self, gui: bool = False) -> None:
+        if gui and sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
+            # PyBullet's GUI kills the whole process when there is no X server: refuse first.
+            raise RuntimeError('render_mode="human" opens the PyBullet GUI and needs a display (DISPLAY is '
+                               'not set); use render_mode="rgb_array" on a headless machine')
         self._client = pb.connect(pb.GUI if gui else pb.DIRECT)
         if self._client < 0:
             raise RuntimeError("could not connect to PyBullet" + (" (GUI needs a display)" if gui else ""))
         self.gui = gui
         self._bodies: dict[str, int] = {}
-        self._parts: dict[str, tuple[str, ...]] = {}
-        self._joint_indices: dict[str, list[int]] = {}
+        self._links: dict[str, dict[str, int]] = {}
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._client)
 
@@ -68,18 +111,22 @@ class PyBulletSim:
             pass
 
     # --- building ---------------------------------------------------------------------
-    def _shape(self, shape: PartShape | Obstacle, rgba: Sequence[float]) -> tuple[int, int]:
+    def _shape(self, shape: PartShape | Obstacle, rgba: Sequence[float],
+               offset: Sequence[float] = (0.0, 0.0, 0.0)) -> tuple[int, int]:
         c = self._client
+        frame = {"collisionFramePosition": list(offset)}
+        vframe = {"visualFramePosition": list(offset)}
         if isinstance(shape, Cylinder) or (isinstance(shape, PartShape) and shape.kind == "cylinder"):
             radius = shape.radius
             length = shape.height if isinstance(shape, Cylinder) else shape.length
-            col = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=radius, height=length, physicsClientId=c)
+            col = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=radius, height=length, physicsClientId=c,
+                                          **frame)
             vis = pb.createVisualShape(pb.GEOM_CYLINDER, radius=radius, length=length, rgbaColor=rgba,
-                                       physicsClientId=c)
+                                       physicsClientId=c, **vframe)
         else:
             half = list(shape.half_extents)
-            col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=c)
-            vis = pb.createVisualShape(pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c)
+            col = pb.createCollisionShape(pb.GEOM_BOX, halfExtents=half, physicsClientId=c, **frame)
+            vis = pb.createVisualShape(pb.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=c, **vframe)
         return col, vis
 
     def add_static(self, name: str, shape: Obstacle, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
@@ -89,38 +136,50 @@ class PyBulletSim:
         self._bodies[name] = pb.createMultiBody(0.0, col, vis, basePosition=list(shape.center),
                                                 physicsClientId=self._client)
 
-    def add_parts_body(self, name: str, parts: Sequence[PartShape],
-                       colors: Sequence[Sequence[float]]) -> None:
-        """Add a kinematic body made of rigid ``parts`` whose poses are set by
-        :meth:`set_part_poses` (see the module docstring)."""
+    def add_tree_body(self, name: str, links: Sequence[LinkSpec]) -> None:
+        """Add a multibody whose base (no shape) sits at the world origin and
+        whose ``links`` form a tree; a link is addressed by its name, its parent
+        by name (None: the base). Link frames are placed by the joint values
+        given to :meth:`set_joints`."""
         self._check_new(name)
-        masses, cols, vis, parents, types, axes = [], [], [], [], [], []
-        for p, (part, rgba) in enumerate(zip(parts, colors, strict=False)):
-            first = _LINKS_PER_PART * p
-            for j, axis in enumerate(((1, 0, 0), (0, 1, 0), (0, 0, 1))):
-                masses.append(1e-3)
+        links = _depth_first(links)  # PyBullet stores links in this order whatever order it is given
+        index = {link.name: i for i, link in enumerate(links)}
+        cols, vis = [], []
+        for link in links:
+            if link.shape is None:
                 cols.append(-1)
                 vis.append(-1)
-                parents.append(0 if j == 0 else first + j)  # parent of link i is i-1 (1-based)
-                types.append(pb.JOINT_PRISMATIC)
-                axes.append(axis)
-            col, v = self._shape(part, rgba)
-            masses.append(1e-3)
-            cols.append(col)
-            vis.append(v)
-            parents.append(first + 3)
-            types.append(pb.JOINT_SPHERICAL)
-            axes.append((0, 0, 1))
-        n = len(masses)
+            else:
+                c, v = self._shape(link.shape, link.rgba, link.shape_offset)
+                cols.append(c)
+                vis.append(v)
+        n = len(links)
         body = pb.createMultiBody(
-            0.0, -1, -1, linkMasses=masses, linkCollisionShapeIndices=cols, linkVisualShapeIndices=vis,
-            linkPositions=[(0, 0, 0)] * n, linkOrientations=[_IDENTITY] * n,
+            0.0, -1, -1, linkMasses=[1e-3] * n, linkCollisionShapeIndices=cols, linkVisualShapeIndices=vis,
+            linkPositions=[link.position for link in links],
+            linkOrientations=[link.orientation for link in links],
             linkInertialFramePositions=[(0, 0, 0)] * n, linkInertialFrameOrientations=[_IDENTITY] * n,
-            linkParentIndices=parents, linkJointTypes=types, linkJointAxis=axes,
+            linkParentIndices=[0 if link.parent is None else index[link.parent] + 1 for link in links],
+            linkJointTypes=[_JOINT_TYPES[link.joint] for link in links],
+            linkJointAxis=[link.axis for link in links],
             physicsClientId=self._client)
         self._bodies[name] = body
-        self._parts[name] = tuple(p.name for p in parts)
-        self._joint_indices[name] = list(range(n))
+        self._links[name] = index
+
+    def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Sequence[float]]) -> None:
+        """Set joint positions of body ``name``: one list per joint (``[q]`` for
+        revolute/prismatic, an xyzw quaternion for spherical)."""
+        pb.resetJointStatesMultiDof(self._bodies[name], joints, values, physicsClientId=self._client)
+
+    def link_index(self, name: str, link: str) -> int:
+        """PyBullet link index of ``link`` in body ``name``."""
+        return self._links[name][link]
+
+    def link_frame(self, name: str, link: str) -> tuple[np.ndarray, np.ndarray]:
+        """World position (m) and xyzw quaternion of a link's frame."""
+        state = pb.getLinkState(self._bodies[name], self._links[name][link], computeForwardKinematics=True,
+                                physicsClientId=self._client)
+        return np.array(state[4]), np.array(state[5])
 
     def remove(self, name: str) -> None:
         """Remove the body ``name``."""
@@ -157,8 +216,8 @@ class PyBulletSim:
                     best, where = pt[8], pt[3]
         if where < 0:
             return max_distance, None
-        parts = self._parts.get(name)
-        return best, (parts[where // _LINKS_PER_PART] if parts else name)
+        links = self._links.get(name)
+        return best, (next(k for k, v in links.items() if v == where) if links else name)
 
     def render(self, width: int, height: int, target: Sequence[float], distance: float,
                yaw: float, pitch: float, fov: float = 45.0) -> np.ndarray:
