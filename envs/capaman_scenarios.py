@@ -12,7 +12,8 @@ from the inverse kinematics). The tour is T.C.1 -> T.C.2 -> T.C.3 -> T.C.1.
   the fixed plate, below the movable plate) and T.P.s, generated feasible:
   every T.P. collision-free with a margin (PyBullet), and all three in one
   connected free component of the joint matrix Theta (paper 000's collision
-  map on a joint grid), so a collision-free tour exists at that resolution.
+  map on a joint grid, colliding cells grown by one), so a collision-free
+  tour exists at that resolution (the tests follow one with a planner).
 """
 
 from __future__ import annotations
@@ -129,12 +130,13 @@ def _random_obstacles(rng: np.random.Generator) -> list[Obstacle]:
 
 def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
                     clusters: occupancy.ClusterPoints | None = None, min_clearance: float = 0.004,
-                    grid_points: int = 11, max_tries: int = 50) -> CaPaManScenario:
+                    grid_points: int = 16, max_tries: int = 50) -> CaPaManScenario:
     """A seeded random feasible scenario (see the module docstring).
 
     T.P.s are drawn in the free cells of a ``grid_points``^3 joint matrix
-    Theta (9 deg cells by default; cluster points every 10 mm unless
-    ``clusters`` are given), in one connected component (26-neighbours),
+    Theta (6 deg cells by default; cluster points every 10 mm unless
+    ``clusters`` are given) with the colliding cells grown by one cell, in one
+    connected component (26-neighbours),
     at least 20 deg apart, and each must have ``min_clearance`` (m) in
     PyBullet. Leaves the scene's obstacles set.
     """
@@ -144,7 +146,8 @@ def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
         obstacles = _random_obstacles(rng)
         grid = occupancy.OccupancyGrid.from_obstacles(obstacles)
         theta, axis = occupancy.joint_matrix(grid, clusters, grid_points, g)
-        labels, count = ndimage.label(~theta, structure=np.ones((3, 3, 3)))
+        blocked = ndimage.binary_dilation(theta, structure=np.ones((3, 3, 3), bool))  # edges stay clear
+        labels, count = ndimage.label(~blocked, structure=np.ones((3, 3, 3)))
         if count == 0:
             continue
         sizes = np.bincount(labels.ravel())[1:]

@@ -19,7 +19,8 @@ than the cluster spacing is seen (the tests check both against PyBullet).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import lru_cache
 
 import numpy as np
 
@@ -85,11 +86,29 @@ class ClusterPoints:
     local: np.ndarray
     part: np.ndarray
     spacing: float
+    #: world positions of one part's points over a joint grid, kept by :func:`joint_matrix`
+    _grid_cache: dict = field(default_factory=dict, compare=False, repr=False)
 
     def subset(self, parts: np.ndarray) -> ClusterPoints:
         """Only the points of the given part indices."""
         keep = np.isin(self.part, parts)
         return ClusterPoints(self.local[keep], self.part[keep], self.spacing)
+
+    def on_joint_grid(self, part: int, alpha: np.ndarray, geometry: capaman.CaPaManGeometry,
+                      key: tuple, max_bytes: int = 64 << 20) -> np.ndarray:
+        """World positions (N, M_part, 3) of one part's points at configurations
+        ``alpha``; kept under ``key`` when smaller than ``max_bytes`` (the
+        joint grid does not change between scenarios, only the obstacles do)."""
+        cached = self._grid_cache.get((key, part))
+        if cached is not None:
+            return cached
+        local = self.local[self.part == part]
+        centres, quats = capaman.part_frames(alpha, geometry, validate=False)
+        rot_t = np.swapaxes(capaman.quat_to_matrix(quats[:, part]), -1, -2)
+        world = centres[:, part, None, :] + local @ rot_t
+        if world.nbytes <= max_bytes:
+            self._grid_cache[(key, part)] = world
+        return world
 
 
 def _grid(length: float, spacing: float) -> np.ndarray:
@@ -144,6 +163,16 @@ def reachable_parts(grid: OccupancyGrid, geometry: capaman.CaPaManGeometry = cap
     swept box misses the grid cannot collide and are skipped by
     :func:`joint_matrix` (e.g. the plate when the obstacles stand below it).
     """
+    if not grid.occupied.any():
+        return np.zeros(0, int)
+    lo, hi = _swept_boxes(geometry, samples_per_axis)
+    glo, ghi = grid.bounds
+    return np.flatnonzero(np.all((hi >= glo) & (lo <= ghi), axis=1))
+
+
+@lru_cache(maxsize=8)
+def _swept_boxes(geometry: capaman.CaPaManGeometry, samples_per_axis: int) -> tuple[np.ndarray, np.ndarray]:
+    """Lower and upper corners (parts, 3) of the boxes swept by the parts (see reachable_parts)."""
     g = geometry
     axis = np.linspace(g.alpha_min, g.alpha_max, samples_per_axis)
     alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
@@ -156,11 +185,7 @@ def reachable_parts(grid: OccupancyGrid, geometry: capaman.CaPaManGeometry = cap
     # Margin per part: the largest change of a box corner between neighbouring samples.
     step = np.max([np.abs(np.diff(b.reshape(cube), axis=ax)).max(axis=(0, 1, 2, 4))
                    for b in (lo_s, hi_s) for ax in range(3)], axis=0)
-    lo = lo_s.min(axis=0) - step[:, None]
-    hi = hi_s.max(axis=0) + step[:, None]
-    glo, ghi = grid.bounds
-    hit = np.all((hi >= glo) & (lo <= ghi), axis=1) & grid.occupied.any()
-    return np.flatnonzero(hit)
+    return lo_s.min(axis=0) - step[:, None], hi_s.max(axis=0) + step[:, None]
 
 
 def grid_collision(alpha: np.ndarray, grid: OccupancyGrid, clusters: ClusterPoints,
@@ -200,6 +225,10 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
     g = geometry
     axis = np.linspace(g.alpha_min, g.alpha_max, points_per_axis)
     alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
-    sub = clusters.subset(reachable_parts(grid, g))
-    theta = grid_collision(alpha, grid, sub, g).reshape((points_per_axis,) * 3)
-    return theta, axis
+    theta = np.zeros(len(alpha), bool)
+    for p in reachable_parts(grid, g):  # a loop over parts, each vectorised over the grid
+        if len(alpha) * np.count_nonzero(clusters.part == p) > 20_000_000:  # too big to hold at once
+            theta |= grid_collision(alpha, grid, clusters.subset([p]), g)
+        else:
+            theta |= grid.lookup(clusters.on_joint_grid(p, alpha, g, (g, points_per_axis))).any(axis=1)
+    return theta.reshape((points_per_axis,) * 3), axis

@@ -1,0 +1,125 @@
+"""Shortest collision-free path on paper 000's joint matrix Theta (a baseline planner).
+
+Theta (Fig 2) marks which cells of an epsilon-grid of the joint space collide
+(eqs 1-2). This planner joins the task points T.P.1 -> T.P.2 -> T.P.3 -> T.P.1
+by Dijkstra's shortest path over the free cells (26-neighbours, edge weight
+the joint distance; colliding cells grown by one cell so edges stay clear):
+the optimum of the path-length term of the paper's fitness (eq 3) at the
+grid's resolution, without the clearance term and
+without the paper's RRT + GA search. It is the simplest planner that is
+correct on this task and serves as a baseline and as the feasibility witness
+for scenarios.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
+from scipy import ndimage
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import dijkstra
+
+from paragym.mechanisms import capaman
+from paragym.sim import occupancy
+from paragym.trajectories import JointPath
+
+__all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError"]
+
+DEG = np.pi / 180
+
+
+class PlanningError(RuntimeError):
+    """No path at the grid's resolution."""
+
+
+def _offsets() -> np.ndarray:
+    """The 13 neighbour offsets of a 26-neighbourhood, one of each +/- pair."""
+    d = np.array(np.meshgrid([-1, 0, 1], [-1, 0, 1], [-1, 0, 1], indexing="ij")).reshape(3, -1).T
+    return d[[tuple(o) > (0, 0, 0) for o in d]]
+
+
+class GridPathPlanner:
+    """Dijkstra on the free cells of Theta.
+
+    Args:
+        points_per_axis: grid points per crank angle over 45-135 deg (31: 3 deg cells).
+        spacing: cluster-point spacing (m).
+        geometry: the CaPaMan's dimensions.
+    """
+
+    def __init__(self, points_per_axis: int = 31, spacing: float = 0.005,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> None:
+        if points_per_axis < 3:
+            raise ValueError(f"points_per_axis must be >= 3; got {points_per_axis}")
+        self.n = points_per_axis
+        self.geometry = geometry
+        self.clusters = occupancy.cluster_points(geometry, spacing)
+
+    def plan(self, scenario: CaPaManScenario) -> JointPath:
+        """The tour T.P.1 -> T.P.2 -> T.P.3 -> T.P.1 as a joint path."""
+        grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles)
+        theta, axis = occupancy.joint_matrix(grid, self.clusters, self.n, self.geometry)
+        # Nodes are checked, edges are not: a free node next to a colliding one is
+        # treated as colliding, so an edge never cuts through a collision region
+        # one cell or more across.
+        free = ~ndimage.binary_dilation(theta, structure=np.ones((3, 3, 3), bool)).ravel()
+        n = self.n
+        cells = np.stack(np.meshgrid(*[np.arange(n)] * 3, indexing="ij"), axis=-1).reshape(-1, 3)
+        rows, cols, weights = [], [], []
+        for off in _offsets():  # 13 directions, each over every cell at once
+            nb = cells + off
+            ok = np.all((nb >= 0) & (nb < n), axis=1)
+            a = np.flatnonzero(ok)
+            b = np.ravel_multi_index(nb[ok].T, (n, n, n))
+            keep = free[a] & free[b]
+            rows.append(a[keep])
+            cols.append(b[keep])
+            weights.append(np.full(keep.sum(), np.linalg.norm(off * (axis[1] - axis[0]))))
+        graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
+                           shape=(n ** 3, n ** 3)).tocsr()
+        tp = scenario.alpha
+        free_idx = np.flatnonzero(free)
+        # Each T.P. enters the grid at its nearest free cell.
+        entry = free_idx[np.argmin(np.linalg.norm(axis[cells[free_idx]][None] - tp[:, None], axis=2), axis=1)]
+        dist, pred = dijkstra(graph, directed=False, indices=entry, return_predecessors=True)
+        waypoints = [tp[0]]
+        vias = [0]
+        order = (0,) + TOUR
+        for i, j in zip(order[:-1], order[1:], strict=True):
+            if not np.isfinite(dist[i, entry[j]]):
+                raise PlanningError(f"T.P.{i + 1} and T.P.{j + 1} are not connected in Theta at "
+                                    f"{np.degrees(axis[1] - axis[0]):.1f} deg resolution")
+            node, chain = entry[j], []
+            while node != entry[i]:  # walk the predecessor chain (path length, not grid size)
+                chain.append(node)
+                node = pred[i, node]
+            chain.append(entry[i])
+            waypoints += list(axis[cells[chain[::-1]]]) + [tp[j]]
+            vias.append(len(waypoints) - 1)
+        return JointPath(np.array(waypoints), tuple(vias))
+
+
+class GridPathPolicy:
+    """Follows :class:`GridPathPlanner`'s path in ``CaPaManCollisionFree-v0``,
+    in straight joint-space steps of at most ``max_joint_step`` rad."""
+
+    def __init__(self, max_joint_step: float = 2 * DEG, planner: GridPathPlanner | None = None) -> None:
+        self.max_joint_step = max_joint_step
+        self.planner = planner or GridPathPlanner()
+        self.path: JointPath | None = None
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.path = self.planner.plan(info["scenario"])
+        self._next = 1
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if self.path is None:
+            raise RuntimeError("call reset(obs, info) before act")
+        alpha = info["alpha"]
+        w = self.path.waypoints
+        while self._next < len(w) - 1 and np.max(np.abs(w[self._next] - alpha)) < 1e-9:
+            self._next += 1
+        delta = w[self._next] - alpha
+        return (delta / max(self.max_joint_step, np.max(np.abs(delta)))).astype(np.float32)
