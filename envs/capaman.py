@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 from typing import Any
 
@@ -166,14 +167,14 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
 
     def _apply_action(self, action: np.ndarray) -> None:
         target = self._tp[self._target]
-        before = float(np.linalg.norm(target - self._alpha))
         new = np.clip(self._alpha + action * self.max_joint_step, self._lo, self._hi)
-        self._step_length = float(np.linalg.norm(new - self._alpha))
+        self._step_length = math.hypot(*(new - self._alpha))
         self._path_length += self._step_length
+        before = math.hypot(*(target - self._alpha))
+        after = math.hypot(*(target - new))
         self._alpha = new
         self.scene.set_configuration(new)
         self._clearance, self._near = self.scene.clearance()
-        after = float(np.linalg.norm(target - new))
         self._progress = before - after
         self._just_reached = after <= self.reach_tolerance and not self._collision
         if self._just_reached:

@@ -111,10 +111,9 @@ class CaPaManScene:
         for name in self._obstacles:
             self.sim.remove(name)
         self._obstacles = []
-        for i, obstacle in enumerate(obstacles):
-            name = f"obstacle{i}"
-            self.sim.add_static(name, obstacle, rgba=_OBSTACLE_COLOR)
-            self._obstacles.append(name)
+        if obstacles:
+            self.sim.add_static_group("obstacles", obstacles, rgba=_OBSTACLE_COLOR)
+            self._obstacles.append("obstacles")
 
     def set_configuration(self, alpha: Sequence[float]) -> np.ndarray:
         """Place every part for crank angles ``alpha`` (rad, trusted: the caller

@@ -136,6 +136,20 @@ class PyBulletSim:
         self._bodies[name] = pb.createMultiBody(0.0, col, vis, basePosition=list(shape.center),
                                                 physicsClientId=self._client)
 
+    def add_static_group(self, name: str, shapes: Sequence[Obstacle],
+                         rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+        """Add fixed shapes (obstacles) as one body named ``name``: one
+        ``getClosestPoints`` call then answers for all of them."""
+        self._check_new(name)
+        cols, vis = zip(*(self._shape(o, rgba) for o in shapes), strict=True)
+        n = len(shapes)
+        self._bodies[name] = pb.createMultiBody(
+            0.0, -1, -1, linkMasses=[0.0] * n, linkCollisionShapeIndices=list(cols),
+            linkVisualShapeIndices=list(vis), linkPositions=[o.center for o in shapes],
+            linkOrientations=[_IDENTITY] * n, linkInertialFramePositions=[(0, 0, 0)] * n,
+            linkInertialFrameOrientations=[_IDENTITY] * n, linkParentIndices=[0] * n,
+            linkJointTypes=[pb.JOINT_FIXED] * n, linkJointAxis=[(0, 0, 1)] * n, physicsClientId=self._client)
+
     def add_tree_body(self, name: str, links: Sequence[LinkSpec]) -> None:
         """Add a multibody whose base (no shape) sits at the world origin and
         whose ``links`` form a tree; a link is addressed by its name, its parent
@@ -195,15 +209,6 @@ class PyBulletSim:
         return tuple(self._bodies)
 
     # --- state and queries --------------------------------------------------------------
-    def set_part_poses(self, name: str, centres: Sequence[Sequence[float]],
-                       quaternions: Sequence[Sequence[float]]) -> None:
-        """Place every part of body ``name``: centres (P, 3) m, quaternions (P, 4) xyzw."""
-        targets: list[Sequence[float]] = []
-        for (x, y, z), q in zip(centres, quaternions, strict=False):
-            targets += [(x,), (y,), (z,), q]
-        pb.resetJointStatesMultiDof(self._bodies[name], self._joint_indices[name], targets,
-                                    physicsClientId=self._client)
-
     def clearance(self, name: str, others: Sequence[str], max_distance: float) -> tuple[float, str | None]:
         """Smallest signed distance (m; negative when penetrating) between body
         ``name`` and the bodies ``others``, capped at ``max_distance``; and the

@@ -72,8 +72,10 @@ class OccupancyGrid:
         it instead of masking points outside.
         """
         shape = self.occupied.shape
-        idx = ((points - self.origin) * (1.0 / self.resolution)).astype(np.int64)
-        np.clip(idx, 0, np.array(shape) - 1, out=idx)
+        pts = np.asarray(points, dtype=np.float32)  # float32/int32: half the memory traffic
+        idx = ((pts - self.origin.astype(np.float32)) * np.float32(1.0 / self.resolution)).astype(np.int32)
+        np.maximum(idx, 0, out=idx)
+        np.minimum(idx, np.array(shape, np.int32) - 1, out=idx)
         flat = (idx[..., 0] * shape[1] + idx[..., 1]) * shape[2] + idx[..., 2]
         return self.occupied.ravel()[flat]
 
@@ -105,7 +107,7 @@ class ClusterPoints:
         local = self.local[self.part == part]
         centres, quats = capaman.part_frames(alpha, geometry, validate=False)
         rot_t = np.swapaxes(capaman.quat_to_matrix(quats[:, part]), -1, -2)
-        world = centres[:, part, None, :] + local @ rot_t
+        world = (centres[:, part, None, :] + local @ rot_t).astype(np.float32)
         if world.nbytes <= max_bytes:
             self._grid_cache[(key, part)] = world
         return world

@@ -1,0 +1,65 @@
+"""Steps per second of every registered paragym env, kinematic mode, no render.
+
+Measured with Gymnasium's own ``benchmark_step`` (random actions, resets
+included whenever an episode ends), pinned to one core. When panda-gym is
+installed, its PandaReach-v3 (a PyBullet serial arm) is measured in the same
+run as the anchor, and every figure is also given as a ratio to it.
+
+    python benchmarks/env_speed.py [--seconds 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import time
+
+import gymnasium as gym
+from gymnasium.utils.performance import benchmark_step
+
+import paragym
+
+TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0}
+
+
+def reset_seconds(env: gym.Env, n: int = 20) -> float:
+    """Mean wall time of a reset (s)."""
+    env.reset(seed=0)
+    t0 = time.perf_counter()
+    for _ in range(n):
+        env.reset()
+    return (time.perf_counter() - t0) / n
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=5.0, help="duration of each measurement")
+    args = parser.parse_args()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
+    rows = []
+    anchor = None
+    try:
+        import panda_gym  # noqa: F401
+
+        env = gym.make("PandaReach-v3")
+        anchor = benchmark_step(env, target_duration=args.seconds, seed=0)
+        rows.append(("PandaReach-v3 (panda-gym, anchor)", "-", anchor, reset_seconds(env), None))
+        env.close()
+    except ImportError:
+        print("panda-gym is not installed: no anchor (pip install panda-gym to add it)")
+    for env_id in paragym.ENVIRONMENTS:
+        for scenario in ("random", "paper"):
+            env = gym.make(env_id, scenario=scenario)
+            sps = benchmark_step(env, target_duration=args.seconds, seed=0)
+            rows.append((env_id, scenario, sps, reset_seconds(env), TARGETS.get(env_id)))
+            env.close()
+    print(f"\n{'environment':42s} {'scenario':8s} {'steps/s':>9s} {'x anchor':>9s} {'reset ms':>9s} {'target':>8s}")
+    for name, scenario, sps, reset_s, target in rows:
+        ratio = f"{sps / anchor:9.1f}" if anchor else f"{'-':>9s}"
+        verdict = "" if target is None else (f"{target:8.0f} " + ("ok" if sps >= target else "MISSED"))
+        print(f"{name:42s} {scenario:8s} {sps:9.0f} {ratio} {reset_s * 1000:9.2f} {verdict}")
+
+
+if __name__ == "__main__":
+    main()

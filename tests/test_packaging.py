@@ -1,0 +1,53 @@
+"""The wheel installs and works on its own; the console script runs."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    out = tmp_path_factory.mktemp("wheel")
+    subprocess.run([sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
+                    "-w", str(out), str(ROOT)], check=True)
+    (whl,) = out.glob("paragym-*.whl")
+    return whl
+
+
+def test_wheel_installs_and_registers_the_envs(wheel, tmp_path):
+    target = tmp_path / "site"
+    subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "-q", "--target", str(target),
+                    str(wheel)], check=True)
+    code = (
+        "import paragym, paragym.envs, paragym.planners, paragym.baselines, gymnasium as gym\n"
+        f"assert paragym.envs.__file__.startswith({str(target)!r}), paragym.envs.__file__\n"
+        "env = gym.make('paragym/CaPaManCollisionFree-v0', scenario='paper')\n"
+        "obs, info = env.reset(seed=0)\n"
+        "print(obs.shape, info['scenario'].name)\n"
+    )
+    env = dict(os.environ, PYTHONPATH=str(target))
+    res = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert "(38,) paper" in res.stdout
+
+
+def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "envs"], capture_output=True, text=True, check=True)
+    assert "paragym/CaPaManCollisionFree-v0" in res.stdout
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "CaPaManCollisionFree-v0",
+                          "--out", str(tmp_path), "--gif", "--frame-every", "20"],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert "success True" in res.stdout
+    png = tmp_path / "CaPaManCollisionFree-v0_paper_seed0.png"
+    assert png.stat().st_size > 50_000 and (tmp_path / "CaPaManCollisionFree-v0_paper_seed0.gif").exists()
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "Nope-v0"], capture_output=True, text=True)
+    assert res.returncode == 2 and "unknown env id" in res.stderr
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "CaPaManCollisionFree-v0",
+                          "--scenario", "moon", "--out", str(tmp_path)], capture_output=True, text=True)
+    assert res.returncode == 2 and "scenario must be" in res.stderr
