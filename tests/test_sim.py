@@ -95,3 +95,23 @@ def test_grid_test_agrees_with_pybullet(scene, seed):
     theta, axis = occupancy.joint_matrix(grid, clusters, 9)
     full = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
     np.testing.assert_array_equal(theta.ravel(), occupancy.grid_collision(full, grid, clusters))
+
+
+def test_swept_boxes_hold_every_part_over_the_joint_range():
+    lo, hi = capaman.swept_part_boxes(G, 9)
+    rng = np.random.default_rng(5)
+    alpha = rng.uniform(G.alpha_min, G.alpha_max, (20000, 3))
+    centres, _ = capaman.part_frames(alpha)
+    assert np.all(centres >= lo) and np.all(centres <= hi)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_clearance_query_on_the_parts_that_can_reach_equals_the_full_query(scene, seed):
+    scenario = random_scenario(np.random.default_rng(seed), scene)
+    scene.set_obstacles(scenario.obstacles)
+    assert len(scene._query_links) < len(capaman.part_shapes())
+    rng = np.random.default_rng(seed)
+    for a in rng.uniform(G.alpha_min, G.alpha_max, (300, 3)):
+        scene.set_configuration(a)
+        full = scene.sim.clearance(scene.ROBOT, ["obstacles"], scene.clearance_cap)
+        assert scene.clearance() == full

@@ -61,6 +61,7 @@ __all__ = [
     "forward_one",
     "part_shapes",
     "part_frames",
+    "swept_part_boxes",
     "tool_tip",
 ]
 
@@ -526,6 +527,31 @@ def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
     centres = np.concatenate([centres, pose.position[:, None], tool_c[:, None]], axis=1)
     quats = np.concatenate([quats, pose.quaternion[:, None], pose.quaternion[:, None]], axis=1)
     return centres, quats
+
+
+@lru_cache(maxsize=8)
+def swept_part_boxes(geometry: CaPaManGeometry = DEFAULT_GEOMETRY, samples_per_axis: int = 7
+                     ) -> tuple[np.ndarray, np.ndarray]:
+    """Boxes (lower and upper corners, (17, 3), m) that hold each part over the whole joint range.
+
+    Each part's world bounding box is taken at a grid of ``samples_per_axis``^3
+    configurations and the union is grown by the largest change of a box
+    corner between neighbouring samples (a margin for what happens between
+    samples; the tests check it against dense sampling).
+    """
+    g = geometry
+    axis = np.linspace(g.alpha_min, g.alpha_max, samples_per_axis)
+    alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    centres, quats = part_frames(alpha, g, validate=False)
+    half = np.array([s.half_extents if s.kind == "box" else (s.radius, s.radius, s.length / 2)
+                     for s in part_shapes(g)])
+    extent = np.abs(quat_to_matrix(quats)) @ half[..., None]  # world AABB half sizes
+    lo_s, hi_s = centres - extent[..., 0], centres + extent[..., 0]  # (samples, parts, 3)
+    cube = (samples_per_axis,) * 3 + lo_s.shape[1:]
+    # Margin per part: the largest change of a box corner between neighbouring samples.
+    step = np.max([np.abs(np.diff(b.reshape(cube), axis=ax)).max(axis=(0, 1, 2, 4))
+                   for b in (lo_s, hi_s) for ax in range(3)], axis=0)
+    return lo_s.min(axis=0) - step[:, None], hi_s.max(axis=0) + step[:, None]
 
 
 # --- one configuration in Python floats: the kinematic simulation's per-step path ------

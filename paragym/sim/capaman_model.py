@@ -26,6 +26,7 @@ _LEG_COLORS = ((0.25, 0.45, 0.8, 1.0), (0.25, 0.45, 0.8, 1.0), (0.35, 0.35, 0.4,
 _PLATE_COLOR = (0.85, 0.7, 0.2, 1.0)
 _TOOL_COLOR = (0.15, 0.15, 0.15, 1.0)
 _OBSTACLE_COLOR = (0.8, 0.25, 0.25, 1.0)
+_SWEEP_MARGIN = 0.02  # m, on top of the swept boxes' own margin
 
 
 def capaman_links(geometry: capaman.CaPaManGeometry) -> list[LinkSpec]:
@@ -97,6 +98,7 @@ class CaPaManScene:
         self._joints = [j for leg in self._legs for j in leg] + [
             idx("plate_x"), idx("plate_y"), idx("plate_z"), idx("plate")]
         self._obstacles: list[str] = []
+        self._query_links: list[int] = []
         self.obstacles: tuple[Obstacle, ...] = ()
         self.alpha = g.alpha_home.copy()
         self.tip = np.zeros(3)
@@ -114,6 +116,15 @@ class CaPaManScene:
         if obstacles:
             self.sim.add_static_group("obstacles", obstacles, rgba=_OBSTACLE_COLOR)
             self._obstacles.append("obstacles")
+        # Parts that cannot come within the cap anywhere in the joint range are
+        # left out of the clearance query: the answer is the same, sooner.
+        lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) if obstacles else 0
+        hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) if obstacles else 0
+        s_lo, s_hi = capaman.swept_part_boxes(self.geometry, 9)
+        gap = np.linalg.norm(np.maximum(0.0, np.maximum(lo - s_hi, s_lo - hi)), axis=1)
+        names = [p.name for p in capaman.part_shapes(self.geometry)]
+        self._query_links = [self.sim.link_index(self.ROBOT, names[i])
+                             for i in np.flatnonzero(gap <= self.clearance_cap + _SWEEP_MARGIN)]
 
     def set_configuration(self, alpha: Sequence[float]) -> np.ndarray:
         """Place every part for crank angles ``alpha`` (rad, trusted: the caller
@@ -140,7 +151,7 @@ class CaPaManScene:
     def clearance(self) -> tuple[float, str | None]:
         """Signed distance (m) from the whole manipulator to the nearest
         obstacle (negative: penetration), capped; and the nearest part."""
-        return self.sim.clearance(self.ROBOT, self._obstacles, self.clearance_cap)
+        return self.sim.clearance(self.ROBOT, self._obstacles, self.clearance_cap, self._query_links)
 
     def render(self, width: int = 480, height: int = 360, yaw: float = 45.0, pitch: float = -25.0,
                distance: float = 0.9) -> np.ndarray:

@@ -87,6 +87,7 @@ class PyBulletSim:
         self.gui = gui
         self._bodies: dict[str, int] = {}
         self._links: dict[str, dict[str, int]] = {}
+        self._link_names: dict[str, dict[int, str]] = {}
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._client)
 
@@ -179,6 +180,7 @@ class PyBulletSim:
             physicsClientId=self._client)
         self._bodies[name] = body
         self._links[name] = index
+        self._link_names[name] = {i: link for link, i in index.items()}
 
     def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Sequence[float]]) -> None:
         """Set joint positions of body ``name``: one list per joint (``[q]`` for
@@ -209,20 +211,31 @@ class PyBulletSim:
         return tuple(self._bodies)
 
     # --- state and queries --------------------------------------------------------------
-    def clearance(self, name: str, others: Sequence[str], max_distance: float) -> tuple[float, str | None]:
+    def clearance(self, name: str, others: Sequence[str], max_distance: float,
+                  links: Sequence[int] | None = None) -> tuple[float, str | None]:
         """Smallest signed distance (m; negative when penetrating) between body
         ``name`` and the bodies ``others``, capped at ``max_distance``; and the
-        part of ``name`` where it occurs (None when nothing is within the cap)."""
+        link of ``name`` where it occurs (None when nothing is within the cap).
+
+        ``links`` restricts the query to those links of ``name`` (PyBullet
+        runs the narrow phase on every link pair of two multibodies, so
+        leaving out links that cannot come within the cap saves time).
+        """
         best, where = max_distance, -1
-        body = self._bodies[name]
+        body, c = self._bodies[name], self._client
         for other in others:
-            for pt in pb.getClosestPoints(body, self._bodies[other], max_distance, physicsClientId=self._client):
+            target = self._bodies[other]
+            if links is None:
+                points = pb.getClosestPoints(body, target, max_distance, physicsClientId=c)
+            else:
+                points = [pt for link in links for pt in
+                          pb.getClosestPoints(body, target, max_distance, linkIndexA=link, physicsClientId=c)]
+            for pt in points:
                 if pt[8] < best:
                     best, where = pt[8], pt[3]
         if where < 0:
             return max_distance, None
-        links = self._links.get(name)
-        return best, (next(k for k, v in links.items() if v == where) if links else name)
+        return best, self._link_names[name][where]
 
     def render(self, width: int, height: int, target: Sequence[float], distance: float,
                yaw: float, pitch: float, fov: float = 45.0) -> np.ndarray:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import lru_cache
 
 import numpy as np
 
@@ -167,27 +166,9 @@ def reachable_parts(grid: OccupancyGrid, geometry: capaman.CaPaManGeometry = cap
     """
     if not grid.occupied.any():
         return np.zeros(0, int)
-    lo, hi = _swept_boxes(geometry, samples_per_axis)
+    lo, hi = capaman.swept_part_boxes(geometry, samples_per_axis)
     glo, ghi = grid.bounds
     return np.flatnonzero(np.all((hi >= glo) & (lo <= ghi), axis=1))
-
-
-@lru_cache(maxsize=8)
-def _swept_boxes(geometry: capaman.CaPaManGeometry, samples_per_axis: int) -> tuple[np.ndarray, np.ndarray]:
-    """Lower and upper corners (parts, 3) of the boxes swept by the parts (see reachable_parts)."""
-    g = geometry
-    axis = np.linspace(g.alpha_min, g.alpha_max, samples_per_axis)
-    alpha = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
-    centres, quats = capaman.part_frames(alpha, g, validate=False)
-    half = np.array([s.half_extents if s.kind == "box" else (s.radius, s.radius, s.length / 2)
-                     for s in capaman.part_shapes(g)])
-    extent = np.abs(capaman.quat_to_matrix(quats)) @ half[..., None]  # world AABB half sizes
-    lo_s, hi_s = centres - extent[..., 0], centres + extent[..., 0]  # (samples, parts, 3)
-    cube = (samples_per_axis,) * 3 + lo_s.shape[1:]
-    # Margin per part: the largest change of a box corner between neighbouring samples.
-    step = np.max([np.abs(np.diff(b.reshape(cube), axis=ax)).max(axis=(0, 1, 2, 4))
-                   for b in (lo_s, hi_s) for ax in range(3)], axis=0)
-    return lo_s.min(axis=0) - step[:, None], hi_s.max(axis=0) + step[:, None]
 
 
 def grid_collision(alpha: np.ndarray, grid: OccupancyGrid, clusters: ClusterPoints,
