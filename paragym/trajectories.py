@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 
-__all__ = ["JointPath"]
+__all__ = ["JointPath", "JointTrajectory"]
 
 
 @dataclass(frozen=True)
@@ -37,3 +39,77 @@ class JointPath:
         starts = np.repeat(np.arange(len(seg)), counts)
         frac = np.concatenate([np.arange(c) / c for c in counts])
         return np.vstack([w[starts] + frac[:, None] * seg[starts], w[-1:]])
+
+
+@dataclass(frozen=True)
+class JointTrajectory:
+    """A time-parameterised joint path: alpha(t), its velocity and acceleration.
+
+    Through the via points at ``times`` with a piecewise-cubic Hermite
+    interpolant whose interior slopes are PCHIP's (shape preserving: each
+    joint stays between its neighbouring via values, so no overshoot past the
+    checked path's bounding boxes) and whose end slopes are zero (rest to
+    rest). Position and velocity are continuous (C1), as paper 000's section 5
+    needs; acceleration is piecewise linear.
+    """
+
+    times: np.ndarray
+    waypoints: np.ndarray
+    max_velocity: float
+
+    @classmethod
+    def from_path(cls, path: JointPath, dt: float, max_velocity: float = 3.0) -> JointTrajectory:
+        """Via points ``dt`` seconds apart (paper 000: 0.09, 0.45 or 0.9 s); if
+        a joint would then exceed ``max_velocity`` (rad/s), every interval is
+        stretched by the same factor until none does (``dt`` becomes the
+        returned trajectory's ``dt``)."""
+        if not (np.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a positive number of seconds; got {dt!r}")
+        if not (np.isfinite(max_velocity) and max_velocity > 0):
+            raise ValueError(f"max_velocity must be > 0 rad/s; got {max_velocity!r}")
+        times = dt * np.arange(len(path.waypoints))
+        traj = cls(times, path.waypoints, max_velocity)
+        peak = traj.peak_velocity
+        if peak > max_velocity:
+            traj = cls(times * (peak / max_velocity) * (1 + 1e-9), path.waypoints, max_velocity)
+        return traj
+
+    @cached_property
+    def _spline(self) -> CubicHermiteSpline:
+        slopes = PchipInterpolator(self.times, self.waypoints).derivative()(self.times)
+        slopes[0] = slopes[-1] = 0.0
+        return CubicHermiteSpline(self.times, self.waypoints, slopes)
+
+    @property
+    def dt(self) -> float:
+        """Time between via points (s)."""
+        return float(self.times[1] - self.times[0])
+
+    @property
+    def duration(self) -> float:
+        """Total time (s)."""
+        return float(self.times[-1])
+
+    @property
+    def peak_velocity(self) -> float:
+        """Largest joint speed along the trajectory (rad/s), on a fine grid."""
+        t = np.linspace(0.0, self.duration, 50 * len(self.times))
+        return float(np.abs(self.velocity(t)).max())
+
+    def position(self, t: np.ndarray) -> np.ndarray:
+        """alpha(t), rad, shape (len(t), n)."""
+        return self._spline(np.clip(t, 0.0, self.duration))
+
+    def velocity(self, t: np.ndarray) -> np.ndarray:
+        """d alpha / dt, rad/s."""
+        return self._spline.derivative(1)(np.clip(t, 0.0, self.duration))
+
+    def acceleration(self, t: np.ndarray) -> np.ndarray:
+        """d2 alpha / dt2, rad/s^2."""
+        return self._spline.derivative(2)(np.clip(t, 0.0, self.duration))
+
+    def sample(self, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(t, alpha, alpha_dot, alpha_ddot) at ``rate`` Hz over the whole trajectory."""
+        t = np.arange(0.0, self.duration + 0.5 / rate, 1.0 / rate)
+        spline = self._spline
+        return t, spline(t), spline.derivative(1)(t), spline.derivative(2)(t)

@@ -6,7 +6,7 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["Policy"]
+__all__ = ["PathFollowingPolicy", "Policy"]
 
 
 @runtime_checkable
@@ -18,3 +18,31 @@ class Policy(Protocol):
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None: ...
 
     def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray: ...
+
+
+class PathFollowingPolicy:
+    """Plans at ``reset`` with ``planner.plan(info["scenario"]) -> JointPath``
+    and follows the path's waypoints in straight joint-space steps of at most
+    ``max_joint_step`` rad per joint (the env's scale for an action of 1).
+    ``info["alpha"]`` (the joint state, float64) is what it steers from."""
+
+    def __init__(self, planner: Any, max_joint_step: float) -> None:
+        if not max_joint_step > 0:
+            raise ValueError(f"max_joint_step must be > 0 rad; got {max_joint_step}")
+        self.planner = planner
+        self.max_joint_step = max_joint_step
+        self.path: Any = None
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.path = self.planner.plan(info["scenario"])
+        self._next = 1
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if self.path is None:
+            raise RuntimeError("call reset(obs, info) before act")
+        alpha = info["alpha"]
+        w = self.path.waypoints
+        while self._next < len(w) - 1 and np.max(np.abs(w[self._next] - alpha)) < 1e-9:
+            self._next += 1
+        delta = w[self._next] - alpha
+        return (delta / max(self.max_joint_step, np.max(np.abs(delta)))).astype(np.float32)

@@ -13,10 +13,9 @@ for scenarios.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
+from paragym.planners.base import PathFollowingPolicy
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
@@ -101,25 +100,8 @@ class GridPathPlanner:
         return JointPath(np.array(waypoints), tuple(vias))
 
 
-class GridPathPolicy:
-    """Follows :class:`GridPathPlanner`'s path in ``CaPaManCollisionFree-v0``,
-    in straight joint-space steps of at most ``max_joint_step`` rad."""
+class GridPathPolicy(PathFollowingPolicy):
+    """Follows :class:`GridPathPlanner`'s path in ``CaPaManCollisionFree-v0``."""
 
     def __init__(self, max_joint_step: float = 2 * DEG, planner: GridPathPlanner | None = None) -> None:
-        self.max_joint_step = max_joint_step
-        self.planner = planner or GridPathPlanner()
-        self.path: JointPath | None = None
-
-    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
-        self.path = self.planner.plan(info["scenario"])
-        self._next = 1
-
-    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        if self.path is None:
-            raise RuntimeError("call reset(obs, info) before act")
-        alpha = info["alpha"]
-        w = self.path.waypoints
-        while self._next < len(w) - 1 and np.max(np.abs(w[self._next] - alpha)) < 1e-9:
-            self._next += 1
-        delta = w[self._next] - alpha
-        return (delta / max(self.max_joint_step, np.max(np.abs(delta)))).astype(np.float32)
+        super().__init__(planner or GridPathPlanner(), max_joint_step)
