@@ -18,9 +18,9 @@ __all__ = ["main"]
 
 
 def _capaman_best(env: gym.Env) -> Any:
-    from paragym.planners import GridPathPolicy
+    from paragym.planners import RrtGaPolicy
 
-    return GridPathPolicy(max_joint_step=env.unwrapped.max_joint_step)
+    return RrtGaPolicy(max_joint_step=env.unwrapped.max_joint_step)
 
 
 def _capaman_plot(ep: Episode, path: Path) -> Path:
@@ -31,7 +31,60 @@ def _capaman_plot(ep: Episode, path: Path) -> Path:
 
 #: env id -> (best available policy factory, name, picture writer)
 DEMOS: dict[str, tuple[Callable[[gym.Env], Any], str, Callable[[Episode, Path], Path]]] = {
-    "paragym/CaPaManCollisionFree-v0": (_capaman_best, "grid-path (Dijkstra on Theta)", _capaman_plot),
+    "paragym/CaPaManCollisionFree-v0": (_capaman_best, "RRT + GA (paper 000)", _capaman_plot),
+}
+
+
+def _plan_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    """RRT + GA on the env's scenario: stats, the Fig 3 picture against time, and a JSON."""
+    import json
+
+    import numpy as np
+
+    from paragym.mechanisms import capaman
+    from paragym.planners import RrtGaPlanner
+    from paragym.plots import plot_capaman_motion
+
+    obs, info = env.reset(seed=args.seed)
+    scenario = info["scenario"]
+    frame = env.render()
+    planner = RrtGaPlanner(seed=args.seed)
+    result = planner.solve(scenario)
+    planner.close()
+    traj = result.trajectory(args.dt)
+    t, alpha, _, _ = traj.sample(rate=200.0)
+    tips = capaman.tool_tip(capaman.forward(alpha, validate=False))
+    axis = np.array(scenario.obstacles[0].center[:2])
+    radius = np.hypot(*(tips[:, :2] - axis).T)
+    marks = traj.times[list(result.path.via_indices)]
+    stats = {
+        "scenario": scenario.name, "seed": args.seed,
+        "planning_seconds": result.timings, "fitness_J": result.fitness,
+        "initial_best_J": result.initial_best_fitness, "joint_path_length_rad": result.path.length,
+        "close_configurations": result.close_configurations, "min_clearance_m": result.min_clearance,
+        "tool_radius_about_obstacle_axis_m": [float(radius.min()), float(radius.max())],
+        "dt_s": traj.dt, "duration_s": traj.duration, "peak_joint_speed_rad_s": traj.peak_velocity,
+        "via_points_rad": result.path.waypoints.tolist(), "task_point_indices": list(result.path.via_indices),
+    }
+    title = (f"RRT + GA, {scenario.name} scenario: J = {result.fitness:.3f}, joint path "
+             f"{result.path.length:.2f} rad, {len(result.path.waypoints)} via points, dt = {traj.dt:.2f} s")
+    png = plot_capaman_motion(scenario, t, alpha, tips, marks, out / f"{stem}.png", title, frame=frame)
+    (out / f"{stem}.json").write_text(json.dumps(stats, indent=2))
+    print(f"planning {result.timings['total']:.2f} s (theta {result.timings['theta']:.2f}, rrt "
+          f"{result.timings['rrt']:.2f}, ga {result.timings['ga']:.2f}, pybullet check {result.timings['check']:.2f})")
+    print(f"fitness J {result.fitness:.3f} (RRT population best {result.initial_best_fitness:.3f}); joint path "
+          f"{result.path.length:.3f} rad; {result.close_configurations} configurations closer than delta")
+    print(f"min clearance {result.min_clearance * 1000:.1f} mm (PyBullet); tool tip {radius.min() * 1000:.1f}-"
+          f"{radius.max() * 1000:.1f} mm from the first obstacle's axis (paper: within 60 mm)")
+    print(f"trajectory: 21 via points, dt {traj.dt:.3f} s, {traj.duration:.2f} s, peak joint speed "
+          f"{traj.peak_velocity:.2f} rad/s")
+    print(f"wrote {png} and {out / (stem + '.json')}")
+    return 0
+
+
+#: env id -> the reference planner's offline run
+PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
+    "paragym/CaPaManCollisionFree-v0": _plan_capaman,
 }
 
 
@@ -41,11 +94,27 @@ def _cmd_envs(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
-    env_id = args.env_id if args.env_id.startswith("paragym/") else f"paragym/{args.env_id}"
+def _env_id(name: str) -> str:
+    env_id = name if name.startswith("paragym/") else f"paragym/{name}"
     if env_id not in paragym.ENVIRONMENTS:
-        print(f"unknown env id {args.env_id!r}; `paragym envs` lists them", file=sys.stderr)
-        return 2
+        raise ValueError(f"unknown env id {name!r}; `paragym envs` lists them")
+    return env_id
+
+
+def _cmd_plan(args: argparse.Namespace) -> int:
+    env_id = _env_id(args.env_id)
+    env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    stem = env_id.split("/")[1] + f"_plan_{args.scenario}_seed{args.seed}"
+    try:
+        return PLANS[env_id](env, args, out, stem)
+    finally:
+        env.close()
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    env_id = _env_id(args.env_id)
     env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
     best, best_name, plot = DEMOS[env_id]
     policy = {"best": lambda: best(env), "random": lambda: RandomPolicy(env.action_space, args.seed),
@@ -89,6 +158,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gif", action="store_true", help="also write an animated GIF of the episode")
     p.add_argument("--frame-every", type=int, default=4, help="GIF: keep a frame every N steps")
     p.set_defaults(func=_cmd_demo)
+    p = sub.add_parser("plan", help="run the reference planner offline; print its figures and save pictures")
+    p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
+    p.add_argument("--scenario", default="paper", help="'paper' (default) or 'random'")
+    p.add_argument("--seed", type=int, default=0, help="scenario (random) and planner seed")
+    p.add_argument("--dt", type=float, default=0.45, help="seconds between via points (paper: 0.09, 0.45, 0.9)")
+    p.add_argument("--out", default="runs/plan", help="folder for the PNG and the JSON")
+    p.set_defaults(func=_cmd_plan)
     return parser
 
 
@@ -100,6 +176,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except ValueError as exc:  # bad input: say it plainly, no traceback
         print(f"paragym: error: {exc}", file=sys.stderr)
         return 2
+    except RuntimeError as exc:  # a planner that found no path, a GUI without display
+        print(f"paragym: failed: {exc}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

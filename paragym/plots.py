@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import matplotlib
 
@@ -14,26 +16,40 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from paragym.rollout import Episode  # noqa: E402
 from paragym.sim.obstacles import Box, Cylinder  # noqa: E402
 
-__all__ = ["plot_capaman_episode"]
+__all__ = ["plot_capaman_episode", "plot_capaman_motion"]
 
 
 def plot_capaman_episode(ep: Episode, path: str | Path, title: str = "") -> Path:
-    """Paper 000's Fig 3 for one episode: (a) the scene, (b) the tool-tip path
-    seen from above with the obstacles, the T.C.s and the paper's 6 cm circle,
-    (c) the joint path in the joint space, (d) the joint angles over the steps
-    with dashed lines where a T.C. is reached."""
-    scenario = ep.infos[0]["scenario"]
-    alpha = np.degrees(np.array([i["alpha"] for i in ep.infos]))
-    tip = np.array([i["tool_tip"] for i in ep.infos]) * 1000.0
+    """Paper 000's Fig 3 for one episode (see :func:`plot_capaman_motion`),
+    against the step count."""
+    alpha = np.array([i["alpha"] for i in ep.infos])
+    tips = np.array([i["tool_tip"] for i in ep.infos])
     reached = [i["reached"] for i in ep.infos]
     marks = [k for k in range(1, len(reached)) if reached[k] > reached[k - 1]]
+    end = ep.infos[-1]
+    scenario = ep.infos[0]["scenario"]
+    title = title or (f"{scenario.name} scenario: success={end['is_success']}, collision={end['collision']}, "
+                      f"joint path {end['path_length']:.2f} rad, {len(ep.actions)} steps")
+    return plot_capaman_motion(scenario, np.arange(len(alpha)), alpha, tips, marks, path, title,
+                               frame=ep.frames[0] if ep.frames else None, time_label="step")
+
+
+def plot_capaman_motion(scenario: Any, t: np.ndarray, alpha: np.ndarray, tips: np.ndarray,
+                        marks: Sequence[float], path: str | Path, title: str,
+                        frame: np.ndarray | None = None, time_label: str = "t [s]") -> Path:
+    """Paper 000's Fig 3: (a) the scene, (b) the tool-tip path seen from above
+    with the obstacles, the T.C.s and the paper's 6 cm circle, (c) the joint
+    path in the joint space, (d) the joint angles against ``t`` with dashed
+    lines at ``marks`` (a T.C. reached). ``alpha`` in rad, ``tips`` in m."""
+    alpha = np.degrees(alpha)
+    tip = np.asarray(tips) * 1000.0
     tc = np.array(scenario.task_configs) * 1000.0
     tp = np.degrees(scenario.alpha)
 
     fig = plt.figure(figsize=(12, 9))
     ax = fig.add_subplot(2, 2, 1)
-    if ep.frames:
-        ax.imshow(ep.frames[0])
+    if frame is not None:
+        ax.imshow(frame)
     ax.set_axis_off()
     ax.set_title("(a) scene at T.C.1 (PyBullet)")
 
@@ -72,18 +88,15 @@ def plot_capaman_episode(ep: Episode, path: str | Path, title: str = "") -> Path
 
     ax = fig.add_subplot(2, 2, 4)
     for j in range(3):
-        ax.plot(alpha[:, j], label=f"alpha{j + 1}")
+        ax.plot(t, alpha[:, j], label=f"alpha{j + 1}")
     for m in marks:
         ax.axvline(m, ls="--", color="gray", lw=0.8)
-    ax.set_xlabel("step")
+    ax.set_xlabel(time_label)
     ax.set_ylabel("crank angle [deg]")
     ax.legend(fontsize=8)
-    ax.set_title("(d) joint variables (dashed: T.C. reached)")
+    ax.set_title("(d) joint variables (dashed: T.P. reached)")
 
-    end = ep.infos[-1]
-    fig.suptitle(title or (f"{scenario.name} scenario: success={end['is_success']}, "
-                           f"collision={end['collision']}, joint path {end['path_length']:.2f} rad, "
-                           f"{len(ep.actions)} steps"))
+    fig.suptitle(title)
     fig.tight_layout()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -2,5 +2,7 @@
 
 from paragym.planners.base import Policy
 from paragym.planners.grid_path import GridPathPlanner, GridPathPolicy, PlanningError
+from paragym.planners.rrt_ga import RrtGaPlanner, RrtGaPolicy, RrtGaResult, RrtGaSettings
 
-__all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError", "Policy"]
+__all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError", "Policy", "RrtGaPlanner", "RrtGaPolicy",
+           "RrtGaResult", "RrtGaSettings"]

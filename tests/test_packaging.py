@@ -43,7 +43,7 @@ def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):
                           "--out", str(tmp_path), "--gif", "--frame-every", "20"],
                          capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert "success True" in res.stdout
+    assert "success True" in res.stdout and "RRT + GA" in res.stdout
     png = tmp_path / "CaPaManCollisionFree-v0_paper_seed0.png"
     assert png.stat().st_size > 50_000 and (tmp_path / "CaPaManCollisionFree-v0_paper_seed0.gif").exists()
     res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "Nope-v0"], capture_output=True, text=True)
@@ -51,3 +51,17 @@ def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):
     res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "CaPaManCollisionFree-v0",
                           "--scenario", "moon", "--out", str(tmp_path)], capture_output=True, text=True)
     assert res.returncode == 2 and "scenario must be" in res.stderr
+
+
+def test_cli_plan_writes_the_figure_and_the_trajectory(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "plan", "CaPaManCollisionFree-v0",
+                          "--scenario", "paper", "--dt", "0.09", "--out", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert "fitness J" in res.stdout and "within 60 mm" in res.stdout
+    import json
+
+    stats = json.loads((tmp_path / "CaPaManCollisionFree-v0_plan_paper_seed0.json").read_text())
+    assert len(stats["via_points_rad"]) == 21 and stats["min_clearance_m"] > 0
+    assert stats["tool_radius_about_obstacle_axis_m"][1] < 0.06
+    assert (tmp_path / "CaPaManCollisionFree-v0_plan_paper_seed0.png").stat().st_size > 50_000
