@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 from gymnasium import spaces
+
 from paragym.envs.base import ParagymEnv
 from paragym.envs.capaman_scenarios import (
     MAX_OBSTACLES,
@@ -17,7 +18,6 @@ from paragym.envs.capaman_scenarios import (
     random_scenario,
     validate_scenario,
 )
-
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene

@@ -14,13 +14,13 @@ for scenarios.
 from __future__ import annotations
 
 import numpy as np
-from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
-from paragym.planners.base import PathFollowingPolicy
 from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
+from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
 from paragym.mechanisms import capaman
+from paragym.planners.base import PathFollowingPolicy
 from paragym.sim import occupancy
 from paragym.trajectories import JointPath
 

@@ -9,9 +9,10 @@ Section 2 of paper 000 (Carbone, Gomez-Bravo, Selvi), Figs 1-2, eqs 1-5:
 2. **rho**: the joint-space distance from a configuration to the nearest
    colliding one, a Euclidean distance transform of Theta (scipy.ndimage),
    interpolated between grid nodes.
-3. **RRT** (LaValle and Kuffner): N goal-biased trees grown in lockstep (one
-   numpy step advances all N) from T.P.1 to T.P.2, T.P.2 to T.P.3 and T.P.3
-   to T.P.1, give N collision-free tours; each is shortcut and resampled to
+3. **RRT** (LaValle and Kuffner; bidirectional, as their RRT-Connect): N
+   pairs of trees grown in lockstep (one numpy step advances all N) from
+   T.P.1 to T.P.2, T.P.2 to T.P.3 and T.P.3 to T.P.1, give N collision-free
+   tours; each is shortcut and resampled to
    the paper's m = 21 configurations (T.P.s at fixed indices) to form the
    initial population.
 4. **GA**: tournament selection, leg-wise and one-point crossover, Gaussian
@@ -40,17 +41,17 @@ from functools import lru_cache
 from typing import Any
 
 import numpy as np
-from paragym.envs.capaman_scenarios import CaPaManScenario, validate_scenario
-from paragym.planners.base import PathFollowingPolicy
-from paragym.planners.grid_path import PlanningError
 from scipy import ndimage
 
+from paragym.envs.capaman_scenarios import CaPaManScenario, validate_scenario
 from paragym.mechanisms import capaman
+from paragym.planners.base import PathFollowingPolicy
+from paragym.planners.grid_path import PlanningError
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.trajectories import JointPath, JointTrajectory
 
-__all__ = ["RrtGaPlanner", "RrtGaPolicy", "RrtGaResult", "RrtGaSettings", "fitness"]
+__all__ = ["JointSpaceModel", "RrtGaPlanner", "RrtGaPolicy", "RrtGaResult", "RrtGaSettings", "fitness"]
 
 DEG = np.pi / 180
 LEG_INTERVALS = (7, 7, 6)  # 20 intervals: m = 21 configurations, T.P.s at 0, 7, 14, 20
@@ -59,17 +60,24 @@ LEG_INTERVALS = (7, 7, 6)  # 20 intervals: m = 21 configurations, T.P.s at 0, 7,
 @dataclass(frozen=True)
 class RrtGaSettings:
     """Parameters of the planner (rad, m, s). The paper gives m = 21; the rest
-    it leaves open and these defaults are ours."""
+    it leaves open and these defaults are ours.
+
+    Theta's default resolution is 31 points per crank angle (3 deg cells,
+    29,791 configurations). On the development machine it builds in about
+    0.2 s, after a first build of about 1.3 s per process, which keeps the
+    reachable parts' cluster points over the joint grid for every later
+    scenario (``python benchmarks/planner_capaman.py`` reports the times).
+    """
 
     theta_points: int = 31  # epsilon-grid of Omega: 3 deg cells
     cell: float = 0.005  # Psi cell size (m)
     cluster_spacing: float = 0.005  # cluster-point spacing (m)
     check_step: float = 1.0 * DEG  # segment sampling
     population: int = 16  # N
-    generations: int = 40
-    rrt_step: float = 10.0 * DEG  # RRT steering distance
-    goal_bias: float = 0.3
+    generations: int = 60
+    rrt_step: float = 15.0 * DEG  # RRT steering distance (the connecting move is not limited)
     rrt_iterations: int = 1500  # per leg, for all trees together
+    rrt_quorum: float = 0.5  # a leg is done when this share of the N tree pairs has met
     delta: float = 8.0 * DEG  # rho below this: k_i = 1 (eq 5)
     beta: float = 0.05  # fitness cost of one close configuration (rad of path)
     crossover_rate: float = 0.8
@@ -137,28 +145,48 @@ def _clusters(geometry: capaman.CaPaManGeometry, spacing: float) -> occupancy.Cl
     return occupancy.cluster_points(geometry, spacing)
 
 
-class _SegmentChecker:
-    """Collision validity of configurations and joint-space segments, from Theta.
+class JointSpaceModel:
+    """Steps 1-2 of the method for one scenario: Theta, rho, and collision
+    validity of configurations and joint-space segments.
 
     A configuration is free when the eight Theta nodes around it are free
     (conservative by up to one cell). Near a task point, which may sit closer
     to an obstacle than one cell, eq 2 is evaluated at the configuration
-    itself instead. A segment is free when its samples, ``step`` apart, are;
-    segments already seen are remembered (a GA child shares most of its
-    segments with its parents).
+    itself instead. A segment is free when its samples, ``check_step`` apart,
+    are; segments already seen are remembered (a GA child shares most of its
+    segments with its parents). The OMPL comparison uses this same model.
     """
 
-    def __init__(self, theta: np.ndarray, axis: np.ndarray, task_points: np.ndarray,
-                 grid: occupancy.OccupancyGrid, clusters: occupancy.ClusterPoints,
-                 geometry: capaman.CaPaManGeometry, step: float) -> None:
+    def __init__(self, scenario: CaPaManScenario, settings: RrtGaSettings,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> None:
+        t0 = time.perf_counter()
+        s, g = settings, geometry
+        self.settings, self.geometry = s, g
+        self.grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=s.cell)
+        clusters = _clusters(g, s.cluster_spacing)
+        self.theta, axis = occupancy.joint_matrix(self.grid, clusters, s.theta_points, g)
         self.lo, self.eps, self.n = axis[0], axis[1] - axis[0], len(axis)
-        free = ~theta
+        self.rho_grid = (ndimage.distance_transform_edt(~self.theta, sampling=self.eps) if self.theta.any()
+                         else np.full(self.theta.shape, np.inf))
+        free = ~self.theta
         self.cell_free = (free[:-1, :-1, :-1] & free[1:, :-1, :-1] & free[:-1, 1:, :-1] & free[:-1, :-1, 1:]
                           & free[1:, 1:, :-1] & free[1:, :-1, 1:] & free[:-1, 1:, 1:] & free[1:, 1:, 1:])
-        self.task_points = task_points
-        self.grid, self.clusters, self.geometry = grid, clusters, geometry
-        self.step = step
+        self.task_points = scenario.alpha
+        self.clusters = clusters.subset(occupancy.reachable_parts(self.grid, g))
+        self.step = s.check_step
         self.memo: dict[bytes, bool] = {}
+        self.build_seconds = time.perf_counter() - t0
+
+    def rho(self, q: np.ndarray) -> np.ndarray:
+        """Joint-space distance (rad) to the nearest colliding Theta node, (...,) for q (..., 3)."""
+        coords = ((q.reshape(-1, 3) - self.lo) / self.eps).T
+        return ndimage.map_coordinates(self.rho_grid, coords, order=1, mode="nearest").reshape(q.shape[:-1])
+
+    def fitness(self, paths: np.ndarray) -> np.ndarray:
+        """Eq 3 for paths (P, m, 3) with this model's segment checks and rho."""
+        p = len(paths)
+        free = self.free(paths[:, :-1].reshape(-1, 3), paths[:, 1:].reshape(-1, 3)).reshape(p, -1)
+        return fitness(paths, free, self.rho(paths), self.settings.delta, self.settings.beta)
 
     def configs(self, q: np.ndarray) -> np.ndarray:
         """Whether each configuration (K, 3) is free."""
@@ -169,6 +197,17 @@ class _SegmentChecker:
         if exact.any():
             ok[exact] = ~occupancy.grid_collision(q[exact], self.grid, self.clusters, self.geometry)
         return ok
+
+    def config_free(self, q0: float, q1: float, q2: float) -> bool:
+        """:meth:`configs` for one configuration in Python floats (for
+        per-state callers such as OMPL's validity checker)."""
+        top = self.n - 2
+        i = min(max(int((q0 - self.lo) / self.eps), 0), top)
+        j = min(max(int((q1 - self.lo) / self.eps), 0), top)
+        k = min(max(int((q2 - self.lo) / self.eps), 0), top)
+        if self.cell_free[i, j, k]:
+            return True
+        return bool(self.configs(np.array([[q0, q1, q2]]))[0])
 
     def evaluate(self, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether each segment a_i -> b_i ((S, 3) each) is free at every sample."""
@@ -233,6 +272,18 @@ class RrtGaPlanner:
             self._scene.close()
             self._scene = None
 
+    def model(self, scenario: CaPaManScenario) -> JointSpaceModel:
+        """Validate the scenario (PyBullet: ``ValueError`` if a task
+        configuration collides) and build its :class:`JointSpaceModel`
+        (:class:`PlanningError` if a task point collides in the grid model)."""
+        validate_scenario(scenario, self.scene)
+        model = JointSpaceModel(scenario, self.settings, self.geometry)
+        bad = np.flatnonzero(~model.configs(scenario.alpha))
+        if len(bad):
+            raise PlanningError(f"T.P.{bad[0] + 1} collides in the grid model (eq 2): it lies within the "
+                                f"{self.settings.cell * 1000:.0f} mm cells' margin of an obstacle")
+        return model
+
     def plan(self, scenario: CaPaManScenario) -> JointPath:
         """The tour T.P.1 -> T.P.2 -> T.P.3 -> T.P.1 as a 21-configuration joint path."""
         return self.solve(scenario).path
@@ -245,31 +296,13 @@ class RrtGaPlanner:
         and :class:`PlanningError` when no path is found within the settings'
         iterations and ``time_budget``.
         """
-        s, g = self.settings, self.geometry
+        s = self.settings
         t0 = time.perf_counter()
         deadline = t0 + s.time_budget
         rng = np.random.default_rng(self.seed if seed is None else seed)
-        validate_scenario(scenario, self.scene)
+        checker = self.model(scenario)
         tp = scenario.alpha
-
-        grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=s.cell)
-        clusters = _clusters(g, s.cluster_spacing)
-        theta, axis = occupancy.joint_matrix(grid, clusters, s.theta_points, g)
-        eps = axis[1] - axis[0]
-        rho_grid = (ndimage.distance_transform_edt(~theta, sampling=eps) if theta.any()
-                    else np.full(theta.shape, np.inf))
-        checker = _SegmentChecker(theta, axis, tp, grid, clusters.subset(occupancy.reachable_parts(grid, g)),
-                                  g, s.check_step)
-        bad = np.flatnonzero(~checker.configs(tp))
-        if len(bad):
-            k = bad[0]
-            raise PlanningError(f"T.P.{k + 1} collides in the grid model (eq 2): it lies within the "
-                                f"{s.cell * 1000:.0f} mm cells' margin of an obstacle")
-
-        def rho(q: np.ndarray) -> np.ndarray:
-            coords = ((q.reshape(-1, 3) - g.alpha_min) / eps).T
-            return ndimage.map_coordinates(rho_grid, coords, order=1, mode="nearest").reshape(q.shape[:-1])
-
+        rho = checker.rho
         t_theta = time.perf_counter()
         legs = [self._rrt_leg(tp[i], tp[j], checker, rng, deadline, leg)
                 for leg, (i, j) in enumerate(((0, 1), (1, 2), (2, 0)))]
@@ -277,10 +310,7 @@ class RrtGaPlanner:
         population = np.concatenate([population, tp[None, :1].repeat(len(population), axis=0)], axis=1)
         t_rrt = time.perf_counter()
 
-        def evaluate(pop: np.ndarray) -> np.ndarray:
-            free = checker.free(pop[:, :-1].reshape(-1, 3), pop[:, 1:].reshape(-1, 3)).reshape(len(pop), -1)
-            return fitness(pop, free, rho(pop), s.delta, s.beta)
-
+        evaluate = checker.fitness
         scores = evaluate(population)
         if not np.isfinite(scores).any():
             raise PlanningError("the RRT population has no collision-free path")
@@ -307,73 +337,98 @@ class RrtGaPlanner:
                      "check": t_end - t_ga, "total": t_end - t0})
         raise PlanningError("no path of the final population passes PyBullet's dense check")
 
-    def _rrt_leg(self, start: np.ndarray, goal: np.ndarray, checker: _SegmentChecker,
+    def _rrt_leg(self, start: np.ndarray, goal: np.ndarray, checker: JointSpaceModel,
                  rng: np.random.Generator, deadline: float, leg: int) -> np.ndarray:
-        """N RRTs from ``start`` to ``goal`` grown in lockstep (a tree extends as
-        far toward its sample as is free); returns the N paths shortcut and
-        resampled to ``LEG_INTERVALS[leg]`` intervals, without the goal:
-        (N, intervals, 3). Trees that have not reached the goal when the
-        iterations run out take the path of one that has."""
+        """N bidirectional RRTs (Kuffner and LaValle's RRT-Connect) from
+        ``start`` to ``goal``, grown in lockstep: each iteration one tree of
+        every pair extends toward a uniform sample (as far as is free, at
+        most ``rrt_step``) and the other tree tries to connect to the new node
+        in one straight, checked move; the trees swap roles every iteration.
+        Returns the N paths shortcut and resampled to ``LEG_INTERVALS[leg]``
+        intervals, without the goal: (N, intervals, 3). Growth stops once
+        ``rrt_quorum`` of the pairs have met; the others take the path of one
+        that has (the GA's mutations then tell them apart)."""
         s, g = self.settings, self.geometry
         n, cap = s.population, s.rrt_iterations + 2
-        nodes = np.zeros((n, cap, 3))
-        parent = np.full((n, cap), -1)
-        nodes[:, 0] = start
-        count = np.ones(n, int)
-        goal_node = np.full(n, -1)
+        nodes = np.zeros((n, 2, cap, 3))  # tree 0 grows from the start, tree 1 from the goal
+        parent = np.full((n, 2, cap), -1)
+        nodes[:, 0, 0], nodes[:, 1, 0] = start, goal
+        count = np.ones((n, 2), int)
+        meet = np.full((n, 2), -1)  # the node where the trees met, in each tree
         rows = np.arange(n)
         if checker.evaluate(start[None], goal[None])[0]:  # straight line is free
-            goal_node[:] = 1
-            nodes[:, 1] = goal
-            parent[:, 1] = 0
-            count[:] = 2
-        for _ in range(s.rrt_iterations):
-            active = rows[goal_node < 0]
-            if len(active) == 0 or time.perf_counter() > deadline:
-                break
-            target = rng.uniform(g.alpha_min, g.alpha_max, (len(active), 3))
-            target[rng.random(len(active)) < s.goal_bias] = goal
-            size = int(count[active].max())
-            diff = nodes[active, :size] - target[:, None]
+            nodes[:, 0, 1] = goal
+            parent[:, 0, 1] = 0
+            count[:, 0] = 2
+            meet[:] = (1, 0)
+
+        def nearest(pairs: np.ndarray, tree: int, q: np.ndarray) -> np.ndarray:
+            size = int(count[pairs, tree].max())
+            diff = nodes[pairs, tree, :size] - q[:, None]
             d = np.einsum("aki,aki->ak", diff, diff)  # squared distances to every node
-            d[np.arange(size)[None] >= count[active, None]] = np.inf
-            near = d.argmin(axis=1)
-            base = nodes[active, near]
+            d[np.arange(size)[None] >= count[pairs, tree, None]] = np.inf
+            return d.argmin(axis=1)
+
+        def add(pairs: np.ndarray, tree: int, q: np.ndarray, par: np.ndarray) -> np.ndarray:
+            slot = count[pairs, tree]
+            nodes[pairs, tree, slot] = q
+            parent[pairs, tree, slot] = par
+            count[pairs, tree] += 1
+            return slot
+
+        quorum = max(1, int(np.ceil(s.rrt_quorum * n)))
+        for it in range(s.rrt_iterations):
+            active = rows[meet[:, 0] < 0]
+            if n - len(active) >= quorum or time.perf_counter() > deadline:
+                break
+            a, b = it % 2, 1 - it % 2
+            target = rng.uniform(g.alpha_min, g.alpha_max, (len(active), 3))
+            near = nearest(active, a, target)
+            base = nodes[active, a, near]
             step = target - base
             dist = np.linalg.norm(step, axis=1, keepdims=True)
             new = base + step * np.minimum(1.0, s.rrt_step / np.maximum(dist, 1e-12))
-            # extend as far as the segment is free (RRT's "extend" with a partial step)
-            new = base + checker.reach(base, new)[:, None] * (new - base)
+            new = base + checker.reach(base, new)[:, None] * (new - base)  # extend as far as is free
             ok = np.linalg.norm(new - base, axis=1) > 0.5 * s.check_step
-            grow = active[ok]
-            slot = count[grow]
-            nodes[grow, slot] = new[ok]
-            parent[grow, slot] = near[ok]
-            count[grow] += 1
-            # connect to the goal when it is within a step and the segment is free
-            close = grow[np.linalg.norm(nodes[grow, slot] - goal, axis=1) <= s.rrt_step]
-            if len(close):
-                reach = checker.evaluate(nodes[close, count[close] - 1], np.broadcast_to(goal, (len(close), 3)))
-                done = close[reach]
-                nodes[done, count[done]] = goal
-                parent[done, count[done]] = count[done] - 1
-                goal_node[done] = count[done]
-                count[done] += 1
-        found = np.flatnonzero(goal_node >= 0)
+            grow, new = active[ok], new[ok]
+            if len(grow) == 0:
+                continue
+            slot_a = add(grow, a, new, near[ok])
+            # connect: the other tree's nearest node straight to the new one, as far as is free
+            near_b = nearest(grow, b, new)
+            base_b = nodes[grow, b, near_b]
+            frac = checker.reach(base_b, new)
+            moved = np.linalg.norm(new - base_b, axis=1) * frac > 0.5 * s.check_step
+            slot_b = np.full(len(grow), -1)
+            if moved.any():
+                q = base_b[moved] + frac[moved, None] * (new[moved] - base_b[moved])
+                slot_b[moved] = add(grow[moved], b, q, near_b[moved])
+            joined = frac >= 1.0
+            slot_b = np.where(joined & ~moved, near_b, slot_b)  # already within a sample of the new node
+            done = grow[joined]
+            meet[done, a], meet[done, b] = slot_a[joined], slot_b[joined]
+        found = np.flatnonzero(meet[:, 0] >= 0)
         if len(found) == 0:
             raise PlanningError(f"RRT found no path from T.P.{leg + 1} to T.P.{(leg + 1) % 3 + 1} in "
                                 f"{s.rrt_iterations} iterations (or the time budget)")
+
+        def chain(i: int, tree: int) -> list[int]:
+            out = [int(meet[i, tree])]
+            while out[-1] > 0:
+                out.append(int(parent[i, tree, out[-1]]))
+            return out
+
         out = np.empty((n, LEG_INTERVALS[leg], 3))
-        for row in range(n):  # each tree's path, shortcut and resampled; trees that failed reuse one that did
-            i = found[row % len(found)] if goal_node[row] < 0 else row
-            chain = [goal_node[i]]
-            while chain[-1] != 0:
-                chain.append(parent[i, chain[-1]])
-            out[row] = self._resample(self._shortcut(nodes[i, chain[::-1]], checker), LEG_INTERVALS[leg])[:-1]
+        for row in range(n):  # each pair's path, shortcut and resampled
+            i = found[row % len(found)] if meet[row, 0] < 0 else row
+            points = np.vstack([nodes[i, 0, chain(i, 0)[::-1]], nodes[i, 1, chain(i, 1)[1:]]])
+            if meet[i, 1] == 0 and not np.array_equal(points[-1], goal):  # tree 0 reached the goal itself
+                points = np.vstack([points, goal])
+            out[row] = self._resample(self._shortcut(points, checker), LEG_INTERVALS[leg])[:-1]
         return out
 
     @staticmethod
-    def _shortcut(points: np.ndarray, checker: _SegmentChecker) -> np.ndarray:
+    def _shortcut(points: np.ndarray, checker: JointSpaceModel) -> np.ndarray:
         """Greedy shortcut: from each kept point jump to the farthest point in
         view (all candidates tested in one batch)."""
         kept, i = [0], 0

@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 from gymnasium.utils.passive_env_checker import env_render_passive_checker
-from paragym.envs import CaPaManScenario
-from paragym.envs.capaman_scenarios import paper_scenario
-from paragym.planners import GridPathPolicy
 
 import paragym
+from paragym.envs import CaPaManScenario
+from paragym.envs.capaman_scenarios import paper_scenario
 from paragym.mechanisms import capaman
+from paragym.planners import GridPathPolicy
 from paragym.rollout import run_episode
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Cylinder

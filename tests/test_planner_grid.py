@@ -2,10 +2,10 @@
 
 import numpy as np
 import pytest
+
 from paragym.envs.capaman_scenarios import CaPaManScenario, paper_scenario
 from paragym.planners import GridPathPlanner, PlanningError, Policy
 from paragym.planners.grid_path import GridPathPolicy
-
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box
 

@@ -6,12 +6,12 @@ import time
 import gymnasium as gym
 import numpy as np
 import pytest
-from paragym.envs.capaman_scenarios import CaPaManScenario, paper_scenario
-from paragym.planners import PlanningError, RrtGaPlanner, RrtGaPolicy, RrtGaSettings
-from paragym.planners.rrt_ga import fitness
 
 import paragym  # noqa: F401
+from paragym.envs.capaman_scenarios import CaPaManScenario, paper_scenario
 from paragym.mechanisms import capaman
+from paragym.planners import PlanningError, RrtGaPlanner, RrtGaPolicy, RrtGaSettings
+from paragym.planners.rrt_ga import fitness
 from paragym.rollout import run_episode
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder
@@ -119,3 +119,11 @@ def test_fast_trajectories_are_stretched_to_the_velocity_limit():
     assert traj.dt > 0.09 and traj.peak_velocity <= 2.0 + 1e-6
     with pytest.raises(ValueError, match="dt"):
         JointTrajectory.from_path(path, -1.0)
+
+
+def test_the_per_state_check_equals_the_batched_one():
+    model = RrtGaPlanner().model(paper_scenario())
+    q = np.random.default_rng(0).uniform(45 * DEG, 135 * DEG, (2000, 3))
+    q[:50] = paper_scenario().alpha[0] + np.random.default_rng(1).normal(0, 3 * DEG, (50, 3))  # near a T.P.
+    q = np.clip(q, 45 * DEG, 135 * DEG)
+    np.testing.assert_array_equal([model.config_free(*x) for x in q], model.configs(q))

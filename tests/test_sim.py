@@ -7,9 +7,9 @@ import gymnasium as gym
 import numpy as np
 import pybullet as pb
 import pytest
-from paragym.envs.capaman_scenarios import paper_scenario, random_scenario
 
 import paragym  # noqa: F401  (registers the envs)
+from paragym.envs.capaman_scenarios import paper_scenario, random_scenario
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene

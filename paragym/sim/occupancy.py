@@ -103,13 +103,23 @@ class ClusterPoints:
         cached = self._grid_cache.get((key, part))
         if cached is not None:
             return cached
-        local = self.local[self.part == part]
         centres, quats = capaman.part_frames(alpha, geometry, validate=False)
-        rot_t = np.swapaxes(capaman.quat_to_matrix(quats[:, part]), -1, -2)
-        world = (centres[:, part, None, :] + local @ rot_t).astype(np.float32)
+        f32 = np.float32
+        world = _place(self.local[self.part == part].astype(f32), centres[:, part].astype(f32),
+                       capaman.quat_to_matrix(quats[:, part]).astype(f32))
         if world.nbytes <= max_bytes:
             self._grid_cache[(key, part)] = world
         return world
+
+
+def _place(local: np.ndarray, centres: np.ndarray, rot: np.ndarray) -> np.ndarray:
+    """World positions (N, M, 3) of part-frame points (M, 3) for N poses
+    (centres (N, 3), rotations (N, 3, 3)): one matrix product for all."""
+    n = len(rot)
+    world = np.swapaxes(rot, 1, 2).reshape(n, 3, 3)  # R^T per pose, so that local @ R^T is one product
+    world = local @ world  # (N, M, 3), a batched product numpy hands to BLAS
+    world += centres[:, None, :]
+    return world
 
 
 def _grid(length: float, spacing: float) -> np.ndarray:
@@ -186,10 +196,10 @@ def grid_collision(alpha: np.ndarray, grid: OccupancyGrid, clusters: ClusterPoin
     for start in range(0, len(al), step):  # chunks of configurations, not single samples
         block = al[start:start + step]
         centres, quats = capaman.part_frames(block, geometry, validate=False)
-        rot_t = np.swapaxes(capaman.quat_to_matrix(quats), -1, -2)  # (n, parts, 3, 3), transposed
+        rot = capaman.quat_to_matrix(quats)  # (n, parts, 3, 3)
         hit = np.zeros(len(block), bool)
         for p, local in by_part:  # a loop over the (at most 17) parts, each vectorised
-            world = centres[:, p, None, :] + local @ rot_t[:, p]
+            world = _place(local, centres[:, p], rot[:, p])
             hit |= grid.lookup(world).any(axis=1)
         out[start:start + step] = hit
     return out

@@ -1,0 +1,23 @@
+"""The benchmark scripts run (quick settings); their figures are theirs to print."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _run(*args: str) -> str:
+    res = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr[-2000:]
+    return res.stdout
+
+
+def test_env_speed_prints_a_row_per_env():
+    out = _run("benchmarks/env_speed.py", "--seconds", "0.3")
+    assert "paragym/CaPaManCollisionFree-v0" in out and "steps/s" in out
+
+
+def test_planner_benchmark_prints_its_table():
+    out = _run("benchmarks/planner_capaman.py", "--scenarios", "1", "--paper-runs", "1")
+    assert "RRT + GA on the paper scenario" in out and "RRT+GA " in out
