@@ -101,15 +101,19 @@ class JointTrajectory:
         return self._spline(np.clip(t, 0.0, self.duration))
 
     def velocity(self, t: np.ndarray) -> np.ndarray:
-        """d alpha / dt, rad/s."""
-        return self._spline.derivative(1)(np.clip(t, 0.0, self.duration))
+        """d alpha / dt, rad/s (zero before the start and after the end: at rest)."""
+        return self._outside_zero(t, self._spline.derivative(1))
 
     def acceleration(self, t: np.ndarray) -> np.ndarray:
-        """d2 alpha / dt2, rad/s^2."""
-        return self._spline.derivative(2)(np.clip(t, 0.0, self.duration))
+        """d2 alpha / dt2, rad/s^2 (zero before the start and after the end)."""
+        return self._outside_zero(t, self._spline.derivative(2))
+
+    def _outside_zero(self, t: np.ndarray, f: CubicHermiteSpline) -> np.ndarray:
+        t = np.asarray(t, float)
+        inside = (t >= 0.0) & (t <= self.duration)
+        return np.where(inside[:, None], f(np.clip(t, 0.0, self.duration)), 0.0)
 
     def sample(self, rate: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """(t, alpha, alpha_dot, alpha_ddot) at ``rate`` Hz over the whole trajectory."""
         t = np.arange(0.0, self.duration + 0.5 / rate, 1.0 / rate)
-        spline = self._spline
-        return t, spline(t), spline.derivative(1)(t), spline.derivative(2)(t)
+        return t, self.position(t), self.velocity(t), self.acceleration(t)

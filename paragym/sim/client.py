@@ -51,6 +51,7 @@ class LinkSpec:
     shape: PartShape | None = None
     shape_offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rgba: tuple[float, float, float, float] = (0.5, 0.5, 0.5, 1.0)
+    mass: float = 1e-3  # kg; the centre of mass sits at the shape's centre
 
 
 def _depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
@@ -170,10 +171,12 @@ class PyBulletSim:
                 vis.append(v)
         n = len(links)
         body = pb.createMultiBody(
-            0.0, -1, -1, linkMasses=[1e-3] * n, linkCollisionShapeIndices=cols, linkVisualShapeIndices=vis,
+            0.0, -1, -1, linkMasses=[link.mass for link in links], linkCollisionShapeIndices=cols,
+            linkVisualShapeIndices=vis,
             linkPositions=[link.position for link in links],
             linkOrientations=[link.orientation for link in links],
-            linkInertialFramePositions=[(0, 0, 0)] * n, linkInertialFrameOrientations=[_IDENTITY] * n,
+            linkInertialFramePositions=[link.shape_offset for link in links],
+            linkInertialFrameOrientations=[_IDENTITY] * n,
             linkParentIndices=[0 if link.parent is None else index[link.parent] + 1 for link in links],
             linkJointTypes=[_JOINT_TYPES[link.joint] for link in links],
             linkJointAxis=[link.axis for link in links],
@@ -186,6 +189,16 @@ class PyBulletSim:
         """Set joint positions of body ``name``: one list per joint (``[q]`` for
         revolute/prismatic, an xyzw quaternion for spherical)."""
         pb.resetJointStatesMultiDof(self._bodies[name], joints, values, physicsClientId=self._client)
+
+    @property
+    def client(self) -> int:
+        """The PyBullet client id, for builders in :mod:`paragym.sim` that need
+        calls this wrapper does not cover (dynamics, constraints)."""
+        return self._client
+
+    def body(self, name: str) -> int:
+        """PyBullet id of body ``name`` (for builders in :mod:`paragym.sim`)."""
+        return self._bodies[name]
 
     def link_index(self, name: str, link: str) -> int:
         """PyBullet link index of ``link`` in body ``name``."""
