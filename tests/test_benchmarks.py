@@ -21,3 +21,8 @@ def test_env_speed_prints_a_row_per_env():
 def test_planner_benchmark_prints_its_table():
     out = _run("benchmarks/planner_capaman.py", "--scenarios", "1", "--paper-runs", "1")
     assert "RRT + GA on the paper scenario" in out and "RRT+GA " in out
+
+
+def test_kf_speed_prints_the_comparison():
+    out = _run("benchmarks/kf_speed.py")
+    assert "Kalman filter" in out and "speed-up" in out and "target" in out

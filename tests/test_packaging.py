@@ -65,3 +65,14 @@ def test_cli_plan_writes_the_figure_and_the_trajectory(tmp_path):
     assert len(stats["via_points_rad"]) == 21 and stats["min_clearance_m"] > 0
     assert stats["tool_radius_about_obstacle_axis_m"][1] < 0.06
     assert (tmp_path / "CaPaManCollisionFree-v0_plan_paper_seed0.png").stat().st_size > 50_000
+
+
+def test_cli_validate_prints_the_report_and_writes_figs_8_and_9(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "validate", "CaPaManCollisionFree-v0",
+                          "--scenario", "paper", "--dt", "0.09", "--out", str(tmp_path)],
+                         capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "verdict: PASS" in res.stdout and "a_Hx" in res.stdout
+    folder = tmp_path / "CaPaManCollisionFree-v0_paper_seed0_dt0.09"
+    assert (folder / "fig8_raw.png").exists() and (folder / "fig9_kf.png").exists()
+    assert (folder / "report.json").exists()
