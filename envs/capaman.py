@@ -20,6 +20,7 @@ from paragym.envs.capaman_scenarios import (
 )
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
+from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
 
@@ -87,25 +88,31 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     ## Arguments
     ``scenario``: "random" (default; seeded, generated feasible), "paper",
     or a :class:`CaPaManScenario`; ``reset(options={"scenario": ...})``
-    overrides it for one episode. ``fidelity``: "kinematic" (the only one
-    in v0). ``max_joint_step`` (rad), ``reach_tolerance`` (rad, joint-space
+    overrides it for one episode. ``fidelity``: "kinematic" (default: the
+    joints go where the action says, the analytic model places the parts)
+    or "dynamic" (the closed chain under physics: the action moves the
+    motors' commands, which the motors chase for ``control_period`` s of
+    simulated time; observations report the encoders and the plate's
+    simulated pose). ``max_joint_step`` (rad), ``reach_tolerance`` (rad, joint-space
     norm), ``delta`` (m), ``beta``, ``w_length``, ``w_progress``,
     ``reach_bonus``, ``collision_penalty``, ``clearance_cap`` (m),
     ``geometry``, ``render_mode`` ("rgb_array" or "human").
 
     ## Version History
-    * v0: initial release.
+    * v0: initial release (kinematic and dynamic fidelity).
     """
 
     def __init__(self, scenario: str | CaPaManScenario = "random", fidelity: str = "kinematic",
                  render_mode: str | None = None, max_joint_step: float = 2 * DEG,
                  reach_tolerance: float = 1 * DEG, delta: float = 0.01, beta: float = 0.1,
                  w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
-                 collision_penalty: float = 5.0, clearance_cap: float = 0.05,
+                 collision_penalty: float = 5.0, clearance_cap: float = 0.05, control_period: float = 0.02,
                  geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> None:
         super().__init__(render_mode)
-        if fidelity != "kinematic":
-            raise ValueError(f"fidelity must be 'kinematic' (the only fidelity of v0); got {fidelity!r}")
+        if fidelity not in ("kinematic", "dynamic"):
+            raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
+        if not (np.isfinite(control_period) and control_period > 0):
+            raise ValueError(f"control_period must be a positive number of seconds; got {control_period!r}")
         self._check_scenario_arg(scenario)
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
                             ("clearance_cap", clearance_cap)):
@@ -121,7 +128,12 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         self.reach_bonus, self.collision_penalty = float(reach_bonus), float(collision_penalty)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
         self.observation_space = spaces.Box(-1.0, 1.0, (OBS_SIZE,), np.float32)
-        self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
+        self.control_period = float(control_period)
+        if fidelity == "kinematic":
+            self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
+        else:
+            self.scene = CaPaManDynamicScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
+        self._scenario_scene: CaPaManScene | None = None
         self._lo, self._hi = geometry.alpha_min, geometry.alpha_max
         self._mid, self._half = (self._hi + self._lo) / 2, (self._hi - self._lo) / 2
         self.scenario: CaPaManScenario | None = None
@@ -137,11 +149,13 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
         choice = options.get("scenario", self.scenario_arg)
         self._check_scenario_arg(choice)
+        checker = self._checker()
         if choice == "random":
-            scenario = random_scenario(self.np_random, self.scene, _clusters(self.geometry))
+            scenario = random_scenario(self.np_random, checker, _clusters(self.geometry))
         else:
             scenario = paper_scenario(self.geometry) if choice == "paper" else choice
-            validate_scenario(scenario, self.scene)
+            validate_scenario(scenario, checker)
+        self.scene.set_obstacles(scenario.obstacles)
         self.scenario = scenario
         self._tp = scenario.alpha
         self._tc = np.array(scenario.task_configs) if scenario.task_configs else \
@@ -150,6 +164,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         for i, o in enumerate(scenario.obstacles):
             self._obstacle_code[i * ENCODING_SIZE:(i + 1) * ENCODING_SIZE] = o.encode()
         self._alpha = self._tp[0].copy()
+        self._command = self._alpha.copy()
         self._reached = 0
         self._path_length = 0.0
         self._step_length = 0.0
@@ -161,19 +176,34 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         info["scenario"] = scenario
         return info
 
+    def _checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios (the env's
+        own in kinematic fidelity; a second, kinematic one in dynamic fidelity)."""
+        if isinstance(self.scene, CaPaManScene):
+            return self.scene
+        if self._scenario_scene is None:
+            self._scenario_scene = CaPaManScene(self.geometry, clearance_cap=self.scene.clearance_cap)
+        return self._scenario_scene
+
     @property
     def _target(self) -> int:
         return TOUR[min(self._reached, len(TOUR) - 1)]
 
     def _apply_action(self, action: np.ndarray) -> None:
         target = self._tp[self._target]
-        new = np.clip(self._alpha + action * self.max_joint_step, self._lo, self._hi)
+        command = np.clip(self._command + action * self.max_joint_step, self._lo, self._hi)
+        if self.fidelity == "kinematic":
+            self.scene.set_configuration(command)
+            new = command
+        else:  # the motors chase the command for one control period; the encoders say where they got
+            self.scene.drive(command, self.control_period)
+            new = self.scene.alpha
+        self._command = command
         self._step_length = math.hypot(*(new - self._alpha))
         self._path_length += self._step_length
         before = math.hypot(*(target - self._alpha))
         after = math.hypot(*(target - new))
         self._alpha = new
-        self.scene.set_configuration(new)
         self._clearance, self._near = self.scene.clearance()
         self._progress = before - after
         self._just_reached = after <= self.reach_tolerance and not self._collision
@@ -187,7 +217,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     def _observe(self) -> np.ndarray:
         t = self._target
         obs = np.concatenate([
-            (self._alpha - self._mid) / self._half, self.scene.tip,
+            np.clip((self._alpha - self._mid) / self._half, -1.0, 1.0), self.scene.tip,
             (self._tp[t] - self._mid) / self._half, self._tc[t],
             self._obstacle_code,
             [max(self._clearance, -self.scene.clearance_cap), self._reached / len(TOUR)],
@@ -225,3 +255,5 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
 
     def _close(self) -> None:
         self.scene.close()
+        if self._scenario_scene is not None:
+            self._scenario_scene.close()

@@ -180,3 +180,20 @@ def test_reward_follows_the_fitness_terms():
     env.reset(seed=0)
     _, r, *_ = env.step(np.zeros(3, np.float32))
     assert r == pytest.approx(-0.5)  # within delta of an obstacle: the beta penalty
+
+
+def test_dynamic_fidelity_passes_the_checker_and_tours_the_paper_scenario():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(gym.make(ENV_ID, fidelity="dynamic").unwrapped, skip_render_check=True)
+    env = gym.make(ENV_ID, scenario="paper", fidelity="dynamic")
+    from paragym.planners import RrtGaPolicy
+
+    ep = run_episode(env, RrtGaPolicy(env.unwrapped.max_joint_step), seed=0)
+    assert ep.success and not any(i["collision"] for i in ep.infos)
+    # the motors lag their commands: the measured joint path is not the commanded one
+    commanded = env.unwrapped._command
+    assert np.abs(ep.infos[-1]["alpha"] - commanded).max() < np.radians(2)
+    a = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)
+    b = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)
+    np.testing.assert_array_equal(a, b)

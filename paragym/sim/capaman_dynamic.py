@@ -97,10 +97,12 @@ class CaPaManDynamicScene:
     ROBOT = "capaman"
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                 dynamics: CaPaManDynamics | None = None) -> None:
+                 dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05) -> None:
         self.geometry = g = geometry
+        self.clearance_cap = clearance_cap
+        self.obstacles: tuple = ()
         self.dynamics = d = dynamics or CaPaManDynamics()
-        self.sim = PyBulletSim()
+        self.sim = PyBulletSim(gui=gui)
         c = self.sim.client
         pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
         pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
@@ -129,7 +131,7 @@ class CaPaManDynamicScene:
                                 [0, 0, 0], [0, 0, g.a / 2], [0, 0, g.c / 2], physicsClientId=c)
             pb.createConstraint(self.body, self.sliders[k], self.body, self.plate, pb.JOINT_POINT2POINT,
                                 [0, 0, 0], [0, 0, 0], list(g.plate_points[k]), physicsClientId=c)
-        self.reset(g.alpha_home)
+        self.set_configuration(g.alpha_home)
 
     def reset(self, alpha: np.ndarray) -> None:
         """Put every joint where the analytic model has it at ``alpha`` (rad), at rest."""
@@ -193,6 +195,65 @@ class CaPaManDynamicScene:
         acc = np.gradient(vel, d.time_step, axis=0)
         ang_acc = np.gradient(omega, d.time_step, axis=0)
         return ExecutedMotion(t, pos, capaman.quat_to_matrix(orn), vel, omega, acc, ang_acc, alpha, closure)
+
+    # --- the interface of CaPaManScene, for an environment in dynamic fidelity ------------
+    def set_obstacles(self, obstacles: tuple) -> None:
+        """Replace the obstacles (static bodies the mechanism can hit)."""
+        obstacles = tuple(obstacles)
+        if obstacles == self.obstacles:
+            return
+        if "obstacles" in self.sim.body_names:
+            self.sim.remove("obstacles")
+        self.obstacles = obstacles
+        if obstacles:
+            self.sim.add_static_group("obstacles", obstacles)
+
+    def set_configuration(self, alpha: np.ndarray) -> np.ndarray:
+        """Reset the mechanism at rest at ``alpha`` with the motors holding it; returns the tool tip."""
+        self.reset(alpha)
+        self._target = np.asarray(alpha, float).copy()
+        return self.tip
+
+    def drive(self, target: np.ndarray, duration: float) -> np.ndarray:
+        """Move the motors' targets linearly from the last target to ``target``
+        (rad) over ``duration`` s of simulated time; returns the tool tip."""
+        d, c = self.dynamics, self.sim.client
+        steps = max(1, int(round(duration / d.time_step)))
+        start = self._target
+        rate = (np.asarray(target, float) - start) / (steps * d.time_step)
+        for i in range(1, steps + 1):
+            goal = start + (target - start) * (i / steps)
+            pb.setJointMotorControlArray(self.body, self.motors, pb.POSITION_CONTROL, targetPositions=list(-goal),
+                                         targetVelocities=list(-rate), forces=[d.motor_torque] * 3,
+                                         positionGains=[d.position_gain] * 3, velocityGains=[d.velocity_gain] * 3,
+                                         physicsClientId=c)
+            pb.stepSimulation(physicsClientId=c)
+        self._target = np.asarray(target, float).copy()
+        return self.tip
+
+    @property
+    def alpha(self) -> np.ndarray:
+        """The crank angles now (rad), as the motors' encoders read them."""
+        return np.array([-s[0] for s in pb.getJointStates(self.body, self.motors, physicsClientId=self.sim.client)])
+
+    @property
+    def tip(self) -> np.ndarray:
+        """The tool tip now (m), from the plate's simulated pose."""
+        pos, orn = pb.getLinkState(self.body, self.plate, computeForwardKinematics=True,
+                                   physicsClientId=self.sim.client)[4:6]
+        rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
+        return np.array(pos) - self.geometry.tool_length * rot[:, 2]
+
+    def clearance(self) -> tuple[float, str | None]:
+        """Signed distance (m) from the whole mechanism to the nearest obstacle, capped."""
+        if not self.obstacles:
+            return self.clearance_cap, None
+        return self.sim.clearance(self.ROBOT, ["obstacles"], self.clearance_cap)
+
+    def render(self, width: int = 480, height: int = 360, yaw: float = 45.0, pitch: float = -25.0,
+               distance: float = 0.9) -> np.ndarray:
+        """RGB image of the scene (uint8, (height, width, 3))."""
+        return self.sim.render(width, height, target=(0.0, 0.0, 0.1), distance=distance, yaw=yaw, pitch=pitch)
 
     def close(self) -> None:
         """Disconnect PyBullet."""
