@@ -17,6 +17,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.capaman:CaPaManCollisionFreeEnv", 400,
         "CaPaMan 3-DOF: tour T.C.1->2->3->1 around obstacles, whole manipulator collision-free (paper 000)",
     ),
+    "paragym/HybridSingularityFree-v0": (
+        "paragym.envs.hybrid:HybridSingularityFreeEnv", 100,
+        "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations (paper 002)",
+    ),
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 
-__all__ = ["JointPath", "JointTrajectory"]
+__all__ = ["JointPath", "JointTrajectory", "nominal_path"]
 
 
 @dataclass(frozen=True)
@@ -117,3 +117,14 @@ class JointTrajectory:
         """(t, alpha, alpha_dot, alpha_ddot) at ``rate`` Hz over the whole trajectory."""
         t = np.arange(0.0, self.duration + 0.5 / rate, 1.0 / rate)
         return t, self.position(t), self.velocity(t), self.acceleration(t)
+
+
+def nominal_path(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01) -> tuple[np.ndarray, np.ndarray]:
+    """u (K,) and P(u) (K, n): paper 002's rest-to-rest 7th-degree polynomial
+    ``P(u) = P0 + (P1 - P0)(35u^4 - 84u^5 + 70u^6 - 20u^7)`` (eqs 15-17: zero
+    velocity, acceleration and jerk at both ends), sampled every ``tau``."""
+    if not 0 < tau <= 0.5:
+        raise ValueError(f"tau must lie in (0, 0.5]; got {tau}")
+    u = np.linspace(0.0, 1.0, int(round(1.0 / tau)) + 1)
+    s = 35 * u ** 4 - 84 * u ** 5 + 70 * u ** 6 - 20 * u ** 7
+    return u, np.asarray(p0, float) + (np.asarray(p1, float) - np.asarray(p0, float)) * s[:, None]

@@ -1,0 +1,224 @@
+"""``paragym/HybridSingularityFree-v0``: the hexapod + tripod along a polynomial path (paper 002)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from paragym.envs.base import ParagymEnv
+from paragym.mechanisms import hybrid
+from paragym.trajectories import nominal_path
+
+__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "hybrid_paper_scenario", "hybrid_random_scenario"]
+
+MM = 1e-3
+POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
+OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
+
+
+@dataclass(frozen=True)
+class HybridScenario:
+    """Start and goal of the end-effector, as displacements from home (m, rad)."""
+
+    name: str
+    p0: tuple[float, ...]
+    p1: tuple[float, ...]
+    geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
+    seed: int | None = None
+
+
+def hybrid_paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> HybridScenario:
+    """Paper 002's example: P0 = [10, 10, 10, 0, 0, 0], P1 = [100, 80, 110, 0.15, 0.25, 0] (mm, rad)."""
+    p0 = (10 * MM, 10 * MM, 10 * MM, 0.0, 0.0, 0.0)
+    p1 = (100 * MM, 80 * MM, 110 * MM, 0.15, 0.25, 0.0)
+    return HybridScenario("paper", p0, p1, geometry)
+
+
+def _reachable(p: np.ndarray, geometry: hybrid.HybridGeometry, deltas: np.ndarray) -> bool:
+    return bool(hybrid.solve(np.repeat(p[None], len(deltas), 0), deltas, geometry, validate=False).free.any())
+
+
+def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                           hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
+    """A seeded pair of poses in the workspace: P0 singularity-free within
+    limits at the starting split Delta = 0.5, P1 at some Delta; x, y in
+    +-100 mm, z in 0-120 mm, roll and pitch in +-0.3 rad, yaw in +-0.4 rad.
+    With probability ``hard_share`` the pair is drawn again until its nominal
+    path at Delta = 0.5 meets a singularity or a leg limit (of unbiased pairs
+    about a quarter do), so that doing nothing does not solve the env."""
+    deltas = np.linspace(0, 1, 21)
+    low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
+    high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
+    hard = rng.random() < hard_share
+    for _ in range(max_tries):
+        p0, p1 = rng.uniform(low, high), rng.uniform(low, high)
+        if not (_reachable(p0, geometry, np.array([0.5])) and _reachable(p1, geometry, deltas)):
+            continue
+        if hard and hybrid.solve(nominal_path(p0, p1)[1], 0.5, geometry, validate=False).free.all():
+            continue
+        return HybridScenario("random", tuple(map(float, p0)), tuple(map(float, p1)), geometry)
+    raise RuntimeError(f"no reachable pair of poses in {max_tries} tries")
+
+
+class HybridSingularityFreeEnv(ParagymEnv):
+    """Move a hexapod + tripod's end-effector along a polynomial path without
+    singular poses or leg-limit violations.
+
+    ## Description
+    Paper 002 (Rakhodaei, Ding, Saadat, Rastegarpanah): a 6-UPU hexapod
+    carries a 3-RPS tripod (nine prismatic actuators). The end-effector E
+    follows the rest-to-rest 7th-degree path from P0 to P1 (eq 17); the
+    episode walks u from 0 to 1 in steps of tau = 0.01. At each step the agent
+    chooses how the motion is split between the stages (Delta, eqs 19-20) and
+    may offset E's position from the nominal path by at most J-bar (the
+    paper's detour); the kinematics is :mod:`paragym.mechanisms.hybrid`.
+
+    ## Action Space
+    ``Box(-1, 1, (4,), float32)``: the change of Delta (times
+    ``max_delta_step`` = 0.05, Delta held in [0, 1]) and the offset of E's
+    x, y, z from the nominal path (times ``j_bar`` = 20 mm). The last pose is
+    P1 exactly: its offset is ignored.
+
+    ## Observation Space
+    ``Box(-10, 10, (28,), float32)``: u; the nominal pose at this step and at
+    the next (x, y, z / 0.1 m, angles / 0.5 rad); Delta; the nine strokes
+    mapped so that L_min -> -1 and L_max -> +1; the two singularity measures
+    (1 at home, singular below 0.2); the current offset / j_bar.
+
+    ## Rewards
+    Per step: ``-w_offset |offset| / j_bar`` (deviation from the nominal
+    path) ``- w_delta |change of Delta| / max_delta_step`` (smoothness)
+    ``- w_singular * sum of (0.4 - mu)_+ / 0.4`` over both measures
+    (closeness to singularity) ``- w_limit * (legs out of limits)``.
+
+    ## Starting State
+    u = 0, Delta = 0.5, E at P0 (``info["scenario"]``: a frozen HybridScenario).
+
+    ## Episode End
+    Terminated after the step that reaches u = 1 (100 steps);
+    ``info["is_success"]`` when every pose of the episode was
+    singularity-free and within the limits (eq 14).
+
+    ## Arguments
+    ``scenario``: "random" (default), "paper" or a HybridScenario;
+    ``max_delta_step``, ``j_bar`` (m), ``w_offset``, ``w_delta``,
+    ``w_singular``, ``w_limit``, ``geometry``, ``render_mode``.
+
+    ## Version History
+    * v0: initial release (kinematic fidelity).
+    """
+
+    def __init__(self, scenario: str | HybridScenario = "random", render_mode: str | None = None,
+                 max_delta_step: float = 0.05, j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05,
+                 w_singular: float = 1.0, w_limit: float = 1.0,
+                 geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01) -> None:
+        super().__init__(render_mode)
+        self._check_scenario(scenario)
+        for name, value in (("max_delta_step", max_delta_step), ("j_bar", j_bar), ("tau", tau)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number; got {value!r}")
+        self.scenario_arg, self.geometry = scenario, geometry
+        self.max_delta_step, self.j_bar, self.tau = float(max_delta_step), float(j_bar), float(tau)
+        self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
+        self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
+        self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
+        self._scene: Any = None
+
+    @staticmethod
+    def _check_scenario(scenario: Any) -> None:
+        if isinstance(scenario, str) and scenario not in ("paper", "random"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {scenario!r}")
+        if not isinstance(scenario, str | HybridScenario):
+            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {scenario!r}")
+
+    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
+        choice = options.get("scenario", self.scenario_arg)
+        self._check_scenario(choice)
+        if choice == "random":
+            scenario = hybrid_random_scenario(self.np_random, self.geometry)
+        elif choice == "paper":
+            scenario = hybrid_paper_scenario(self.geometry)
+        else:
+            scenario = choice
+            hybrid.check_pose(np.array(scenario.p0), "scenario.p0")
+            hybrid.check_pose(np.array(scenario.p1), "scenario.p1")
+        self.scenario = scenario
+        self._u, self._nominal = nominal_path(np.array(scenario.p0), np.array(scenario.p1), self.tau)
+        self._k = 0
+        self._delta = 0.5
+        self._d_delta = 0.0
+        self._offset = np.zeros(3)
+        self._all_free = True
+        self._evaluate()
+        info = self._info()
+        info["scenario"] = scenario
+        return info
+
+    def _evaluate(self) -> None:
+        pose = self._nominal[self._k].copy()
+        pose[:3] += self._offset
+        self._state = hybrid.solve(pose[None], self._delta, self.geometry, validate=False)
+        self._all_free &= bool(self._state.free[0])
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        if self._k >= len(self._u) - 1:
+            raise RuntimeError("the episode has ended: call reset()")
+        a = np.clip(action, -1.0, 1.0)
+        new_delta = float(np.clip(self._delta + a[0] * self.max_delta_step, 0.0, 1.0))
+        self._d_delta = new_delta - self._delta
+        self._delta = new_delta
+        self._k += 1
+        self._offset = np.zeros(3) if self._k == len(self._u) - 1 else a[1:] * self.j_bar
+        self._evaluate()
+
+    def _observe(self) -> np.ndarray:
+        g, st = self.geometry, self._state
+        nxt = min(self._k + 1, len(self._u) - 1)
+        strokes = 2 * (st.lengths[0] - g.l_min) / (g.l_max - g.l_min) - 1
+        obs = np.concatenate([[self._u[self._k]], self._nominal[self._k] / POSE_SCALE,
+                              self._nominal[nxt] / POSE_SCALE, [self._delta], strokes,
+                              [st.mu_hexapod[0], st.mu_tripod[0]], self._offset / self.j_bar])
+        return np.clip(obs, -10.0, 10.0).astype(np.float32)
+
+    def _reward(self) -> float:
+        st, g = self._state, self.geometry
+        close = sum(max(0.0, 2 * g.singularity_threshold - float(m)) / (2 * g.singularity_threshold)
+                    for m in (st.mu_hexapod[0], st.mu_tripod[0]))
+        out = int(np.sum((st.lengths[0] < g.l_min) | (st.lengths[0] > g.l_max)))
+        return float(-self.w_offset * np.linalg.norm(self._offset) / self.j_bar
+                     - self.w_delta * abs(self._d_delta) / self.max_delta_step
+                     - self.w_singular * close - self.w_limit * out)
+
+    def _terminated(self) -> bool:
+        return self._k >= len(self._u) - 1
+
+    def _info(self) -> dict[str, Any]:
+        st = self._state
+        return {"step": self._k, "u": float(self._u[self._k]), "delta": self._delta,
+                "offset": self._offset.copy(), "lengths": st.lengths[0].copy(),
+                "mu_hexapod": float(st.mu_hexapod[0]), "mu_tripod": float(st.mu_tripod[0]),
+                "free": bool(st.free[0]), "within_limits": bool(st.within_limits[0]),
+                "is_success": self._terminated() and self._all_free,
+                "max_delta_step": self.max_delta_step, "j_bar": self.j_bar}
+
+    def _render_rgb(self) -> np.ndarray:
+        if self._scene is None:
+            from paragym.sim.hybrid_model import HybridScene
+
+            self._scene = HybridScene(self.geometry, gui=self.render_mode == "human")
+        self._scene.set_state(self._state.t_a[0], self._state.t_e[0])
+        return self._scene.render()
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode == "human":
+            self._render_rgb()
+            return None
+        return super().render()
+
+    def _close(self) -> None:
+        if self._scene is not None:
+            self._scene.close()
+            self._scene = None

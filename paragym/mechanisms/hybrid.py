@@ -1,0 +1,376 @@
+"""Kinematics of the hybrid parallel robot of paper 002: a hexapod carrying a tripod.
+
+Paper 002 (Rakhodaei, Ding, Saadat, Rastegarpanah, "Free singularity path
+planning of hybrid parallel robot") gives the model's structure and numbers
+but not its geometry; every size below is an assumption from the project's
+design notes, documented in :class:`HybridGeometry`.
+
+* **Hexapod** (6-UPU, base B to platform A): leg i runs from B_i on the base
+  to A_i on platform A, ``L_i = |T_A A_i - B_i|`` (eq 1). Base joints at radius
+  0.150 m, 120 k +- 15 deg; platform joints at 0.100 m, 120 k +- 45 deg; each
+  base joint joins its nearest platform joint.
+* **Tripod** (3-RPS, platform A to end-effector platform E): leg j has a
+  revolute joint on A at radius ``r_ta`` whose axis is tangential, a
+  prismatic actuator, and a spherical joint on E at radius ``r_te``. Each
+  leg therefore moves in the vertical plane through A's axis and its
+  revolute joint, which constrains E: ``t_j . E_j = 0`` with t_j the
+  revolute axis. The tripod has three degrees of freedom, heave z_T, roll
+  and pitch; its x_T, y_T and yaw are *parasitic* motions that follow from
+  those three (:func:`tripod_pose`), never ignored.
+* **Series**: ``T_E = T_A T_T`` exactly (eq 3).
+* **Split** Delta (eqs 19-20): of the end-effector's displacement P from
+  home (x, y, z, roll, pitch, yaw; m and rad), the tripod takes the share
+  (1 - Delta) of what it can do (z, roll, pitch); the hexapod takes the rest,
+  ``T_A = T_E T_T^-1``, so that E's pose is met exactly whatever Delta.
+* **Singularity**: the hexapod's force transformation matrix
+  ``H = [s_i ; A_i x s_i]`` (eq 11) with moments about A's centre divided by
+  the platform radius, measured by its smallest singular value normalised
+  by its value at home; the tripod's 6x6 matrix of the three actuation
+  wrenches (along the legs) and the three constraint wrenches (forces
+  through the spherical joints along the revolute axes), measured the same
+  way. Singular when a measure drops below ``singularity_threshold``;
+  eq 14 adds the nine leg limits L_min = 226.11 mm <= L <= L_max = 326.11 mm.
+
+Angles are XYZ fixed (roll about x, then pitch about y, then yaw about z:
+``R = Rz(yaw) Ry(pitch) Rx(roll)``). SI units throughout (the paper's mm are
+converted at the edge).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+
+__all__ = [
+    "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
+    "hexapod_matrix", "is_singularity_free", "pose_matrix", "solve", "split", "tripod_forward",
+    "tripod_lengths", "tripod_pose",
+]
+
+DEG = np.pi / 180
+
+
+@dataclass(frozen=True)
+class HybridGeometry:
+    """Sizes of the hybrid robot (m, rad). The paper gives only the leg
+    limits; the joint layout is the design notes' assumption, and the home
+    heights are chosen so that the paper's example (P0 -> P1) is feasible after
+    planning while its nominal path at Delta = 0.5 is not."""
+
+    base_radius: float = 0.150
+    base_half_angle: float = 15 * DEG
+    platform_radius: float = 0.100
+    platform_half_angle: float = 45 * DEG
+    r_ta: float = 0.090  # tripod revolute joints on A
+    r_te: float = 0.060  # tripod spherical joints on E
+    tripod_angles: tuple[float, float, float] = (90 * DEG, 210 * DEG, 330 * DEG)
+    hexapod_home_height: float = 0.220  # A above B at home (m)
+    tripod_home_height: float = 0.225  # E above A at home (m)
+    l_min: float = 0.22611
+    l_max: float = 0.32611
+    singularity_threshold: float = 0.2  # of the home value, both stages
+
+    @property
+    def base_joints(self) -> np.ndarray:
+        """B_i (6, 3) in the base frame."""
+        ang = np.array([120 * DEG * k + s * self.base_half_angle for k in range(3) for s in (-1, 1)])
+        return self.base_radius * np.stack([np.cos(ang), np.sin(ang), np.zeros(6)], axis=1)
+
+    @property
+    def platform_joints(self) -> np.ndarray:
+        """A_i (6, 3) in A's frame; A_i pairs with B_i (its nearest)."""
+        ang = np.array([120 * DEG * k + s * self.platform_half_angle for k in range(3) for s in (-1, 1)])
+        return self.platform_radius * np.stack([np.cos(ang), np.sin(ang), np.zeros(6)], axis=1)
+
+    @property
+    def tripod_base(self) -> np.ndarray:
+        """Revolute joint centres (3, 3) on A, A's frame."""
+        a = np.asarray(self.tripod_angles)
+        return self.r_ta * np.stack([np.cos(a), np.sin(a), np.zeros(3)], axis=1)
+
+    @property
+    def tripod_top(self) -> np.ndarray:
+        """Spherical joint centres (3, 3) on E, E's frame."""
+        a = np.asarray(self.tripod_angles)
+        return self.r_te * np.stack([np.cos(a), np.sin(a), np.zeros(3)], axis=1)
+
+    @property
+    def tripod_axes(self) -> np.ndarray:
+        """Revolute axes t_j (3, 3), tangential, A's frame."""
+        a = np.asarray(self.tripod_angles)
+        return np.stack([-np.sin(a), np.cos(a), np.zeros(3)], axis=1)
+
+
+DEFAULT_GEOMETRY = HybridGeometry()
+
+
+def euler_matrix(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll), batched: (N, 3, 3)."""
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    flat = np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+                     sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+                     -sp, cp * sr, cp * cr], -1)
+    return flat.reshape(flat.shape[:-1] + (3, 3))
+
+
+def matrix_euler(r: np.ndarray) -> np.ndarray:
+    """(roll, pitch, yaw) (N, 3) of rotation matrices (N, 3, 3) (inverse of :func:`euler_matrix`)."""
+    return np.stack([np.arctan2(r[..., 2, 1], r[..., 2, 2]), -np.arcsin(np.clip(r[..., 2, 0], -1, 1)),
+                     np.arctan2(r[..., 1, 0], r[..., 0, 0])], -1)
+
+
+def pose_matrix(pose: np.ndarray) -> np.ndarray:
+    """4x4 transforms (N, 4, 4) of poses (N, 6) = (x, y, z, roll, pitch, yaw)."""
+    pose = np.atleast_2d(pose)
+    t = np.zeros(pose.shape[:-1] + (4, 4))
+    t[..., :3, :3] = euler_matrix(pose[..., 3], pose[..., 4], pose[..., 5])
+    t[..., :3, 3] = pose[..., :3]
+    t[..., 3, 3] = 1.0
+    return t
+
+
+def _pose_of(t: np.ndarray) -> np.ndarray:
+    return np.concatenate([t[..., :3, 3], matrix_euler(t[..., :3, :3])], axis=-1)
+
+
+def _apply(t: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Points (K, 3) through transforms (N, 4, 4): (N, K, 3)."""
+    return np.einsum("nij,kj->nki", t[:, :3, :3], points) + t[:, None, :3, 3]
+
+
+# --- tripod -------------------------------------------------------------------------
+
+
+@lru_cache(maxsize=8)
+def _tripod_consts(g: HybridGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return g.tripod_top, g.tripod_axes, g.tripod_base
+
+
+@lru_cache(maxsize=8)
+def _consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
+    """Per-geometry constant arrays: B_i, A_i, pinv of the revolute axes' xy,
+    the constraint wrench columns' force part."""
+    return g.base_joints, g.platform_joints, np.linalg.pinv(g.tripod_axes[:, :2]).T, home_pose(g)
+
+
+def tripod_pose(z: np.ndarray, roll: np.ndarray, pitch: np.ndarray,
+                geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The tripod's full pose (N, 6) in A's frame from its three inputs.
+
+    Summing the three plane constraints ``t_j . (p + R q_j) = 0`` removes p
+    (the t_j sum to zero) and, for joints 120 deg apart, leaves ``R_10 = R_01``;
+    with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` that is the parasitic yaw
+    ``tan(yaw) = sin(pitch) sin(roll) / (cos(pitch) + cos(roll))``. The
+    parasitic x and y then follow from the (linear, consistent) constraints.
+    """
+    g = geometry
+    q, t, _ = _tripod_consts(g)
+    z, roll, pitch = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, float)) for v in (z, roll, pitch)))
+    yaw = np.arctan2(np.sin(pitch) * np.sin(roll), np.cos(pitch) + np.cos(roll))
+    rq = np.einsum("nij,kj->nki", euler_matrix(roll, pitch, yaw), q)  # (N, 3, 3)
+    rhs = -np.einsum("ki,nki->nk", t, rq)  # t_j . p = rhs_j
+    xy = rhs @ _consts(g)[2]
+    return np.column_stack([xy, z, roll, pitch, yaw])
+
+
+def tripod_lengths(t_t: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Tripod leg lengths (N, 3) for tripod transforms T_T (N, 4, 4) (eq 4)."""
+    q, _, base = _tripod_consts(geometry)
+    return np.linalg.norm(_apply(t_t, q) - base, axis=2)
+
+
+def tripod_forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
+                   guess: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
+    """Tripod inputs (z, roll, pitch) (N, 3) from leg lengths (N, 3), by
+    Newton's method on :func:`tripod_pose` (numerical Jacobian), batched."""
+    lengths = np.atleast_2d(lengths)
+    x = np.tile([geometry.tripod_home_height, 0.0, 0.0], (len(lengths), 1)) if guess is None else guess.copy()
+
+    def f(v: np.ndarray) -> np.ndarray:
+        return tripod_lengths(pose_matrix(tripod_pose(v[:, 0], v[:, 1], v[:, 2], geometry)), geometry)
+
+    for _ in range(50):
+        r = f(x) - lengths
+        if np.max(np.abs(r)) < tol:
+            break
+        jac = np.stack([(f(x + h) - f(x - h)) / 2e-7 for h in np.eye(3) * 1e-7], axis=2)
+        x = x - np.linalg.solve(jac, r[..., None])[..., 0]
+    return x
+
+
+# --- hexapod ---------------------------------------------------------------------------
+
+
+def hexapod_lengths(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Hexapod leg lengths (N, 6) for platform transforms T_A (N, 4, 4) (eq 1)."""
+    base, plat = _consts(geometry)[:2]
+    return np.linalg.norm(_apply(t_a, plat) - base, axis=2)
+
+
+def hexapod_matrix(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """H(X) (N, 6, 6) of eq 11: columns [s_i ; a_i x s_i / r] with s_i the
+    unit leg vectors and a_i = R A_i the joints about A's centre (moments
+    divided by the platform radius, so the matrix is dimensionless). Its
+    transpose maps the platform twist (v, r omega) to the leg rates."""
+    g = geometry
+    base, plat = _consts(g)[:2]
+    a = t_a[:, None, :3, :3] @ plat[None, :, :, None]
+    a = a[..., 0]
+    legs = a + t_a[:, None, :3, 3] - base
+    s = legs / np.linalg.norm(legs, axis=2, keepdims=True)
+    return np.concatenate([s, np.cross(a, s) / g.platform_radius], axis=2).transpose(0, 2, 1)
+
+
+def hexapod_forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
+                    guess: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
+    """Platform A's pose (N, 6) from the six leg lengths (N, 6): Newton's
+    method with the analytic Jacobian H^T, batched, from ``guess`` (home)."""
+    g = geometry
+    lengths = np.atleast_2d(lengths)
+    pose = np.tile([0, 0, g.hexapod_home_height, 0, 0, 0], (len(lengths), 1)).astype(float) \
+        if guess is None else guess.astype(float).copy()
+    for _ in range(50):
+        t = pose_matrix(pose)
+        r = hexapod_lengths(t, g) - lengths
+        if np.max(np.abs(r)) < tol:
+            break
+        jt = np.swapaxes(hexapod_matrix(t, g), 1, 2)  # dL = H^T [dp; r dphi]
+        twist = np.linalg.solve(jt, -r[..., None])[..., 0]
+        dphi = twist[:, 3:] / g.platform_radius
+        rot = _rotvec(dphi) @ t[:, :3, :3]
+        pose = np.column_stack([pose[:, :3] + twist[:, :3], matrix_euler(rot)])
+    return pose
+
+
+def _rotvec(v: np.ndarray) -> np.ndarray:
+    """Rotation matrices (N, 3, 3) of rotation vectors (N, 3) (Rodrigues)."""
+    theta = np.linalg.norm(v, axis=1)[:, None, None]
+    k = np.zeros((len(v), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -v[:, 2], v[:, 1], -v[:, 0]
+    k = k - np.swapaxes(k, 1, 2)
+    safe = np.where(theta > 1e-12, theta, 1.0)
+    return np.eye(3) + np.sin(safe) / safe * k + (1 - np.cos(safe)) / safe ** 2 * (k @ k)
+
+
+def tripod_matrix(t_t: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The tripod's 6x6 wrench matrix (N, 6, 6), in A's frame: three actuation
+    wrenches (unit forces along the legs through the spherical joints) and
+    three constraint wrenches (unit forces through the spherical joints along
+    the revolute axes), moments about E's centre divided by r_te."""
+    q, t, base = _tripod_consts(geometry)
+    e = np.einsum("nij,kj->nki", t_t[:, :3, :3], q)  # joints about E's centre
+    legs = e + t_t[:, None, :3, 3] - base
+    s = legs / np.linalg.norm(legs, axis=2, keepdims=True)
+    tt = np.broadcast_to(t, s.shape)
+    cols = np.concatenate([np.concatenate([s, np.cross(e, s) / geometry.r_te], axis=2),
+                           np.concatenate([tt, np.cross(e, tt) / geometry.r_te], axis=2)], axis=1)
+    return cols.transpose(0, 2, 1)
+
+
+# --- the whole robot ---------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class HybridState:
+    """Everything about a batch of N end-effector poses at split Delta.
+
+    Attributes: ``t_e``, ``t_a`` (base frame) and ``t_t`` (in A's frame)
+    transforms (N, 4, 4); ``lengths`` (N, 9): six hexapod legs then three
+    tripod legs (m); ``mu_hexapod``, ``mu_tripod`` (N,): the singularity
+    measures (1 at home, 0 singular); ``within_limits`` (N,); ``free`` (N,):
+    eq 14.
+    """
+
+    t_e: np.ndarray
+    t_a: np.ndarray
+    t_t: np.ndarray
+    lengths: np.ndarray
+    mu_hexapod: np.ndarray
+    mu_tripod: np.ndarray
+    within_limits: np.ndarray
+    free: np.ndarray
+
+
+def _sigma_min(m: np.ndarray) -> np.ndarray:
+    return np.linalg.svd(m, compute_uv=False)[..., -1]
+
+
+@lru_cache(maxsize=8)
+def _home_sigmas(g: HybridGeometry) -> tuple[float, float]:
+    t_a = pose_matrix(np.array([0, 0, g.hexapod_home_height, 0, 0, 0.0]))
+    t_t = pose_matrix(tripod_pose(g.tripod_home_height, 0.0, 0.0, g))
+    return float(_sigma_min(hexapod_matrix(t_a, g))[0]), float(_sigma_min(tripod_matrix(t_t, g))[0])
+
+
+def home_pose(geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """E's pose at home (6,): the stages stacked at their home heights."""
+    return np.array([0.0, 0.0, geometry.hexapod_home_height + geometry.tripod_home_height, 0.0, 0.0, 0.0])
+
+
+def check_pose(p: np.ndarray, name: str = "pose") -> np.ndarray:
+    """Validate displacements from home (N, 6) (m, rad): shape and finiteness."""
+    arr = np.asarray(p, float)
+    arr = arr[None] if arr.ndim == 1 else arr
+    if arr.ndim != 2 or arr.shape[1] != 6:
+        raise ValueError(f"{name} must have shape (6,) or (N, 6): x, y, z (m), roll, pitch, yaw (rad); "
+                         f"got {np.shape(p)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite; got NaN or inf")
+    if np.any(np.abs(arr[:, 3:]) > np.pi / 2):
+        raise ValueError(f"{name} angles must lie within +-pi/2 rad")
+    return arr
+
+
+def split(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY
+          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """T_E, T_A, T_T (N, 4, 4) for displacements ``p`` (N, 6) of E from home and
+    splits ``delta`` (N,) (module docstring; eqs 3, 19-20)."""
+    g = geometry
+    t_e = pose_matrix(_consts(g)[3] + p)
+    share = 1.0 - delta
+    t_t = pose_matrix(tripod_pose(g.tripod_home_height + share * p[:, 2], share * p[:, 3], share * p[:, 4], g))
+    inv = np.zeros_like(t_t)  # rigid inverse: [R^T, -R^T p]
+    inv[:, :3, :3] = np.swapaxes(t_t[:, :3, :3], 1, 2)
+    inv[:, :3, 3] = -np.einsum("nji,nj->ni", t_t[:, :3, :3], t_t[:, :3, 3])
+    inv[:, 3, 3] = 1.0
+    return t_e, t_e @ inv, t_t
+
+
+def solve(p: np.ndarray, delta: np.ndarray | float = 0.5, geometry: HybridGeometry = DEFAULT_GEOMETRY,
+          validate: bool = True) -> HybridState:
+    """Inverse kinematics of all nine actuators and the singularity test (eq 14)
+    for displacements ``p`` (m, rad; (6,) or (N, 6)) of E from home at split
+    ``delta`` ((N,) or a number in [0, 1])."""
+    g = geometry
+    p = check_pose(p) if validate else np.atleast_2d(p)
+    d = np.broadcast_to(np.asarray(delta, float), (len(p),))
+    if validate and (not np.all(np.isfinite(d)) or np.any((d < 0) | (d > 1))):
+        raise ValueError(f"delta must lie in [0, 1]; got {delta!r}")
+    t_e, t_a, t_t = split(p, d, g)
+    lengths = np.concatenate([hexapod_lengths(t_a, g), tripod_lengths(t_t, g)], axis=1)
+    h0, t0 = _home_sigmas(g)
+    sig = _sigma_min(np.concatenate([hexapod_matrix(t_a, g), tripod_matrix(t_t, g)]))  # one batched SVD
+    mu_h, mu_t = sig[:len(p)] / h0, sig[len(p):] / t0
+    within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
+    free = within & (mu_h >= g.singularity_threshold) & (mu_t >= g.singularity_threshold)
+    return HybridState(t_e, t_a, t_t, lengths, mu_h, mu_t, within, free)
+
+
+def is_singularity_free(p: np.ndarray, delta: np.ndarray | float = 0.5,
+                        geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Eq 14 for the whole robot: both stages non-singular and all nine legs within limits."""
+    return solve(p, delta, geometry).free
+
+
+def forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
+            guess_a: np.ndarray | None = None, guess_t: np.ndarray | None = None) -> np.ndarray:
+    """E's displacement from home (N, 6) from the nine leg lengths (N, 9):
+    hexapod and tripod forward kinematics (numerical), then T_E = T_A T_T."""
+    g = geometry
+    lengths = np.atleast_2d(lengths)
+    pose_a = hexapod_forward(lengths[:, :6], g, guess_a)
+    inputs = tripod_forward(lengths[:, 6:], g, guess_t)
+    t_t = pose_matrix(tripod_pose(inputs[:, 0], inputs[:, 1], inputs[:, 2], g))
+    return _pose_of(pose_matrix(pose_a) @ t_t) - home_pose(g)
