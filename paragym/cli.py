@@ -30,9 +30,22 @@ def _capaman_plot(ep: Episode, path: Path) -> Path:
     return plot_capaman_episode(ep, path)
 
 
+def _hybrid_best(env: gym.Env) -> Any:
+    from paragym.planners.polynomial_detour import PolynomialDetourPolicy
+
+    return PolynomialDetourPolicy()
+
+
+def _hybrid_plot(ep: Episode, path: Path) -> Path:
+    from paragym.plots import plot_hybrid_episode
+
+    return plot_hybrid_episode(ep, path)
+
+
 #: env id -> (best available policy factory, name, picture writer)
 DEMOS: dict[str, tuple[Callable[[gym.Env], Any], str, Callable[[Episode, Path], Path]]] = {
     "paragym/CaPaManCollisionFree-v0": (_capaman_best, "RRT + GA (paper 000)", _capaman_plot),
+    "paragym/HybridSingularityFree-v0": (_hybrid_best, "polynomial + serial + detour (paper 002)", _hybrid_plot),
 }
 
 
@@ -115,9 +128,48 @@ def _validate_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: s
     return 0 if rep.passed else 1
 
 
+def _plan_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    """Paper 002's planner on the env's scenario: figures, nominal vs planned."""
+    import json
+
+    from paragym.mechanisms import hybrid
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+    from paragym.plots import plot_hybrid_plan
+    from paragym.trajectories import nominal_path
+
+    obs, info = env.reset(seed=args.seed)
+    sc = info["scenario"]
+    g = sc.geometry
+    plan = PolynomialDetourPlanner(g).plan(np.array(sc.p0), np.array(sc.p1))
+    nominal = hybrid.solve(nominal_path(np.array(sc.p0), np.array(sc.p1))[1], 0.5, g, validate=False)
+    rows = (("nominal, Delta = 0.5", nominal.free, nominal.lengths, nominal.mu_hexapod, nominal.mu_tripod),
+            ("planned", plan.free, plan.lengths, plan.mu_hexapod, plan.mu_tripod))
+    print(f"{'':22s} {'singular/limit poses':>21s} {'strokes [mm]':>16s} {'min mu hexapod':>15s} "
+          f"{'min mu tripod':>14s}")
+    stats = {}
+    for name, free, lengths, mu_h, mu_t in rows:
+        print(f"{name:22s} {int((~free).sum()):>13d} of {len(free):<5d} {lengths.min() * 1000:7.1f}-"
+              f"{lengths.max() * 1000:6.1f} {mu_h.min():15.3f} {mu_t.min():14.3f}")
+        stats[name] = {"bad_poses": int((~free).sum()), "stroke_range_m": [float(lengths.min()), float(lengths.max())],
+                       "min_mu_hexapod": float(mu_h.min()), "min_mu_tripod": float(mu_t.min())}
+    methods = np.bincount(plan.method, minlength=3)
+    print(f"Delta {plan.delta.min():.2f}-{plan.delta.max():.2f}; samples: {methods[0]} nominal, {methods[1]} serial, "
+          f"{methods[2]} detour (largest offset {np.abs(plan.offsets).max() * 1000:.1f} mm); limits "
+          f"{g.l_min * 1000:.2f}-{g.l_max * 1000:.2f} mm, singular below {g.singularity_threshold}")
+    title = (f"paper 002 planner, {sc.name} scenario: {int((~plan.free).sum())} singular/limit poses "
+             f"(nominal at Delta = 0.5: {int((~nominal.free).sum())})")
+    png = plot_hybrid_plan(plan, out / f"{stem}.png", title, g.l_min, g.l_max, g.singularity_threshold)
+    (out / f"{stem}.json").write_text(json.dumps({"scenario": sc.name, "p0": sc.p0, "p1": sc.p1, **stats,
+                                                  "delta": plan.delta.tolist(), "offsets_m": plan.offsets.tolist(),
+                                                  "strokes_m": plan.lengths.tolist()}, indent=2))
+    print(f"wrote {png} and {out / (stem + '.json')}")
+    return 0
+
+
 #: env id -> the reference planner's offline run
 PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v0": _plan_capaman,
+    "paragym/HybridSingularityFree-v0": _plan_hybrid,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate
@@ -141,6 +193,8 @@ def _env_id(name: str) -> str:
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     env_id = _env_id(args.env_id)
+    if env_id not in PLANS:
+        raise ValueError(f"no offline planner for {env_id} yet")
     env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -1,0 +1,134 @@
+"""Paper 002's hybrid robot: kinematics, singularity, the planner and its env."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import paragym  # noqa: F401
+from paragym.baselines import ZeroPolicy
+from paragym.envs.hybrid import HybridScenario, hybrid_paper_scenario
+from paragym.mechanisms import hybrid
+from paragym.planners import PlanningError
+from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
+from paragym.rollout import run_episode
+from paragym.trajectories import nominal_path
+
+G = hybrid.DEFAULT_GEOMETRY
+ENV_ID = "paragym/HybridSingularityFree-v0"
+# found by searching seeded pairs: no Delta works somewhere on the nominal path, a detour does
+DETOUR = ((0.0763, 0.1088, 0.0292, -0.2817, -0.3225, -0.2099), (-0.0779, 0.0769, 0.0043, -0.2282, 0.2792, 0.3271))
+
+small = st.floats(-1.0, 1.0)
+poses = st.tuples(*[small] * 6).map(lambda v: np.array(v) * [0.04, 0.04, 0.04, 0.12, 0.12, 0.12])
+
+
+@settings(max_examples=60, deadline=None)
+@given(poses, st.floats(0.0, 1.0))
+def test_forward_of_inverse_is_identity(p, delta):
+    state = hybrid.solve(p, delta)
+    np.testing.assert_allclose(hybrid.forward(state.lengths)[0], p, atol=1e-10)
+
+
+def test_end_effector_pose_is_exact_for_every_split():
+    p = np.array([0.03, -0.02, 0.05, 0.1, -0.15, 0.05])
+    for delta in (0.0, 0.3, 0.5, 1.0):
+        st_ = hybrid.solve(p, delta)
+        np.testing.assert_allclose(st_.t_a @ st_.t_t, st_.t_e, atol=1e-14)
+        np.testing.assert_allclose(hybrid._pose_of(st_.t_e)[0], hybrid.home_pose() + p, atol=1e-14)
+
+
+def test_tripod_parasitic_motion_keeps_each_leg_in_its_plane():
+    rng = np.random.default_rng(0)
+    z, roll, pitch = rng.uniform(0.2, 0.26, 200), rng.uniform(-0.4, 0.4, 200), rng.uniform(-0.4, 0.4, 200)
+    pose = hybrid.tripod_pose(z, roll, pitch)
+    t = hybrid.pose_matrix(pose)
+    joints = np.einsum("nij,kj->nki", t[:, :3, :3], G.tripod_top) + t[:, None, :3, 3]
+    np.testing.assert_allclose(np.einsum("ki,nki->nk", G.tripod_axes, joints), 0.0, atol=1e-15)
+    assert np.abs(pose[:, 5]).max() > 1e-3  # the parasitic yaw is there, not ignored
+
+
+def test_force_matrix_is_the_transposed_jacobian_of_the_leg_lengths():
+    t_a = hybrid.pose_matrix(np.array([0.01, -0.02, 0.24, 0.05, -0.08, 0.1]))
+    h = hybrid.hexapod_matrix(t_a)[0]
+    eps = 1e-7
+    for k in range(6):
+        twist = np.zeros(6)
+        twist[k] = eps
+        moved = t_a.copy()
+        moved[0, :3, 3] += twist[:3]
+        moved[0, :3, :3] = hybrid._rotvec(twist[None, 3:] / G.platform_radius)[0] @ t_a[0, :3, :3]
+        back = t_a.copy()
+        back[0, :3, 3] -= twist[:3]
+        back[0, :3, :3] = hybrid._rotvec(-twist[None, 3:] / G.platform_radius)[0] @ t_a[0, :3, :3]
+        d_len = (hybrid.hexapod_lengths(moved) - hybrid.hexapod_lengths(back))[0] / (2 * eps)
+        np.testing.assert_allclose(d_len, h[k], atol=1e-7)
+
+
+def test_home_is_regular_and_the_other_pairing_is_singular():
+    home = hybrid.solve(np.zeros(6))
+    assert home.free[0] and home.mu_hexapod[0] == pytest.approx(1.0) and home.mu_tripod[0] == pytest.approx(1.0)
+    # joining each base joint to the platform joint 60 deg further on the same side
+    t_a = hybrid.pose_matrix(np.array([0, 0, G.hexapod_home_height, 0, 0, 0.0]))
+    a = (t_a[0, :3, :3] @ np.roll(G.platform_joints, 1, axis=0).T).T + t_a[0, :3, 3]
+    a = np.roll(a, -2, axis=0)
+    legs = a - G.base_joints
+    s = legs / np.linalg.norm(legs, axis=1, keepdims=True)
+    h = np.vstack([s.T, (np.cross(a - t_a[0, :3, 3], s) / G.platform_radius).T])
+    assert np.linalg.svd(h, compute_uv=False)[-1] < 1e-9
+
+
+def test_nominal_polynomial_is_rest_to_rest():
+    u, p = nominal_path(np.zeros(6), np.ones(6), tau=0.01)
+    poly = np.polynomial.Polynomial.fit(u, p[:, 0], 7).convert()  # the samples are exactly a 7th-degree polynomial
+    for order in (1, 2, 3):
+        np.testing.assert_allclose(poly.deriv(order)([0.0, 1.0]), 0.0, atol=1e-8)
+    np.testing.assert_allclose(p[[0, -1]], [np.zeros(6), np.ones(6)])
+
+
+def test_paper_plan_is_free_serial_only_and_smooth():
+    sc = hybrid_paper_scenario()
+    plan = PolynomialDetourPlanner().plan(np.array(sc.p0), np.array(sc.p1))
+    assert (~plan.nominal_free).sum() > 0  # the nominal path at Delta = 0.5 leaves the limits ...
+    assert plan.free.all()  # ... the plan does not
+    np.testing.assert_array_equal(plan.path, plan.nominal)  # serial optimisation keeps E on the nominal path
+    assert np.abs(np.diff(plan.delta)).max() <= 0.05 + 1e-12 and plan.delta[0] == 0.5
+    assert ((plan.lengths >= G.l_min) & (plan.lengths <= G.l_max)).all()
+
+
+def test_detour_where_no_split_works():
+    plan = PolynomialDetourPlanner().plan(np.array(DETOUR[0]), np.array(DETOUR[1]))
+    assert (plan.method == 2).any() and plan.free.all()
+    assert np.abs(plan.offsets).max() <= 0.02 + 1e-12
+    np.testing.assert_array_equal(plan.offsets[[0, -1]], 0.0)  # the end poses stay exact
+
+
+def test_unreachable_goal_and_bad_input_are_refused():
+    with pytest.raises(PlanningError, match="not singularity-free"):
+        PolynomialDetourPlanner().plan(np.zeros(6), np.array([0.3, 0, 0, 0, 0, 0]))
+    with pytest.raises(ValueError, match="finite"):
+        hybrid.solve(np.array([np.nan, 0, 0, 0, 0, 0]))
+    with pytest.raises(ValueError, match="delta"):
+        hybrid.solve(np.zeros(6), 1.5)
+    with pytest.raises(ValueError, match="angles"):
+        hybrid.solve(np.array([0, 0, 0, 2.0, 0, 0]))
+    with pytest.raises(ValueError, match="scenario must be"):
+        gym.make(ENV_ID, scenario="moon")
+    bad = HybridScenario("bad", (0.0,) * 5, (0.0,) * 6)
+    with pytest.raises(ValueError, match="shape"):
+        gym.make(ENV_ID, scenario=bad).reset(seed=0)
+
+
+def test_planner_succeeds_where_doing_nothing_fails():
+    env = gym.make(ENV_ID)
+    hard = 0
+    for seed in range(16):
+        ep_plan = run_episode(env, PolynomialDetourPolicy(), seed=seed)
+        ep_zero = run_episode(env, ZeroPolicy(env.action_space), seed=seed)
+        assert ep_plan.success, seed
+        hard += not ep_zero.success
+    assert hard >= 4  # about half of the random scenarios need the planner (hard_share = 0.5)
+    paper = gym.make(ENV_ID, scenario="paper")
+    assert run_episode(paper, PolynomialDetourPolicy(), seed=0).success
+    assert not run_episode(paper, ZeroPolicy(paper.action_space), seed=0).success
