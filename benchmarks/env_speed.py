@@ -19,7 +19,7 @@ from gymnasium.utils.performance import benchmark_step
 
 import paragym
 
-TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0}
+TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularityFree-v0": 5000.0}
 
 
 def reset_seconds(env: gym.Env, n: int = 20) -> float:

@@ -132,3 +132,19 @@ def test_planner_succeeds_where_doing_nothing_fails():
     paper = gym.make(ENV_ID, scenario="paper")
     assert run_episode(paper, PolynomialDetourPolicy(), seed=0).success
     assert not run_episode(paper, ZeroPolicy(paper.action_space), seed=0).success
+
+
+def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+    from paragym.validation.hybrid import validate_hybrid
+
+    sc = hybrid_paper_scenario()
+    plan = PolynomialDetourPlanner().plan(np.array(sc.p0), np.array(sc.p1))
+    good = validate_hybrid(plan, duration=2.0)
+    assert good.position_error < 1e-3 and good.orientation_error < np.radians(0.2)  # 1 mm, 0.2 deg
+    assert good.run.closure_error < 0.1e-3
+    assert good.report.passed, good.report.table()
+    assert sum(c.observable for c in good.report.components) >= 3  # a_H is seen at this speed
+    assert not validate_hybrid(plan, duration=2.0, delay=0.2).report.passed
+    weak = validate_hybrid(plan, duration=2.0, dynamics=HybridDynamics(motor_force=20.0))
+    assert weak.position_error > 5e-3 and not weak.report.passed

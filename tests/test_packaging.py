@@ -76,3 +76,15 @@ def test_cli_validate_prints_the_report_and_writes_figs_8_and_9(tmp_path):
     folder = tmp_path / "CaPaManCollisionFree-v0_paper_seed0_dt0.09"
     assert (folder / "fig8_raw.png").exists() and (folder / "fig9_kf.png").exists()
     assert (folder / "report.json").exists()
+
+
+def test_cli_plans_and_validates_the_hybrid_robot(tmp_path):
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "plan", "HybridSingularityFree-v0",
+                          "--scenario", "paper", "--out", str(tmp_path)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stderr
+    assert "nominal, Delta = 0.5" in res.stdout
+    assert (tmp_path / "HybridSingularityFree-v0_plan_paper_seed0.png").exists()
+    res = subprocess.run([sys.executable, "-m", "paragym.cli", "validate", "HybridSingularityFree-v0",
+                          "--scenario", "paper", "--out", str(tmp_path)], capture_output=True, text=True)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert "verdict: PASS" in res.stdout

@@ -103,3 +103,28 @@ def capaman_planned_motion(trajectory: JointTrajectory, rate: float,
     twist = np.einsum("nij,nj->ni", j, rate1)
     acc = np.einsum("nij,nj->ni", j, rate2) + np.einsum("nij,nj->ni", (j_plus - j_minus) / (2 * h), rate1)
     return RigidMotion(t, pose.position, pose.rotation, twist[:, :3], twist[:, 3:], acc[:, :3], acc[:, 3:])
+
+
+def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle: float = 0.0) -> RigidMotion:
+    """A body's planned motion from poses (K, 6) = (x, y, z, roll, pitch, yaw)
+    (m, rad; ``R = Rz(yaw) Ry(pitch) Rx(roll)``) at times ``t_knots`` (K,):
+    cubic splines through the poses (at rest at both ends), sampled at
+    ``rate`` Hz, plus ``settle`` s at rest. Angular velocity from the angle
+    rates, ``omega = roll' Rz Ry e_x + pitch' Rz e_y + yaw' e_z``; angular
+    acceleration by central differences of omega."""
+    from scipy.interpolate import CubicSpline
+
+    from paragym.mechanisms.hybrid import euler_matrix
+
+    spline = CubicSpline(t_knots, poses, bc_type="clamped")
+    end = float(t_knots[-1])
+    t = np.arange(0.0, end + settle + 0.5 / rate, 1.0 / rate)
+    tc = np.clip(t, 0.0, end)
+    moving = (t <= end)[:, None]
+    p, v, a = spline(tc), np.where(moving, spline(tc, 1), 0.0), np.where(moving, spline(tc, 2), 0.0)
+    roll, pitch, yaw = p[:, 3], p[:, 4], p[:, 5]
+    rz_ry = euler_matrix(np.zeros_like(roll), pitch, yaw)
+    rz = euler_matrix(np.zeros_like(roll), np.zeros_like(roll), yaw)
+    omega = v[:, 3:4] * rz_ry[:, :, 0] + v[:, 4:5] * rz[:, :, 1] + v[:, 5:6] * np.array([0.0, 0.0, 1.0])
+    return RigidMotion(t, p[:, :3], euler_matrix(roll, pitch, yaw), v[:, :3], omega, a[:, :3],
+                       np.gradient(omega, t, axis=0))

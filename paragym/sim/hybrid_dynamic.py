@@ -1,0 +1,232 @@
+"""The hybrid hexapod + tripod of paper 002 in PyBullet, dynamic fidelity.
+
+Paper 002 validated its planned strokes in a CAD model; here PyBullet is
+that model. One multibody: platform A floats on the base (three passive
+prismatic joints and a spherical one) and E floats on A the same way; each
+hexapod leg hangs from the base on a universal joint (two revolute joints)
+and extends along a prismatic actuator; each tripod leg turns on A about its
+tangential revolute axis and extends likewise. The legs' tips are tied to
+their platforms by point-to-point constraints (the ball joints), so the
+platforms are held only by the legs. The nine prismatic actuators are
+position-controlled with a force limit; gravity is on.
+
+Masses and motor settings are assumptions (:class:`HybridDynamics`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pybullet as pb
+from scipy.interpolate import PchipInterpolator
+
+from paragym.mechanisms import capaman, hybrid
+from paragym.mechanisms.capaman import PartShape
+from paragym.sim.client import LinkSpec, PyBulletSim
+
+__all__ = ["HybridDynamics", "HybridDynamicScene", "HybridRun"]
+
+_ID = (0.0, 0.0, 0.0, 1.0)
+
+
+@dataclass(frozen=True)
+class HybridDynamics:
+    """Physical parameters (SI), assumed."""
+
+    platform_a_mass: float = 3.0
+    platform_e_mass: float = 1.0
+    leg_mass: float = 0.2
+    motor_force: float = 800.0  # N per actuator
+    position_gain: float = 0.3
+    velocity_gain: float = 1.0
+    time_step: float = 1e-3
+    solver_iterations: int = 150
+    gravity: float = 9.81
+
+
+@dataclass(frozen=True)
+class HybridRun:
+    """A dynamic run at the simulation rate: E's and A's recorded poses
+    (world, positions (N, 3), rotations (N, 3, 3)), E's velocities and
+    accelerations, the measured strokes (N, 9), and the largest ball-joint
+    gap of the run (m)."""
+
+    t: np.ndarray
+    e_position: np.ndarray
+    e_rotation: np.ndarray
+    e_velocity: np.ndarray
+    e_angular_velocity: np.ndarray
+    e_acceleration: np.ndarray
+    e_angular_acceleration: np.ndarray
+    a_position: np.ndarray
+    strokes: np.ndarray
+    closure_error: float
+
+
+def _quat_z_to(d: np.ndarray) -> tuple[float, ...]:
+    z = np.array([0.0, 0.0, 1.0])
+    axis = np.cross(z, d)
+    s, c = np.linalg.norm(axis), float(np.dot(z, d))
+    half = np.arctan2(s, c) / 2
+    return tuple(np.append(axis / max(s, 1e-12) * np.sin(half), np.cos(half)))
+
+
+class HybridDynamicScene:
+    """The dynamic hybrid robot (module docstring), built at the home pose."""
+
+    ROBOT = "hybrid"
+
+    def __init__(self, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                 dynamics: HybridDynamics | None = None) -> None:
+        self.geometry = g = geometry
+        self.dynamics = d = dynamics or HybridDynamics()
+        self.sim = PyBulletSim()
+        c = self.sim.client
+        pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
+        pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
+                                     physicsClientId=c)
+        home = hybrid.solve(np.zeros(6), 0.5, g)
+        t_a, t_t = home.t_a[0], home.t_t[0]
+        rod = PartShape("rod", "cylinder", radius=0.008, length=0.05)
+        links = [LinkSpec("a_x", None, "prismatic", axis=(1, 0, 0)),
+                 LinkSpec("a_y", "a_x", "prismatic", axis=(0, 1, 0)),
+                 LinkSpec("a_z", "a_y", "prismatic", axis=(0, 0, 1)),
+                 LinkSpec("A", "a_z", "spherical", mass=d.platform_a_mass,
+                          shape=PartShape("A", "cylinder", radius=g.platform_radius + 0.015, length=0.01),
+                          rgba=(0.2, 0.45, 0.8, 1)),
+                 LinkSpec("e_x", "A", "prismatic", axis=(1, 0, 0)),
+                 LinkSpec("e_y", "e_x", "prismatic", axis=(0, 1, 0)),
+                 LinkSpec("e_z", "e_y", "prismatic", axis=(0, 0, 1)),
+                 LinkSpec("E", "e_z", "spherical", mass=d.platform_e_mass,
+                          shape=PartShape("E", "cylinder", radius=g.r_te + 0.015, length=0.01),
+                          rgba=(0.85, 0.7, 0.2, 1))]
+        self._frames = []  # each leg's fixed joint frame (orientation of its home direction)
+        a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
+        for i in range(6):
+            direction = a_world[i] - g.base_joints[i]
+            q0 = _quat_z_to(direction / np.linalg.norm(direction))
+            self._frames.append(q0)
+            links += [LinkSpec(f"h{i}_u", None, "revolute", tuple(g.base_joints[i]), q0, (1, 0, 0)),
+                      LinkSpec(f"h{i}_v", f"h{i}_u", "revolute", axis=(0, 1, 0)),
+                      LinkSpec(f"h{i}_p", f"h{i}_v", "prismatic", axis=(0, 0, 1), shape=rod,
+                               shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.3, 0.3, 0.3, 1))]
+        e_in_a = (t_t[:3, :3] @ g.tripod_top.T).T + t_t[:3, 3]
+        for j in range(3):
+            direction = e_in_a[j] - g.tripod_base[j]
+            z = direction / np.linalg.norm(direction)
+            x = g.tripod_axes[j]
+            frame = np.column_stack([x, np.cross(z, x), z])
+            qj = tuple(capaman.matrix_to_quat(frame))
+            self._frames.append(qj)
+            links += [LinkSpec(f"t{j}_r", "A", "revolute", tuple(g.tripod_base[j]), qj, (1, 0, 0)),
+                      LinkSpec(f"t{j}_p", f"t{j}_r", "prismatic", axis=(0, 0, 1), shape=rod,
+                               shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.6, 0.2, 0.2, 1))]
+        self.sim.add_tree_body(self.ROBOT, links)
+        self.body = self.sim.body(self.ROBOT)
+        idx = lambda name: self.sim.link_index(self.ROBOT, name)  # noqa: E731
+        self.a_float = [idx("a_x"), idx("a_y"), idx("a_z")]
+        self.e_float = [idx("e_x"), idx("e_y"), idx("e_z")]
+        self.a_link, self.e_link = idx("A"), idx("E")
+        self.hex_u = [idx(f"h{i}_u") for i in range(6)]
+        self.hex_v = [idx(f"h{i}_v") for i in range(6)]
+        self.tri_r = [idx(f"t{j}_r") for j in range(3)]
+        self.actuators = [idx(f"h{i}_p") for i in range(6)] + [idx(f"t{j}_p") for j in range(3)]
+        n = pb.getNumJoints(self.body, physicsClientId=c)
+        for i in range(-1, n):
+            for k in range(i + 1, n):
+                pb.setCollisionFilterPair(self.body, self.body, i, k, 0, physicsClientId=c)
+        passive = self.a_float + self.e_float + self.hex_u + self.hex_v + self.tri_r
+        pb.setJointMotorControlArray(self.body, passive, pb.VELOCITY_CONTROL, forces=[0.0] * len(passive),
+                                     physicsClientId=c)
+        for sph in (self.a_link, self.e_link):
+            pb.setJointMotorControlMultiDof(self.body, sph, pb.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
+                                            force=[0.0, 0.0, 0.0], physicsClientId=c)
+        for i in range(6):  # ball joints: leg tip (the prismatic link's origin, COM offset -0.025) to A_i
+            pb.createConstraint(self.body, self.actuators[i], self.body, self.a_link, pb.JOINT_POINT2POINT,
+                                [0, 0, 0], [0, 0, 0.025], list(g.platform_joints[i]), physicsClientId=c)
+        for j in range(3):
+            pb.createConstraint(self.body, self.actuators[6 + j], self.body, self.e_link, pb.JOINT_POINT2POINT,
+                                [0, 0, 0], [0, 0, 0.025], list(g.tripod_top[j]), physicsClientId=c)
+        self.reset(np.zeros(6), 0.5)
+
+    def reset(self, p: np.ndarray, delta: float) -> None:
+        """Every joint where the kinematics has it for E displacement ``p`` at split ``delta``, at rest."""
+        g, c = self.geometry, self.sim.client
+        st = hybrid.solve(p, delta, g)
+        t_a, t_t = st.t_a[0], st.t_t[0]
+        set_ = lambda j, v: pb.resetJointState(self.body, j, float(v), 0.0, physicsClientId=c)  # noqa: E731
+        for j, v in zip(self.a_float, t_a[:3, 3], strict=True):
+            set_(j, v)
+        pb.resetJointStateMultiDof(self.body, self.a_link, list(capaman.matrix_to_quat(t_a[:3, :3])), [0, 0, 0],
+                                   physicsClientId=c)
+        for j, v in zip(self.e_float, t_t[:3, 3], strict=True):
+            set_(j, v)
+        pb.resetJointStateMultiDof(self.body, self.e_link, list(capaman.matrix_to_quat(t_t[:3, :3])), [0, 0, 0],
+                                   physicsClientId=c)
+        a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
+        for i in range(6):
+            d = a_world[i] - g.base_joints[i]
+            local = capaman.quat_to_matrix(np.array(self._frames[i])).T @ (d / np.linalg.norm(d))
+            set_(self.hex_v[i], np.arcsin(np.clip(local[0], -1, 1)))
+            set_(self.hex_u[i], np.arctan2(-local[1], local[2]))
+            set_(self.actuators[i], st.lengths[0, i])
+        e_in_a = (t_t[:3, :3] @ g.tripod_top.T).T + t_t[:3, 3]
+        for j in range(3):
+            d = e_in_a[j] - g.tripod_base[j]
+            local = capaman.quat_to_matrix(np.array(self._frames[6 + j])).T @ (d / np.linalg.norm(d))
+            set_(self.tri_r[j], np.arctan2(-local[1], local[2]))
+            set_(self.actuators[6 + j], st.lengths[0, 6 + j])
+
+    def closure_error(self) -> float:
+        """Largest ball-joint gap (m) now."""
+        g, c = self.geometry, self.sim.client
+        state = lambda link: pb.getLinkState(self.body, link, computeForwardKinematics=True,  # noqa: E731
+                                             physicsClientId=c)
+        worst = 0.0
+        for platform, joints, legs in ((self.a_link, g.platform_joints, self.actuators[:6]),
+                                       (self.e_link, g.tripod_top, self.actuators[6:])):
+            pos, orn = state(platform)[4:6]
+            rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
+            for leg, joint in zip(legs, joints, strict=True):
+                tip = np.array(state(leg)[4])
+                worst = max(worst, float(np.linalg.norm(tip - (np.array(pos) + rot @ joint))))
+        return worst
+
+    def execute(self, u: np.ndarray, strokes: np.ndarray, p0: np.ndarray, delta0: float, duration: float,
+                settle: float = 0.5) -> HybridRun:
+        """Drive the nine actuators through ``strokes`` (K, 9) given at path
+        parameters ``u`` (K,), with u = t / duration, then hold ``settle`` s;
+        record E's motion at every step."""
+        d, c = self.dynamics, self.sim.client
+        self.reset(p0, delta0)
+        spline = PchipInterpolator(u * duration, strokes)
+        rate = spline.derivative()
+        n = int(round((duration + settle) / d.time_step)) + 1
+        t = np.arange(n) * d.time_step
+        target, target_rate = spline(np.clip(t, 0, duration)), np.where((t <= duration)[:, None],
+                                                                         rate(np.clip(t, 0, duration)), 0.0)
+        pos, orn, vel, omega = (np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3)))
+        a_pos, measured = np.empty((n, 3)), np.empty((n, 9))
+        closure = 0.0
+        forces = [d.motor_force] * 9
+        for i in range(n):  # the physics is sequential
+            if i:
+                pb.setJointMotorControlArray(self.body, self.actuators, pb.POSITION_CONTROL,
+                                             targetPositions=list(target[i]), targetVelocities=list(target_rate[i]),
+                                             forces=forces, positionGains=[d.position_gain] * 9,
+                                             velocityGains=[d.velocity_gain] * 9, physicsClientId=c)
+                pb.stepSimulation(physicsClientId=c)
+            s = pb.getLinkState(self.body, self.e_link, computeLinkVelocity=True, computeForwardKinematics=True,
+                                physicsClientId=c)
+            pos[i], orn[i], vel[i], omega[i] = s[4], s[5], s[6], s[7]
+            a_pos[i] = pb.getLinkState(self.body, self.a_link, computeForwardKinematics=True, physicsClientId=c)[4]
+            measured[i] = [j[0] for j in pb.getJointStates(self.body, self.actuators, physicsClientId=c)]
+            if i % 200 == 0:
+                closure = max(closure, self.closure_error())
+        return HybridRun(t, pos, capaman.quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),
+                         np.gradient(omega, d.time_step, axis=0), a_pos, measured, closure)
+
+    def close(self) -> None:
+        """Disconnect PyBullet."""
+        self.sim.close()
