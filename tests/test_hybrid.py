@@ -148,3 +148,16 @@ def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
     assert not validate_hybrid(plan, duration=2.0, delay=0.2).report.passed
     weak = validate_hybrid(plan, duration=2.0, dynamics=HybridDynamics(motor_force=20.0))
     assert weak.position_error > 5e-3 and not weak.report.passed
+
+
+def test_single_pose_path_equals_batched():
+    rng = np.random.default_rng(0)
+    poses = rng.uniform(-1, 1, (300, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
+    deltas = rng.uniform(0, 1, 300)
+    st_ = hybrid.solve(poses, deltas)
+    for k in range(300):
+        lengths, mu_h, mu_t, within, free = hybrid.solve_one(poses[k], deltas[k])
+        np.testing.assert_allclose(lengths, st_.lengths[k], atol=1e-12)
+        assert mu_h == pytest.approx(st_.mu_hexapod[k], abs=1e-12)
+        assert mu_t == pytest.approx(st_.mu_tripod[k], abs=1e-12)
+        assert within == st_.within_limits[k] and free == st_.free[k]
