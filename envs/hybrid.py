@@ -157,8 +157,15 @@ class HybridSingularityFreeEnv(ParagymEnv):
             scenario = hybrid_paper_scenario(self.geometry)
         else:
             scenario = choice
-            hybrid.check_pose(np.array(scenario.p0), "scenario.p0")
-            hybrid.check_pose(np.array(scenario.p1), "scenario.p1")
+            p0 = hybrid.check_pose(np.array(scenario.p0), "scenario.p0")
+            p1 = hybrid.check_pose(np.array(scenario.p1), "scenario.p1")
+            if not hybrid.solve(p0, 0.5, scenario.geometry).free[0]:
+                raise ValueError("scenario.p0 is outside the workspace: at Delta = 0.5 a leg is out of "
+                                 "[226.11, 326.11] mm or a stage is singular")
+            splits = np.linspace(0, 1, 21)
+            if not hybrid.solve(np.repeat(p1, 21, 0), splits, scenario.geometry).free.any():
+                raise ValueError("scenario.p1 is outside the workspace: no split Delta keeps it singularity-free "
+                                 "within the leg limits")
         self.scenario = scenario
         self._u, self._nominal = nominal_path(np.array(scenario.p0), np.array(scenario.p1), self.tau)
         self._k = 0

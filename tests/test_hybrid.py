@@ -118,6 +118,9 @@ def test_unreachable_goal_and_bad_input_are_refused():
     bad = HybridScenario("bad", (0.0,) * 5, (0.0,) * 6)
     with pytest.raises(ValueError, match="shape"):
         gym.make(ENV_ID, scenario=bad).reset(seed=0)
+    far = HybridScenario("far", (0.0,) * 6, (0.3, 0.0, 0.0, 0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="outside the workspace"):
+        gym.make(ENV_ID, scenario=far).reset(seed=0)
 
 
 def test_planner_succeeds_where_doing_nothing_fails():
