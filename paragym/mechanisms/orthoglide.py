@@ -1,0 +1,211 @@
+"""Kinematics of the 2-dof Orthoglide (2PRR) assisted by a 1-dof table (paper 003).
+
+Paper 003 (Moreno, Pamanes, Wenger, Chablat, "Global optimization of
+performance of a 2PRR parallel manipulator for cooperative tasks"): two
+sliders, A on the fixed x axis (rho2) and B on the fixed y axis (rho3), carry
+links AC = BC = L = 1 m that meet at the tool point C; a table translating
+along the direction theta1 (rho1) carries the work-piece. In the table frame
+the tool moves with velocity ``t_dot = J rho_dot``, ``J = A^-1 B`` (eqs 1-6):
+
+    A = [r4^T ; r5^T],  B = [[-r4 . d, r4_x, 0], [-r5 . d, 0, r5_y]]
+
+with r4 = (C - A)/L, r5 = (C - B)/L unit link vectors and d the table's unit
+direction (the table moving by +d moves C by -d relative to it).
+kappa(J) = sigma_max / sigma_min (eq 8). The sliders' working mode has C to
+the upper right of both (r4_x > 0, r5_y > 0).
+
+The paper does not give theta1 or the sliders' origins. kappa depends on C's
+position in the fixed frame only (through r4, r5) and on theta1; with a
+table on one axis the exactly isotropic poses are isolated points
+(:func:`isotropic_point`; for theta1 = 10 deg there are two on the
+diagonal, at about 0.46 m and 0.89 m). The defaults here are provisional:
+theta1 = 10 deg is the direction that keeps the pointwise-best kappa lowest
+along the paper's 0.8 m circle (max 1.19, mean 1.10 on a brute-force sweep),
+but the table travel that optimum asks for (2.6 m) exceeds rho1's 2 m, so the
+table origin and slider origins that fit all three of the paper's cases
+inside the limits are still to be chosen.
+
+SI units (m, rad). Batched functions take rho (N, 3) and table-frame points
+(N, 2); the ``*_one`` functions are the per-step path in Python floats.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy.optimize import minimize
+
+__all__ = ["OrthoglideGeometry", "check_joints", "fixed_point", "forward", "inverse", "isotropic_point",
+           "jacobian", "kappa", "kappa_gradient", "null_direction", "singularity"]
+
+
+@dataclass(frozen=True)
+class OrthoglideGeometry:
+    """Sizes and the choices the paper leaves open (m, rad; see the module docstring)."""
+
+    link: float = 1.0
+    theta1: float = math.radians(10.0)  # table direction (provisional, module docstring)
+    table_origin: tuple[float, float] = (0.0, 0.0)  # table frame origin at rho1 = 0, fixed frame
+    slider2_origin: float = -1.0  # A = (slider2_origin + rho2, 0)
+    slider3_origin: float = -1.0  # B = (0, slider3_origin + rho3)
+    rho_min: tuple[float, float, float] = (-1.0, 0.0, 0.0)
+    rho_max: tuple[float, float, float] = (1.0, 1.5, 1.5)
+
+    @property
+    def direction(self) -> np.ndarray:
+        """Unit direction d of the table."""
+        return np.array([math.cos(self.theta1), math.sin(self.theta1)])
+
+
+DEFAULT_GEOMETRY = OrthoglideGeometry()
+
+
+def check_joints(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY, name: str = "rho") -> np.ndarray:
+    """Validate joint values (3,) or (N, 3): finite and inside the limits."""
+    arr = np.atleast_2d(np.asarray(rho, float))
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (3,) or (N, 3); got {np.shape(rho)}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} must be finite")
+    lo, hi = np.array(geometry.rho_min), np.array(geometry.rho_max)
+    if np.any(arr < lo - 1e-12) or np.any(arr > hi + 1e-12):
+        raise ValueError(f"{name} outside the limits rho1 in [-1, 1] m, rho2 and rho3 in [0, 1.5] m")
+    return arr
+
+
+def fixed_point(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """C in the fixed frame (N, 2) for table positions rho1 (N,) and table-frame points p (N, 2)."""
+    return np.asarray(geometry.table_origin) + np.asarray(rho1)[..., None] * geometry.direction + np.asarray(p)
+
+
+def inverse(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """rho (N, 3) putting C on table point p (N, 2) with the table at rho1 (N,),
+    in the working mode, and whether that is possible (N,) (C within reach of
+    both sliders' lines; joint limits are checked apart, by :func:`within_limits`)."""
+    g = geometry
+    c = fixed_point(rho1, p, g)
+    cx, cy = c[..., 0], c[..., 1]
+    ok = (np.abs(cy) < g.link) & (np.abs(cx) < g.link)
+    rho2 = cx - np.sqrt(np.clip(g.link ** 2 - cy ** 2, 0, None)) - g.slider2_origin
+    rho3 = cy - np.sqrt(np.clip(g.link ** 2 - cx ** 2, 0, None)) - g.slider3_origin
+    return np.stack([np.broadcast_to(rho1, rho2.shape), rho2, rho3], axis=-1), ok
+
+
+def within_limits(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Whether each rho (N, 3) is inside the joint limits."""
+    return np.all((rho >= np.array(geometry.rho_min)) & (rho <= np.array(geometry.rho_max)), axis=-1)
+
+
+def _links(rho: np.ndarray, g: OrthoglideGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """C (N, 2) and unit link vectors r4, r5 (N, 2) from rho (working mode)."""
+    a = np.stack([g.slider2_origin + rho[..., 1], np.zeros_like(rho[..., 1])], -1)
+    b = np.stack([np.zeros_like(rho[..., 2]), g.slider3_origin + rho[..., 2]], -1)
+    m = 0.5 * (a + b)
+    half = b - a
+    dist = np.sqrt(half[..., 0] ** 2 + half[..., 1] ** 2)
+    h = np.sqrt(g.link ** 2 - (dist / 2) ** 2 + 0j) if np.iscomplexobj(rho) else \
+        np.sqrt(np.clip(g.link ** 2 - (dist / 2) ** 2, 0, None))
+    perp = np.stack([half[..., 1], -half[..., 0]], -1) / dist[..., None]
+    c = m + h[..., None] * perp
+    other = m - h[..., None] * perp
+    # the working mode: C to the right of A and above B
+    mode = (np.real(c[..., 0] - a[..., 0]) > 0) & (np.real(c[..., 1] - b[..., 1]) > 0)
+    c = np.where(mode[..., None], c, other)
+    return c, (c - a) / g.link, (c - b) / g.link
+
+
+def forward(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The tool point in the table frame (N, 2) from rho (N, 3)."""
+    c, _, _ = _links(np.atleast_2d(rho), geometry)
+    return c - fixed_point(np.atleast_2d(rho)[:, 0], np.zeros(2), geometry)
+
+
+def jacobian(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A (N, 2, 2), B (N, 2, 3) and J = A^-1 B (N, 2, 3) at rho (N, 3) (eqs 1-3, 6)."""
+    rho = np.atleast_2d(rho)
+    _, r4, r5 = _links(rho, geometry)
+    d = geometry.direction
+    a = np.stack([r4, r5], axis=-2)
+    zero = np.zeros_like(r4[..., 0])
+    b = np.stack([np.stack([-(r4 @ d), r4[..., 0], zero], -1), np.stack([-(r5 @ d), zero, r5[..., 1]], -1)], -2)
+    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    a_inv = np.stack([np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)],
+                     -2) / det[..., None, None]
+    return a, b, a_inv @ b
+
+
+def kappa(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """kappa(J) = sigma_max / sigma_min (eq 8) at rho (N, 3), from the
+    eigenvalues of J J^T in closed form (works on complex input, for the
+    complex-step derivative)."""
+    _, _, j = jacobian(rho, geometry)
+    m = j @ np.swapaxes(j, -1, -2)
+    tr, det = m[..., 0, 0] + m[..., 1, 1], m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
+    disc = np.sqrt((tr / 2) ** 2 - det + 0j) if np.iscomplexobj(m) else np.sqrt(np.clip((tr / 2) ** 2 - det, 0, None))
+    return np.sqrt((tr / 2 + disc) / (tr / 2 - disc))
+
+
+def kappa_gradient(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY, h: float = 1e-20
+                   ) -> np.ndarray:
+    """d kappa / d rho (N, 3) by the complex step (exact to rounding)."""
+    rho = np.atleast_2d(rho).astype(complex)
+    out = np.empty(rho.shape)
+    for k in range(3):  # three directions, each for the whole batch
+        step = rho.copy()
+        step[:, k] += 1j * h
+        out[:, k] = kappa(step, geometry).imag / h
+    return out
+
+
+def null_direction(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Unit vector n (N, 3) spanning the null space of J; the projector of
+    eq 5 is ``I - J^+ J = n n^T``. Oriented so that the table's rate n_1 >= 0."""
+    _, _, j = jacobian(rho, geometry)
+    n = np.cross(j[..., 0, :], j[..., 1, :])
+    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
+    return n * np.where(n[..., :1] < 0, -1.0, 1.0)
+
+
+def singularity(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY, tol: float = 1e-3
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """(parallel, serial) singularity flags (N,) (section 3.2): A singular when
+    the links are parallel; B loses rank when r4 is orthogonal to the slider 2
+    axis or r5 to the slider 3 axis."""
+    a, _, _ = jacobian(rho, geometry)
+    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    return np.abs(det) < tol, (np.abs(a[..., 0, 0]) < tol) | (np.abs(a[..., 1, 1]) < tol)
+
+
+@lru_cache(maxsize=8)
+def isotropic_point(geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> tuple[float, float]:
+    """The fixed-frame tool position C* where kappa(J) = 1 (J J^T proportional
+    to the identity) nearest the fixed frame's origin: minima of kappa over C
+    from a grid, polished by Nelder-Mead (kappa has a cone-shaped minimum
+    there, so a derivative-free method suits it)."""
+    g = geometry
+    origin = np.asarray(g.table_origin)
+
+    def k_at(c: np.ndarray) -> np.ndarray:
+        rho, ok = inverse(np.zeros(len(c)), c - origin, g)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            k = kappa(rho, g)
+        return np.where(ok & np.isfinite(k), k, np.inf)
+
+    x = np.linspace(-0.98, 0.98, 197)
+    grid = np.stack(np.meshgrid(x, x), -1).reshape(-1, 2)
+    k = k_at(grid)
+    found = []
+    for c0 in grid[np.argsort(k)[:40]]:  # polish the lowest grid points; keep the exact minima
+        sol = minimize(lambda c: float(k_at(c[None])[0]), c0, method="Nelder-Mead",
+                       options={"xatol": 1e-13, "fatol": 1e-15, "maxiter": 4000})
+        if sol.fun - 1.0 < 1e-9:
+            found.append(sol.x)
+    if not found:
+        raise ValueError("no isotropic pose in reach for this geometry")
+    best = min(found, key=lambda c: float(np.hypot(*c)))  # the one nearest the fixed frame's origin
+    return float(best[0]), float(best[1])
