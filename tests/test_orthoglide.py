@@ -67,10 +67,26 @@ def test_singularities_and_bad_input():
     parallel, _ = o.singularity(np.array([[0.0, far, far]]), tol=1e-6)
     assert parallel[0]
     # C straight above A: r4 orthogonal to slider 2's axis -> B loses rank (serial singularity)
-    rho, _ = o.inverse(np.zeros(1), np.array([[0.3, 0.999999]]) - np.asarray(G.table_origin))
+    rho, ok = o.inverse(np.zeros(1), np.array([[-0.3, 0.999999]]) - np.asarray(G.table_origin))
+    assert ok[0]
     _, serial = o.singularity(rho, tol=1e-2)
     assert serial[0]
     with pytest.raises(ValueError, match="limits"):
         o.check_joints(np.array([2.0, 0.5, 0.5]))
     with pytest.raises(ValueError, match="finite"):
         o.check_joints(np.array([np.nan, 0.5, 0.5]))
+
+
+def test_float_path_equals_batched():
+    rho, p = _configs(100, seed=3)
+    _, _, j = o.jacobian(rho)
+    k, n = o.kappa(rho), o.null_direction(rho)
+    for i in range(len(rho)):
+        r2, r3, ok = o.inverse_one(rho[i, 0], *p[i])
+        assert ok and r2 == pytest.approx(rho[i, 1], abs=1e-12) and r3 == pytest.approx(rho[i, 2], abs=1e-12)
+        j0, j1, kap, nn = o.jacobian_one(rho[i, 0], *p[i])
+        np.testing.assert_allclose([j0, j1], j[i], atol=1e-12)
+        assert kap == pytest.approx(k[i], rel=1e-10)
+        np.testing.assert_allclose(nn, n[i], atol=1e-10)
+        t = np.array([0.3, -0.2])
+        np.testing.assert_allclose(o.least_norm_one(j0, j1, *t), np.linalg.pinv(j[i]) @ t, atol=1e-10)

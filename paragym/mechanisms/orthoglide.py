@@ -17,13 +17,13 @@ the upper right of both (r4_x > 0, r5_y > 0).
 The paper does not give theta1 or the sliders' origins. kappa depends on C's
 position in the fixed frame only (through r4, r5) and on theta1; with a
 table on one axis the exactly isotropic poses are isolated points
-(:func:`isotropic_point`; for theta1 = 10 deg there are two on the
-diagonal, at about 0.46 m and 0.89 m). The defaults here are provisional:
-theta1 = 10 deg is the direction that keeps the pointwise-best kappa lowest
-along the paper's 0.8 m circle (max 1.19, mean 1.10 on a brute-force sweep),
-but the table travel that optimum asks for (2.6 m) exceeds rho1's 2 m, so the
-table origin and slider origins that fit all three of the paper's cases
-inside the limits are still to be chosen.
+(:func:`isotropic_point`). The defaults come from a brute-force search over
+theta1 (5 deg steps) and the table's origin (0.1 m steps) for the lowest
+pointwise-best kappa along the paper's circle with the table inside its
+travel: theta1 = 45 deg, table origin (0.0707, -0.3536) m, which gives a
+pointwise-optimal kappa of at most 1.108 (mean 1.063); the sliders' origins
+(-1.2 m on each axis) then keep rho2 and rho3 inside [0, 1.5] m for the
+three cases of the paper.
 
 SI units (m, rad). Batched functions take rho (N, 3) and table-frame points
 (N, 2); the ``*_one`` functions are the per-step path in Python floats.
@@ -38,8 +38,9 @@ from functools import lru_cache
 import numpy as np
 from scipy.optimize import minimize
 
-__all__ = ["OrthoglideGeometry", "check_joints", "fixed_point", "forward", "inverse", "isotropic_point",
-           "jacobian", "kappa", "kappa_gradient", "null_direction", "singularity"]
+__all__ = ["OrthoglideGeometry", "check_joints", "fixed_point", "forward", "inverse", "inverse_one",
+           "isotropic_point", "jacobian", "jacobian_one", "kappa", "kappa_gradient", "least_norm_one",
+           "null_direction", "singularity", "within_limits"]
 
 
 @dataclass(frozen=True)
@@ -47,10 +48,10 @@ class OrthoglideGeometry:
     """Sizes and the choices the paper leaves open (m, rad; see the module docstring)."""
 
     link: float = 1.0
-    theta1: float = math.radians(10.0)  # table direction (provisional, module docstring)
-    table_origin: tuple[float, float] = (0.0, 0.0)  # table frame origin at rho1 = 0, fixed frame
-    slider2_origin: float = -1.0  # A = (slider2_origin + rho2, 0)
-    slider3_origin: float = -1.0  # B = (0, slider3_origin + rho3)
+    theta1: float = math.radians(45.0)  # table direction (module docstring)
+    table_origin: tuple[float, float] = (0.0707, -0.3536)  # table frame origin at rho1 = 0, fixed frame
+    slider2_origin: float = -1.2  # A = (slider2_origin + rho2, 0)
+    slider3_origin: float = -1.2  # B = (0, slider3_origin + rho3)
     rho_min: tuple[float, float, float] = (-1.0, 0.0, 0.0)
     rho_max: tuple[float, float, float] = (1.0, 1.5, 1.5)
 
@@ -84,14 +85,18 @@ def fixed_point(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = 
 def inverse(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
             ) -> tuple[np.ndarray, np.ndarray]:
     """rho (N, 3) putting C on table point p (N, 2) with the table at rho1 (N,),
-    in the working mode, and whether that is possible (N,) (C within reach of
-    both sliders' lines; joint limits are checked apart, by :func:`within_limits`)."""
+    in the working mode, and whether that is possible (N,). The working mode:
+    C to the right of A and above B, and det A = r4 x r5 > 0 (the branch of
+    the isotropic pose; det A = 0 is the parallel singularity between the
+    branches). Joint limits are checked apart, by :func:`within_limits`."""
     g = geometry
     c = fixed_point(rho1, p, g)
     cx, cy = c[..., 0], c[..., 1]
-    ok = (np.abs(cy) < g.link) & (np.abs(cx) < g.link)
-    rho2 = cx - np.sqrt(np.clip(g.link ** 2 - cy ** 2, 0, None)) - g.slider2_origin
-    rho3 = cy - np.sqrt(np.clip(g.link ** 2 - cx ** 2, 0, None)) - g.slider3_origin
+    sx, sy = np.sqrt(np.clip(g.link ** 2 - cy ** 2, 0, None)), np.sqrt(np.clip(g.link ** 2 - cx ** 2, 0, None))
+    # working mode: C right of A and above B (r4_x, r5_y > 0) with det A = r4 x r5 = sx sy - cy cx > 0
+    ok = (np.abs(cy) < g.link) & (np.abs(cx) < g.link) & (sx * sy - cy * cx > 0)
+    rho2 = cx - sx - g.slider2_origin
+    rho3 = cy - sy - g.slider3_origin
     return np.stack([np.broadcast_to(rho1, rho2.shape), rho2, rho3], axis=-1), ok
 
 
@@ -112,8 +117,9 @@ def _links(rho: np.ndarray, g: OrthoglideGeometry) -> tuple[np.ndarray, np.ndarr
     perp = np.stack([half[..., 1], -half[..., 0]], -1) / dist[..., None]
     c = m + h[..., None] * perp
     other = m - h[..., None] * perp
-    # the working mode: C to the right of A and above B
-    mode = (np.real(c[..., 0] - a[..., 0]) > 0) & (np.real(c[..., 1] - b[..., 1]) > 0)
+    # the working mode: det A = r4 x r5 > 0 (see inverse)
+    u, v = c - a, c - b
+    mode = np.real(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]) > 0
     c = np.where(mode[..., None], c, other)
     return c, (c - a) / g.link, (c - b) / g.link
 
@@ -209,3 +215,62 @@ def isotropic_point(geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> tuple[fl
         raise ValueError("no isotropic pose in reach for this geometry")
     best = min(found, key=lambda c: float(np.hypot(*c)))  # the one nearest the fixed frame's origin
     return float(best[0]), float(best[1])
+
+
+# --- one configuration in Python floats: the environment's per-step path -----------------
+
+
+def inverse_one(rho1: float, px: float, py: float, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                ) -> tuple[float, float, bool]:
+    """:func:`inverse` for one point: (rho2, rho3, reachable)."""
+    g = geometry
+    d = _dir_one(g)
+    cx = g.table_origin[0] + rho1 * d[0] + px
+    cy = g.table_origin[1] + rho1 * d[1] + py
+    if abs(cx) >= g.link or abs(cy) >= g.link:
+        return math.nan, math.nan, False
+    sx, sy = math.sqrt(g.link ** 2 - cy * cy), math.sqrt(g.link ** 2 - cx * cx)
+    return cx - sx - g.slider2_origin, cy - sy - g.slider3_origin, sx * sy - cy * cx > 0
+
+
+@lru_cache(maxsize=8)
+def _dir_one(g: OrthoglideGeometry) -> tuple[float, float]:
+    return math.cos(g.theta1), math.sin(g.theta1)
+
+
+def jacobian_one(rho1: float, px: float, py: float, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                 ) -> tuple[list[float], list[float], float, list[float]]:
+    """J's two rows, kappa and the null direction n (n_1 >= 0) for the tool on
+    table point (px, py) with the table at rho1 (working mode), in floats.
+    The same equations as :func:`jacobian`, :func:`kappa`, :func:`null_direction`."""
+    g = geometry
+    d0, d1 = _dir_one(g)
+    cx = g.table_origin[0] + rho1 * d0 + px
+    cy = g.table_origin[1] + rho1 * d1 + py
+    sx, sy = math.sqrt(g.link ** 2 - cy * cy), math.sqrt(g.link ** 2 - cx * cx)
+    r4x, r4y = sx / g.link, cy / g.link  # C - A with A = (cx - sx, 0)
+    r5x, r5y = cx / g.link, sy / g.link  # C - B with B = (0, cy - sy)
+    b = [[-(r4x * d0 + r4y * d1), r4x, 0.0], [-(r5x * d0 + r5y * d1), 0.0, r5y]]
+    det = r4x * r5y - r4y * r5x
+    inv = [[r5y / det, -r4y / det], [-r5x / det, r4x / det]]
+    j0 = [inv[0][0] * b[0][k] + inv[0][1] * b[1][k] for k in range(3)]
+    j1 = [inv[1][0] * b[0][k] + inv[1][1] * b[1][k] for k in range(3)]
+    m00 = j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2]
+    m11 = j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2]
+    m01 = j0[0] * j1[0] + j0[1] * j1[1] + j0[2] * j1[2]
+    half = 0.5 * (m00 + m11)
+    disc = math.sqrt(max(half * half - (m00 * m11 - m01 * m01), 0.0))
+    kap = math.sqrt((half + disc) / (half - disc)) if half - disc > 0 else math.inf
+    n = [j0[1] * j1[2] - j0[2] * j1[1], j0[2] * j1[0] - j0[0] * j1[2], j0[0] * j1[1] - j0[1] * j1[0]]
+    norm = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2) * (-1.0 if n[0] < 0 else 1.0)
+    return j0, j1, kap, [n[0] / norm, n[1] / norm, n[2] / norm]
+
+
+def least_norm_one(j0: list[float], j1: list[float], tx: float, ty: float) -> list[float]:
+    """J^+ t_dot = J^T (J J^T)^-1 t_dot for one configuration (eq 5's first term)."""
+    m00 = j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2]
+    m11 = j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2]
+    m01 = j0[0] * j1[0] + j0[1] * j1[1] + j0[2] * j1[2]
+    det = m00 * m11 - m01 * m01
+    w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
+    return [j0[k] * w0 + j1[k] * w1 for k in range(3)]
