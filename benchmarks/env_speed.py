@@ -19,7 +19,8 @@ from gymnasium.utils.performance import benchmark_step
 
 import paragym
 
-TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularityFree-v0": 5000.0}
+TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularityFree-v0": 5000.0,
+           "paragym/Orthoglide2PRRKappa-v0": 20000.0}
 
 
 def reset_seconds(env: gym.Env, n: int = 20) -> float:

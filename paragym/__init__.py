@@ -21,6 +21,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.hybrid:HybridSingularityFreeEnv", 100,
         "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations (paper 002)",
     ),
+    "paragym/Orthoglide2PRRKappa-v0": (
+        "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv", 1000,
+        "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)",
+    ),
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

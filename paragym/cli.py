@@ -42,10 +42,24 @@ def _hybrid_plot(ep: Episode, path: Path) -> Path:
     return plot_hybrid_episode(ep, path)
 
 
+def _orthoglide_best(env: gym.Env) -> Any:
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    return GradientPolicy(geometry=env.unwrapped.geometry)
+
+
+def _orthoglide_plot(ep: Episode, path: Path) -> Path:
+    from paragym.plots import plot_kappa_episode
+
+    return plot_kappa_episode(ep, path)
+
+
 #: env id -> (best available policy factory, name, picture writer)
 DEMOS: dict[str, tuple[Callable[[gym.Env], Any], str, Callable[[Episode, Path], Path]]] = {
     "paragym/CaPaManCollisionFree-v0": (_capaman_best, "RRT + GA (paper 000)", _capaman_plot),
     "paragym/HybridSingularityFree-v0": (_hybrid_best, "polynomial + serial + detour (paper 002)", _hybrid_plot),
+    "paragym/Orthoglide2PRRKappa-v0": (_orthoglide_best, "null-space gradient of kappa (paper 003, case c)",
+                                       _orthoglide_plot),
 }
 
 
@@ -195,10 +209,43 @@ def _validate_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: st
     return 0 if rep.passed else 1
 
 
+def _plan_orthoglide(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    """Paper 003's three cases offline: kappa per case, against the pointwise best; Figs 5-13."""
+    import json
+    import time
+
+    from paragym.planners import nullspace_gradient as ng
+    from paragym.plots import plot_orthoglide_cases
+
+    obs, info = env.reset(seed=args.seed)
+    task, g = info["scenario"], env.unwrapped.geometry
+    cases = [ng.case_fixed_table(task, g)]
+    t0 = time.perf_counter()
+    cases.append(ng.case_least_norm(task, g))
+    cases.append(ng.case_gradient(task, g, start=cases[1]))
+    t_c = time.perf_counter() - t0  # case (c) starts from case (b)
+    optimum, _ = ng.pointwise_optimum(task, g)
+    print(f"{'case':36s} {'mean kappa':>10s} {'max kappa':>10s} {'worst at t':>11s}")
+    stats = {}
+    for c in cases:
+        print(f"{c.name:36s} {c.kappa.mean():10.3f} {c.kappa.max():10.3f} {c.t[np.argmax(c.kappa)]:9.2f} s")
+        stats[c.name] = {"mean_kappa": float(c.kappa.mean()), "max_kappa": float(c.kappa.max())}
+    print(f"{'best reachable at each point':36s} {optimum.mean():10.3f} {optimum.max():10.3f}")
+    print(f"case (c) within {100 * (cases[2].kappa / optimum - 1).max():.3f}% of the pointwise best; "
+          f"computed in about {t_c:.2f} s; geometry: theta1 {np.degrees(g.theta1):.0f} deg, table origin "
+          f"{g.table_origin} m, slider origins {g.slider2_origin}, {g.slider3_origin} m")
+    png = plot_orthoglide_cases(task, cases, optimum, g, out / f"{stem}.png")
+    (out / f"{stem}.json").write_text(json.dumps({"task": task.name, **stats, "optimum_mean": float(optimum.mean()),
+                                                  "optimum_max": float(optimum.max())}, indent=2))
+    print(f"wrote {png} and {out / (stem + '.json')}")
+    return 0
+
+
 #: env id -> the reference planner's offline run
 PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v0": _plan_capaman,
     "paragym/HybridSingularityFree-v0": _plan_hybrid,
+    "paragym/Orthoglide2PRRKappa-v0": _plan_orthoglide,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate

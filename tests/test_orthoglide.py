@@ -90,3 +90,47 @@ def test_float_path_equals_batched():
         np.testing.assert_allclose(nn, n[i], atol=1e-10)
         t = np.array([0.3, -0.2])
         np.testing.assert_allclose(o.least_norm_one(j0, j1, *t), np.linalg.pinv(j[i]) @ t, atol=1e-10)
+
+
+def test_the_papers_three_cases():
+    from paragym.planners import nullspace_gradient as ng
+
+    task = ng.paper_task()
+    a, b = ng.case_fixed_table(task), ng.case_least_norm(task)
+    c = ng.case_gradient(task, start=b)
+    assert c.kappa.mean() <= b.kappa.mean() < a.kappa.mean()
+    assert c.kappa.max() <= b.kappa.max() < a.kappa.max()
+    assert abs(a.t[np.argmax(a.kappa)] - 2.2) < 0.3  # the fixed table is worst near 2.2 s, as in the paper
+    optimum, _ = ng.pointwise_optimum(task)
+    assert np.all(c.kappa <= 1.02 * optimum)  # within 2% of the best reachable at every path point
+    for case in (a, b, c):  # all inside the joint limits, tool on the path
+        assert o.within_limits(case.rho).all()
+        np.testing.assert_allclose(o.forward(case.rho), task.points, atol=1e-9)
+    assert np.ptp(a.rho[:, 0]) == 0.0
+
+
+def test_env_policies_and_modes():
+    import gymnasium as gym
+
+    import paragym  # noqa: F401
+    from paragym.baselines import ZeroPolicy
+    from paragym.planners.nullspace_gradient import GradientPolicy, Task
+    from paragym.rollout import run_episode
+
+    env = gym.make("paragym/Orthoglide2PRRKappa-v0", scenario="paper")
+    grad = run_episode(env, GradientPolicy(), seed=0)
+    least = run_episode(env, ZeroPolicy(env.action_space), seed=0)  # case (b): no null-space motion
+    assert grad.success and least.success
+    k_grad = np.array([i["kappa"] for i in grad.infos])
+    k_least = np.array([i["kappa"] for i in least.infos])
+    assert k_grad.mean() < k_least.mean() and grad.episode_return > least.episode_return
+    assert max(i["tracking_error"] for i in grad.infos) == 0.0  # tracking is exact in the default mode
+    joint = gym.make("paragym/Orthoglide2PRRKappa-v0", scenario="paper", action_mode="joint_velocity")
+    obs, info = joint.reset(seed=0)
+    obs, r, term, trunc, info = joint.step(np.zeros(3, np.float32))
+    assert info["tracking_error"] > 0  # standing still leaves the moving path point behind
+    far = Task("far", np.array([0.0, 0.01]), np.array([[3.0, 3.0], [3.0, 3.0]]), np.zeros((2, 2)))
+    with pytest.raises(ValueError, match="reachable"):
+        gym.make("paragym/Orthoglide2PRRKappa-v0", scenario=far).reset(seed=0)
+    with pytest.raises(ValueError, match="action_mode"):
+        gym.make("paragym/Orthoglide2PRRKappa-v0", action_mode="torque")

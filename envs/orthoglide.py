@@ -1,0 +1,219 @@
+"""``paragym/Orthoglide2PRRKappa-v0``: track a path with the 2PRR + table, keeping kappa(J) low (paper 003)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+
+from paragym.envs.base import ParagymEnv
+from paragym.mechanisms import orthoglide as og
+
+__all__ = ["Orthoglide2PRRKappaEnv", "orthoglide_random_task"]
+
+OBS_SIZE = 3 + 2 + 2 + 1 + 3
+KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
+
+
+def _task_module() -> Any:
+    from paragym.planners import nullspace_gradient
+
+    return nullspace_gradient
+
+
+def orthoglide_random_task(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                           max_tries: int = 100) -> Any:
+    """A seeded circle, ellipse or line (10 s) whose points some admissible
+    table position can serve (checked on every tenth point by a sweep of rho1)."""
+    ng = _task_module()
+    for _ in range(max_tries):
+        kind = rng.choice(["circle", "ellipse", "line"])
+        centre = rng.uniform([-0.2, 0.3], [0.4, 0.8])
+        t = np.linspace(0.0, 10.0, 1001)
+        if kind == "line":
+            a, b = centre, centre + rng.uniform(-0.5, 0.5, 2)
+            s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)  # rest to rest
+            pts = a + (b - a) * s[:, None]
+            vel = (b - a) * (0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0))[:, None]
+        else:
+            rx, ry = rng.uniform(0.1, 0.4), rng.uniform(0.1, 0.4) if kind == "ellipse" else None
+            ry = rx if ry is None else ry
+            w, phi = 2 * np.pi / 10.0, rng.uniform(0, 2 * np.pi)
+            ang = phi + w * t
+            pts = centre + np.stack([rx * np.cos(ang), ry * np.sin(ang)], 1)
+            vel = w * np.stack([-rx * np.sin(ang), ry * np.cos(ang)], 1)
+        task = ng.Task(str(kind), t, pts, vel)
+        every = ng.Task(task.name, t[::10], pts[::10], vel[::10])  # every tenth point, 101 table positions
+        opt, _ = ng.pointwise_optimum(every, geometry, samples=101)
+        if np.isfinite(opt).all():
+            return task
+    raise RuntimeError(f"no reachable random path in {max_tries} tries")
+
+
+class Orthoglide2PRRKappaEnv(ParagymEnv):
+    """Track a path with the 2-dof Orthoglide assisted by a translating table,
+    keeping the condition number of J low.
+
+    ## Description
+    Paper 003 (Moreno, Pamanes, Wenger, Chablat): the 2PRR and its table form
+    a redundant 3-dof manipulator for a 2-D task in the table frame. With the
+    default action the tool follows the path exactly (least-norm motion
+    ``J^+ t_dot``) and the agent chooses the motion in the null space of J,
+    where kappa(J) (eq 8) can be lowered without leaving the path (eqs 5, 9-10).
+    Kinematics: :mod:`paragym.mechanisms.orthoglide`.
+
+    ## Action Space
+    ``action_mode="null_space"`` (default): ``Box(-1, 1, (1,))``, the null-space
+    rate times ``max_null_rate`` (m/s along the unit null vector n).
+    ``action_mode="joint_velocity"``: ``Box(-1, 1, (3,))``, joint rates times
+    ``max_joint_rate`` (m/s); the tool then tracks only as well as the agent does.
+
+    ## Observation Space
+    ``Box(-10, 10, (11,))``: rho normalised to [-1, 1] over its limits; the
+    path point now and next (table frame, m); log kappa (clipped at 10); n.
+
+    ## Rewards
+    ``-log(kappa)`` per step (0 at an isotropic pose); in joint-velocity mode
+    also ``- w_track * tracking error / 0.01 m``. Reaching a joint limit or a
+    singularity (kappa > 100, or leaving the working mode) costs
+    ``limit_penalty`` and ends the episode.
+
+    ## Starting State
+    The optimal initial configuration: the admissible table position with
+    the lowest kappa at the first path point. ``info["scenario"]`` is the task.
+
+    ## Episode End
+    Terminated at the path's end (``is_success``: no limit or singularity on
+    the way) or at a limit/singularity.
+
+    ## Arguments
+    ``scenario``: "paper" (the 0.8 m circle in 10 s) or "random" (default:
+    seeded circles, ellipses, lines); ``action_mode``; ``max_null_rate`` (0.5
+    m/s); ``max_joint_rate`` (0.5 m/s); ``w_track``; ``limit_penalty`` (10);
+    ``geometry``; ``render_mode``.
+
+    ## Version History
+    * v0: initial release (kinematic fidelity).
+    """
+
+    def __init__(self, scenario: str | Any = "random", action_mode: str = "null_space",
+                 render_mode: str | None = None, max_null_rate: float = 0.5, max_joint_rate: float = 0.5,
+                 w_track: float = 1.0, limit_penalty: float = 10.0,
+                 geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> None:
+        super().__init__(render_mode)
+        if action_mode not in ("null_space", "joint_velocity"):
+            raise ValueError(f"action_mode must be 'null_space' or 'joint_velocity'; got {action_mode!r}")
+        if not (isinstance(scenario, str) and scenario in ("paper", "random")) and not hasattr(scenario, "points"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {scenario!r}")
+        self.scenario_arg, self.action_mode, self.geometry = scenario, action_mode, geometry
+        self.max_null_rate, self.max_joint_rate = float(max_null_rate), float(max_joint_rate)
+        self.w_track, self.limit_penalty = float(w_track), float(limit_penalty)
+        dim = 1 if action_mode == "null_space" else 3
+        self.action_space = spaces.Box(-1.0, 1.0, (dim,), np.float32)
+        self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
+        self._lo, self._hi = np.array(geometry.rho_min), np.array(geometry.rho_max)
+        self._scene: Any = None
+
+    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
+        ng = _task_module()
+        choice = options.get("scenario", self.scenario_arg)
+        if isinstance(choice, str):
+            if choice not in ("paper", "random"):
+                raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+            task = ng.paper_task() if choice == "paper" else orthoglide_random_task(self.np_random, self.geometry)
+        else:
+            task = choice
+        first = ng.Task(task.name, task.t[:1], task.points[:1], task.velocities[:1])
+        kap, r1 = ng.pointwise_optimum(first, self.geometry, samples=401)
+        if not np.isfinite(kap[0]):
+            raise ValueError("the task's first point is outside the reachable set")
+        self.task = task
+        self._points, self._vel = task.points.tolist(), task.velocities.tolist()
+        self._dt, self._last = np.diff(task.t).tolist(), len(task.t) - 1
+        self._k = 0
+        r2, r3, _ = og.inverse_one(float(r1[0]), *task.points[0], self.geometry)
+        self._rho = [float(r1[0]), r2, r3]
+        self._failed = False
+        self._evaluate()
+        info = self._info()
+        info["scenario"] = task
+        return info
+
+    def _evaluate(self) -> None:
+        px, py = self._points[self._k]
+        r1, r2, r3 = self._rho
+        self._err = 0.0
+        if self.action_mode == "joint_velocity":
+            tool = og.forward(np.array([self._rho]), self.geometry)[0]
+            self._err = math.hypot(tool[0] - px, tool[1] - py)
+        _, _, mode = og.inverse_one(r1, px, py, self.geometry)
+        lo, hi = self.geometry.rho_min, self.geometry.rho_max
+        inside = lo[0] <= r1 <= hi[0] and lo[1] <= r2 <= hi[1] and lo[2] <= r3 <= hi[2]
+        if not (mode and inside):
+            self._kappa, self._n, self._j = math.inf, [0.0, 0.0, 0.0], None
+            self._failed = True
+            return
+        j0, j1, self._kappa, self._n = og.jacobian_one(r1, px, py, self.geometry)
+        self._j = (j0, j1)
+        if not self._kappa < KAPPA_LIMIT:
+            self._failed = True
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        if self._k >= self._last:
+            raise RuntimeError("the episode has ended: call reset()")
+        dt = self._dt[self._k]
+        if self.action_mode == "null_space":
+            a = min(1.0, max(-1.0, float(action[0])))
+            tx, ty = self._vel[self._k]
+            rate = og.least_norm_one(self._j[0], self._j[1], tx, ty)
+            r1 = self._rho[0] + dt * (rate[0] + a * self.max_null_rate * self._n[0])
+            self._k += 1
+            r2, r3, _ = og.inverse_one(r1, *self._points[self._k], self.geometry)  # exact tracking
+            self._rho = [r1, r2, r3]
+        else:
+            a = np.clip(action, -1.0, 1.0)
+            self._rho = [r + dt * self.max_joint_rate * float(x) for r, x in zip(self._rho, a, strict=True)]
+            self._k += 1
+        self._evaluate()
+
+    def _observe(self) -> np.ndarray:
+        k = self._k
+        nxt = min(k + 1, self._last)
+        lo, hi = self.geometry.rho_min, self.geometry.rho_max
+        kap = math.log(self._kappa) if self._kappa < 2.2e4 else 10.0
+        obs = [2 * (self._rho[i] - lo[i]) / (hi[i] - lo[i]) - 1 for i in range(3)]
+        obs += [*self._points[k], *self._points[nxt], min(kap, 10.0), *self._n]
+        return np.clip(np.nan_to_num(np.array(obs, np.float32), nan=10.0), -10.0, 10.0)
+
+    def _reward(self) -> float:
+        if self._failed:
+            return -self.limit_penalty
+        return float(-math.log(self._kappa) - self.w_track * self._err / 0.01)
+
+    def _terminated(self) -> bool:
+        return self._failed or self._k >= self._last
+
+    def _info(self) -> dict[str, Any]:
+        return {"kappa": self._kappa, "tracking_error": self._err, "rho": np.array(self._rho),
+                "step": self._k, "is_success": (not self._failed) and self._k >= self._last}
+
+    def _render_rgb(self) -> np.ndarray:
+        if self._scene is None:
+            from paragym.sim.orthoglide_model import OrthoglideScene
+
+            self._scene = OrthoglideScene(self.geometry, gui=self.render_mode == "human")
+        self._scene.set_state(np.array(self._rho), self.task.points)
+        return self._scene.render()
+
+    def render(self) -> np.ndarray | None:
+        if self.render_mode == "human":
+            self._render_rgb()
+            return None
+        return super().render()
+
+    def _close(self) -> None:
+        if self._scene is not None:
+            self._scene.close()
+            self._scene = None

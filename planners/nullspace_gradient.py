@@ -1,0 +1,170 @@
+"""Paper 003's three cases for the 2PRR + table (sections 5-6).
+
+* **Case (a)**, fixed table: the table stays at the one position, among
+  those that keep the whole task inside the limits, with the lowest mean
+  kappa; rho2 and rho3 by the inverse kinematics.
+* **Case (b)**, least norm: ``rho_dot = J^+ t_dot`` (eq 5 with z = 0) from the
+  optimal initial configuration (the table position with the lowest kappa
+  at the first path point); integrated for the table, rho2 and rho3 then
+  follow the inverse kinematics so that tracking is exact.
+* **Case (c)**, global minimisation of kappa (eqs 9-10): at each path point,
+  ``rho' = rho + (I - J^+ J) z' dt`` with ``z' = -grad kappa``, repeated while
+  kappa decreases (step halved when it does not), then the next point. The
+  null space of J is one-dimensional (n), so ``(I - J^+ J) z' = (n . z') n``;
+  all path points iterate together, each stopping on its own.
+
+A task is a path in the table frame sampled on a time grid: :class:`Task`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from paragym.mechanisms import orthoglide as og
+from paragym.planners.grid_path import PlanningError
+
+__all__ = ["CaseResult", "GradientPolicy", "Task", "case_fixed_table", "case_gradient", "case_least_norm",
+           "paper_task", "pointwise_optimum"]
+
+
+@dataclass(frozen=True)
+class Task:
+    """A path in the table frame: times (K,) s, points (K, 2) m, velocities (K, 2) m/s."""
+
+    name: str
+    t: np.ndarray
+    points: np.ndarray
+    velocities: np.ndarray
+
+
+def circle_task(centre: tuple[float, float], radius: float, duration: float = 10.0, start: float = 0.0,
+                steps: int = 1000, name: str = "circle") -> Task:
+    """A circle run once counter-clockwise from angle ``start`` (rad) in ``duration`` s."""
+    t = np.linspace(0.0, duration, steps + 1)
+    w = 2 * np.pi / duration
+    ang = start + w * t
+    pts = np.asarray(centre) + radius * np.stack([np.cos(ang), np.sin(ang)], 1)
+    vel = radius * w * np.stack([-np.sin(ang), np.cos(ang)], 1)
+    return Task(name, t, pts, vel)
+
+
+def paper_task() -> Task:
+    """Paper 003, section 6: a 0.8 m circle centred at (0.1, 0.55) m in the
+    table frame, in 10 s. The paper does not say where the circle starts; it
+    starts here where the fixed table's worst kappa falls near t = 2.2 s, as
+    in the paper's Fig 11 (angle 5.70 rad)."""
+    return circle_task((0.1, 0.55), 0.4, 10.0, start=np.pi + 2 * np.pi * 0.407, name="paper")
+
+
+@dataclass(frozen=True)
+class CaseResult:
+    """Joint trajectory (K, 3) and kappa (K,) of one case."""
+
+    name: str
+    t: np.ndarray
+    rho: np.ndarray
+    kappa: np.ndarray
+
+
+def _admissible(rho1: np.ndarray, points: np.ndarray, g: og.OrthoglideGeometry) -> tuple[np.ndarray, np.ndarray]:
+    """rho and admissibility (reachable, working mode, inside the limits) for every (rho1, point) pair."""
+    rho, ok = og.inverse(rho1, points, g)
+    return rho, ok & og.within_limits(rho, g)
+
+
+def pointwise_optimum(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                      samples: int = 2001) -> tuple[np.ndarray, np.ndarray]:
+    """For every path point, the lowest kappa over the admissible table
+    positions (a brute-force sweep of rho1) and the rho1 that gives it."""
+    r1 = np.linspace(geometry.rho_min[0], geometry.rho_max[0], samples)
+    k, n = len(task.points), len(r1)
+    rho, ok = _admissible(np.tile(r1, k), np.repeat(task.points, n, 0), geometry)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kap = np.where(ok, og.kappa(rho, geometry), np.inf).reshape(k, n)
+    kap = np.where(np.isfinite(kap), kap, np.inf)
+    best = kap.argmin(axis=1)
+    return kap[np.arange(k), best], r1[best]
+
+
+def case_fixed_table(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                     samples: int = 401) -> CaseResult:
+    """Case (a): the best constant table position for the task."""
+    r1 = np.linspace(geometry.rho_min[0], geometry.rho_max[0], samples)
+    k, n = len(task.points), len(r1)
+    rho, ok = _admissible(np.repeat(r1, k), np.tile(task.points, (n, 1)), geometry)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        kap = og.kappa(rho, geometry).reshape(n, k)
+    usable = ok.reshape(n, k).all(axis=1) & np.isfinite(kap).all(axis=1)
+    if not usable.any():
+        raise PlanningError("no fixed table position keeps the whole task inside the limits")
+    best = np.flatnonzero(usable)[np.argmin(kap[usable].mean(axis=1))]
+    return CaseResult("(a) fixed table", task.t, rho.reshape(n, k, 3)[best], kap[best])
+
+
+def case_least_norm(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> CaseResult:
+    """Case (b): rho_dot = J^+ t_dot from the optimal initial configuration
+    (midpoint integration of the table; rho2, rho3 by inverse kinematics)."""
+    _, r1_opt = pointwise_optimum(Task(task.name, task.t[:1], task.points[:1], task.velocities[:1]), geometry)
+    r1 = float(r1_opt[0])
+    out = np.empty((len(task.t), 3))
+    for i in range(len(task.t)):  # an integration: each step needs the last
+        rho, ok = _admissible(np.array([r1]), task.points[i:i + 1], geometry)
+        if not ok[0]:
+            raise PlanningError(f"the least-norm motion leaves the admissible set at t = {task.t[i]:.2f} s")
+        out[i] = rho[0]
+        if i + 1 < len(task.t):
+            dt = task.t[i + 1] - task.t[i]
+            j0, j1, _, _ = og.jacobian_one(r1, *task.points[i], geometry)
+            half = r1 + 0.5 * dt * og.least_norm_one(j0, j1, *task.velocities[i])[0]
+            mid = 0.5 * (task.points[i] + task.points[i + 1])
+            vmid = 0.5 * (task.velocities[i] + task.velocities[i + 1])
+            j0, j1, _, _ = og.jacobian_one(half, *mid, geometry)
+            r1 = r1 + dt * og.least_norm_one(j0, j1, *vmid)[0]
+    return CaseResult("(b) least norm", task.t, out, og.kappa(out, geometry))
+
+
+def case_gradient(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, step: float = 0.05,
+                  max_iter: int = 300, start: CaseResult | None = None) -> CaseResult:
+    """Case (c): at every path point, null-space steps along -grad kappa
+    (eqs 9-10) while kappa decreases, halving the step when it does not;
+    from ``start`` (default: case (b)'s configurations)."""
+    g = geometry
+    rho = (start or case_least_norm(task, g)).rho.copy()
+    kap = og.kappa(rho, g)
+    dt = np.full(len(rho), step)
+    active = np.ones(len(rho), bool)
+    for _ in range(max_iter):  # iterations, each over all still-improving path points at once
+        if not active.any():
+            break
+        idx = np.flatnonzero(active)
+        n = og.null_direction(rho[idx], g)
+        z = -og.kappa_gradient(rho[idx], g)
+        move = np.sum(n * z, axis=1)[:, None] * n  # (I - J^+ J) z' = (n . z') n
+        trial_r1 = rho[idx, 0] + dt[idx] * move[:, 0]
+        trial, ok = _admissible(trial_r1, task.points[idx], g)  # back onto the path: exact tracking
+        with np.errstate(divide="ignore", invalid="ignore"):
+            trial_k = np.where(ok, og.kappa(trial, g), np.inf)
+        better = trial_k < kap[idx]
+        rho[idx[better]], kap[idx[better]] = trial[better], trial_k[better]
+        dt[idx[~better]] *= 0.5
+        active[idx[~better & (dt[idx] < 1e-9)]] = False
+    return CaseResult("(c) global minimisation of kappa", task.t, rho, kap)
+
+
+class GradientPolicy:
+    """Case (c) in ``Orthoglide2PRRKappa-v0`` (default action mode): the
+    null-space rate along -grad kappa, ``gain`` per unit of gradient, clipped."""
+
+    def __init__(self, gain: float = 5.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> None:
+        self.gain, self.geometry = gain, geometry
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        rho = np.asarray(info["rho"])[None]
+        slope = float(np.sum(og.null_direction(rho, self.geometry) * og.kappa_gradient(rho, self.geometry)))
+        return np.array([np.clip(-self.gain * slope, -1.0, 1.0)], np.float32)
