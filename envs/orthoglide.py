@@ -184,8 +184,9 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         lo, hi = self.geometry.rho_min, self.geometry.rho_max
         kap = math.log(self._kappa) if self._kappa < 2.2e4 else 10.0
         obs = [2 * (self._rho[i] - lo[i]) / (hi[i] - lo[i]) - 1 for i in range(3)]
-        obs += [*self._points[k], *self._points[nxt], min(kap, 10.0), *self._n]
-        return np.clip(np.nan_to_num(np.array(obs, np.float32), nan=10.0), -10.0, 10.0)
+        obs += [*self._points[k], *self._points[nxt], kap, *self._n]
+        # plain floats: clip (and a NaN after leaving the working mode) without numpy's per-call overhead
+        return np.array([10.0 if v != v else min(10.0, max(-10.0, v)) for v in obs], np.float32)
 
     def _reward(self) -> float:
         if self._failed:

@@ -9,7 +9,8 @@
   follow the inverse kinematics so that tracking is exact.
 * **Case (c)**, global minimisation of kappa (eqs 9-10): at each path point,
   ``rho' = rho + (I - J^+ J) z' dt`` with ``z' = -grad kappa``, repeated while
-  kappa decreases (step halved when it does not), then the next point. The
+  kappa decreases (dt grown by half after a successful step, halved after a
+  failed one, until it falls below 1e-7), then the next point. The
   null space of J is one-dimensional (n), so ``(I - J^+ J) z' = (n . z') n``;
   all path points iterate together, each stopping on its own.
 
@@ -149,8 +150,9 @@ def case_gradient(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOME
             trial_k = np.where(ok, og.kappa(trial, g), np.inf)
         better = trial_k < kap[idx]
         rho[idx[better]], kap[idx[better]] = trial[better], trial_k[better]
+        dt[idx[better]] *= 1.5  # a successful step grows, a failed one halves
         dt[idx[~better]] *= 0.5
-        active[idx[~better & (dt[idx] < 1e-9)]] = False
+        active[idx[~better & (dt[idx] < 1e-7)]] = False
     return CaseResult("(c) global minimisation of kappa", task.t, rho, kap)
 
 

@@ -182,7 +182,8 @@ def singularity(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
     """(parallel, serial) singularity flags (N,) (section 3.2): A singular when
     the links are parallel; B loses rank when r4 is orthogonal to the slider 2
     axis or r5 to the slider 3 axis."""
-    a, _, _ = jacobian(rho, geometry)
+    with np.errstate(divide="ignore", invalid="ignore"):  # J itself is undefined at the parallel singularity
+        a, _, _ = jacobian(rho, geometry)
     det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
     return np.abs(det) < tol, (np.abs(a[..., 0, 0]) < tol) | (np.abs(a[..., 1, 1]) < tol)
 

@@ -57,7 +57,7 @@ class OrthoglideScene:
 
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """RGB image from above (uint8, (height, width, 3))."""
-        return self.sim.render(width, height, target=(0.0, 0.3, 0.0), distance=2.6, yaw=0.0, pitch=-89.0)
+        return self.sim.render(width, height, target=(0.0, 0.05, 0.0), distance=3.0, yaw=0.0, pitch=-89.0)
 
     def close(self) -> None:
         """Disconnect PyBullet."""
