@@ -49,7 +49,9 @@ class ParagymEnv(gym.Env):
     def render(self) -> np.ndarray | None:
         if self.render_mode == "rgb_array":
             return self._render_rgb()
-        return None  # "human": the PyBullet GUI window shows the scene live
+        if self.render_mode == "human":
+            self._show()  # the PyBullet GUI window shows the scene
+        return None
 
     def close(self) -> None:
         self._close()
@@ -85,6 +87,10 @@ class ParagymEnv(gym.Env):
 
     def _render_rgb(self) -> np.ndarray:
         raise NotImplementedError
+
+    def _show(self) -> None:
+        """Update the GUI in ``render_mode="human"``; a scene that PyBullet
+        keeps up to date itself needs nothing (the default)."""
 
     def _close(self) -> None:
         raise NotImplementedError

@@ -208,11 +208,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         self._scene.set_state(np.array(self._rho), self.task.points)
         return self._scene.render()
 
-    def render(self) -> np.ndarray | None:
-        if self.render_mode == "human":
-            self._render_rgb()
-            return None
-        return super().render()
+    def _show(self) -> None:
+        self._render_rgb()  # the scene is posed when drawn
 
     def _close(self) -> None:
         if self._scene is not None:

@@ -16,7 +16,19 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from paragym.rollout import Episode  # noqa: E402
 from paragym.sim.obstacles import Box, Cylinder  # noqa: E402
 
-__all__ = ["plot_capaman_episode", "plot_capaman_motion"]
+__all__ = ["plot_capaman_episode", "plot_capaman_motion", "plot_hybrid_episode", "plot_hybrid_plan",
+           "plot_kappa_episode", "plot_orthoglide_cases"]
+
+
+def _save(fig: Any, path: str | Path, title: str, dpi: int = 100) -> Path:
+    """Title, lay out, write the PNG (making its folder), close; the path."""
+    fig.suptitle(title)
+    fig.tight_layout()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(out, dpi=dpi)
+    plt.close(fig)
+    return out
 
 
 def plot_capaman_episode(ep: Episode, path: str | Path, title: str = "") -> Path:
@@ -96,13 +108,7 @@ def plot_capaman_motion(scenario: Any, t: np.ndarray, alpha: np.ndarray, tips: n
     ax.legend(fontsize=8)
     ax.set_title("(d) joint variables (dashed: T.P. reached)")
 
-    fig.suptitle(title)
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    return _save(fig, path, title, dpi=110)
 
 
 def plot_hybrid_plan(plan: Any, path: str | Path, title: str = "", l_min: float = 0.22611,
@@ -150,13 +156,7 @@ def plot_hybrid_plan(plan: Any, path: str | Path, title: str = "", l_min: float 
     ax.set_ylabel("sigma_min / home")
     ax.legend(fontsize=8)
     ax.set_title("singularity measures")
-    fig.suptitle(title)
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    return _save(fig, path, title, dpi=100)
 
 
 def plot_hybrid_episode(ep: Episode, path: str | Path) -> Path:
@@ -182,14 +182,8 @@ def plot_hybrid_episode(ep: Episode, path: str | Path) -> Path:
     for ax in axes:
         ax.set_xlabel("u")
     end = ep.infos[-1]
-    fig.suptitle(f"{ep.infos[0]['scenario'].name} scenario: success={end['is_success']}, "
-                 f"return {ep.episode_return:.2f}")
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    return _save(fig, path, f"{ep.infos[0]['scenario'].name} scenario: success={end['is_success']}, "
+                            f"return {ep.episode_return:.2f}")
 
 
 def plot_orthoglide_cases(task: Any, cases: Sequence[Any], optimum: np.ndarray, geometry: Any,
@@ -234,13 +228,7 @@ def plot_orthoglide_cases(task: Any, cases: Sequence[Any], optimum: np.ndarray, 
         ax.set_ylabel("kappa(J)")
         ax.set_ylim(1.0, max(2.0, float(np.nanmax(case.kappa)) * 1.05))
         ax.legend(fontsize=7)
-    fig.suptitle(f"2PRR + table, {task.name} task: the paper's cases (a), (b), (c)")
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
-    return out
+    return _save(fig, path, f"2PRR + table, {task.name} task: the paper's cases (a), (b), (c)", dpi=90)
 
 
 def plot_kappa_episode(ep: Episode, path: str | Path) -> Path:
@@ -256,10 +244,5 @@ def plot_kappa_episode(ep: Episode, path: str | Path) -> Path:
     axes[1].plot(kap)
     axes[1].set_xlabel("step")
     axes[1].set_ylabel("kappa(J)")
-    fig.suptitle(f"success={ep.infos[-1]['is_success']}, mean kappa {kap.mean():.3f}, max {kap.max():.3f}")
-    fig.tight_layout()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=100)
-    plt.close(fig)
-    return out
+    title = f"success={ep.infos[-1]['is_success']}, mean kappa {kap.mean():.3f}, max {kap.max():.3f}"
+    return _save(fig, path, title)
