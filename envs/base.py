@@ -92,5 +92,21 @@ class ParagymEnv(gym.Env):
         """Update the GUI in ``render_mode="human"``; a scene that PyBullet
         keeps up to date itself needs nothing (the default)."""
 
+    # --- a PyBullet scene built on the first render, for envs whose step needs none ----
+    _render_scene: Any = None
+
+    def _drawn(self, build: Any, pose: Any) -> np.ndarray:
+        """Build the render scene on first use (``build(gui)``), pose it
+        (``pose(scene)``) and draw it."""
+        if self._render_scene is None:
+            self._render_scene = build(self.render_mode == "human")
+        pose(self._render_scene)
+        return self._render_scene.render()
+
+    def _close_render_scene(self) -> None:
+        if self._render_scene is not None:
+            self._render_scene.close()
+            self._render_scene = None
+
     def _close(self) -> None:
         raise NotImplementedError

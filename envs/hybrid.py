@@ -139,7 +139,6 @@ class HybridSingularityFreeEnv(ParagymEnv):
         self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
-        self._scene: Any = None
 
     @staticmethod
     def _check_scenario(scenario: Any) -> None:
@@ -227,18 +226,14 @@ class HybridSingularityFreeEnv(ParagymEnv):
                 "max_delta_step": self.max_delta_step, "j_bar": self.j_bar}
 
     def _render_rgb(self) -> np.ndarray:
-        if self._scene is None:
-            from paragym.sim.hybrid_model import HybridScene
+        from paragym.sim.hybrid_model import HybridScene
 
-            self._scene = HybridScene(self.geometry, gui=self.render_mode == "human")
         state = hybrid.solve(self._pose[None], self._delta, self.geometry, validate=False)
-        self._scene.set_state(state.t_a[0], state.t_e[0])
-        return self._scene.render()
+        return self._drawn(lambda gui: HybridScene(self.geometry, gui=gui),
+                           lambda scene: scene.set_state(state.t_a[0], state.t_e[0]))
 
     def _show(self) -> None:
         self._render_rgb()  # the scene is posed when drawn
 
     def _close(self) -> None:
-        if self._scene is not None:
-            self._scene.close()
-            self._scene = None
+        self._close_render_scene()

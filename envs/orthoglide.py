@@ -114,7 +114,6 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (dim,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
         self._lo, self._hi = np.array(geometry.rho_min), np.array(geometry.rho_max)
-        self._scene: Any = None
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
         ng = _task_module()
@@ -201,17 +200,13 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
                 "step": self._k, "is_success": (not self._failed) and self._k >= self._last}
 
     def _render_rgb(self) -> np.ndarray:
-        if self._scene is None:
-            from paragym.sim.orthoglide_model import OrthoglideScene
+        from paragym.sim.orthoglide_model import OrthoglideScene
 
-            self._scene = OrthoglideScene(self.geometry, gui=self.render_mode == "human")
-        self._scene.set_state(np.array(self._rho), self.task.points)
-        return self._scene.render()
+        return self._drawn(lambda gui: OrthoglideScene(self.geometry, gui=gui),
+                           lambda scene: scene.set_state(np.array(self._rho), self.task.points))
 
     def _show(self) -> None:
         self._render_rgb()  # the scene is posed when drawn
 
     def _close(self) -> None:
-        if self._scene is not None:
-            self._scene.close()
-            self._scene = None
+        self._close_render_scene()
