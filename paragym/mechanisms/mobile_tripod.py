@@ -1,0 +1,161 @@
+"""Kinematics of the sensory-redundant mobile tripod (paper 004).
+
+Paper 004 (Shoval and Shoham, "Sensory redundant parallel mobile
+mechanism"): three drive units on the ground, each joined by a spherical
+joint to a leg of fixed length r; each leg joins the upper plate (an
+equilateral triangle of edge p) by a revolute joint whose encoder reads
+eta_i. In the plate frame U-V-W (eqs 1-3)::
+
+    D_i = (p / sqrt 3 + r cos eta_i) (cos alpha_i, sin alpha_i, 0) + (0, 0, -r sin eta_i)
+
+so each leg moves in the vertical plane through the plate's centre and its
+vertex, eta measured down from the plate's plane. Consistent forms of what
+the paper prints (tested):
+
+* alpha_i = pi/2 + (i + 1) 2 pi / 3 places the vertices at -30, 90 and
+  210 deg, 120 deg apart (the printed ``cos alpha_ii`` of eq 1 is cos alpha_i);
+* eq 4: l_i = |D_(i-1) - D_(i+1)|, the distance between the two units other
+  than i (eq 5 the same from odometry);
+* relocating a faulty unit k (section 3): it lies at distance l_(k+1) from
+  D_(k-1) and l_(k-1) from D_(k+1) — the full inter-unit distances, not the
+  halves l/2 the paper prints (tested: only the full distances put it back).
+
+Forward kinematics from the three units' positions solves eq 4 = eq 5 for
+eta (Newton, from the last eta so the branch stays continuous) and places
+the plate by the rigid fit of its frame's D_i(eta) onto the world's
+(Kabsch). Defaults: the paper's example, r = p = 5 ft = 1.524 m. SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["FOOT", "TripodGeometry", "distances", "forward", "inverse", "plate_frame_units", "relocate"]
+
+FOOT = 0.3048
+
+
+@dataclass(frozen=True)
+class TripodGeometry:
+    """Leg length r and plate edge p (m): the paper's example, 5 ft each."""
+
+    r: float = 5 * FOOT
+    p: float = 5 * FOOT
+
+    def __post_init__(self) -> None:
+        if not (self.r > 0 and self.p > 0):
+            raise ValueError(f"r and p must be positive lengths; got r = {self.r}, p = {self.p}")
+
+    @property
+    def alphas(self) -> np.ndarray:
+        """alpha_i = pi/2 + (i + 1) 2 pi / 3 for i = 1, 2, 3 (rad)."""
+        return np.array([math.pi / 2 + (i + 1) * 2 * math.pi / 3 for i in (1, 2, 3)])
+
+
+DEFAULT_GEOMETRY = TripodGeometry()
+
+
+def plate_frame_units(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Drive units D_i in the plate frame (N, 3, 3) from encoder angles eta (N, 3), rad (eqs 1-3)."""
+    g = geometry
+    eta = np.atleast_2d(eta)
+    a = g.alphas
+    reach = g.p / math.sqrt(3) + g.r * np.cos(eta)
+    return np.stack([reach * np.cos(a), reach * np.sin(a), -g.r * np.sin(eta)], axis=-1)
+
+
+def distances(units: np.ndarray) -> np.ndarray:
+    """l_i = |D_(i-1) - D_(i+1)| (eqs 4, 5) for units (N, 3, 3): (N, 3)."""
+    units = np.atleast_3d(units) if units.ndim == 2 else units
+    return np.linalg.norm(np.roll(units, 1, axis=-2) - np.roll(units, -1, axis=-2), axis=-1)
+
+
+def _kabsch(local: np.ndarray, world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """R (N, 3, 3), t (N, 3) with world ~ R local + t (least squares, proper rotations)."""
+    lc, wc = local.mean(axis=1), world.mean(axis=1)
+    h = np.swapaxes(local - lc[:, None], 1, 2) @ (world - wc[:, None])
+    u, _, vt = np.linalg.svd(h)
+    d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
+    fix = np.ones((len(d), 3))
+    fix[:, 2] = d
+    rot = np.swapaxes(vt, 1, 2) @ (fix[:, :, None] * np.swapaxes(u, 1, 2))
+    return rot, wc - np.einsum("nij,nj->ni", rot, lc)
+
+
+def forward(units: np.ndarray, eta0: np.ndarray | None = None, geometry: TripodGeometry = DEFAULT_GEOMETRY,
+            tol: float = 1e-13) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Plate pose and eta from the units' world positions (N, 3, 3).
+
+    Solves eq 4 = eq 5 for eta by Newton's method from ``eta0`` (default
+    45 deg; pass the last eta to stay on its branch), then fits the plate.
+    Returns eta (N, 3), the plate's rotation (N, 3, 3) and centre (N, 3).
+    Raises ValueError if the distances cannot be met (legs too short).
+    """
+    units = np.asarray(units, float)
+    units = units[None] if units.ndim == 2 else units
+    target = distances(units)
+    eta = np.full((len(units), 3), math.radians(45.0)) if eta0 is None else np.atleast_2d(eta0).astype(float)
+    for _ in range(60):
+        r = distances(plate_frame_units(eta, geometry)) - target
+        if np.max(np.abs(r)) < tol:
+            break
+        h = 1e-7
+        jac = np.stack([(distances(plate_frame_units(eta + h * e, geometry)) -
+                         distances(plate_frame_units(eta - h * e, geometry))) / (2 * h) for e in np.eye(3)], axis=2)
+        eta = eta - np.linalg.solve(jac, r[..., None])[..., 0]
+    if np.max(np.abs(distances(plate_frame_units(eta, geometry)) - target)) > 1e-9:
+        raise ValueError("the units' distances cannot be met by legs of this length (forward kinematics)")
+    rot, centre = _kabsch(plate_frame_units(eta, geometry), units)
+    return eta, rot, centre
+
+
+def inverse(rotation: np.ndarray, centre: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY,
+            ground: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """eta (N, 3) and the units' world positions (N, 3, 3) for a plate pose
+    (rotation (N, 3, 3), centre (N, 3)) with the units on the plane z = ground.
+    Each leg's eta solves ``c_z + (p/sqrt 3 + r cos eta) e_z - r sin eta n_z = ground``
+    (e the vertex's radial direction, n the plate normal, in the world), the
+    root with the leg below the plate and pointing outward (eta in (0, pi/2])."""
+    g = geometry
+    rot = np.asarray(rotation, float).reshape(-1, 3, 3)
+    centre = np.asarray(centre, float).reshape(-1, 3)
+    a = g.alphas
+    radial = np.stack([np.cos(a), np.sin(a), np.zeros(3)], axis=1)
+    e = np.einsum("nij,kj->nki", rot, radial)  # (N, 3, 3)
+    nz = rot[:, 2, 2][:, None]
+    c = centre[:, 2:3] + g.p / math.sqrt(3) * e[..., 2] - ground  # A cos(eta) + B sin(eta) = -c / r
+    amp, phase = np.hypot(e[..., 2], -nz), np.arctan2(-nz, e[..., 2])
+    ratio = -c / (g.r * amp)
+    if np.any(np.abs(ratio) > 1):
+        raise ValueError("the plate is too high (or too tilted) for legs of this length to reach the ground")
+    eta = phase + np.arccos(ratio)
+    eta = np.where(eta > np.pi, eta - 2 * np.pi, eta)
+    eta = np.where((eta < 0) | (eta > np.pi / 2 + 1e-9), phase - np.arccos(ratio), eta)
+    units = np.einsum("nij,nkj->nki", rot, plate_frame_units(eta, g)) + centre[:, None]
+    return eta, units
+
+
+def relocate(units: np.ndarray, faulty: int, target: np.ndarray) -> np.ndarray:
+    """The paper's correction (section 3): unit ``faulty`` (0-based) moved to
+    the intersection of the circles, in the ground plane, about the other two
+    units with radii the encoder distances ``target`` (eq 4's l, (3,)); of the
+    two intersections the one nearer its odometric position. Units (3, 3)."""
+    k = faulty
+    i, j = (k - 1) % 3, (k + 1) % 3
+    ri, rj = target[j], target[i]  # |D_k - D_i| is l_j (the distance opposite unit j), and vice versa
+    pi_, pj = units[i, :2], units[j, :2]
+    d = float(np.linalg.norm(pj - pi_))
+    ri = math.sqrt(max(ri * ri - (units[k, 2] - units[i, 2]) ** 2, 0.0))
+    rj = math.sqrt(max(rj * rj - (units[k, 2] - units[j, 2]) ** 2, 0.0))
+    along = (ri * ri - rj * rj + d * d) / (2 * d)
+    h = math.sqrt(max(ri * ri - along * along, 0.0))
+    base = pi_ + along * (pj - pi_) / d
+    perp = np.array([-(pj - pi_)[1], (pj - pi_)[0]]) / d
+    candidates = [base + h * perp, base - h * perp]
+    best = min(candidates, key=lambda c: float(np.linalg.norm(c - units[k, :2])))
+    out = units.copy()
+    out[k, :2] = best
+    return out

@@ -1,0 +1,77 @@
+"""Paper 004's mobile tripod: kinematics, the consistent forms of its printed equations, the relocation."""
+
+import math
+
+import numpy as np
+import pytest
+
+from paragym.mechanisms import mobile_tripod as mt
+
+
+def _level(eta_deg: float = 40.0) -> tuple[np.ndarray, np.ndarray]:
+    eta0 = np.radians([eta_deg] * 3)
+    height = -mt.plate_frame_units(eta0)[0, 0, 2]
+    return mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]))
+
+
+def test_vertices_are_120_degrees_apart():
+    assert np.allclose(np.degrees(mt.DEFAULT_GEOMETRY.alphas) % 360, [330.0, 90.0, 210.0])
+
+
+def test_inverse_and_forward_round_trip_on_tilted_poses():
+    rng = np.random.default_rng(0)
+    for _ in range(20):
+        roll, pitch, yaw = rng.uniform(-0.15, 0.15, 3)
+        cr, sr = math.cos(roll), math.sin(roll)
+        cp, sp = math.cos(pitch), math.sin(pitch)
+        cy, sy = math.cos(yaw), math.sin(yaw)
+        rot = np.array([[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                        [-sp, cp * sr, cp * cr]])
+        centre = np.array([rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(0.8, 1.2)])
+        eta, units = mt.inverse(rot[None], centre[None])
+        np.testing.assert_allclose(units[0, :, 2], 0.0, atol=1e-12)  # on the ground
+        eta2, rot2, centre2 = mt.forward(units, eta0=eta + 0.05)
+        np.testing.assert_allclose(eta2, eta, atol=1e-10)
+        np.testing.assert_allclose(rot2[0], rot, atol=1e-10)
+        np.testing.assert_allclose(centre2[0], centre, atol=1e-10)
+
+
+def test_encoder_and_odometry_distances_agree_when_odometry_is_exact():
+    eta, units = _level()
+    np.testing.assert_allclose(mt.distances(mt.plate_frame_units(eta)), mt.distances(units), atol=1e-12)
+
+
+def test_relocation_uses_the_full_distances_not_the_halves():
+    eta, units = _level()
+    true = units[0]
+    target = mt.distances(mt.plate_frame_units(eta))[0]
+    wrong = true.copy()
+    wrong[2, :2] += [0.03, -0.02]  # unit 3's odometry is off
+    fixed = mt.relocate(wrong, 2, target)
+    np.testing.assert_allclose(fixed, true, atol=1e-9)
+    halved = mt.relocate(wrong, 2, target / 2)  # the printed radii l/2 do not put it back
+    assert np.linalg.norm(halved[2] - true[2]) > 0.1
+
+
+def test_the_90_ft_example():
+    """A 1 deg heading error on one unit over 90 ft: the unit ends 90 sin(1 deg) = 1.57 ft off
+    (the paper: about 1.5 ft); the plate's yaw error depends on the legs' angle and the heading
+    (2.3-6.5 deg over 20-70 deg and two headings; the paper's 2.62 deg lies in that range)."""
+    eta, units = _level(20.0)
+    travel = 90 * mt.FOOT
+    moved = units[0] + [travel, 0.0, 0.0]
+    off = moved.copy()
+    off[0] = units[0][0] + travel * np.array([math.cos(math.radians(1)), math.sin(math.radians(1)), 0.0])
+    assert (off[0, 1] - moved[0, 1]) / mt.FOOT == pytest.approx(1.5707, abs=1e-3)
+    _, r_true, _ = mt.forward(moved, eta0=eta)
+    _, r_off, _ = mt.forward(off, eta0=eta)
+    yaw_error = math.degrees(math.atan2(r_off[0, 1, 0], r_off[0, 0, 0]) - math.atan2(r_true[0, 1, 0], r_true[0, 0, 0]))
+    assert 2.0 < abs(yaw_error) < 3.0
+
+
+def test_bad_geometry_and_unreachable_input():
+    with pytest.raises(ValueError, match="positive"):
+        mt.TripodGeometry(r=-1.0)
+    with pytest.raises(ValueError, match="too high"):
+        mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, 5.0]]))
