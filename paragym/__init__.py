@@ -25,6 +25,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv", 1000,
         "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)",
     ),
+    "paragym/MobileTripodOdometry-v0": (
+        "paragym.envs.mobile_tripod:MobileTripodOdometryEnv", 700,
+        "mobile tripod: estimate the three drive units under slip from odometry and leg encoders (paper 004)",
+    ),
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

@@ -54,12 +54,31 @@ def _orthoglide_plot(ep: Episode, path: Path) -> Path:
     return plot_kappa_episode(ep, path)
 
 
+def _tripod_best(env: gym.Env) -> Any:
+    from paragym.planners.encoder_correction import EncoderCorrection, EstimatorPolicy
+
+    return EstimatorPolicy(EncoderCorrection, geometry=env.unwrapped.geometry)
+
+
+def _tripod_plot(ep: Episode, path: Path) -> Path:
+    from paragym.plots import plot_tripod_estimates
+
+    true = np.array([i["true_units"] for i in ep.infos])
+    estimate = np.array([i["estimate"] for i in ep.infos])
+    odometry = np.array([i["odometry"] for i in ep.infos])
+    eta = np.array([i["eta"] for i in ep.infos])
+    t = np.array([i["t"] for i in ep.infos])
+    return plot_tripod_estimates(t, true, {"odometry": odometry, "policy's estimate": estimate}, eta, eta, 0, path,
+                                 f"{ep.infos[0]['scenario'].name}: final unit error {ep.infos[-1]['unit_error']:.3f} m")
+
+
 #: env id -> (best available policy factory, name, picture writer)
 DEMOS: dict[str, tuple[Callable[[gym.Env], Any], str, Callable[[Episode, Path], Path]]] = {
     "paragym/CaPaManCollisionFree-v0": (_capaman_best, "RRT + GA (paper 000)", _capaman_plot),
     "paragym/HybridSingularityFree-v0": (_hybrid_best, "polynomial + serial + detour (paper 002)", _hybrid_plot),
     "paragym/Orthoglide2PRRKappa-v0": (_orthoglide_best, "null-space gradient of kappa (paper 003, case c)",
                                        _orthoglide_plot),
+    "paragym/MobileTripodOdometry-v0": (_tripod_best, "redundant-encoder correction (paper 004)", _tripod_plot),
 }
 
 
@@ -241,11 +260,53 @@ def _plan_orthoglide(env: gym.Env, args: argparse.Namespace, out: Path, stem: st
     return 0
 
 
+def _plan_tripod(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    """Paper 004's drive with the three estimators side by side; Figs 8-10."""
+    import json
+
+    from paragym.planners.encoder_correction import EncoderCorrection, FusionEstimator, OdometryEstimator
+    from paragym.plots import plot_tripod_estimates
+    from paragym.sim.tripod_drive import TripodDrive
+
+    obs, info = env.reset(seed=args.seed)
+    scenario, g = info["scenario"], env.unwrapped.geometry
+    kinds = {"odometry": OdometryEstimator, "correction (paper)": EncoderCorrection, "fusion (UKF)": FusionEstimator}
+    tracks, stats = {}, {}
+    for name, kind in kinds.items():  # the same drive, noise and all, for every estimator
+        drive = TripodDrive(scenario, np.random.default_rng(args.seed), g)
+        est = kind(drive.odometry, g)
+        true, track, eta, eta_true, t = [drive.true.copy()], [est.estimate.copy()], [drive.eta], [drive.eta], [0.0]
+        for _ in range(drive.steps):
+            inc = drive.step()
+            measured = drive.encoders
+            est.update(inc, measured, drive.odometry[:, 2])
+            true.append(drive.true.copy())
+            track.append(est.estimate.copy())
+            eta.append(measured)
+            eta_true.append(drive.eta.copy())
+            t.append(drive.t)
+        true_a, track_a = np.array(true), np.array(track)
+        err = np.linalg.norm(track_a[:, :, :2] - true_a[:, :, :2], axis=2).max(axis=1)
+        tracks[name] = track_a
+        stats[name] = {"final_error_m": float(err[-1]), "max_error_m": float(err.max())}
+    print(f"{scenario.name}: {scenario.distance:.0f} m at {scenario.speed} m/s, {1 / drive.dt:.0f} Hz")
+    print(f"{'estimator':22s} {'final error':>12s} {'max error':>10s}   (largest of the three units)")
+    for name, st in stats.items():
+        print(f"{name:22s} {st['final_error_m'] * 100:10.2f} cm {st['max_error_m'] * 100:8.2f} cm")
+    unit = scenario.push[0] if scenario.push else int(np.argmax(np.abs(scenario.heading_error)))
+    png = plot_tripod_estimates(np.array(t), true_a, tracks, np.array(eta), np.array(eta_true), unit,
+                                out / f"{stem}.png", f"mobile tripod, {scenario.name}")
+    (out / f"{stem}.json").write_text(json.dumps({"scenario": scenario.name, **stats}, indent=2))
+    print(f"wrote {png} and {out / (stem + '.json')}")
+    return 0
+
+
 #: env id -> the reference planner's offline run
 PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v0": _plan_capaman,
     "paragym/HybridSingularityFree-v0": _plan_hybrid,
     "paragym/Orthoglide2PRRKappa-v0": _plan_orthoglide,
+    "paragym/MobileTripodOdometry-v0": _plan_tripod,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate
@@ -343,7 +404,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_demo)
     p = sub.add_parser("plan", help="run the reference planner offline; print its figures and save pictures")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
-    p.add_argument("--scenario", default="paper", help="'paper' (default) or 'random'")
+    p.add_argument("--scenario", default="paper",
+                   help="'paper' (default) or 'random'; the mobile tripod: initial_heading, push, random_slip, ...")
     p.add_argument("--seed", type=int, default=0, help="scenario (random) and planner seed")
     p.add_argument("--dt", type=float, default=0.45, help="seconds between via points (paper: 0.09, 0.45, 0.9)")
     p.add_argument("--out", default="runs/plan", help="folder for the PNG and the JSON")

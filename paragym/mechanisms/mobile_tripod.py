@@ -98,13 +98,22 @@ def forward(units: np.ndarray, eta0: np.ndarray | None = None, geometry: TripodG
     units = units[None] if units.ndim == 2 else units
     target = distances(units)
     eta = np.full((len(units), 3), math.radians(45.0)) if eta0 is None else np.atleast_2d(eta0).astype(float)
+    g = geometry
+    a = g.alphas
+    radial = np.stack([np.cos(a), np.sin(a), np.zeros(3)], axis=1)
     for _ in range(60):
-        r = distances(plate_frame_units(eta, geometry)) - target
+        d = plate_frame_units(eta, g)
+        r = distances(d) - target
         if np.max(np.abs(r)) < tol:
             break
-        h = 1e-7
-        jac = np.stack([(distances(plate_frame_units(eta + h * e, geometry)) -
-                         distances(plate_frame_units(eta - h * e, geometry))) / (2 * h) for e in np.eye(3)], axis=2)
+        # analytic Jacobian: l_i = |D_(i-1) - D_(i+1)|, dD_j/deta_j = -r sin(eta_j) e_j - r cos(eta_j) w
+        dd = -g.r * (np.sin(eta)[..., None] * radial + np.cos(eta)[..., None] * np.array([0.0, 0.0, 1.0]))
+        diff = np.roll(d, 1, axis=-2) - np.roll(d, -1, axis=-2)  # D_(i-1) - D_(i+1)
+        unit = diff / np.linalg.norm(diff, axis=-1, keepdims=True)
+        jac = np.zeros(eta.shape + (3,))
+        for i in range(3):  # l_i touches units i-1 (+) and i+1 (-)
+            jac[:, i, (i - 1) % 3] = np.sum(unit[:, i] * dd[:, (i - 1) % 3], axis=-1)
+            jac[:, i, (i + 1) % 3] = -np.sum(unit[:, i] * dd[:, (i + 1) % 3], axis=-1)
         eta = eta - np.linalg.solve(jac, r[..., None])[..., 0]
     if np.max(np.abs(distances(plate_frame_units(eta, geometry)) - target)) > 1e-9:
         raise ValueError("the units' distances cannot be met by legs of this length (forward kinematics)")

@@ -1,0 +1,130 @@
+"""The mobile tripod's drive: three unicycle drive units, slip, terrain, odometry and encoders (paper 004).
+
+Each drive unit moves as a unicycle along its commanded heading at the
+commanded speed; what really happens differs by the scenario's disturbances
+(a heading offset, a push, slip velocities, the terrain's slope). Odometry
+integrates the wheels' own motion — the commanded speed along the heading
+the unit believes it has — and so is blind to all of them. The plate's true
+pose and the encoder angles eta follow from the units' true positions by the
+forward kinematics (:mod:`paragym.mechanisms.mobile_tripod`); the encoders
+add uniform noise of +-``encoder_noise``. Sampled at ``rate`` (20 Hz). The
+terrain is flat or bumpy (a sum of Gaussian bumps and holes); PyBullet draws
+it as a heightfield with the robot (:class:`TripodScene`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from paragym.mechanisms import mobile_tripod as mt
+
+__all__ = ["DriveScenario", "Terrain", "TripodDrive"]
+
+
+@dataclass(frozen=True)
+class Terrain:
+    """Ground height z(x, y) = sum of Gaussian bumps (positive) and holes (negative), m."""
+
+    bumps: tuple[tuple[float, float, float, float], ...] = ()  # (x, y, height, radius)
+
+    def height(self, xy: np.ndarray) -> np.ndarray:
+        xy = np.asarray(xy, float)
+        z = np.zeros(xy.shape[:-1])
+        for x0, y0, h, rad in self.bumps:
+            z = z + h * np.exp(-((xy[..., 0] - x0) ** 2 + (xy[..., 1] - y0) ** 2) / (2 * rad * rad))
+        return z
+
+    def slope(self, xy: np.ndarray, direction: np.ndarray) -> np.ndarray:
+        """dz/ds along unit horizontal directions (N, 2) at points (N, 2)."""
+        h = 1e-4
+        return (self.height(xy + h * direction) - self.height(xy - h * direction)) / (2 * h)
+
+
+@dataclass(frozen=True)
+class DriveScenario:
+    """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
+
+    ``heading_error`` (3,) rad: each unit's true heading minus the one it
+    believes; ``push`` (unit, time s, inward distance m) or None;
+    ``slip`` m/s: the largest random slip velocity of each unit per sample
+    (uniform in [0, slip] in a random direction); ``terrain``.
+    """
+
+    name: str
+    speed: float = 0.66
+    heading: float = 0.0
+    distance: float = 20.0
+    heading_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    push: tuple[int, float, float] | None = None
+    slip: float = 0.0
+    terrain: Terrain = field(default_factory=Terrain)
+    seed: int | None = None
+
+    @property
+    def duration(self) -> float:
+        return self.distance / self.speed
+
+
+class TripodDrive:
+    """Steps the true units, the odometry and the encoders of one drive.
+
+    Args:
+        scenario: the drive and its disturbances.
+        rng: for the encoder noise and the slip.
+        geometry: the tripod.
+        eta0: the legs' initial angle (rad), equal for the three.
+        encoder_noise: half-width of the uniform encoder noise (rad; paper: 1 deg).
+        rate: sampling rate (Hz; paper: 20).
+    """
+
+    def __init__(self, scenario: DriveScenario, rng: np.random.Generator,
+                 geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY, eta0: float = math.radians(40.0),
+                 encoder_noise: float = math.radians(1.0), rate: float = 20.0) -> None:
+        self.scenario, self.rng, self.geometry = scenario, rng, geometry
+        self.encoder_noise, self.dt = encoder_noise, 1.0 / rate
+        eta = np.full(3, eta0)
+        height = -mt.plate_frame_units(eta, geometry)[0, 0, 2]
+        self.eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
+        self.true = units[0].copy()
+        self.true[:, 2] = scenario.terrain.height(self.true[:, :2])
+        self.odometry = self.true.copy()
+        self.t = 0.0
+        self.steps = int(round(scenario.duration * rate))
+        self._pose()
+
+    def _pose(self) -> None:
+        self.eta, self.rotation, self.centre = mt.forward(self.true[None], eta0=self.eta, geometry=self.geometry)
+        self.eta, self.rotation, self.centre = self.eta[0], self.rotation[0], self.centre[0]
+
+    @property
+    def encoders(self) -> np.ndarray:
+        """The measured eta (3,): the true angles plus uniform noise."""
+        return self.eta + self.rng.uniform(-self.encoder_noise, self.encoder_noise, 3)
+
+    def step(self) -> np.ndarray:
+        """Advance one sample; returns the odometric increments (3, 2) of the units."""
+        sc, dt = self.scenario, self.dt
+        believed = np.array([math.cos(sc.heading), math.sin(sc.heading)])
+        odo = np.tile(sc.speed * dt * believed, (3, 1))
+        ang = sc.heading + np.asarray(sc.heading_error)
+        true_dir = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        # on a slope the wheel rolls along the ground: less horizontal way than it counts
+        slope = sc.terrain.slope(self.true[:, :2], true_dir)
+        move = (sc.speed * dt / np.sqrt(1.0 + slope * slope))[:, None] * true_dir
+        if sc.slip > 0:
+            a = self.rng.uniform(0, 2 * np.pi, 3)
+            move += (self.rng.uniform(0, sc.slip, 3) * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
+        if sc.push is not None and self.t < sc.push[1] <= self.t + dt:
+            unit, _, depth = sc.push
+            inward = self.centre[:2] - self.true[unit, :2]
+            move[unit] += depth * inward / np.linalg.norm(inward)
+        self.true[:, :2] += move
+        self.true[:, 2] = sc.terrain.height(self.true[:, :2])
+        self.odometry[:, :2] += odo
+        self.odometry[:, 2] = sc.terrain.height(self.odometry[:, :2])
+        self.t += dt
+        self._pose()
+        return odo
