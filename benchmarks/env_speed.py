@@ -23,7 +23,8 @@ from gymnasium.utils.performance import benchmark_step
 import paragym
 
 TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularityFree-v0": 5000.0,
-           "paragym/Orthoglide2PRRKappa-v0": 20000.0}
+           "paragym/Orthoglide2PRRKappa-v0": 20000.0, "paragym/MobileTripodOdometry-v0": 5000.0}
+SCENARIOS = {"paragym/MobileTripodOdometry-v0": ("random", "push")}  # the paper's drives are named
 
 
 def steps_per_second(env: gym.Env, seconds: float, seed: int = 0) -> float:
@@ -70,7 +71,7 @@ def main() -> None:
     except ImportError:
         print("panda-gym is not installed: no anchor (pip install panda-gym to add it)")
     for env_id in paragym.ENVIRONMENTS:
-        for scenario in ("random", "paper"):
+        for scenario in SCENARIOS.get(env_id, ("random", "paper")):
             env = gym.make(env_id, scenario=scenario)
             sps = steps_per_second(env, args.seconds)
             rows.append((env_id, scenario, sps, benchmark_step(env, target_duration=args.seconds, seed=0),

@@ -75,3 +75,12 @@ def test_bad_geometry_and_unreachable_input():
         mt.TripodGeometry(r=-1.0)
     with pytest.raises(ValueError, match="too high"):
         mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, 5.0]]))
+
+
+def test_float_eta_equals_the_batched_forward_kinematics():
+    rng = np.random.default_rng(2)
+    eta, units = _level(35.0)
+    for _ in range(30):
+        moved = units[0] + np.column_stack([rng.normal(0, 0.05, (3, 2)), np.zeros(3)])
+        expected, _, _ = mt.forward(moved, eta0=eta)
+        np.testing.assert_allclose(mt.eta_one(moved, eta[0]), expected[0], atol=1e-11)

@@ -168,3 +168,38 @@ def relocate(units: np.ndarray, faulty: int, target: np.ndarray) -> np.ndarray:
     out = units.copy()
     out[k, :2] = best
     return out
+
+
+def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY,
+            tol: float = 1e-13) -> np.ndarray:
+    """The eta of :func:`forward` for one configuration, in Python floats:
+    Newton's method on eq 4 = eq 5 with the analytic Jacobian and Cramer's
+    rule (the per-sample path of the drive simulation; tested equal)."""
+    g = geometry
+    u = np.asarray(units, float).tolist()
+    target = [math.dist(u[(i - 1) % 3], u[(i + 1) % 3]) for i in range(3)]
+    ca = [math.cos(a) for a in g.alphas]
+    sa = [math.sin(a) for a in g.alphas]
+    base, r = g.p / math.sqrt(3), g.r
+    eta = [float(e) for e in eta0]
+    for _ in range(50):
+        reach = [base + r * math.cos(e) for e in eta]
+        d = [(reach[k] * ca[k], reach[k] * sa[k], -r * math.sin(eta[k])) for k in range(3)]
+        dd = [(-r * math.sin(eta[k]) * ca[k], -r * math.sin(eta[k]) * sa[k], -r * math.cos(eta[k])) for k in range(3)]
+        res, jac = [], [[0.0] * 3 for _ in range(3)]
+        for i in range(3):
+            a, b = (i - 1) % 3, (i + 1) % 3
+            diff = (d[a][0] - d[b][0], d[a][1] - d[b][1], d[a][2] - d[b][2])
+            length = math.sqrt(diff[0] ** 2 + diff[1] ** 2 + diff[2] ** 2)
+            res.append(length - target[i])
+            jac[i][a] = (diff[0] * dd[a][0] + diff[1] * dd[a][1] + diff[2] * dd[a][2]) / length
+            jac[i][b] = -(diff[0] * dd[b][0] + diff[1] * dd[b][1] + diff[2] * dd[b][2]) / length
+        if max(abs(x) for x in res) < tol:
+            break
+        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = jac
+        det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
+        inv = [[j11 * j22 - j12 * j21, j02 * j21 - j01 * j22, j01 * j12 - j02 * j11],
+               [j12 * j20 - j10 * j22, j00 * j22 - j02 * j20, j02 * j10 - j00 * j12],
+               [j10 * j21 - j11 * j20, j01 * j20 - j00 * j21, j00 * j11 - j01 * j10]]
+        eta = [eta[k] - sum(inv[k][m] * res[m] for m in range(3)) / det for k in range(3)]
+    return np.array(eta)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -30,17 +31,26 @@ class Terrain:
 
     bumps: tuple[tuple[float, float, float, float], ...] = ()  # (x, y, height, radius)
 
+    @cached_property
+    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        b = np.array(self.bumps, float).reshape(-1, 4)
+        return b[:, :2], b[:, 2], 2 * b[:, 3] ** 2
+
     def height(self, xy: np.ndarray) -> np.ndarray:
         xy = np.asarray(xy, float)
-        z = np.zeros(xy.shape[:-1])
-        for x0, y0, h, rad in self.bumps:
-            z = z + h * np.exp(-((xy[..., 0] - x0) ** 2 + (xy[..., 1] - y0) ** 2) / (2 * rad * rad))
-        return z
+        if not self.bumps:
+            return np.zeros(xy.shape[:-1])
+        centres, heights, width = self._arrays
+        d2 = np.sum((xy[..., None, :] - centres) ** 2, axis=-1)
+        return np.sum(heights * np.exp(-d2 / width), axis=-1)
 
     def slope(self, xy: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """dz/ds along unit horizontal directions (N, 2) at points (N, 2)."""
+        if not self.bumps:
+            return np.zeros(np.shape(xy)[:-1])
         h = 1e-4
-        return (self.height(xy + h * direction) - self.height(xy - h * direction)) / (2 * h)
+        both = self.height(np.stack([xy + h * direction, xy - h * direction]))
+        return (both[0] - both[1]) / (2 * h)
 
 
 @dataclass(frozen=True)
@@ -87,7 +97,8 @@ class TripodDrive:
         self.encoder_noise, self.dt = encoder_noise, 1.0 / rate
         eta = np.full(3, eta0)
         height = -mt.plate_frame_units(eta, geometry)[0, 0, 2]
-        self.eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
+        eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
+        self.eta = eta[0]
         self.true = units[0].copy()
         self.true[:, 2] = scenario.terrain.height(self.true[:, :2])
         self.odometry = self.true.copy()
@@ -96,8 +107,17 @@ class TripodDrive:
         self._pose()
 
     def _pose(self) -> None:
-        self.eta, self.rotation, self.centre = mt.forward(self.true[None], eta0=self.eta, geometry=self.geometry)
-        self.eta, self.rotation, self.centre = self.eta[0], self.rotation[0], self.centre[0]
+        self.eta = mt.eta_one(self.true, self.eta, self.geometry)  # the branch continuous with the last sample
+
+    @property
+    def rotation(self) -> np.ndarray:
+        """The plate's true orientation (3, 3), by the rigid fit of :func:`mobile_tripod.forward`."""
+        return mt.forward(self.true[None], eta0=self.eta, geometry=self.geometry)[1][0]
+
+    @property
+    def centre(self) -> np.ndarray:
+        """The plate's true centre (3,)."""
+        return mt.forward(self.true[None], eta0=self.eta, geometry=self.geometry)[2][0]
 
     @property
     def encoders(self) -> np.ndarray:
@@ -119,7 +139,7 @@ class TripodDrive:
             move += (self.rng.uniform(0, sc.slip, 3) * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
         if sc.push is not None and self.t < sc.push[1] <= self.t + dt:
             unit, _, depth = sc.push
-            inward = self.centre[:2] - self.true[unit, :2]
+            inward = self.true[:, :2].mean(axis=0) - self.true[unit, :2]  # toward the robot's centre
             move[unit] += depth * inward / np.linalg.norm(inward)
         self.true[:, :2] += move
         self.true[:, 2] = sc.terrain.height(self.true[:, :2])
