@@ -124,8 +124,10 @@ class MobileTripodOdometryEnv(ParagymEnv):
         self._errors()
 
     def _errors(self) -> None:
-        self._unit_error = float(np.linalg.norm(self._estimate[:, :2] - self.drive.true[:, :2], axis=1).mean())
-        self._plate_error = float(np.linalg.norm(self._estimate.mean(axis=0)[:2] - self.drive.true.mean(axis=0)[:2]))
+        diff = self._estimate[:, :2] - self.drive.true[:, :2]
+        self._unit_error = float(np.sqrt((diff * diff).sum(axis=1)).mean())
+        centre = diff.sum(axis=0) / 3.0  # the plate's centre error: the units' mean error
+        self._plate_error = float(math.hypot(centre[0], centre[1]))
 
     def _observe(self) -> np.ndarray:
         sc = self.scenario
@@ -143,12 +145,14 @@ class MobileTripodOdometryEnv(ParagymEnv):
     def _detected_fault(self) -> tuple[int, str] | None:
         """The paper's reading of eq 4 against eq 5 for the current estimate:
         which unit looks faulty, and whether eta says it went inward or outward."""
-        target = mt.distances(mt.plate_frame_units(self._eta, self.geometry))[0]
-        diff = np.abs(mt.distances(self._estimate[None])[0] - target)
-        order = np.argsort(diff)
-        if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03 or self._k == 0:
+        if self._k == 0:
             return None
-        k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
+        target = mt.encoder_distances_one(self._eta, self.geometry)
+        diff = [abs(a - b) for a, b in zip(mt.distances_one(self._estimate), target, strict=True)]
+        order = sorted(range(3), key=diff.__getitem__)
+        if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
+            return None
+        k = order[0]  # eta grows when a unit moves inward (eta measured down from the plate)
         return k, "inward (bump or push)" if self._eta[k] > self._last_eta[k] else "outward (hole or slip)"
 
     def _info(self) -> dict[str, Any]:

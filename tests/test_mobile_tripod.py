@@ -84,3 +84,15 @@ def test_float_eta_equals_the_batched_forward_kinematics():
         moved = units[0] + np.column_stack([rng.normal(0, 0.05, (3, 2)), np.zeros(3)])
         expected, _, _ = mt.forward(moved, eta0=eta)
         np.testing.assert_allclose(mt.eta_one(moved, eta[0]), expected[0], atol=1e-11)
+
+
+def test_terrain_gradient_matches_finite_differences():
+    from paragym.sim.tripod_drive import Terrain
+
+    terrain = Terrain(((1.0, 0.5, 0.08, 0.4), (2.0, -0.3, -0.05, 0.3)))
+    pts = np.random.default_rng(0).uniform([0, -1], [3, 1], (50, 2))
+    z, grad = terrain.height_and_gradient(pts)
+    np.testing.assert_allclose(z, terrain.height(pts), atol=1e-15)
+    for k, d in enumerate(np.eye(2)):
+        fd = (terrain.height(pts + 1e-6 * d) - terrain.height(pts - 1e-6 * d)) / 2e-6
+        np.testing.assert_allclose(grad[:, k], fd, atol=1e-7)

@@ -203,3 +203,18 @@ def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFA
                [j10 * j21 - j11 * j20, j01 * j20 - j00 * j21, j00 * j11 - j01 * j10]]
         eta = [eta[k] - sum(inv[k][m] * res[m] for m in range(3)) / det for k in range(3)]
     return np.array(eta)
+
+
+def distances_one(units: np.ndarray) -> list[float]:
+    """:func:`distances` for one configuration (3, 3), in Python floats."""
+    u = np.asarray(units, float).tolist()
+    return [math.dist(u[(i - 1) % 3], u[(i + 1) % 3]) for i in range(3)]
+
+
+def encoder_distances_one(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY) -> list[float]:
+    """Eq 4 for one set of encoder angles: the inter-unit distances, in Python floats."""
+    g = geometry
+    base = g.p / math.sqrt(3)
+    pts = [((base + g.r * math.cos(e)) * math.cos(a), (base + g.r * math.cos(e)) * math.sin(a), -g.r * math.sin(e))
+           for e, a in zip(eta, g.alphas, strict=True)]
+    return [math.dist(pts[(i - 1) % 3], pts[(i + 1) % 3]) for i in range(3)]

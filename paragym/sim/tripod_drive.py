@@ -44,6 +44,16 @@ class Terrain:
         d2 = np.sum((xy[..., None, :] - centres) ** 2, axis=-1)
         return np.sum(heights * np.exp(-d2 / width), axis=-1)
 
+    def height_and_gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """z (N,) and its gradient (N, 2) at points (N, 2), in one pass."""
+        xy = np.asarray(xy, float)
+        if not self.bumps:
+            return np.zeros(xy.shape[:-1]), np.zeros(xy.shape)
+        centres, heights, width = self._arrays
+        rel = xy[..., None, :] - centres
+        each = heights * np.exp(-np.sum(rel * rel, axis=-1) / width)
+        return each.sum(axis=-1), np.sum((-2.0 * each / width)[..., None] * rel, axis=-2)
+
     def slope(self, xy: np.ndarray, direction: np.ndarray) -> np.ndarray:
         """dz/ds along unit horizontal directions (N, 2) at points (N, 2)."""
         if not self.bumps:
@@ -100,7 +110,8 @@ class TripodDrive:
         eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
         self.eta = eta[0]
         self.true = units[0].copy()
-        self.true[:, 2] = scenario.terrain.height(self.true[:, :2])
+        self.true[:, 2], gradient = scenario.terrain.height_and_gradient(self.true[:, :2])
+        self._gradient = gradient
         self.odometry = self.true.copy()
         self.t = 0.0
         self.steps = int(round(scenario.duration * rate))
@@ -132,7 +143,7 @@ class TripodDrive:
         ang = sc.heading + np.asarray(sc.heading_error)
         true_dir = np.stack([np.cos(ang), np.sin(ang)], axis=1)
         # on a slope the wheel rolls along the ground: less horizontal way than it counts
-        slope = sc.terrain.slope(self.true[:, :2], true_dir)
+        slope = np.sum(self._gradient * true_dir, axis=1)
         move = (sc.speed * dt / np.sqrt(1.0 + slope * slope))[:, None] * true_dir
         if sc.slip > 0:
             a = self.rng.uniform(0, 2 * np.pi, 3)
@@ -142,9 +153,11 @@ class TripodDrive:
             inward = self.true[:, :2].mean(axis=0) - self.true[unit, :2]  # toward the robot's centre
             move[unit] += depth * inward / np.linalg.norm(inward)
         self.true[:, :2] += move
-        self.true[:, 2] = sc.terrain.height(self.true[:, :2])
         self.odometry[:, :2] += odo
-        self.odometry[:, 2] = sc.terrain.height(self.odometry[:, :2])
+        if sc.terrain.bumps:
+            heights, gradient = sc.terrain.height_and_gradient(np.concatenate([self.true[:, :2],
+                                                                               self.odometry[:, :2]]))
+            self.true[:, 2], self.odometry[:, 2], self._gradient = heights[:3], heights[3:], gradient[:3]
         self.t += dt
         self._pose()
         return odo
