@@ -8,7 +8,7 @@ from functools import cached_property
 import numpy as np
 from scipy.interpolate import CubicHermiteSpline, PchipInterpolator
 
-__all__ = ["JointPath", "JointTrajectory", "nominal_path"]
+__all__ = ["JointPath", "JointTrajectory", "RigidMotion", "nominal_path"]
 
 
 @dataclass(frozen=True)
@@ -128,3 +128,64 @@ def nominal_path(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01) -> tuple[np.
     u = np.linspace(0.0, 1.0, int(round(1.0 / tau)) + 1)
     s = 35 * u ** 4 - 84 * u ** 5 + 70 * u ** 6 - 20 * u ** 7
     return u, np.asarray(p0, float) + (np.asarray(p1, float) - np.asarray(p0, float)) * s[:, None]
+
+
+@dataclass(frozen=True)
+class RigidMotion:
+    """A rigid body's motion on the time grid ``t`` (s), world frame.
+
+    Attributes:
+        position: reference point (N, 3), m.
+        rotation: body-to-world rotations (N, 3, 3).
+        velocity: of the reference point (N, 3), m/s.
+        angular_velocity: (N, 3), rad/s.
+        acceleration: of the reference point (N, 3), m/s^2.
+        angular_acceleration: (N, 3), rad/s^2.
+    """
+
+    t: np.ndarray
+    position: np.ndarray
+    rotation: np.ndarray
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    acceleration: np.ndarray
+    angular_acceleration: np.ndarray
+
+    def __post_init__(self) -> None:
+        n = len(self.t)
+        for name in ("position", "velocity", "angular_velocity", "acceleration", "angular_acceleration"):
+            if np.shape(getattr(self, name)) != (n, 3):
+                raise ValueError(f"RigidMotion.{name} must have shape ({n}, 3); got {np.shape(getattr(self, name))}")
+        if np.shape(self.rotation) != (n, 3, 3):
+            raise ValueError(f"RigidMotion.rotation must have shape ({n}, 3, 3); got {np.shape(self.rotation)}")
+
+    def body(self, name: str) -> np.ndarray:
+        """A world-frame vector series expressed in the body frame: R^T v."""
+        return np.einsum("nji,nj->ni", self.rotation, getattr(self, name))
+
+    def at(self, t: np.ndarray) -> RigidMotion:
+        """The motion on another time grid (linear interpolation of every
+        series; rotations re-orthonormalised). ``t`` must lie in the range."""
+        t = np.asarray(t, float)
+        if t.min() < self.t[0] - 1e-9 or t.max() > self.t[-1] + 1e-9:
+            raise ValueError(f"times must lie in [{self.t[0]}, {self.t[-1]}] s")
+
+        def interp(a: np.ndarray) -> np.ndarray:
+            flat = a.reshape(len(self.t), -1)
+            return np.stack([np.interp(t, self.t, flat[:, j]) for j in range(flat.shape[1])], axis=1)
+
+        u, _, vt = np.linalg.svd(interp(self.rotation).reshape(-1, 3, 3))
+        return RigidMotion(t, interp(self.position), u @ vt, interp(self.velocity),
+                           interp(self.angular_velocity), interp(self.acceleration),
+                           interp(self.angular_acceleration))
+
+    def shifted(self, delay: float) -> RigidMotion:
+        """The same motion ``delay`` s later (held at its first state before)."""
+        return RigidMotion(self.t, *(_shift(self.t, a, delay) for a in (
+            self.position, self.rotation, self.velocity, self.angular_velocity, self.acceleration,
+            self.angular_acceleration)))
+
+
+def _shift(t: np.ndarray, a: np.ndarray, delay: float) -> np.ndarray:
+    idx = np.clip(np.searchsorted(t, t - delay), 0, len(t) - 1)
+    return a[idx]

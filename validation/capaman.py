@@ -16,7 +16,7 @@ from paragym.validation.motion import RigidMotion, capaman_planned_motion
 from paragym.validation.report import Tolerances, ValidationReport, validate
 from paragym.validation.sensors import AccelerometerArray
 
-__all__ = ["CaPaManValidation", "executed_motion", "validate_capaman"]
+__all__ = ["CaPaManValidation", "validate_capaman"]
 
 
 @dataclass(frozen=True)
@@ -27,12 +27,6 @@ class CaPaManValidation:
     planned: RigidMotion
     executed: RigidMotion
     run: ExecutedMotion
-
-
-def executed_motion(run: ExecutedMotion) -> RigidMotion:
-    """The plate's recorded motion as a :class:`RigidMotion`."""
-    return RigidMotion(run.t, run.position, run.rotation, run.velocity, run.angular_velocity, run.acceleration,
-                       run.angular_acceleration)
 
 
 def validate_capaman(trajectory: JointTrajectory, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
@@ -50,7 +44,7 @@ def validate_capaman(trajectory: JointTrajectory, geometry: capaman.CaPaManGeome
     finally:
         if own:
             scene.close()
-    executed = executed_motion(run)
+    executed: RigidMotion = run
     if delay:
         executed = executed.shifted(delay)
     planned = capaman_planned_motion(trajectory, sensors.rate, geometry, settle=settle)

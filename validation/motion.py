@@ -1,83 +1,21 @@
 """Rigid-body motions as time series: what the validation compares.
 
-A :class:`RigidMotion` is any rigid body's motion about a reference point
-(CaPaMan: the plate centre H): pose, twist and their derivatives on a time
-grid, in the world frame (SI). It is generic: planned motions (from a joint
-trajectory's analytic derivatives) and executed ones (from a dynamic run) of
-any mechanism are validated by the same code.
+A :class:`~paragym.trajectories.RigidMotion` is any rigid body's motion
+about a reference point (CaPaMan: the plate centre H): pose, twist and their
+derivatives on a time grid, in the world frame (SI). It is generic: planned
+motions (built here from a joint trajectory's analytic derivatives or from a
+pose path) and executed ones (recorded by a dynamic run) of any mechanism are
+validated by the same code.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from paragym.mechanisms import capaman
-from paragym.trajectories import JointTrajectory
+from paragym.trajectories import JointTrajectory, RigidMotion
 
 __all__ = ["RigidMotion", "capaman_planned_motion"]
-
-
-@dataclass(frozen=True)
-class RigidMotion:
-    """A rigid body's motion on the time grid ``t`` (s), world frame.
-
-    Attributes:
-        position: reference point (N, 3), m.
-        rotation: body-to-world rotations (N, 3, 3).
-        velocity: of the reference point (N, 3), m/s.
-        angular_velocity: (N, 3), rad/s.
-        acceleration: of the reference point (N, 3), m/s^2.
-        angular_acceleration: (N, 3), rad/s^2.
-    """
-
-    t: np.ndarray
-    position: np.ndarray
-    rotation: np.ndarray
-    velocity: np.ndarray
-    angular_velocity: np.ndarray
-    acceleration: np.ndarray
-    angular_acceleration: np.ndarray
-
-    def __post_init__(self) -> None:
-        n = len(self.t)
-        for name in ("position", "velocity", "angular_velocity", "acceleration", "angular_acceleration"):
-            if np.shape(getattr(self, name)) != (n, 3):
-                raise ValueError(f"RigidMotion.{name} must have shape ({n}, 3); got {np.shape(getattr(self, name))}")
-        if np.shape(self.rotation) != (n, 3, 3):
-            raise ValueError(f"RigidMotion.rotation must have shape ({n}, 3, 3); got {np.shape(self.rotation)}")
-
-    def body(self, name: str) -> np.ndarray:
-        """A world-frame vector series expressed in the body frame: R^T v."""
-        return np.einsum("nji,nj->ni", self.rotation, getattr(self, name))
-
-    def at(self, t: np.ndarray) -> RigidMotion:
-        """The motion on another time grid (linear interpolation of every
-        series; rotations re-orthonormalised). ``t`` must lie in the range."""
-        t = np.asarray(t, float)
-        if t.min() < self.t[0] - 1e-9 or t.max() > self.t[-1] + 1e-9:
-            raise ValueError(f"times must lie in [{self.t[0]}, {self.t[-1]}] s")
-
-        def interp(a: np.ndarray) -> np.ndarray:
-            flat = a.reshape(len(self.t), -1)
-            return np.stack([np.interp(t, self.t, flat[:, j]) for j in range(flat.shape[1])], axis=1)
-
-        u, _, vt = np.linalg.svd(interp(self.rotation).reshape(-1, 3, 3))
-        return RigidMotion(t, interp(self.position), u @ vt, interp(self.velocity),
-                           interp(self.angular_velocity), interp(self.acceleration),
-                           interp(self.angular_acceleration))
-
-    def shifted(self, delay: float) -> RigidMotion:
-        """The same motion ``delay`` s later (held at its first state before)."""
-        return RigidMotion(self.t, *(_shift(self.t, a, delay) for a in (
-            self.position, self.rotation, self.velocity, self.angular_velocity, self.acceleration,
-            self.angular_acceleration)))
-
-
-def _shift(t: np.ndarray, a: np.ndarray, delay: float) -> np.ndarray:
-    idx = np.clip(np.searchsorted(t, t - delay), 0, len(t) - 1)
-    return a[idx]
 
 
 def capaman_planned_motion(trajectory: JointTrajectory, rate: float,

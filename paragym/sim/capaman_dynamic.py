@@ -25,7 +25,7 @@ import pybullet as pb
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_model import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim
-from paragym.trajectories import JointTrajectory
+from paragym.trajectories import JointTrajectory, RigidMotion
 
 __all__ = ["CaPaManDynamics", "CaPaManDynamicScene", "ExecutedMotion"]
 
@@ -51,22 +51,12 @@ class CaPaManDynamics:
 
 
 @dataclass(frozen=True)
-class ExecutedMotion:
-    """What the dynamic run did, at the simulation rate (world frame, SI).
+class ExecutedMotion(RigidMotion):
+    """What the dynamic run did, at the simulation rate (world frame, SI): the
+    plate centre H's motion (PyBullet's pose and velocities; accelerations by
+    central differences), the measured crank angles ``alpha``, and the
+    largest loop-closure error of the run."""
 
-    ``position``/``rotation`` of the plate centre H, its ``velocity`` and
-    ``angular_velocity`` (PyBullet's), ``acceleration`` and
-    ``angular_acceleration`` (central differences of those), the measured
-    crank angles ``alpha``, and the largest loop-closure error of the run.
-    """
-
-    t: np.ndarray
-    position: np.ndarray
-    rotation: np.ndarray
-    velocity: np.ndarray
-    angular_velocity: np.ndarray
-    acceleration: np.ndarray
-    angular_acceleration: np.ndarray
     alpha: np.ndarray
     closure_error: float
 
