@@ -20,14 +20,6 @@ from paragym.trajectories import JointPath, JointTrajectory
 DEG = np.pi / 180
 
 
-@pytest.fixture(scope="module")
-def paper_result():
-    planner = RrtGaPlanner(seed=0)
-    result = planner.solve(paper_scenario())
-    planner.close()
-    return result
-
-
 def test_paper_plan_is_collision_free_and_visits_the_task_points_in_order(paper_result):
     scenario = paper_scenario()
     path = paper_result.path

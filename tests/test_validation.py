@@ -4,9 +4,7 @@ filterpy, the dynamic CaPaMan, and a verdict that passes and fails."""
 import numpy as np
 import pytest
 
-from paragym.envs.capaman_scenarios import paper_scenario
 from paragym.mechanisms import capaman
-from paragym.planners import RrtGaPlanner
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
 from paragym.trajectories import JointPath, JointTrajectory
 from paragym.validation.capaman import validate_capaman
@@ -76,11 +74,8 @@ def test_filter_input_is_checked():
 
 
 @pytest.fixture(scope="module")
-def plan():
-    planner = RrtGaPlanner(seed=0)
-    result = planner.solve(paper_scenario())
-    planner.close()
-    return result
+def plan(paper_result):
+    return paper_result
 
 
 @pytest.fixture(scope="module")
