@@ -386,6 +386,38 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return 0 if args.policy != "best" or end.get("is_success") else 1
 
 
+def _cmd_train(args: argparse.Namespace) -> int:
+    from paragym.baselines.training import train
+
+    res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
+                progress_bar=not args.no_progress, threads=args.threads, force=args.force)
+    meta = res.meta
+    if res.skipped:
+        print(f"{res.files.model} is already trained for {meta['timesteps']:,} steps (--force retrains)")
+        return 0
+    curve = meta["curve"]
+    last = (f"last evaluation {curve['eval_mean_return'][-1]:.3f} +- {curve['eval_std_return'][-1]:.3f}"
+            if curve["eval_mean_return"] else "no evaluation yet")
+    resumed = f", resumed at {res.resumed_from:,}" if res.resumed_from else ""
+    print(f"{meta['algo'].upper()} seed {meta['seed']} on {meta['env_id']}: {meta['timesteps']:,} steps in "
+          f"{meta['train_seconds']:.0f} s{resumed}; {last}")
+    print(f"wrote {res.files.model} ({meta['model_bytes'] / 1024:.0f} KiB, {meta['parameters']['policy']:,} "
+          f"parameters), {res.files.meta.name}, {res.files.curve_png.name}")
+    return 0
+
+
+def _cmd_leaderboard(args: argparse.Namespace) -> int:
+    from paragym.baselines.leaderboard import FULL, QUICK, run_leaderboard
+
+    run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env, policies=args.policy,
+                          models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
+                          else args.executor, workers=args.workers, ray_address=args.ray_address, out=args.out,
+                          markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress)
+    print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; {run.seconds:.0f} s")
+    print("wrote " + ", ".join(str(p) for p in run.files))
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``paragym`` command."""
     parser = argparse.ArgumentParser(prog="paragym", description=paragym.__doc__.splitlines()[0])
@@ -420,6 +452,31 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, default=2.0, help="hybrid: seconds for the whole path")
     p.add_argument("--out", default="runs/validate", help="folder for the pictures and the JSON report")
     p.set_defaults(func=_cmd_validate)
+    p = sub.add_parser("train", help="train a Stable-Baselines3 agent (needs the 'rl' extra); resumable")
+    p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
+    p.add_argument("--algo", default="ppo", help="ppo, sac or td3 (hyper-parameters: baselines/hyperparams/)")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--timesteps", type=int, default=None, help="env steps (default: the yml's n_timesteps)")
+    p.add_argument("--models", default="models", help="folder of the saved models (default: models)")
+    p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
+    p.add_argument("--force", action="store_true", help="retrain even if the model exists; ignore checkpoints")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_train)
+    p = sub.add_parser("leaderboard", help="evaluate every env x every policy on fixed seeds; resumable; writes "
+                                           "LEADERBOARD.md, a CSV and a PNG per env")
+    p.add_argument("--quick", action="store_true", help="1 seed x 3 episodes (about 2 minutes) instead of 5 x 10")
+    p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
+    p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")
+    p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")
+    p.add_argument("--env", action="append", help="only this env (repeatable)")
+    p.add_argument("--policy", action="append", help="only this policy name (repeatable)")
+    p.add_argument("--models", default=None, help="folder of learned models (default: ./models or the shipped ones)")
+    p.add_argument("--executor", choices=("local", "workers", "ray"), default="local")
+    p.add_argument("--workers", type=int, default=1, help="processes (a local pool) or Ray CPUs")
+    p.add_argument("--ray-address", default=None, help="a Ray cluster's address (default: start a local Ray)")
+    p.add_argument("--no-validation", action="store_true", help="skip the KF validation of the reference plans")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_leaderboard)
     return parser
 
 

@@ -17,7 +17,8 @@ from paragym.rollout import Episode  # noqa: E402
 from paragym.sim.obstacles import Box, Cylinder  # noqa: E402
 
 __all__ = ["plot_capaman_episode", "plot_capaman_motion", "plot_hybrid_episode", "plot_hybrid_plan",
-           "plot_kappa_episode", "plot_orthoglide_cases"]
+           "plot_kappa_episode", "plot_leaderboard", "plot_orthoglide_cases",
+           "plot_training_curve"]
 
 
 def _save(fig: Any, path: str | Path, title: str, dpi: int = 100) -> Path:
@@ -278,3 +279,52 @@ def plot_tripod_estimates(t: np.ndarray, true: np.ndarray, tracks: dict[str, np.
     ax.legend(fontsize=8)
     ax.set_title("estimation error")
     return _save(fig, path, title)
+
+
+def plot_training_curve(curve: dict[str, list], path: str | Path, title: str = "") -> Path:
+    """A training run: the return of each training episode (dots, and its
+    running mean over 20) and of the periodic evaluations (mean +- std), with
+    the evaluations' success rate on the right axis, against env steps."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    steps, ret = np.asarray(curve["train_timesteps"], float), np.asarray(curve["train_return"], float)
+    if len(ret):
+        ax.plot(steps, ret, ".", ms=2, color="0.75", label="training episodes")
+        window = min(20, len(ret))
+        smooth = np.convolve(ret, np.ones(window) / window, mode="valid")
+        ax.plot(steps[window - 1:], smooth, color="0.35", lw=1, label=f"running mean ({window})")
+    ev_t = np.asarray(curve["eval_timesteps"], float)
+    if len(ev_t):
+        mean, std = np.asarray(curve["eval_mean_return"]), np.asarray(curve["eval_std_return"])
+        ax.errorbar(ev_t, mean, yerr=std, fmt="o-", color="C0", capsize=3, label="evaluation (mean +- std)")
+        rate = [np.nan if r is None else r for r in curve["eval_success_rate"]]
+        if not np.all(np.isnan(rate)):
+            ax2 = ax.twinx()
+            ax2.plot(ev_t, rate, "s--", color="C2", label="evaluation success rate")
+            ax2.set_ylim(-0.05, 1.05)
+            ax2.set_ylabel("success rate", color="C2")
+    ax.set_xlabel("env steps")
+    ax.set_ylabel("episode return")
+    ax.legend(loc="lower right", fontsize=8)
+    return _save(fig, path, title, dpi=90)
+
+
+def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str | Path, title: str = "") -> Path:
+    """One env's leaderboard as three bar panels, in rank order: success
+    rate, return (mean +- std over episodes), and the env's primary metric."""
+    names = [s.policy for s in summaries]
+    colours = {"reference": "C3", "paper case": "C1", "other": "C4", "learned": "C0", "floor": "0.6", "user": "C2"}
+    col = [colours.get(s.kind, "C2") for s in summaries]
+    y = np.arange(len(names))
+    panels = [("success rate", [s.success_rate for s in summaries], None),
+              ("return (mean +- std)", [s.return_mean for s in summaries], [s.return_std for s in summaries])]
+    if key != "return":
+        panels.append((label, [s.metrics.get(key, np.nan) for s in summaries], None))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 0.45 * len(names) + 1.6), sharey=True)
+    for ax, (name, values, err) in zip(axes, panels, strict=True):
+        ax.barh(y, values, xerr=err, color=col, capsize=2)
+        ax.set_xlabel(name)
+        ax.grid(axis="x", alpha=0.3)
+    axes[0].set_yticks(y, names)
+    axes[0].invert_yaxis()
+    axes[0].set_xlim(0, 1.05)
+    return _save(fig, path, title, dpi=90)

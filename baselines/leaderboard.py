@@ -1,0 +1,522 @@
+"""The leaderboard: every registered env x every policy, on fixed seeds.
+
+Evaluation suite (:data:`FULL`): evaluation seeds 0-4, ten episodes each,
+50 episodes per (env, policy), every env in its default (random) scenario
+and kinematic fidelity. Episode ``k`` of seed ``s`` resets the env with
+``episode_seed(s, k) = 100_000 + 1_000 s + k`` and builds its policy with
+that same seed, so an episode's numbers depend on nothing else (not on the
+executor, the worker or the order). The training runs never see these
+seeds (PPO/SAC train on seeds 0-2 and evaluate on 10_000+).
+:data:`QUICK` is seed 0, three episodes.
+
+Per (env, policy) the summary holds the success rate, the return's mean
+and standard deviation, the task's own metrics (:data:`METRICS`, each the
+mean over episodes of a per-episode value) and the wall time per episode
+(reset, planning and steps). Ranking: success rate, then the env's primary
+metric (:data:`PRIMARY`). For the CaPaMan and the hybrid the reference
+policy's plan on the paper's scenario is also executed in dynamic fidelity
+and judged by :mod:`paragym.validation`; its verdict is part of the row.
+
+Executors: ``local`` (this process), ``workers`` (a process pool on this
+machine) and ``ray`` (Ray tasks, local or on a cluster). All of them hand
+each finished episode back to this process, which commits it to the
+:class:`~paragym.baselines.store.ResultStore` at once.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import time
+from collections.abc import Callable, Iterable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import paragym
+from paragym.baselines.policies import PolicySpec, default_models_dir, policies_for
+from paragym.baselines.store import EpisodeRow, ResultStore
+from paragym.baselines.training import check_env_id, env_name
+from paragym.rollout import Episode, run_episode
+
+__all__ = ["FULL", "METRICS", "PRIMARY", "QUICK", "EvalSuite", "Summary", "episode_seed", "evaluate_episode",
+           "markdown", "run_leaderboard", "summarise", "terminal_table"]
+
+
+@dataclass(frozen=True)
+class EvalSuite:
+    """Which episodes are evaluated: ``episodes`` per evaluation seed."""
+
+    name: str
+    seeds: tuple[int, ...]
+    episodes: int
+
+    def keys(self) -> list[tuple[int, int]]:
+        return [(s, k) for s in self.seeds for k in range(self.episodes)]
+
+
+FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10)
+QUICK = EvalSuite("quick", (0,), 3)
+
+
+def episode_seed(seed: int, episode: int) -> int:
+    """The env's reset seed (and the policy's seed) of episode ``episode`` of evaluation seed ``seed``."""
+    return 100_000 + 1_000 * seed + episode
+
+
+# --- the task's own metrics, per episode ------------------------------------------------------------------------
+
+def _capaman(ep: Episode) -> dict[str, float]:
+    alpha = np.array([i["alpha"] for i in ep.infos])
+    clearance = np.array([i["clearance"] for i in ep.infos])
+    return {"path_length_rad": float(np.linalg.norm(np.diff(alpha, axis=0), axis=1).sum()),
+            "min_clearance_mm": float(clearance.min() * 1000), "collision": float(ep.infos[-1]["collision"]),
+            "tcs_reached": float(ep.infos[-1]["reached"])}
+
+
+def _hybrid(ep: Episode) -> dict[str, float]:
+    mu = np.array([[i["mu_hexapod"], i["mu_tripod"]] for i in ep.infos])
+    within = np.array([i["within_limits"] for i in ep.infos])
+    free = np.array([i["free"] for i in ep.infos])
+    offsets = np.array([i["offset"] for i in ep.infos])
+    return {"min_mu": float(mu.min()), "limit_violations": float((~within).sum()),
+            "bad_poses": float((~free).sum()), "max_detour_mm": float(np.abs(offsets).max() * 1000)}
+
+
+def _orthoglide(ep: Episode) -> dict[str, float]:
+    kappa = np.array([i["kappa"] for i in ep.infos])
+    err = np.array([i["tracking_error"] for i in ep.infos])
+    ok = np.isfinite(kappa)
+    last = len(ep.infos[0]["scenario"].t) - 1
+    return {"mean_kappa": float(kappa[ok].mean()), "max_kappa": float(kappa[ok].max()),
+            "mean_tracking_error_mm": float(err.mean() * 1000), "max_tracking_error_mm": float(err.max() * 1000),
+            "path_completed": float(ep.infos[-1]["step"] / last)}
+
+
+def _tripod(ep: Episode) -> dict[str, float]:
+    err = np.array([i["unit_error"] for i in ep.infos])
+    return {"final_unit_error_cm": float(err[-1] * 100), "max_unit_error_cm": float(err.max() * 100)}
+
+
+#: env id -> (per-episode metrics, [(key, column label, number format)])
+METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, str, str]]]] = {
+    "paragym/CaPaManCollisionFree-v0": (_capaman, [
+        ("path_length_rad", "joint path [rad]", ".2f"), ("min_clearance_mm", "min clearance [mm]", ".1f"),
+        ("collision", "collisions", ".2f"), ("tcs_reached", "T.C.s reached", ".2f")]),
+    "paragym/HybridSingularityFree-v0": (_hybrid, [
+        ("min_mu", "min singularity measure", ".3f"), ("limit_violations", "leg-limit poses", ".1f"),
+        ("bad_poses", "singular/limit poses", ".1f"), ("max_detour_mm", "max detour [mm]", ".1f")]),
+    "paragym/Orthoglide2PRRKappa-v0": (_orthoglide, [
+        ("mean_kappa", "mean kappa", ".3f"), ("max_kappa", "max kappa", ".2f"),
+        ("mean_tracking_error_mm", "tracking error [mm]", ".2f"),
+        ("max_tracking_error_mm", "max tracking error [mm]", ".2f"), ("path_completed", "path completed", ".2f")]),
+    "paragym/MobileTripodOdometry-v0": (_tripod, [
+        ("final_unit_error_cm", "final unit error [cm]", ".2f"), ("max_unit_error_cm", "max unit error [cm]", ".2f")]),
+}
+
+#: env id -> (metric that breaks ties after the success rate, +1 if higher is better, -1 if lower).
+#: Where the paper's method is optimal for this metric, the reference policy is expected first (tested):
+#: CaPaMan (RRT+GA: every tour collision-free), hybrid (every pose singularity-free within the limits),
+#: Orthoglide (case c minimises kappa), mobile tripod (the encoders bound the odometry's drift).
+PRIMARY: dict[str, tuple[str, int]] = {
+    "paragym/CaPaManCollisionFree-v0": ("return", +1),
+    "paragym/HybridSingularityFree-v0": ("bad_poses", -1),
+    "paragym/Orthoglide2PRRKappa-v0": ("mean_kappa", -1),
+    "paragym/MobileTripodOdometry-v0": ("final_unit_error_cm", -1),
+}
+
+
+# --- one episode (runs in whatever process the executor chooses) ------------------------------------------------
+
+_ENVS: dict[str, gym.Env] = {}
+
+
+def _env(env_id: str) -> gym.Env:
+    """One env per id per process, kept: resets re-seed it completely."""
+    if env_id not in _ENVS:
+        _ENVS[env_id] = gym.make(env_id)
+    return _ENVS[env_id]
+
+
+def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
+    """Run episode ``episode`` of evaluation seed ``seed`` of ``spec`` on its
+    env and measure it. A planner that finds no plan (PlanningError) leaves
+    the robot standing still for the episode, which is then scored as it
+    goes (metric ``policy_failed`` = 1)."""
+    from paragym.baselines.simple import ZeroPolicy
+    from paragym.planners.grid_path import PlanningError
+
+    env = _env(spec.env_id)
+    s = episode_seed(seed, episode)
+    t0 = time.perf_counter()
+    policy = spec.factory(env, s)
+    failed = 0.0
+    try:
+        ep = run_episode(env, policy, seed=s)
+    except PlanningError:
+        failed = 1.0
+        ep = run_episode(env, ZeroPolicy(env.action_space), seed=s)
+    wall = time.perf_counter() - t0
+    metrics = METRICS[spec.env_id][0](ep)
+    metrics["policy_failed"] = failed
+    return EpisodeRow(spec.env_id, spec.name, seed, episode, spec.kind, ep.episode_return, len(ep.actions),
+                      ep.success, metrics, wall)
+
+
+# --- executors: each yields finished rows as they come --------------------------------------------------------
+
+Job = tuple[PolicySpec, int, int]
+
+
+def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+    for spec, seed, episode in jobs:
+        yield evaluate_episode(spec, seed, episode)
+
+
+def _init_worker() -> None:
+    try:
+        import torch
+
+        torch.set_num_threads(1)
+    except ImportError:
+        pass
+
+
+def _evaluate_by_name(env_id: str, name: str, models_dir: str, seed: int, episode: int) -> EpisodeRow:
+    from paragym.baselines.policies import get_policy
+
+    return evaluate_episode(get_policy(env_id, name, models_dir), seed, episode)
+
+
+def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+    """A fork-started process pool: workers inherit the policy registry, so
+    policies registered in the calling script work too."""
+    import multiprocessing as mp
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    with ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"), initializer=_init_worker) as pool:
+        futures = [pool.submit(_evaluate_by_name, spec.env_id, spec.name, models_dir, seed, episode)
+                   for spec, seed, episode in jobs]
+        try:
+            for fut in as_completed(futures):
+                yield fut.result()
+        finally:
+            for fut in futures:
+                fut.cancel()
+
+
+def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+    """Ray tasks (one per episode; the policy spec travels with the task,
+    pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise ValueError("--executor ray needs Ray: pip install 'paragym[ray]'") from exc
+    started = not ray.is_initialized()
+    if started:
+        kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
+        ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+    remote = ray.remote(num_cpus=1)(evaluate_episode)
+    pending = [remote.remote(spec, seed, episode) for spec, seed, episode in jobs]
+    try:
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            yield ray.get(done[0])
+    finally:
+        for ref in pending:
+            ray.cancel(ref)
+        if started:
+            ray.shutdown()
+
+
+EXECUTORS = ("local", "workers", "ray")
+
+
+# --- summaries and reports -------------------------------------------------------------------------------------
+
+@dataclass
+class Summary:
+    """One (env, policy) row of the leaderboard."""
+
+    env: str
+    policy: str
+    kind: str
+    description: str
+    episodes: int
+    success_rate: float
+    return_mean: float
+    return_std: float
+    metrics: dict[str, float]
+    wall_seconds: float
+    validation: dict[str, Any] | None = None
+    rank: int = 0
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def sort_key(self) -> tuple[float, float, str]:
+        key, sign = PRIMARY[self.env]
+        value = self.return_mean if key == "return" else self.metrics.get(key, math.nan)
+        value = -math.inf if not np.isfinite(value) else sign * value
+        return (-self.success_rate, -value, self.policy)
+
+
+def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> dict[str, list[Summary]]:
+    """The ranked summaries, per env (in registration order)."""
+    groups: dict[tuple[str, str], list[EpisodeRow]] = {}
+    for row in rows:
+        groups.setdefault((row.env, row.policy), []).append(row)
+    out: dict[str, list[Summary]] = {}
+    for (env, policy), rs in groups.items():
+        returns = np.array([r.episode_return for r in rs])
+        keys = rs[0].metrics.keys()
+        metrics = {k: float(np.mean([r.metrics[k] for r in rs])) for k in keys}
+        out.setdefault(env, []).append(Summary(
+            env, policy, rs[0].kind, "", len(rs),
+            float(np.mean([r.success for r in rs])), float(returns.mean()), float(returns.std()), metrics,
+            float(np.mean([r.wall_seconds for r in rs])),
+            store.validation(env, policy) if store is not None else None))
+    ordered = {env: out[env] for env in paragym.ENVIRONMENTS if env in out}
+    for summaries in ordered.values():
+        summaries.sort(key=Summary.sort_key)
+        for i, s in enumerate(summaries, 1):
+            s.rank = i
+    return ordered
+
+
+def _verdict(s: Summary) -> str:
+    if s.validation is None:
+        return ""
+    return "PASS" if s.validation["passed"] else "FAIL"
+
+
+def _columns(env: str) -> list[tuple[str, Callable[[Summary], str]]]:
+    cols: list[tuple[str, Callable[[Summary], str]]] = [
+        ("#", lambda s: str(s.rank)), ("policy", lambda s: s.policy), ("kind", lambda s: s.kind),
+        ("success", lambda s: f"{s.success_rate:.2f}"),
+        ("return", lambda s: f"{s.return_mean:.2f} ± {s.return_std:.2f}")]
+    for key, label, fmt in METRICS[env][1]:
+        cols.append((label, lambda s, key=key, fmt=fmt: format(s.metrics.get(key, math.nan), fmt)))
+    cols.append(("s/episode", lambda s: f"{s.wall_seconds:.3f}"))
+    if env in VALIDATED:
+        cols.append(("KF validation", _verdict))
+    return cols
+
+
+def terminal_table(summaries: list[Summary]) -> str:
+    """A plain-text table of one env's summaries."""
+    cols = _columns(summaries[0].env)
+    cells = [[label for label, _ in cols]] + [[f(s) for _, f in cols] for s in summaries]
+    widths = [max(len(row[i]) for row in cells) for i in range(len(cols))]
+    lines = ["  ".join(c.ljust(w) if i in (1, 2) else c.rjust(w)
+                       for i, (c, w) in enumerate(zip(row, widths, strict=True))) for row in cells]
+    lines.insert(1, "  ".join("-" * w for w in widths))
+    return "\n".join(lines)
+
+
+def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: dict[str, str],
+             header: str) -> str:
+    """LEADERBOARD.md: one section per env (table, picture, notes)."""
+    out = [header, ""]
+    for env, summaries in all_summaries.items():
+        cols = _columns(env)
+        out += [f"## `{env}`", "", "| " + " | ".join(label for label, _ in cols) + " |",
+                "|" + "|".join("---" for _ in cols) + "|"]
+        out += ["| " + " | ".join(f(s).replace("|", "/") for _, f in cols) + " |" for s in summaries]
+        key, sign = PRIMARY[env]
+        label = "return" if key == "return" else dict((k, lab) for k, lab, _ in METRICS[env][1])[key]
+        out += ["", f"Ranked by success rate, then {label} ({'higher' if sign > 0 else 'lower'} is better). "
+                f"{summaries[0].episodes} episodes per policy.", ""]
+        for s in summaries:
+            if s.validation is not None:
+                v = s.validation
+                out.append(f"KF validation of `{s.policy}` (paper scenario, dynamic fidelity): "
+                           f"**{'PASS' if v['passed'] else 'FAIL'}** — {v.get('text', '')}")
+                out.append("")
+        notes = [f"* `{s.policy}`: {s.description}" for s in summaries if s.description]
+        out += notes + [""]
+        if env in images:
+            out += [f"![{env}]({images[env]})", ""]
+    return "\n".join(out)
+
+
+def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
+    """One line per (env, policy), every number of the summary."""
+    buf = io.StringIO()
+    writer = csv.writer(buf)
+    keys = sorted({k for ss in all_summaries.values() for s in ss for k in s.metrics})
+    writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "return_mean", "return_std",
+                     *keys, "wall_seconds_per_episode", "kf_validation"])
+    for ss in all_summaries.values():
+        for s in ss:
+            writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
+                             f"{s.return_mean:.6g}", f"{s.return_std:.6g}",
+                             *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
+                             f"{s.wall_seconds:.4f}", _verdict(s)])
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(buf.getvalue())
+    return path
+
+
+# --- KF validation of the reference plans ----------------------------------------------------------------------
+
+def _validate_capaman(seed: int) -> tuple[bool, dict[str, Any]]:
+    from paragym.envs.capaman_scenarios import paper_scenario
+    from paragym.planners import RrtGaPlanner
+    from paragym.validation.capaman import validate_capaman
+
+    planner = RrtGaPlanner(seed=seed)
+    result = planner.solve(paper_scenario())
+    planner.close()
+    traj = result.trajectory(0.45)
+    rep = validate_capaman(traj, seed=seed).report
+    return rep.passed, {"text": f"RRT+GA plan at dt = 0.45 s ({traj.duration:.1f} s) executed by the closed-chain "
+                                f"dynamics, accelerometer array + Kalman filter (RTS); {_worst(rep)}",
+                        "duration_s": traj.duration}
+
+
+def _worst(rep: Any) -> str:
+    """The judged component closest to its tolerance, as text."""
+    worst = max(rep.components, key=lambda c: c.error_judged / c.tolerance)
+    return (f"tightest component {worst.name}: error {worst.error_judged:.3f} against tolerance "
+            f"{worst.tolerance:.3f}, correlation {worst.correlation:.2f}")
+
+
+def _validate_hybrid(seed: int) -> tuple[bool, dict[str, Any]]:
+    from paragym.envs.hybrid import hybrid_paper_scenario
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+    from paragym.validation.hybrid import validate_hybrid
+
+    sc = hybrid_paper_scenario()
+    plan = PolynomialDetourPlanner(sc.geometry).plan(np.array(sc.p0), np.array(sc.p1))
+    val = validate_hybrid(plan, 2.0, seed=seed)
+    return val.report.passed, {"text": f"paper 002 plan over 2 s executed by the stage dynamics, accelerometers + "
+                                       f"Kalman filter (RTS); {_worst(val.report)}; E within "
+                                       f"{val.position_error * 1000:.2f} mm of the plan",
+                               "position_error_m": val.position_error}
+
+
+#: env id -> (reference policy name, validation run)
+VALIDATED: dict[str, tuple[str, Callable[[int], tuple[bool, dict[str, Any]]]]] = {
+    "paragym/CaPaManCollisionFree-v0": ("rrt-ga", _validate_capaman),
+    "paragym/HybridSingularityFree-v0": ("polynomial-detour", _validate_hybrid),
+}
+
+
+# --- the run ----------------------------------------------------------------------------------------------------
+
+@dataclass
+class LeaderboardRun:
+    """What :func:`run_leaderboard` did and produced."""
+
+    summaries: dict[str, list[Summary]]
+    new_episodes: int
+    skipped_episodes: int
+    files: list[Path]
+    seconds: float
+
+
+def _select(env_ids: list[str] | None, policy_names: list[str] | None,
+            models_dir: Path) -> dict[str, dict[str, PolicySpec]]:
+    envs = [check_env_id(e) for e in env_ids] if env_ids else list(paragym.ENVIRONMENTS)
+    chosen: dict[str, dict[str, PolicySpec]] = {}
+    for env in envs:
+        specs = policies_for(env, models_dir)
+        if policy_names:
+            chosen[env] = {n: specs[n] for n in policy_names if n in specs}
+        else:
+            chosen[env] = specs
+    if policy_names:
+        known = {n for env in envs for n in policies_for(env, models_dir)}
+        unknown = [n for n in policy_names if n not in known]
+        if unknown:
+            raise ValueError(f"unknown policy {', '.join(map(repr, unknown))}; known: {', '.join(sorted(known))}")
+    return chosen
+
+
+def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite = FULL,
+                    env_ids: list[str] | None = None, policies: list[str] | None = None,
+                    models_dir: str | Path | None = None, executor: str = "local", workers: int = 1,
+                    ray_address: str | None = None, out: str | Path | None = "results",
+                    markdown_path: str | Path | None = None, validate: bool = True, progress: bool = True,
+                    on_row: Callable[[EpisodeRow], None] | None = None, echo: Callable[[str], None] = print,
+                    ) -> LeaderboardRun:
+    """Evaluate what is missing from ``db`` for ``suite``, then write the
+    reports (to ``out``: ``LEADERBOARD.md`` unless ``markdown_path``,
+    ``leaderboard.csv``, ``<env>.png``; nothing written when ``out`` is None).
+    ``on_row`` sees each new row after it is stored."""
+    if executor not in EXECUTORS:
+        raise ValueError(f"unknown executor {executor!r}; known: {', '.join(EXECUTORS)}")
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive integer; got {workers!r}")
+    models = Path(models_dir) if models_dir is not None else default_models_dir()
+    chosen = _select(env_ids, policies, models)
+    t0 = time.perf_counter()
+    with ResultStore(db) as store:
+        done = store.done_keys()
+        jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
+                if (spec.env_id, spec.name, s, k, store.version) not in done]
+        total = sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+        echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
+             f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
+             f"{store.path}; running {len(jobs)} with the {executor} executor")
+        run = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}[executor]
+        stream = run(jobs, workers, ray_address, str(models))
+        from tqdm.auto import tqdm
+
+        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
+            for row in stream:
+                store.add(row)
+                bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
+                bar.update()
+                if on_row is not None:
+                    on_row(row)
+        if validate:
+            for env, (name, check) in VALIDATED.items():
+                if env in chosen and name in chosen[env] and store.validation(env, name) is None:
+                    echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
+                    passed, summary = check(0)
+                    store.set_validation(env, name, passed, summary)
+        wanted = {(env, name) for env, specs in chosen.items() for name in specs}
+        rows = [r for r in store.rows() if (r.env, r.policy) in wanted and (r.seed, r.episode) in set(suite.keys())]
+        all_summaries = summarise(rows, store)
+        for env, ss in all_summaries.items():
+            for s in ss:
+                s.description = chosen[env][s.policy].description
+        files = _write_reports(all_summaries, suite, out, markdown_path) if out is not None else []
+    seconds = time.perf_counter() - t0
+    for env, ss in all_summaries.items():
+        echo(f"\n{env}\n{terminal_table(ss)}")
+    return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds)
+
+
+def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out: str | Path,
+                   markdown_path: str | Path | None) -> list[Path]:
+    import os
+    import platform
+
+    from paragym.plots import plot_leaderboard
+
+    out = Path(out)
+    md_path = Path(markdown_path) if markdown_path is not None else out / "LEADERBOARD.md"
+    images = {}
+    files = []
+    for env, ss in all_summaries.items():
+        key, sign = PRIMARY[env]
+        label = "return" if key == "return" else dict((k, lab) for k, lab, _ in METRICS[env][1])[key]
+        png = plot_leaderboard(ss, key, label, out / f"{env_name(env)}.png",
+                               f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite)")
+        files.append(png)
+        images[env] = os.path.relpath(png, md_path.parent)
+    files.append(write_csv(all_summaries, out / "leaderboard.csv"))
+    header = (f"# paragym leaderboard\n\npackage version {paragym.__version__}; {suite.name} suite: evaluation "
+              f"seeds {', '.join(map(str, suite.seeds))} x {suite.episodes} episodes per policy "
+              f"(reset seed 100000 + 1000 seed + episode), random scenarios, kinematic fidelity; "
+              f"wall times on {platform.machine()} with {os.cpu_count()} cores. Written by `paragym leaderboard"
+              f"{' --quick' if suite is QUICK else ''}`; every episode is a row of the SQLite results database.")
+    md_path.parent.mkdir(parents=True, exist_ok=True)
+    md_path.write_text(markdown(all_summaries, suite, images, header))
+    files.append(md_path)
+    return files

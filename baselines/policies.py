@@ -1,0 +1,311 @@
+"""Every policy the leaderboard knows, by env: one registration each.
+
+A policy is registered with :func:`register_policy` as a name and a factory
+``factory(env, seed) -> policy``, where ``policy`` has ``reset(obs, info)``
+and ``act(obs, info) -> action`` (:class:`paragym.planners.base.Policy`) and
+``seed`` seeds whatever randomness it has. The leaderboard builds a fresh
+policy for every episode, so that an episode's result depends only on its
+own seeds, never on which worker ran it or what it ran before.
+
+Built in, per env: the paper's method (``kind="reference"``), the paper's
+other cases where they differ from the trivial policies (``"paper case"``),
+other planners of ours (``"other"``), the shipped Stable-Baselines3 models
+found under ``models/<env name>/`` (``"learned"``) and the floor every agent
+must beat, uniformly random and zero actions (``"floor"``). A zero action
+*is* one of the paper's cases in three envs; its description says which.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import paragym
+from paragym.baselines.simple import RandomPolicy, ZeroPolicy
+from paragym.baselines.training import check_env_id, env_name, load_model
+
+__all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "default_models_dir", "get_policy", "policies_for",
+           "register_policy"]
+
+KINDS = ("reference", "paper case", "other", "learned", "floor", "user")
+DEG = np.pi / 180
+
+
+@dataclass(frozen=True)
+class PolicySpec:
+    """A named way to act in one env: ``factory(env, seed) -> policy``."""
+
+    env_id: str
+    name: str
+    factory: Callable[[gym.Env, int], Any]
+    kind: str = "user"
+    description: str = ""
+
+
+_REGISTRY: dict[str, dict[str, PolicySpec]] = {env_id: {} for env_id in paragym.ENVIRONMENTS}
+
+
+def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], Any], kind: str = "user",
+                    description: str = "", replace: bool = False) -> PolicySpec:
+    """Add a policy to ``env_id``'s leaderboard. ``name`` is its row label
+    (letters, digits, ``-_.()+`` and spaces); an existing name needs ``replace``."""
+    env_id = check_env_id(env_id)
+    if not isinstance(name, str) or not re.fullmatch(r"[\w\-.()+ ]{1,60}", name):
+        raise ValueError(f"policy name must be 1-60 letters, digits, spaces or -_.()+; got {name!r}")
+    if not callable(factory):
+        raise ValueError(f"factory for {name!r} must be callable as factory(env, seed)")
+    if kind not in KINDS:
+        raise ValueError(f"kind must be one of {KINDS}; got {kind!r}")
+    if name in _REGISTRY[env_id] and not replace:
+        raise ValueError(f"{env_id} already has a policy named {name!r} (replace=True overrides it)")
+    spec = PolicySpec(env_id, name, factory, kind, description)
+    _REGISTRY[env_id][name] = spec
+    return spec
+
+
+def default_models_dir() -> Path:
+    """``models/`` in the working directory if there is one, else the one
+    beside the package in a source checkout (where the shipped models live)."""
+    here = Path("models")
+    if here.is_dir():
+        return here
+    return Path(__file__).resolve().parents[1] / "models"
+
+
+class LearnedPolicy:
+    """A saved Stable-Baselines3 model acting deterministically.
+
+    The deterministic action of an MLP policy is a few matrix products, so
+    the layers are copied out once into numpy and evaluated there (about
+    20 us a step against about 300 us through ``model.predict``); the result
+    equals ``model.predict(obs, deterministic=True)`` to float32 rounding
+    (tested). Networks of other shapes go through ``model.predict``."""
+
+    def __init__(self, model: Any) -> None:
+        self.model = model
+        self.layers, self.squash = _numpy_actor(model)
+        space = model.action_space
+        self.low, self.high = space.low.astype(np.float64), space.high.astype(np.float64)
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if self.layers is None:
+            action, _ = self.model.predict(obs, deterministic=True)
+            return action
+        x = np.asarray(obs, np.float32).reshape(-1)
+        for weight, bias, activation in self.layers:
+            x = weight @ x + bias
+            if activation is not None:
+                x = activation(x)
+        if self.squash:  # SAC/TD3: tanh-squashed to [-1, 1], then to the bounds
+            x = self.low + 0.5 * (np.tanh(x) + 1.0) * (self.high - self.low)
+        return np.clip(x, self.low, self.high).astype(np.float32)
+
+
+def _numpy_actor(model: Any) -> tuple[list[tuple[np.ndarray, np.ndarray, Any]] | None, bool]:
+    """The deterministic actor of ``model`` as (weight, bias, activation)
+    layers in numpy and whether its output is tanh-squashed; (None, False)
+    when the network is not a plain MLP on flat observations."""
+    import torch.nn as nn
+
+    acts = {nn.Tanh: np.tanh, nn.ReLU: lambda v: np.maximum(v, 0.0)}
+    policy = model.policy
+    if hasattr(policy, "mlp_extractor") and hasattr(policy, "action_net"):  # PPO/A2C
+        if type(policy.features_extractor).__name__ != "FlattenExtractor" or getattr(policy, "squash_output", False):
+            return None, False
+        modules, squash = [*policy.mlp_extractor.policy_net, policy.action_net], False
+    elif hasattr(policy, "actor") and hasattr(policy.actor, "mu"):  # SAC (latent_pi, mu) / TD3 (mu)
+        actor = policy.actor
+        if type(actor.features_extractor).__name__ != "FlattenExtractor" or getattr(actor, "use_sde", False):
+            return None, False
+        if hasattr(actor, "latent_pi"):
+            modules = [*actor.latent_pi, actor.mu]
+        else:  # TD3: mu ends in the Tanh that the squashing applies
+            modules = [*actor.mu][:-1] if isinstance([*actor.mu][-1], nn.Tanh) else None
+            if modules is None:
+                return None, False
+        squash = True
+    else:
+        return None, False
+    layers: list[list[Any]] = []
+    for m in modules:
+        if isinstance(m, nn.Linear):
+            layers.append([m.weight.detach().numpy().astype(np.float32), m.bias.detach().numpy().astype(np.float32),
+                           None])
+        elif type(m) in acts and layers and layers[-1][2] is None:
+            layers[-1][2] = acts[type(m)]
+        else:
+            return None, False
+    return [tuple(layer) for layer in layers], squash
+
+
+@lru_cache(maxsize=64)
+def _cached_model(path: str, mtime: float) -> Any:
+    return load_model(path)
+
+
+@dataclass(frozen=True)
+class _LearnedFactory:
+    """Loads the model once per process (picklable, for worker pools and Ray)."""
+
+    path: str
+
+    def __call__(self, env: gym.Env, seed: int) -> LearnedPolicy:
+        p = Path(self.path)
+        model = _cached_model(str(p), p.stat().st_mtime if p.exists() else 0.0)
+        if model.observation_space.shape != env.observation_space.shape:
+            raise ValueError(f"model {p} expects observations of shape {model.observation_space.shape}, "
+                             f"the env gives {env.observation_space.shape}")
+        return LearnedPolicy(model)
+
+
+def _learned(env_id: str, models_dir: Path) -> dict[str, PolicySpec]:
+    folder = models_dir / env_name(env_id)
+    found = {}
+    for path in sorted(folder.glob("*_seed*.zip")):
+        m = re.fullmatch(r"(ppo|sac|td3)_seed(\d+)", path.stem)
+        if m:
+            name = f"{m[1]}-seed{m[2]}"
+            found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path)), "learned",
+                                     f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}: {path}")
+    return found
+
+
+def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str, PolicySpec]:
+    """Every policy of ``env_id``: the registered ones and the learned models
+    under ``models_dir`` (default :func:`default_models_dir`), in table order."""
+    env_id = check_env_id(env_id)
+    learned = _learned(env_id, Path(models_dir) if models_dir is not None else default_models_dir())
+    specs = {**_REGISTRY[env_id], **learned}
+    return dict(sorted(specs.items(), key=lambda kv: (KINDS.index(kv[1].kind), kv[0])))
+
+
+def get_policy(env_id: str, name: str, models_dir: str | Path | None = None) -> PolicySpec:
+    """The policy ``name`` of ``env_id``, or a ValueError listing them."""
+    specs = policies_for(env_id, models_dir)
+    if name not in specs:
+        raise ValueError(f"unknown policy {name!r} for {env_id}; known: {', '.join(specs)}")
+    return specs[name]
+
+
+# --- built-in policies -------------------------------------------------------------------------------------------
+
+def _random(env: gym.Env, seed: int) -> RandomPolicy:
+    return RandomPolicy(env.action_space, seed)
+
+
+def _zero(env: gym.Env, seed: int) -> ZeroPolicy:
+    return ZeroPolicy(env.action_space)
+
+
+def _rrt_ga(env: gym.Env, seed: int) -> Any:
+    from paragym.planners import RrtGaPlanner, RrtGaPolicy
+
+    return RrtGaPolicy(max_joint_step=env.unwrapped.max_joint_step, planner=RrtGaPlanner(seed=seed))
+
+
+def _grid_path(env: gym.Env, seed: int) -> Any:
+    from paragym.planners import GridPathPolicy
+
+    return GridPathPolicy(max_joint_step=env.unwrapped.max_joint_step)
+
+
+def _polynomial_detour(env: gym.Env, seed: int) -> Any:
+    from paragym.planners.polynomial_detour import PolynomialDetourPolicy
+
+    return PolynomialDetourPolicy()
+
+
+def _gradient(env: gym.Env, seed: int) -> Any:
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    return GradientPolicy(geometry=env.unwrapped.geometry)
+
+
+class FixedTablePolicy:
+    """Paper 003's case (a) in the env's null-space action: the null-space rate
+    that cancels the least-norm motion of the table (rho1), so the table
+    stays where the env put it. The paper's case (a) picks, offline, the
+    table position with the lowest mean kappa over the whole task; the env
+    starts at the optimum for the first point instead, and a policy cannot
+    move the start, so this is case (a) from the env's start."""
+
+    def __init__(self, env: gym.Env) -> None:
+        self.geometry = env.unwrapped.geometry
+        self.max_null_rate = env.unwrapped.max_null_rate
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.task = info["scenario"]
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        from paragym.mechanisms import orthoglide as og
+
+        k = min(info["step"], len(self.task.t) - 1)
+        r1 = float(info["rho"][0])
+        px, py = self.task.points[k]
+        j0, j1, kap, n = og.jacobian_one(r1, float(px), float(py), self.geometry)
+        rate = og.least_norm_one(j0, j1, *map(float, self.task.velocities[k]))
+        if abs(n[0]) < 1e-9:
+            return np.zeros(1, np.float32)
+        return np.array([np.clip(-rate[0] / (self.max_null_rate * n[0]), -1.0, 1.0)], np.float32)
+
+
+def _fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
+    if env.unwrapped.action_mode != "null_space":
+        raise ValueError("the fixed-table policy acts in the env's null_space action mode")
+    return FixedTablePolicy(env)
+
+
+@dataclass(frozen=True)
+class _Estimator:
+    """An estimator of :mod:`paragym.planners.encoder_correction` as a policy factory."""
+
+    kind: str
+
+    def __call__(self, env: gym.Env, seed: int) -> Any:
+        from paragym.planners import encoder_correction as ec
+
+        return ec.EstimatorPolicy(getattr(ec, self.kind), max_correction=env.unwrapped.max_correction,
+                                  geometry=env.unwrapped.geometry)
+
+
+_encoder_correction = _Estimator("EncoderCorrection")
+_ukf_fusion = _Estimator("FusionEstimator")
+
+_BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str], ...] = (
+    ("paragym/CaPaManCollisionFree-v0", "rrt-ga", _rrt_ga, "reference",
+     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step"),
+    ("paragym/CaPaManCollisionFree-v0", "grid-dijkstra", _grid_path, "other",
+     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term"),
+    ("paragym/CaPaManCollisionFree-v0", "zero", _zero, "floor", "stand still at T.P.1"),
+    ("paragym/HybridSingularityFree-v0", "polynomial-detour", _polynomial_detour, "reference",
+     "7th-degree path + serial optimisation of Delta + detour via-poses (paper 002)"),
+    ("paragym/HybridSingularityFree-v0", "zero", _zero, "floor",
+     "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)"),
+    ("paragym/Orthoglide2PRRKappa-v0", "gradient-c", _gradient, "reference",
+     "null-space gradient of kappa (paper 003, case c, eqs 9-10)"),
+    ("paragym/Orthoglide2PRRKappa-v0", "fixed-table-a", _fixed_table, "paper case",
+     "case (a): the table held still (at the env's start; see FixedTablePolicy)"),
+    ("paragym/Orthoglide2PRRKappa-v0", "zero", _zero, "floor",
+     "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)"),
+    ("paragym/MobileTripodOdometry-v0", "encoder-correction", _encoder_correction, "reference",
+     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection)"),
+    ("paragym/MobileTripodOdometry-v0", "ukf-fusion", _ukf_fusion, "other",
+     "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper"),
+    ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
+     "= odometry only: no correction (paper 004's uncorrected estimate)"),
+)
+
+for _env_id, _name, _factory, _kind, _doc in _BUILT_IN:
+    register_policy(_env_id, _name, _factory, _kind, _doc)
+for _env_id in paragym.ENVIRONMENTS:
+    register_policy(_env_id, "random", _random, "floor", "uniform random actions")

@@ -1,0 +1,129 @@
+"""The leaderboard's results: one SQLite file, one row per episode.
+
+Rows are keyed by (env, policy, seed, episode, paragym version) and each is
+committed as soon as its episode finishes, so an interrupted run loses at
+most the episodes in flight and a rerun skips what is already there. A
+file written by another paragym version (or not a paragym database at all)
+is refused with a clear error and left untouched: its numbers would not be
+comparable, and the ``--db`` option takes a new file.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import paragym
+
+__all__ = ["SCHEMA_VERSION", "EpisodeRow", "ResultStore"]
+
+SCHEMA_VERSION = "1"
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
+CREATE TABLE IF NOT EXISTS episodes (
+    env TEXT NOT NULL, policy TEXT NOT NULL, seed INTEGER NOT NULL, episode INTEGER NOT NULL,
+    version TEXT NOT NULL, kind TEXT NOT NULL, episode_return REAL NOT NULL, length INTEGER NOT NULL,
+    success INTEGER NOT NULL, metrics TEXT NOT NULL, wall_seconds REAL NOT NULL, finished_at REAL NOT NULL,
+    PRIMARY KEY (env, policy, seed, episode, version));
+CREATE TABLE IF NOT EXISTS validations (
+    env TEXT NOT NULL, policy TEXT NOT NULL, version TEXT NOT NULL, passed INTEGER NOT NULL,
+    summary TEXT NOT NULL, PRIMARY KEY (env, policy, version));
+"""
+
+
+@dataclass(frozen=True)
+class EpisodeRow:
+    """One evaluated episode. ``metrics``: the task's own measures (floats)."""
+
+    env: str
+    policy: str
+    seed: int
+    episode: int
+    kind: str
+    episode_return: float
+    length: int
+    success: bool
+    metrics: dict[str, float] = field(default_factory=dict)
+    wall_seconds: float = 0.0
+    version: str = paragym.__version__
+
+    @property
+    def key(self) -> tuple[str, str, int, int, str]:
+        return (self.env, self.policy, self.seed, self.episode, self.version)
+
+
+class ResultStore:
+    """The SQLite file at ``path`` (made, with its folder, if missing)."""
+
+    def __init__(self, path: str | Path, version: str = paragym.__version__) -> None:
+        self.path, self.version = Path(path), version
+        if self.path.exists():
+            self._check_existing()
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.db = sqlite3.connect(self.path)
+        self.db.executescript(_SCHEMA)
+        with self.db:
+            self.db.execute("INSERT OR IGNORE INTO meta VALUES ('schema', ?)", (SCHEMA_VERSION,))
+            self.db.execute("INSERT OR IGNORE INTO meta VALUES ('paragym_version', ?)", (version,))
+
+    def _check_existing(self) -> None:
+        """Refuse (ValueError) a file that is not this version's paragym database, before writing anything."""
+        try:
+            db = sqlite3.connect(f"file:{self.path}?mode=ro", uri=True)
+            try:
+                meta = dict(db.execute("SELECT key, value FROM meta").fetchall())
+            finally:
+                db.close()
+        except sqlite3.DatabaseError as exc:
+            raise ValueError(f"{self.path} is not a paragym results database ({exc}); choose another file "
+                             f"with --db") from exc
+        if meta.get("schema") != SCHEMA_VERSION or meta.get("paragym_version") != self.version:
+            raise ValueError(f"{self.path} holds results of paragym {meta.get('paragym_version', '?')} (schema "
+                             f"{meta.get('schema', '?')}); this is paragym {self.version} (schema {SCHEMA_VERSION}). "
+                             f"Results of different versions are not comparable: use --db for a new file")
+
+    def close(self) -> None:
+        self.db.close()
+
+    def __enter__(self) -> ResultStore:
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        self.close()
+
+    def done_keys(self) -> set[tuple[str, str, int, int, str]]:
+        """The keys of every stored episode."""
+        return set(self.db.execute("SELECT env, policy, seed, episode, version FROM episodes").fetchall())
+
+    def add(self, row: EpisodeRow) -> None:
+        """Store one episode now (a key already stored is kept as it was)."""
+        with self.db:
+            self.db.execute("INSERT OR IGNORE INTO episodes VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
+                            (row.env, row.policy, row.seed, row.episode, row.version, row.kind,
+                             float(row.episode_return), int(row.length), int(row.success),
+                             json.dumps(row.metrics, sort_keys=True), float(row.wall_seconds), time.time()))
+
+    def rows(self, env: str | None = None) -> list[EpisodeRow]:
+        """This version's episodes (of ``env``), in key order."""
+        query = ("SELECT env, policy, seed, episode, kind, episode_return, length, success, metrics, wall_seconds, "
+                 "version FROM episodes WHERE version = ?" + (" AND env = ?" if env else "") +
+                 " ORDER BY env, policy, seed, episode")
+        args = (self.version, env) if env else (self.version,)
+        return [EpisodeRow(e, p, s, k, kind, r, n, bool(ok), json.loads(m), w, v)
+                for e, p, s, k, kind, r, n, ok, m, w, v in self.db.execute(query, args)]
+
+    def set_validation(self, env: str, policy: str, passed: bool, summary: dict[str, Any]) -> None:
+        with self.db:
+            self.db.execute("INSERT OR REPLACE INTO validations VALUES (?,?,?,?,?)",
+                            (env, policy, self.version, int(passed), json.dumps(summary, sort_keys=True)))
+
+    def validation(self, env: str, policy: str) -> dict[str, Any] | None:
+        """The stored verdict ``{"passed": bool, **summary}`` or None."""
+        got = self.db.execute("SELECT passed, summary FROM validations WHERE env=? AND policy=? AND version=?",
+                              (env, policy, self.version)).fetchone()
+        return None if got is None else {"passed": bool(got[0]), **json.loads(got[1])}

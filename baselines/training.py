@@ -1,0 +1,303 @@
+"""Train Stable-Baselines3 agents on the paragym envs (``paragym train``).
+
+Hyper-parameters come from ``hyperparams/<algo>.yml`` keyed by env id, as in
+rl-baselines3-zoo. A run writes, under ``models/<env name>/``:
+
+* ``<algo>_seed<N>.zip``: the final model (SB3's format: weights, optimiser
+  state, hyper-parameters);
+* ``<algo>_seed<N>.json``: the run's config, versions, wall time, network
+  size and its training curve (periodic evaluations on fixed seeds, and the
+  return of every training episode);
+* ``<algo>_seed<N>.png``: the curve as a picture;
+* ``checkpoints/<algo>_seed<N>/`` while it runs: the latest model (and replay
+  buffer for SAC/TD3) and the curve so far, written atomically every
+  ``checkpoint_freq`` steps. A run started again with the same arguments
+  resumes from there (the env's random streams restart, so a resumed run is
+  a continuation, not a bit-identical replay); the folder goes when the run
+  completes.
+
+Everything runs on the CPU; ``threads`` (default 1) caps torch's threads so
+that two runs share a 2-core machine without contention.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+import yaml
+
+import paragym
+
+__all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
+
+ALGOS = ("ppo", "sac", "td3")
+#: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
+EVAL_SEED = 10_000
+#: keys of the yml files that paragym consumes; all others go to the SB3 algorithm
+PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes",
+                "action_noise_std", "checkpoint_freq", "normalize_reward")
+
+
+def check_env_id(env_id: str) -> str:
+    """``env_id`` itself, or a ValueError listing the registered ids (the
+    ``paragym/`` prefix may be left out)."""
+    if not isinstance(env_id, str):
+        raise ValueError(f"env id must be a string; got {env_id!r}")
+    full = env_id if env_id.startswith("paragym/") else f"paragym/{env_id}"
+    if full not in paragym.ENVIRONMENTS:
+        raise ValueError(f"unknown env {env_id!r}; registered: {', '.join(paragym.ENVIRONMENTS)}")
+    return full
+
+
+def check_algo(algo: str) -> str:
+    """``algo`` lower-cased, or a ValueError naming the known algorithms."""
+    if not isinstance(algo, str) or algo.lower() not in ALGOS:
+        raise ValueError(f"unknown algorithm {algo!r}; known: {', '.join(ALGOS)}")
+    return algo.lower()
+
+
+def load_hyperparams(algo: str, env_id: str) -> dict[str, Any]:
+    """The hyper-parameters of ``algo`` for ``env_id`` from the packaged
+    ``hyperparams/<algo>.yml`` (a copy; the caller may change it)."""
+    algo, env_id = check_algo(algo), check_env_id(env_id)
+    text = resources.files("paragym.baselines").joinpath("hyperparams", f"{algo}.yml").read_text()
+    table = yaml.safe_load(text)
+    if env_id not in table:
+        raise ValueError(f"hyperparams/{algo}.yml has no entry for {env_id}")
+    return dict(table[env_id])
+
+
+def env_name(env_id: str) -> str:
+    """The env id without its namespace: the name of its folder under ``models/``."""
+    return check_env_id(env_id).split("/", 1)[1]
+
+
+@dataclass(frozen=True)
+class RunFiles:
+    """Where one (env, algo, seed) run keeps its files."""
+
+    model: Path
+    meta: Path
+    curve_png: Path
+    checkpoints: Path
+
+
+def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = "models") -> RunFiles:
+    """The files of a run under ``models_dir/<env name>/``."""
+    folder = Path(models_dir) / env_name(env_id)
+    stem = f"{check_algo(algo)}_seed{int(seed)}"
+    return RunFiles(folder / f"{stem}.zip", folder / f"{stem}.json", folder / f"{stem}.png",
+                    folder / "checkpoints" / stem)
+
+
+@dataclass
+class TrainResult:
+    """A finished run: its files, the trained model and the metadata written with it."""
+
+    files: RunFiles
+    model: Any
+    meta: dict[str, Any]
+    resumed_from: int = 0
+    skipped: bool = False
+
+
+def _algorithm(algo: str) -> type:
+    from stable_baselines3 import PPO, SAC, TD3
+
+    return {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
+
+
+def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dict[str, Any]) -> Any:
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    if vec_env not in ("dummy", "subproc"):
+        raise ValueError(f"vec_env must be 'dummy' or 'subproc'; got {vec_env!r}")
+    cls = SubprocVecEnv if vec_env == "subproc" and n_envs > 1 else DummyVecEnv
+    return make_vec_env(env_id, n_envs=n_envs, seed=seed, vec_env_cls=cls, env_kwargs=env_kwargs)
+
+
+def _write_atomic(path: Path, text: str) -> None:
+    tmp = path.with_suffix(path.suffix + ".tmp")
+    tmp.write_text(text)
+    os.replace(tmp, path)
+
+
+def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, curve: dict[str, list],
+                    off_policy: bool) -> list[Any]:
+    """An EvalCallback that records each evaluation in ``curve``, a callback
+    that records training episodes and writes the checkpoint."""
+    from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
+
+    class RecordEvaluation(BaseCallback):
+        def _on_step(self) -> bool:
+            parent = self.parent
+            curve["eval_timesteps"].append(int(self.num_timesteps))
+            last = np.asarray(parent.evaluations_results[-1], float)
+            curve["eval_mean_return"].append(float(last.mean()))
+            curve["eval_std_return"].append(float(last.std()))
+            succ = parent.evaluations_successes[-1] if parent.evaluations_successes else []
+            curve["eval_success_rate"].append(float(np.mean(succ)) if len(succ) else None)
+            return True
+
+    class RecordAndCheckpoint(BaseCallback):
+        def __init__(self, every: int) -> None:
+            super().__init__()
+            self.every, self.last_saved = every, 0
+
+        def _on_step(self) -> bool:
+            for info in self.locals.get("infos", ()):
+                if "episode" in info:
+                    curve["train_timesteps"].append(int(self.num_timesteps))
+                    curve["train_return"].append(float(info["episode"]["r"]))
+            if self.num_timesteps - self.last_saved >= self.every:
+                self.save()
+            return True
+
+        def save(self) -> None:
+            ckpt.mkdir(parents=True, exist_ok=True)
+            self.model.save(ckpt / "latest.tmp.zip")
+            if off_policy:
+                self.model.save_replay_buffer(ckpt / "replay_buffer.tmp.pkl")
+                os.replace(ckpt / "replay_buffer.tmp.pkl", ckpt / "replay_buffer.pkl")
+            os.replace(ckpt / "latest.tmp.zip", ckpt / "latest.zip")
+            venv = self.model.get_env()
+            if hasattr(venv, "ret_rms"):  # VecNormalize: its running return statistics
+                venv.save(str(ckpt / "vecnormalize.pkl"))
+            _write_atomic(ckpt / "curve.json", json.dumps({"num_timesteps": int(self.num_timesteps), **curve}))
+            self.last_saved = self.num_timesteps
+
+    eval_cb = EvalCallback(eval_env, n_eval_episodes=int(hp["n_eval_episodes"]),
+                           eval_freq=max(1, int(hp["eval_freq"]) // n_envs), deterministic=True, verbose=0,
+                           log_path=str(ckpt), callback_after_eval=RecordEvaluation())
+    return [eval_cb, RecordAndCheckpoint(int(hp.get("checkpoint_freq", hp["eval_freq"])))]
+
+
+def _count_parameters(model: Any) -> dict[str, int]:
+    params = {name: int(sum(p.numel() for p in module.parameters()))
+              for name, module in (("policy", model.policy),)}
+    actor = getattr(model, "actor", None)
+    if actor is not None:
+        params["actor"] = int(sum(p.numel() for p in actor.parameters()))
+    return params
+
+
+def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = "models",
+          progress_bar: bool = True, threads: int = 1, force: bool = False, verbose: int = 0,
+          hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None) -> TrainResult:
+    """Train ``algo`` on ``env_id`` with ``seed`` for ``timesteps`` env steps
+    (default: the yml's ``n_timesteps``) and save the model, its JSON and its
+    curve. A finished run with the same timesteps is returned as it is
+    (``skipped``) unless ``force``; an interrupted one resumes from its
+    checkpoint. ``hyperparams`` override the yml's entries; ``callbacks``
+    (SB3 callbacks) run beside paragym's own."""
+    import torch
+
+    env_id, algo = check_env_id(env_id), check_algo(algo)
+    if not isinstance(seed, int | np.integer) or seed < 0:
+        raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
+    hp = {**load_hyperparams(algo, env_id), **(hyperparams or {})}
+    total = int(hp["n_timesteps"] if timesteps is None else timesteps)
+    if total <= 0:
+        raise ValueError(f"timesteps must be positive; got {timesteps!r}")
+    files = run_files(env_id, algo, seed, models_dir)
+    cls = _algorithm(algo)
+    if files.model.exists() and files.meta.exists() and not force:
+        meta = json.loads(files.meta.read_text())
+        if meta.get("timesteps") == total:
+            return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
+    torch.set_num_threads(int(threads))
+
+    n_envs = int(hp["n_envs"])
+    env_kwargs = dict(hp.get("env_kwargs") or {})
+    env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
+    if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
+        from stable_baselines3.common.vec_env import VecNormalize
+
+        stats = files.checkpoints / "vecnormalize.pkl"
+        env = (VecNormalize.load(str(stats), env) if stats.exists() and not force else
+               VecNormalize(env, norm_obs=False, norm_reward=True, gamma=float(hp.get("gamma", 0.99))))
+    eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
+    kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
+    off_policy = algo in ("sac", "td3")
+    if algo == "td3":
+        from stable_baselines3.common.noise import NormalActionNoise
+
+        dim = env.action_space.shape[0]
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("action_noise_std", 0.1)) * np.ones(dim))
+
+    curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_mean_return", "eval_std_return",
+                                              "eval_success_rate", "train_timesteps", "train_return")}
+    resumed_from = 0
+    latest = files.checkpoints / "latest.zip"
+    if latest.exists() and (files.checkpoints / "curve.json").exists() and not force:
+        model = cls.load(latest, env=env, device="cpu")
+        if off_policy and (files.checkpoints / "replay_buffer.pkl").exists():
+            model.load_replay_buffer(files.checkpoints / "replay_buffer.pkl")
+        saved = json.loads((files.checkpoints / "curve.json").read_text())
+        resumed_from = int(model.num_timesteps)
+        for key in curve:
+            curve[key] = list(saved.get(key, []))
+    else:
+        model = cls(hp["policy"], env, seed=int(seed), device="cpu", verbose=verbose, **kwargs)
+
+    callbacks = _make_callbacks(hp, eval_env, n_envs, files.checkpoints, curve, off_policy) + list(callbacks or [])
+    t0 = time.perf_counter()
+    remaining = max(0, total - resumed_from)
+    if remaining:
+        model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=resumed_from == 0)
+    seconds = time.perf_counter() - t0
+    env.close()
+    eval_env.close()
+
+    files.model.parent.mkdir(parents=True, exist_ok=True)
+    model.save(files.model)
+    meta = {
+        "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
+        "hyperparams": hp, "train_seconds": seconds, "steps_per_second": remaining / seconds if seconds else None,
+        "parameters": _count_parameters(model), "model_bytes": files.model.stat().st_size,
+        "versions": _versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
+        "curve": curve,
+    }
+    _write_atomic(files.meta, json.dumps(meta, indent=1))
+    from paragym.plots import plot_training_curve
+
+    plot_training_curve(curve, files.curve_png, f"{algo.upper()} seed {seed} on {env_name(env_id)}: "
+                        f"{total:,} steps, {seconds / 60:.1f} min")
+    for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl"):
+        (files.checkpoints / name).unlink(missing_ok=True)
+    for folder in (files.checkpoints, files.checkpoints.parent):
+        if folder.exists() and not any(folder.iterdir()):
+            folder.rmdir()
+    return TrainResult(files, model, meta, resumed_from=resumed_from)
+
+
+def _versions() -> dict[str, str]:
+    import stable_baselines3
+    import torch
+
+    return {"paragym": paragym.__version__, "stable_baselines3": stable_baselines3.__version__,
+            "torch": torch.__version__, "gymnasium": gym.__version__, "python": platform.python_version()}
+
+
+def load_model(path: str | Path, algo: str | None = None) -> Any:
+    """Load a saved SB3 model on the CPU; the algorithm from ``algo`` or the
+    file name (``ppo_seed0.zip``). A missing or unreadable file raises a
+    ValueError naming it."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"no model file at {path}")
+    algo = check_algo(algo if algo is not None else path.stem.split("_", 1)[0])
+    try:
+        return _algorithm(algo).load(path, device="cpu")
+    except Exception as exc:  # SB3 raises zipfile, pickle, torch or key errors for a damaged file
+        raise ValueError(f"cannot load {algo.upper()} model {path}: {type(exc).__name__}: {exc}") from exc
