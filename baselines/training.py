@@ -220,13 +220,15 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     n_envs = int(hp["n_envs"])
     env_kwargs = dict(hp.get("env_kwargs") or {})
     env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
+    eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
     if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
         from stable_baselines3.common.vec_env import VecNormalize
 
         stats = files.checkpoints / "vecnormalize.pkl"
         env = (VecNormalize.load(str(stats), env) if stats.exists() and not force else
                VecNormalize(env, norm_obs=False, norm_reward=True, gamma=float(hp.get("gamma", 0.99))))
-    eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
+        # the same wrapper, inert, on the evaluation env (EvalCallback syncs the two): raw returns
+        eval_env = VecNormalize(eval_env, training=False, norm_obs=False, norm_reward=False)
     kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
     off_policy = algo in ("sac", "td3")
     if algo == "td3":

@@ -1,0 +1,134 @@
+"""Leaderboard tests: the store, resume, executors, reports, bad input."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import pytest
+
+from paragym.baselines.leaderboard import EvalSuite, run_leaderboard, summarise
+from paragym.baselines.policies import get_policy, policies_for, register_policy
+from paragym.baselines.simple import ZeroPolicy
+from paragym.baselines.store import EpisodeRow, ResultStore
+from paragym.cli import main
+
+ORTHO = "paragym/Orthoglide2PRRKappa-v0"
+HYBRID = "paragym/HybridSingularityFree-v0"
+SMALL = dict(suite=EvalSuite("test", (0, 1), 2), env_ids=[ORTHO, HYBRID], policies=["zero", "random"], out=None,
+             validate=False, progress=False, echo=lambda s: None)
+
+
+def _table(run) -> list[tuple]:
+    """The leaderboard's numbers without the wall times."""
+    return [(s.env, s.rank, s.policy, s.episodes, s.success_rate, s.return_mean, s.return_std, s.metrics)
+            for ss in run.summaries.values() for s in ss]
+
+
+def _rows(db) -> list[tuple]:
+    with ResultStore(db) as store:
+        return [(r.key, r.episode_return, r.length, r.success, r.metrics) for r in store.rows()]
+
+
+def test_an_interrupted_run_resumes_to_the_same_table_without_duplicates(tmp_path):
+    kw = {**SMALL, "models_dir": tmp_path}
+    clean = run_leaderboard(db=tmp_path / "clean.sqlite", **kw)
+    assert clean.new_episodes == 2 * 2 * 4
+
+    seen = []
+
+    def killed_after_three(row: EpisodeRow) -> None:
+        seen.append(row)
+        if len(seen) == 3:
+            raise KeyboardInterrupt
+
+    db = tmp_path / "resumed.sqlite"
+    with pytest.raises(KeyboardInterrupt):
+        run_leaderboard(db=db, on_row=killed_after_three, **kw)
+    assert len(_rows(db)) == 3  # each episode was committed as it finished
+    again = run_leaderboard(db=db, **kw)
+    assert again.skipped_episodes == 3 and again.new_episodes == 13
+    assert _table(again) == _table(clean)
+    assert _rows(db) == _rows(tmp_path / "clean.sqlite")
+    con = sqlite3.connect(db)
+    assert con.execute("SELECT COUNT(*) FROM episodes").fetchone()[0] == 16
+    third = run_leaderboard(db=db, **kw)  # nothing left to do
+    assert third.new_episodes == 0 and _table(third) == _table(clean)
+
+
+def test_the_process_pool_and_ray_give_the_same_rows_as_the_local_executor(tmp_path):
+    kw = {**SMALL, "suite": EvalSuite("test", (0,), 2), "models_dir": tmp_path}
+    run_leaderboard(db=tmp_path / "local.sqlite", **kw)
+    run_leaderboard(db=tmp_path / "pool.sqlite", executor="workers", workers=2, **kw)
+    assert _rows(tmp_path / "pool.sqlite") == _rows(tmp_path / "local.sqlite")
+    pytest.importorskip("ray")
+    run_leaderboard(db=tmp_path / "ray.sqlite", executor="ray", workers=2, **kw)
+    assert _rows(tmp_path / "ray.sqlite") == _rows(tmp_path / "local.sqlite")
+
+
+def test_reports_are_written(tmp_path):
+    run = run_leaderboard(db=tmp_path / "r.sqlite", **{**SMALL, "out": tmp_path / "out",
+                                                       "suite": EvalSuite("test", (0,), 1), "models_dir": tmp_path})
+    names = sorted(p.name for p in run.files)
+    assert names == ["HybridSingularityFree-v0.png", "LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
+                     "leaderboard.csv"]
+    md = (tmp_path / "out" / "LEADERBOARD.md").read_text()
+    assert f"## `{ORTHO}`" in md and "| 1 |" in md and "mean kappa" in md
+    csv = (tmp_path / "out" / "leaderboard.csv").read_text().splitlines()
+    assert len(csv) == 1 + 4 and csv[0].startswith("env,rank,policy")
+
+
+def test_a_registered_policy_joins_the_board(tmp_path):
+    register_policy(ORTHO, "my-zero", lambda env, seed: ZeroPolicy(env.action_space), description="mine",
+                    replace=True)
+    assert get_policy(ORTHO, "my-zero", tmp_path).kind == "user"
+    run = run_leaderboard(db=tmp_path / "r.sqlite", **{**SMALL, "policies": ["my-zero", "zero"], "env_ids": [ORTHO],
+                                                       "suite": EvalSuite("test", (0,), 1), "models_dir": tmp_path})
+    rows = {s.policy: s for s in run.summaries[ORTHO]}
+    assert rows["my-zero"].return_mean == rows["zero"].return_mean  # same actions, same seeds, same numbers
+    with pytest.raises(ValueError, match="already has a policy"):
+        register_policy(ORTHO, "my-zero", lambda env, seed: None)
+
+
+def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path, capsys):
+    with pytest.raises(ValueError, match="unknown env"):
+        run_leaderboard(db=tmp_path / "a.sqlite", **{**SMALL, "env_ids": ["NoSuch-v0"]})
+    with pytest.raises(ValueError, match="unknown policy 'nope'"):
+        run_leaderboard(db=tmp_path / "a.sqlite", **{**SMALL, "policies": ["nope"]})
+    with pytest.raises(ValueError, match="unknown executor"):
+        run_leaderboard(db=tmp_path / "a.sqlite", **{**SMALL, "executor": "slurm"})
+    with pytest.raises(ValueError, match="unknown policy"):
+        get_policy(ORTHO, "rrt-ga")  # a policy of another env
+
+    old = tmp_path / "old.sqlite"
+    ResultStore(old, version="0.0.1").close()
+    before = old.read_bytes()
+    with pytest.raises(ValueError, match="paragym 0.0.1"):
+        ResultStore(old)
+    garbage = tmp_path / "garbage.sqlite"
+    garbage.write_bytes(b"this is not a database" * 100)
+    with pytest.raises(ValueError, match="not a paragym results database"):
+        ResultStore(garbage)
+    assert old.read_bytes() == before and garbage.read_bytes() == b"this is not a database" * 100
+
+    assert main(["leaderboard", "--quick", "--db", str(old), "--no-progress"]) == 2
+    assert main(["leaderboard", "--quick", "--db", str(tmp_path / "b.sqlite"), "--policy", "nope"]) == 2
+    err = capsys.readouterr().err
+    assert "paragym 0.0.1" in err and "unknown policy" in err
+    assert old.read_bytes() == before
+
+    bad_models = tmp_path / "models" / "Orthoglide2PRRKappa-v0"
+    bad_models.mkdir(parents=True)
+    (bad_models / "ppo_seed0.zip").write_bytes(b"corrupt")
+    spec = policies_for(ORTHO, tmp_path / "models")["ppo-seed0"]
+    with pytest.raises(ValueError, match="cannot load PPO model"):
+        run_leaderboard(db=tmp_path / "c.sqlite", **{**SMALL, "policies": ["ppo-seed0"], "env_ids": [ORTHO],
+                                                     "models_dir": tmp_path / "models"})
+    assert spec.kind == "learned" and (bad_models / "ppo_seed0.zip").read_bytes() == b"corrupt"
+
+
+def test_summaries_rank_by_success_then_the_primary_metric():
+    rows = [EpisodeRow(ORTHO, name, 0, k, "floor", ret, 10, ok, {"mean_kappa": kap})
+            for name, ret, ok, kap in (("a", -5.0, True, 1.2), ("b", -9.0, True, 1.1), ("c", 0.0, False, 1.0))
+            for k in range(2)]
+    ranked = [s.policy for s in summarise(rows)[ORTHO]]
+    assert ranked == ["b", "a", "c"]

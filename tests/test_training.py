@@ -1,0 +1,100 @@
+"""paragym train: hyper-parameters, files, resume, loading, numpy inference."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+from stable_baselines3.common.callbacks import BaseCallback  # noqa: E402
+
+from paragym.baselines.policies import LearnedPolicy  # noqa: E402
+from paragym.baselines.training import ALGOS, load_hyperparams, load_model, run_files, train  # noqa: E402
+from paragym.cli import main  # noqa: E402
+
+HYBRID = "paragym/HybridSingularityFree-v0"
+TINY = {"ppo": {"n_envs": 2, "n_steps": 64, "batch_size": 64, "n_epochs": 2, "eval_freq": 128, "n_eval_episodes": 1,
+                "checkpoint_freq": 128},
+        "sac": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1},
+        "td3": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1}}
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_every_env_has_hyperparameters(algo):
+    import paragym
+
+    for env_id in paragym.ENVIRONMENTS:
+        hp = load_hyperparams(algo, env_id)
+        assert hp["n_timesteps"] > 0 and hp["policy"] == "MlpPolicy" and hp["eval_freq"] > 0
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_a_short_run_writes_its_files_and_is_not_repeated(tmp_path, algo):
+    res = train(HYBRID, algo, seed=1, timesteps=400, models_dir=tmp_path, progress_bar=False, hyperparams=TINY[algo])
+    files = run_files(HYBRID, algo, 1, tmp_path)
+    assert files.model.is_file() and files.curve_png.is_file() and not files.checkpoints.exists()
+    meta = json.loads(files.meta.read_text())
+    assert meta["timesteps"] == 400 and meta["algo"] == algo and meta["parameters"]["policy"] > 0
+    assert meta["curve"]["eval_timesteps"] and len(meta["curve"]["eval_mean_return"]) == len(
+        meta["curve"]["eval_timesteps"])
+    assert res.model.num_timesteps >= 400
+    again = train(HYBRID, algo, seed=1, timesteps=400, models_dir=tmp_path, progress_bar=False)
+    assert again.skipped
+
+
+@pytest.mark.parametrize("algo", ALGOS)
+def test_numpy_inference_equals_predict(tmp_path, algo):
+    res = train(HYBRID, algo, seed=0, timesteps=200, models_dir=tmp_path, progress_bar=False, hyperparams=TINY[algo])
+    model = load_model(res.files.model)
+    policy = LearnedPolicy(model)
+    assert policy.layers is not None
+    obs = np.random.default_rng(0).uniform(-3, 3, (100, *model.observation_space.shape)).astype(np.float32)
+    ours = np.array([policy.act(o, {}) for o in obs])
+    theirs = np.array([model.predict(o, deterministic=True)[0] for o in obs])
+    assert np.abs(ours - theirs).max() < 1e-5
+
+
+class _Interrupt(BaseCallback):
+    def __init__(self, after: int) -> None:
+        super().__init__()
+        self.after = after
+
+    def _on_step(self) -> bool:
+        if self.num_timesteps >= self.after:
+            raise KeyboardInterrupt
+        return True
+
+
+def test_an_interrupted_run_resumes_from_its_checkpoint(tmp_path):
+    hp = {**TINY["ppo"], "normalize_reward": True}  # the reward scaler's statistics are checkpointed too
+    with pytest.raises(KeyboardInterrupt):
+        train(HYBRID, "ppo", seed=2, timesteps=768, models_dir=tmp_path, progress_bar=False, hyperparams=hp,
+              callbacks=[_Interrupt(400)])
+    files = run_files(HYBRID, "ppo", 2, tmp_path)
+    assert (files.checkpoints / "latest.zip").is_file() and not files.model.exists()
+    assert (files.checkpoints / "vecnormalize.pkl").is_file()
+    res = train(HYBRID, "ppo", seed=2, timesteps=768, models_dir=tmp_path, progress_bar=False, hyperparams=hp)
+    assert 256 <= res.resumed_from < 768
+    assert res.model.num_timesteps >= 768
+    curve = res.meta["curve"]["eval_timesteps"]
+    assert curve == sorted(curve) and curve[0] < res.resumed_from < curve[-1]  # the curve continues
+    assert not files.checkpoints.exists()
+
+
+def test_bad_names_and_corrupt_files_are_clear_errors(tmp_path, capsys):
+    with pytest.raises(ValueError, match="unknown env"):
+        train("NoSuchEnv-v0", "ppo")
+    with pytest.raises(ValueError, match="unknown algorithm"):
+        train(HYBRID, "dqn")
+    bad = tmp_path / "ppo_seed0.zip"
+    bad.write_bytes(b"not a zip file")
+    with pytest.raises(ValueError, match="cannot load PPO model"):
+        load_model(bad)
+    assert bad.read_bytes() == b"not a zip file"
+    assert main(["train", "NoSuchEnv-v0"]) == 2
+    assert main(["train", HYBRID, "--algo", "dqn"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown env" in err and "unknown algorithm" in err
