@@ -9,9 +9,10 @@ import numpy as np
 from gymnasium import spaces
 
 from paragym.envs.base import ParagymEnv
+from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import orthoglide as og
 
-__all__ = ["Orthoglide2PRRKappaEnv", "orthoglide_random_task"]
+__all__ = ["Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -210,3 +211,119 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
 
     def _close(self) -> None:
         self._close_render_scene()
+
+
+class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaEnv` stepped together
+    in numpy (:mod:`paragym.envs.vector`; the same numbers as the single env).
+    Keyword arguments are the single env's; all tasks have the same number of
+    path points (the paper's and the random ones: 1001)."""
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        super().__init__(num_envs, Orthoglide2PRRKappaEnv(**kwargs), max_episode_steps, render_index)
+        e = self.single_env
+        self.geometry, self.joint_mode = e.geometry, e.action_mode == "joint_velocity"
+        self._lo, self._hi = np.array(e.geometry.rho_min), np.array(e.geometry.rho_max)
+        self._tasks: list[Any] = [None] * self.num_envs
+        self._idx = np.arange(self.num_envs)
+
+    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
+        ng = _task_module()
+        e = self.single_env
+        choice = options.get("scenario", e.scenario_arg)
+        tasks = []
+        for i in rows:
+            if isinstance(choice, str):
+                if choice not in ("paper", "random"):
+                    raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+                task = ng.paper_task() if choice == "paper" else orthoglide_random_task(self._rngs[i], self.geometry)
+            else:
+                task = choice
+            tasks.append(task)
+        first = np.array([t.points[0] for t in tasks])
+        kap, r1 = ng.pointwise_optimum(ng.Task("first", np.zeros(len(first)), first, first), self.geometry, 401)
+        if not np.all(np.isfinite(kap)):
+            raise ValueError("the task's first point is outside the reachable set")
+        if self._tasks[0] is None:  # the first reset allocates the path arrays
+            k = len(tasks[0].t)
+            self._points = np.zeros((self.num_envs, k, 2))
+            self._vel = np.zeros((self.num_envs, k, 2))
+            self._dt = np.zeros((self.num_envs, k - 1))
+            self._last = np.zeros(self.num_envs, np.int64)
+            self._rho = np.zeros((self.num_envs, 3))
+            self._k = np.zeros(self.num_envs, np.int64)
+        for i, task in zip(rows, tasks, strict=True):
+            if len(task.t) != self._points.shape[1]:
+                raise ValueError(f"every task must have {self._points.shape[1]} path points; got {len(task.t)}")
+            self._tasks[i] = task
+            self._points[i], self._vel[i], self._dt[i] = task.points, task.velocities, np.diff(task.t)
+            self._last[i] = len(task.t) - 1
+        self._k[rows] = 0
+        r2, r3, _ = og.inverse_rows(r1, first[:, 0], first[:, 1], self.geometry)
+        self._rho[rows] = np.stack([r1, r2, r3], -1)
+        self._evaluate()
+
+    def _evaluate(self) -> None:
+        g, k = self.geometry, self._k
+        p = self._points[self._idx, k]
+        r1 = self._rho[:, 0]
+        self._err = np.zeros(self.num_envs)
+        if self.joint_mode:
+            tool = og.forward(self._rho, g)
+            self._err = np.hypot(tool[:, 0] - p[:, 0], tool[:, 1] - p[:, 1])
+        _, _, mode = og.inverse_rows(r1, p[:, 0], p[:, 1], g)
+        ok = mode & np.all((self._rho >= self._lo) & (self._rho <= self._hi), axis=1)
+        self._j0, self._j1, kap, n = og.jacobian_rows(r1, p[:, 0], p[:, 1], g)
+        self._kappa = np.where(ok, kap, np.inf)
+        self._n = np.where(ok[:, None], n, 0.0)
+        with np.errstate(invalid="ignore"):
+            self._failed = ~ok | ~(self._kappa < KAPPA_LIMIT)
+
+    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
+        e, k = self.single_env, self._k
+        step = np.minimum(k, self._dt.shape[1] - 1)  # rows being reset may sit at the path's end
+        dt = self._dt[self._idx, step]
+        k1 = np.where(active, np.minimum(k + 1, self._last), k)
+        if self.joint_mode:
+            a = np.clip(actions, -1.0, 1.0)
+            rho = self._rho + dt[:, None] * e.max_joint_rate * a
+        else:
+            a = np.clip(actions[:, 0], -1.0, 1.0)
+            v = self._vel[self._idx, step]
+            with np.errstate(invalid="ignore", divide="ignore"):
+                rate = og.least_norm_rows(self._j0, self._j1, v[:, 0], v[:, 1])
+            r1 = self._rho[:, 0] + dt * (rate[:, 0] + a * e.max_null_rate * self._n[:, 0])
+            p = self._points[self._idx, k1]
+            r2, r3, _ = og.inverse_rows(r1, p[:, 0], p[:, 1], self.geometry)  # exact tracking
+            rho = np.stack([r1, r2, r3], -1)
+        self._rho = np.where(active[:, None], rho, self._rho)
+        self._k = k1
+        self._evaluate()
+
+    def _observe(self) -> np.ndarray:
+        k = self._k
+        nxt = np.minimum(k + 1, self._last)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            kap = np.where(self._kappa < 2.2e4, np.log(self._kappa), 10.0)
+        obs = np.concatenate([2 * (self._rho - self._lo) / (self._hi - self._lo) - 1, self._points[self._idx, k],
+                              self._points[self._idx, nxt], kap[:, None], self._n], axis=1)
+        return np.clip(np.nan_to_num(obs, nan=10.0), -10.0, 10.0).astype(np.float32)
+
+    def _reward(self) -> np.ndarray:
+        e = self.single_env
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = -np.log(self._kappa) - e.w_track * self._err / 0.01
+        return np.where(self._failed, -e.limit_penalty, r)
+
+    def _terminated(self) -> np.ndarray:
+        return self._failed | (self._k >= self._last)
+
+    def _infos(self) -> dict[str, Any]:
+        success = ~self._failed & (self._k >= self._last)
+        every = np.ones(self.num_envs, bool)
+        return {"kappa": self._kappa.copy(), "_kappa": every, "is_success": success, "_is_success": every}
+
+    def _load_single(self, i: int) -> None:
+        e = self.single_env
+        e.task, e._rho, e._k = self._tasks[i], self._rho[i].tolist(), int(self._k[i])

@@ -31,6 +31,12 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
     ),
 }
 
+#: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
+VECTOR_ENTRY_POINTS: dict[str, str] = {
+    "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
+}
+
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():
     if _env_id not in registry:
-        register(id=_env_id, entry_point=_entry, max_episode_steps=_steps)
+        register(id=_env_id, entry_point=_entry, max_episode_steps=_steps,
+                 vector_entry_point=VECTOR_ENTRY_POINTS.get(_env_id))

@@ -275,3 +275,58 @@ def least_norm_one(j0: list[float], j1: list[float], tx: float, ty: float) -> li
     det = m00 * m11 - m01 * m01
     w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
     return [j0[k] * w0 + j1[k] * w1 for k in range(3)]
+
+
+# --- many configurations, the same float formulas: the vector environment's per-step path ---
+
+
+def inverse_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`inverse_one` for arrays (N,): (rho2, rho3, reachable); NaN where out of reach."""
+    g = geometry
+    d0, d1 = _dir_one(g)
+    cx = g.table_origin[0] + rho1 * d0 + px
+    cy = g.table_origin[1] + rho1 * d1 + py
+    inside = (np.abs(cx) < g.link) & (np.abs(cy) < g.link)
+    with np.errstate(invalid="ignore"):
+        sx, sy = np.sqrt(g.link ** 2 - cy * cy), np.sqrt(g.link ** 2 - cx * cx)
+    r2 = np.where(inside, cx - sx - g.slider2_origin, np.nan)
+    r3 = np.where(inside, cy - sy - g.slider3_origin, np.nan)
+    return r2, r3, inside & (sx * sy - cy * cx > 0)
+
+
+def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`jacobian_one` for arrays (N,): J's rows (N, 3) twice, kappa (N,)
+    (inf where J J^T is singular) and n (N, 3). Rows out of reach give NaN."""
+    g = geometry
+    d0, d1 = _dir_one(g)
+    cx = g.table_origin[0] + rho1 * d0 + px
+    cy = g.table_origin[1] + rho1 * d1 + py
+    with np.errstate(invalid="ignore", divide="ignore"):
+        sx, sy = np.sqrt(g.link ** 2 - cy * cy), np.sqrt(g.link ** 2 - cx * cx)
+        r4x, r4y = sx / g.link, cy / g.link
+        r5x, r5y = cx / g.link, sy / g.link
+        b00, b10 = -(r4x * d0 + r4y * d1), -(r5x * d0 + r5y * d1)
+        det = r4x * r5y - r4y * r5x
+        i00, i01, i10, i11 = r5y / det, -r4y / det, -r5x / det, r4x / det
+        j0 = np.stack([i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y], -1)
+        j1 = np.stack([i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y], -1)
+        m00, m11 = (j0 * j0).sum(-1), (j1 * j1).sum(-1)
+        m01 = (j0 * j1).sum(-1)
+        half = 0.5 * (m00 + m11)
+        disc = np.sqrt(np.maximum(half * half - (m00 * m11 - m01 * m01), 0.0))
+        kap = np.where(half - disc > 0, np.sqrt((half + disc) / (half - disc)), np.inf)
+        n = np.cross(j0, j1)
+        norm = np.sqrt((n * n).sum(-1)) * np.where(n[:, 0] < 0, -1.0, 1.0)
+        n = n / norm[:, None]
+    return j0, j1, kap, n
+
+
+def least_norm_rows(j0: np.ndarray, j1: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
+    """:func:`least_norm_one` for arrays: J^+ t_dot (N, 3)."""
+    m00, m11 = (j0 * j0).sum(-1), (j1 * j1).sum(-1)
+    m01 = (j0 * j1).sum(-1)
+    det = m00 * m11 - m01 * m01
+    w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
+    return j0 * w0[:, None] + j1 * w1[:, None]

@@ -1,0 +1,150 @@
+"""The base of paragym's native vector environments: N robots per numpy call.
+
+``gymnasium.make_vec(ENV_ID, num_envs=N, vectorization_mode="vector_entry_point")``
+returns one of these. It runs the same task as the single env, with the same
+numbers: for the same seeds its observations, rewards, terminations and
+truncations equal those of ``SyncVectorEnv`` over single envs (to 1e-9,
+tested for every task). Each robot keeps its own ``np.random.Generator``
+seeded as the single env seeds its own (``reset(seed=s)`` gives robot i the
+seed ``s + i``, as gymnasium's vector envs do), and draws from it in the same
+order, so scenarios and noise agree.
+
+Autoreset: gymnasium 1.x's ``NEXT_STEP`` mode, as ``SyncVectorEnv``: the step
+after a robot's episode ends resets that robot (its action is ignored; its
+reward is 0 and its termination and truncation flags are False). The time
+limit of the registration (``max_episode_steps``) truncates as ``TimeLimit``.
+
+Only resets (a new scenario per robot) loop over robots; a step is array
+operations on all of them. PyBullet stays the renderer: ``render()`` draws
+robot ``render_index`` in the single env's scene.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+__all__ = ["ParagymVectorEnv"]
+
+
+class ParagymVectorEnv(VectorEnv):
+    """Shared reset/step/render; tasks fill the hooks.
+
+    Hooks (``rows`` are integer indices of robots): ``_reset_rows(rows, options)``,
+    ``_apply(actions, active)`` (``active``: the boolean mask of robots that step),
+    ``_observe() -> (N, obs)``, ``_reward() -> (N,)``, ``_terminated() -> (N,)``,
+    ``_infos() -> dict of (N,) arrays``, ``_load_single(i)`` (put robot i's state
+    into ``self.single_env`` for rendering).
+    """
+
+    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
+
+    def __init__(self, num_envs: int, single_env: Any, max_episode_steps: int | None = None,
+                 render_index: int = 0) -> None:
+        if not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer; got {num_envs!r}")
+        if not 0 <= render_index < num_envs:
+            raise ValueError(f"render_index must lie in [0, {num_envs - 1}]; got {render_index!r}")
+        self.num_envs = int(num_envs)
+        self.single_env = single_env
+        self.render_mode = single_env.render_mode
+        self.render_index = int(render_index)
+        self.single_observation_space = single_env.observation_space
+        self.single_action_space = single_env.action_space
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.max_episode_steps = max_episode_steps
+        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self._elapsed = np.zeros(self.num_envs, np.int64)
+        self._autoreset = np.zeros(self.num_envs, bool)
+        self._started = False
+
+    # --- the loop ---------------------------------------------------------------------
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        if seed is None:
+            seeds: list[int | None] = [None] * self.num_envs
+        elif isinstance(seed, int | np.integer):
+            seeds = [int(seed) + i for i in range(self.num_envs)]
+        else:
+            seeds = list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be an int, None or a list of {self.num_envs} seeds; got {len(seeds)}")
+        for i, s in enumerate(seeds):
+            if s is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(s)
+        rows = np.arange(self.num_envs)
+        self._reset_rows(rows, dict(options or {}))
+        self._elapsed[:] = 0
+        self._autoreset[:] = False
+        self._started = True
+        return self._observe(), self._infos()
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if not self._started:
+            raise RuntimeError("call reset() before step()")
+        actions = self._check_actions(actions)
+        resetting = np.flatnonzero(self._autoreset)
+        active = ~self._autoreset
+        self._apply(actions, active)
+        if resetting.size:
+            self._reset_rows(resetting, {})
+        obs, reward, terminated = self._observe(), self._reward(), self._terminated()
+        self._elapsed += active
+        self._elapsed[resetting] = 0
+        truncated = (self._elapsed >= self.max_episode_steps if self.max_episode_steps is not None
+                     else np.zeros(self.num_envs, bool))
+        reward[resetting] = 0.0
+        terminated[resetting] = False
+        truncated[resetting] = False
+        self._autoreset = terminated | truncated
+        return obs, reward, terminated, truncated, self._infos()
+
+    def render(self) -> np.ndarray | None:
+        """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
+        if self.render_mode != "rgb_array":
+            return None
+        self._load_single(self.render_index)
+        return self.single_env.render()
+
+    def close_extras(self, **kwargs: Any) -> None:
+        self.single_env.close()
+
+    # --- input check --------------------------------------------------------------------
+    def _check_actions(self, actions: np.ndarray) -> np.ndarray:
+        arr = np.asarray(actions, dtype=np.float64)
+        want = (self.num_envs, *self.single_action_space.shape)
+        if arr.shape != want:
+            raise ValueError(f"actions must have shape {want} (one row per robot); got {arr.shape}")
+        bad = ~np.isfinite(arr.reshape(self.num_envs, -1)).all(axis=1)
+        if bad.any():
+            rows = np.flatnonzero(bad)
+            raise ValueError(f"actions must be finite; row {rows[0]} is {arr[rows[0]]}"
+                             + (f" ({len(rows)} rows are not: {rows[:10].tolist()}...)" if len(rows) > 1 else ""))
+        return arr
+
+    # --- hooks --------------------------------------------------------------------------
+    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
+        raise NotImplementedError
+
+    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
+        raise NotImplementedError
+
+    def _observe(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _reward(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _terminated(self) -> np.ndarray:
+        raise NotImplementedError
+
+    def _infos(self) -> dict[str, Any]:
+        return {}
+
+    def _load_single(self, i: int) -> None:
+        raise NotImplementedError
