@@ -9,10 +9,12 @@ import numpy as np
 from gymnasium import spaces
 
 from paragym.envs.base import ParagymEnv
+from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
 from paragym.trajectories import nominal_path
 
-__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "hybrid_paper_scenario", "hybrid_random_scenario"]
+__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
+           "hybrid_random_scenario"]
 
 MM = 1e-3
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
@@ -237,3 +239,106 @@ class HybridSingularityFreeEnv(ParagymEnv):
 
     def _close(self) -> None:
         self._close_render_scene()
+
+
+class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
+    one batched :func:`paragym.mechanisms.hybrid.solve` (nine legs, two
+    singularity measures) per step for all robots (:mod:`paragym.envs.vector`;
+    the same numbers as the single env). Keyword arguments are the single env's."""
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        super().__init__(num_envs, HybridSingularityFreeEnv(**kwargs), max_episode_steps, render_index)
+        e = self.single_env
+        self.geometry = e.geometry
+        self._u = nominal_path(np.zeros(6), np.zeros(6), e.tau)[0]
+        self._last = len(self._u) - 1
+        n = self.num_envs
+        self._idx = np.arange(n)
+        self._nominal = np.zeros((n, len(self._u), 6))
+        self._k = np.zeros(n, np.int64)
+        self._delta, self._d_delta = np.full(n, 0.5), np.zeros(n)
+        self._offset = np.zeros((n, 3))
+        self._all_free = np.ones(n, bool)
+        self._scenarios: list[HybridScenario | None] = [None] * n
+
+    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
+        e = self.single_env
+        choice = options.get("scenario", e.scenario_arg)
+        e._check_scenario(choice)
+        for i in rows:
+            if choice == "random":
+                scenario = hybrid_random_scenario(self._rngs[i], self.geometry)
+            elif choice == "paper":
+                scenario = hybrid_paper_scenario(self.geometry)
+            else:
+                scenario = choice
+            self._scenarios[i] = scenario
+            self._nominal[i] = nominal_path(np.array(scenario.p0), np.array(scenario.p1), e.tau)[1]
+        self._k[rows] = 0
+        self._delta[rows], self._d_delta[rows] = 0.5, 0.0
+        self._offset[rows] = 0.0
+        self._all_free[rows] = True
+        self._evaluate(rows)
+
+    def _evaluate(self, rows: np.ndarray | slice) -> None:
+        """The legs and the measures of ``rows`` (all robots after a step)."""
+        if isinstance(rows, slice):
+            self._pose = self._nominal[self._idx, self._k].copy()
+            self._pose[:, :3] += self._offset
+            state = hybrid.solve(self._pose, self._delta, self.geometry, validate=False)
+            self._lengths, self._mu_h, self._mu_t = state.lengths, state.mu_hexapod, state.mu_tripod
+            self._free = state.free
+        else:
+            if not hasattr(self, "_lengths"):
+                self._lengths, self._pose = np.zeros((self.num_envs, 9)), np.zeros((self.num_envs, 6))
+                self._mu_h, self._mu_t = np.zeros(self.num_envs), np.zeros(self.num_envs)
+                self._free = np.zeros(self.num_envs, bool)
+            pose = self._nominal[rows, self._k[rows]].copy()
+            pose[:, :3] += self._offset[rows]
+            state = hybrid.solve(pose, self._delta[rows], self.geometry, validate=False)
+            self._pose[rows], self._lengths[rows] = pose, state.lengths
+            self._mu_h[rows], self._mu_t[rows], self._free[rows] = state.mu_hexapod, state.mu_tripod, state.free
+        self._all_free &= self._free
+
+    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
+        e = self.single_env
+        a = np.clip(actions, -1.0, 1.0)
+        new_delta = np.clip(self._delta + a[:, 0] * e.max_delta_step, 0.0, 1.0)
+        self._d_delta = np.where(active, new_delta - self._delta, self._d_delta)
+        self._delta = np.where(active, new_delta, self._delta)
+        k = np.where(active, np.minimum(self._k + 1, self._last), self._k)
+        offset = np.where((k == self._last)[:, None], 0.0, a[:, 1:] * e.j_bar)
+        self._offset = np.where(active[:, None], offset, self._offset)
+        self._k = k
+        self._evaluate(slice(None))
+
+    def _observe(self) -> np.ndarray:
+        g, e = self.geometry, self.single_env
+        nxt = np.minimum(self._k + 1, self._last)
+        strokes = 2 * (self._lengths - g.l_min) / (g.l_max - g.l_min) - 1
+        obs = np.concatenate([self._u[self._k][:, None], self._nominal[self._idx, self._k] / POSE_SCALE,
+                              self._nominal[self._idx, nxt] / POSE_SCALE, self._delta[:, None], strokes,
+                              self._mu_h[:, None], self._mu_t[:, None], self._offset / e.j_bar], axis=1)
+        return np.clip(obs, -10.0, 10.0).astype(np.float32)
+
+    def _reward(self) -> np.ndarray:
+        g, e = self.geometry, self.single_env
+        thr = 2 * g.singularity_threshold
+        close = np.maximum(0.0, thr - self._mu_h) / thr + np.maximum(0.0, thr - self._mu_t) / thr
+        out = np.sum((self._lengths < g.l_min) | (self._lengths > g.l_max), axis=1)
+        return (-e.w_offset * np.sqrt((self._offset ** 2).sum(axis=1)) / e.j_bar
+                - e.w_delta * np.abs(self._d_delta) / e.max_delta_step - e.w_singular * close - e.w_limit * out)
+
+    def _terminated(self) -> np.ndarray:
+        return self._k >= self._last
+
+    def _infos(self) -> dict[str, Any]:
+        every = np.ones(self.num_envs, bool)
+        return {"is_success": self._terminated() & self._all_free, "_is_success": every,
+                "free": self._free.copy(), "_free": every}
+
+    def _load_single(self, i: int) -> None:
+        e = self.single_env
+        e._pose, e._delta = self._pose[i].copy(), float(self._delta[i])
