@@ -9,10 +9,11 @@ import numpy as np
 from gymnasium import spaces
 
 from paragym.envs.base import ParagymEnv
+from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.tripod_drive import DriveScenario, Terrain, TripodDrive
 
-__all__ = ["MobileTripodOdometryEnv", "drive_scenario"]
+__all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
 SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
 OBS_SIZE = 9 + 3 + 3 + 6
@@ -173,3 +174,146 @@ class MobileTripodOdometryEnv(ParagymEnv):
 
     def _close(self) -> None:
         self._close_render_scene()
+
+
+MAX_BUMPS = 8  # the most bumps a built-in scenario has (rough_terrain)
+
+
+class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryEnv` stepped together:
+    the drives (unicycle units, slope, slip, pushes, terrain), the encoders
+    (a batched Newton solve of eq 4 = eq 5) and the estimates, for all robots
+    in numpy (:mod:`paragym.envs.vector`; the same numbers as the single env).
+    Each reset builds the robot's :class:`TripodDrive` (which draws the drive's
+    random numbers) and copies its state in. Scenarios with more than eight
+    terrain bumps are refused."""
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        super().__init__(num_envs, MobileTripodOdometryEnv(**kwargs), max_episode_steps, render_index)
+        n = self.num_envs
+        self.geometry = self.single_env.geometry
+        self._drives: list[TripodDrive | None] = [None] * n
+        self._steps = np.zeros(n, np.int64)
+        self._k = np.zeros(n, np.int64)
+        self._t = np.zeros(n)
+        self._speed, self._heading = np.zeros(n), np.zeros(n)
+        self._heading_error = np.zeros((n, 3))
+        self._push = np.full((n, 3), np.nan)  # unit, time, depth (NaN: none)
+        self._bumps = np.zeros((n, MAX_BUMPS, 2))
+        self._bump_height = np.zeros((n, MAX_BUMPS))
+        self._bump_width = np.ones((n, MAX_BUMPS))
+        self._true, self._odometry, self._estimate = np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3))
+        self._gradient = np.zeros((n, 3, 2))
+        self._eta_true, self._eta = np.zeros((n, 3)), np.zeros((n, 3))
+        self._noise: np.ndarray | None = None
+        self._slip_angle: np.ndarray | None = None
+        self._slip_speed: np.ndarray | None = None
+
+    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
+        e = self.single_env
+        choice = options.get("scenario", e.scenario_arg)
+        for i in rows:
+            sc = drive_scenario(choice, self._rngs[i]) if isinstance(choice, str) else choice
+            if not isinstance(sc, DriveScenario):
+                raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
+            if len(sc.terrain.bumps) > MAX_BUMPS:
+                raise ValueError(f"the vector env takes at most {MAX_BUMPS} terrain bumps; got {len(sc.terrain.bumps)}")
+            drive = TripodDrive(sc, self._rngs[i], self.geometry, encoder_noise=e.encoder_noise)
+            if self._noise is None:  # the first drive sets the length of the noise arrays
+                self._dt = drive.dt
+                self._noise = np.zeros((self.num_envs, drive.steps + 1, 3))
+                self._slip_angle, self._slip_speed = np.zeros_like(self._noise), np.zeros_like(self._noise)
+            if drive.steps + 1 != self._noise.shape[1] or drive.dt != self._dt:
+                raise ValueError(f"every drive must have {self._noise.shape[1]} samples at {1 / self._dt:g} Hz; "
+                                 f"got {drive.steps + 1} at {1 / drive.dt:g} Hz")
+            self._drives[i] = drive
+            self._steps[i], self._k[i], self._t[i] = drive.steps, 0, drive.t
+            self._speed[i], self._heading[i], self._heading_error[i] = sc.speed, sc.heading, sc.heading_error
+            self._push[i] = sc.push if sc.push is not None else (np.nan, np.nan, np.nan)
+            b = np.array(sc.terrain.bumps, float).reshape(-1, 4)
+            self._bumps[i], self._bump_height[i], self._bump_width[i] = 0.0, 0.0, 1.0
+            self._bumps[i, :len(b)], self._bump_height[i, :len(b)] = b[:, :2], b[:, 2]
+            self._bump_width[i, :len(b)] = 2 * b[:, 3] ** 2
+            self._true[i], self._odometry[i], self._gradient[i] = drive.true, drive.odometry, drive._gradient
+            self._eta_true[i] = drive.eta
+            self._noise[i, :drive.steps + 1] = drive.noise
+            if sc.slip > 0:
+                self._slip_angle[i, :drive.steps], self._slip_speed[i, :drive.steps] = drive.slip_angle, \
+                    drive.slip_speed
+            else:
+                self._slip_speed[i] = 0.0
+            self._eta[i] = drive.encoders
+            self._estimate[i] = drive.odometry
+        self._errors()
+
+    def _terrain(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Heights (N, M) and gradients (N, M, 2) at points (N, M, 2) of each robot's terrain."""
+        rel = xy[:, :, None, :] - self._bumps[:, None]
+        each = self._bump_height[:, None] * np.exp(-np.sum(rel * rel, axis=-1) / self._bump_width[:, None])
+        return each.sum(axis=-1), np.sum((-2.0 * each / self._bump_width[:, None])[..., None] * rel, axis=-2)
+
+    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
+        dt, idx, k = self._dt, np.arange(self.num_envs), np.minimum(self._k, self._steps - 1)
+        believed = np.stack([np.cos(self._heading), np.sin(self._heading)], -1)
+        odo = (self._speed * dt)[:, None] * believed  # (N, 2), the same for the three units
+        ang = self._heading[:, None] + self._heading_error
+        true_dir = np.stack([np.cos(ang), np.sin(ang)], -1)
+        slope = np.sum(self._gradient * true_dir, axis=-1)
+        move = (self._speed[:, None] * dt / np.sqrt(1.0 + slope * slope))[..., None] * true_dir
+        a = self._slip_angle[idx, k]
+        move += (self._slip_speed[idx, k] * dt)[..., None] * np.stack([np.cos(a), np.sin(a)], -1)
+        pushed = active & (self._t < self._push[:, 1]) & (self._push[:, 1] <= self._t + dt)
+        for i in np.flatnonzero(pushed):  # at most one step per drive
+            unit, depth = int(self._push[i, 0]), self._push[i, 2]
+            inward = self._true[i, :, :2].mean(axis=0) - self._true[i, unit, :2]
+            move[i, unit] += depth * inward / np.linalg.norm(inward)
+        live = active[:, None, None]
+        self._true[:, :, :2] = np.where(live[..., :1], self._true[:, :, :2] + move, self._true[:, :, :2])
+        self._odometry[:, :, :2] = np.where(live[..., :1], self._odometry[:, :, :2] + odo[:, None],
+                                            self._odometry[:, :, :2])
+        heights, gradient = self._terrain(np.concatenate([self._true[:, :, :2], self._odometry[:, :, :2]], axis=1))
+        self._true[:, :, 2] = np.where(active[:, None], heights[:, :3], self._true[:, :, 2])
+        self._odometry[:, :, 2] = np.where(active[:, None], heights[:, 3:], self._odometry[:, :, 2])
+        self._gradient = np.where(live, gradient[:, :3], self._gradient)
+        self._t = np.where(active, self._t + dt, self._t)
+        rows = np.flatnonzero(active)
+        self._eta_true[rows] = mt.eta_rows(self._true[rows], self._eta_true[rows], self.geometry)
+        self._k = np.where(active, self._k + 1, self._k)
+        e = self.single_env
+        est = self._estimate[:, :, :2] + odo[:, None] + np.clip(actions, -1, 1).reshape(-1, 3, 2) * e.max_correction
+        self._estimate[:, :, :2] = np.where(live[..., :1], est, self._estimate[:, :, :2])
+        est_z, _ = self._terrain(self._estimate[:, :, :2])
+        self._estimate[:, :, 2] = np.where(active[:, None], est_z, self._estimate[:, :, 2])
+        self._eta = np.where(active[:, None], self._eta_true + self._noise[idx, self._k], self._eta)
+        self._errors()
+
+    def _errors(self) -> None:
+        diff = self._estimate[:, :, :2] - self._true[:, :, :2]
+        self._unit_error = np.sqrt((diff * diff).sum(axis=-1)).mean(axis=1)
+        centre = diff.sum(axis=1) / 3.0
+        self._plate_error = np.hypot(centre[:, 0], centre[:, 1])
+
+    def _observe(self) -> np.ndarray:
+        obs = np.concatenate([self._odometry.reshape(-1, 9) / POS_SCALE, self._eta, self._speed[:, None],
+                              np.cos(self._heading)[:, None], np.sin(self._heading)[:, None],
+                              self._estimate[:, :, :2].reshape(-1, 6) / POS_SCALE], axis=1)
+        return np.clip(obs, -100, 100).astype(np.float32)
+
+    def _reward(self) -> np.ndarray:
+        return -10.0 * (self._unit_error + self._plate_error)
+
+    def _terminated(self) -> np.ndarray:
+        return self._k >= self._steps
+
+    def _infos(self) -> dict[str, Any]:
+        every = np.ones(self.num_envs, bool)
+        return {"unit_error": self._unit_error.copy(), "_unit_error": every,
+                "is_success": self._terminated() & (self._unit_error < self.single_env.success_error),
+                "_is_success": every}
+
+    def _load_single(self, i: int) -> None:
+        e = self.single_env
+        drive = self._drives[i]
+        drive.true, drive.eta = self._true[i].copy(), self._eta_true[i].copy()
+        e.scenario, e.drive = drive.scenario, drive

@@ -35,6 +35,7 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
 VECTOR_ENTRY_POINTS: dict[str, str] = {
     "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
+    "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

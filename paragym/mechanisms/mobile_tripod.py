@@ -218,3 +218,43 @@ def encoder_distances_one(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GE
     pts = [((base + g.r * math.cos(e)) * math.cos(a), (base + g.r * math.cos(e)) * math.sin(a), -g.r * math.sin(e))
            for e, a in zip(eta, g.alphas, strict=True)]
     return [math.dist(pts[(i - 1) % 3], pts[(i + 1) % 3]) for i in range(3)]
+
+
+def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY,
+             tol: float = 1e-13) -> np.ndarray:
+    """:func:`eta_one` for N configurations (N, 3, 3) from guesses (N, 3): the
+    same Newton iteration, each row stopping where :func:`eta_one` would."""
+    g = geometry
+    ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
+    base, r = g.p / math.sqrt(3), g.r
+    prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])  # (i - 1) % 3 and (i + 1) % 3
+    target = np.sqrt(np.sum((units[:, prev] - units[:, nxt]) ** 2, axis=-1))
+    eta = np.array(eta0, float)
+    active = np.arange(len(eta))
+    for _ in range(50):
+        e = eta[active]
+        se, ce = np.sin(e), np.cos(e)
+        reach = base + r * ce
+        d = np.stack([reach * ca, reach * sa, -r * se], -1)
+        dd = np.stack([-r * se * ca, -r * se * sa, -r * ce], -1)
+        diff = d[:, prev] - d[:, nxt]
+        length = np.sqrt(np.sum(diff * diff, axis=-1))
+        res = length - target[active]
+        done = np.max(np.abs(res), axis=1) < tol
+        if done.all():
+            break
+        rows = np.arange(len(active))
+        jac = np.zeros((len(active), 3, 3))
+        jac[:, [0, 1, 2], prev] = np.sum(diff * dd[:, prev], axis=-1) / length
+        jac[:, [0, 1, 2], nxt] = -np.sum(diff * dd[:, nxt], axis=-1) / length
+        keep = ~done
+        j, res, rows = jac[keep], res[keep], rows[keep]
+        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = (j[:, i].T for i in range(3))
+        det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
+        inv = np.stack([np.stack([j11 * j22 - j12 * j21, j02 * j21 - j01 * j22, j01 * j12 - j02 * j11], -1),
+                        np.stack([j12 * j20 - j10 * j22, j00 * j22 - j02 * j20, j02 * j10 - j00 * j12], -1),
+                        np.stack([j10 * j21 - j11 * j20, j01 * j20 - j00 * j21, j00 * j11 - j01 * j10], -1)], 1)
+        idx = active[rows]
+        eta[idx] = e[rows] - np.einsum("nkm,nm->nk", inv, res) / det[:, None]
+        active = idx
+    return eta

@@ -8,6 +8,10 @@ the unit believes it has — and so is blind to all of them. The plate's true
 pose and the encoder angles eta follow from the units' true positions by the
 forward kinematics (:mod:`paragym.mechanisms.mobile_tripod`); the encoders
 add uniform noise of +-``encoder_noise``. Sampled at ``rate`` (20 Hz). The
+drive's random numbers (the encoder noise of every sample, the slip of
+every step) are drawn when it starts, in a fixed order, so that a drive
+depends only on its generator's state (and the vector env, which draws the
+same arrays per robot, reproduces it exactly). The
 terrain is flat or bumpy (a sum of Gaussian bumps and holes); PyBullet draws
 it as a heightfield with the robot (:class:`TripodScene`).
 """
@@ -115,6 +119,12 @@ class TripodDrive:
         self.odometry = self.true.copy()
         self.t = 0.0
         self.steps = int(round(scenario.duration * rate))
+        self.k = 0
+        # the whole drive's random numbers, in this order: encoder noise per sample, slip per step
+        self.noise = rng.uniform(-encoder_noise, encoder_noise, (self.steps + 1, 3))
+        if scenario.slip > 0:
+            self.slip_angle = rng.uniform(0, 2 * np.pi, (self.steps, 3))
+            self.slip_speed = rng.uniform(0, scenario.slip, (self.steps, 3))
         self._pose()
 
     def _pose(self) -> None:
@@ -132,8 +142,8 @@ class TripodDrive:
 
     @property
     def encoders(self) -> np.ndarray:
-        """The measured eta (3,): the true angles plus uniform noise."""
-        return self.eta + self.rng.uniform(-self.encoder_noise, self.encoder_noise, 3)
+        """The measured eta (3,) of the current sample: the true angles plus uniform noise."""
+        return self.eta + self.noise[self.k]
 
     def step(self) -> np.ndarray:
         """Advance one sample; returns the odometric increments (3, 2) of the units."""
@@ -146,8 +156,8 @@ class TripodDrive:
         slope = np.sum(self._gradient * true_dir, axis=1)
         move = (sc.speed * dt / np.sqrt(1.0 + slope * slope))[:, None] * true_dir
         if sc.slip > 0:
-            a = self.rng.uniform(0, 2 * np.pi, 3)
-            move += (self.rng.uniform(0, sc.slip, 3) * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
+            a = self.slip_angle[self.k]
+            move += (self.slip_speed[self.k] * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
         if sc.push is not None and self.t < sc.push[1] <= self.t + dt:
             unit, _, depth = sc.push
             inward = self.true[:, :2].mean(axis=0) - self.true[unit, :2]  # toward the robot's centre
@@ -159,5 +169,6 @@ class TripodDrive:
                                                                                self.odometry[:, :2]]))
             self.true[:, 2], self.odometry[:, 2], self._gradient = heights[:3], heights[3:], gradient[:3]
         self.t += dt
+        self.k += 1
         self._pose()
         return odo
