@@ -203,6 +203,7 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         self._bumps = np.zeros((n, MAX_BUMPS, 2))
         self._bump_height = np.zeros((n, MAX_BUMPS))
         self._bump_width = np.ones((n, MAX_BUMPS))
+        self._n_bumps = np.zeros(n, np.int64)
         self._true, self._odometry, self._estimate = np.zeros((n, 3, 3)), np.zeros((n, 3, 3)), np.zeros((n, 3, 3))
         self._gradient = np.zeros((n, 3, 2))
         self._eta_true, self._eta = np.zeros((n, 3)), np.zeros((n, 3))
@@ -235,6 +236,7 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
             self._bumps[i], self._bump_height[i], self._bump_width[i] = 0.0, 0.0, 1.0
             self._bumps[i, :len(b)], self._bump_height[i, :len(b)] = b[:, :2], b[:, 2]
             self._bump_width[i, :len(b)] = 2 * b[:, 3] ** 2
+            self._n_bumps[i] = len(b)
             self._true[i], self._odometry[i], self._gradient[i] = drive.true, drive.odometry, drive._gradient
             self._eta_true[i] = drive.eta
             self._noise[i, :drive.steps + 1] = drive.noise
@@ -248,10 +250,24 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         self._errors()
 
     def _terrain(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Heights (N, M) and gradients (N, M, 2) at points (N, M, 2) of each robot's terrain."""
-        rel = xy[:, :, None, :] - self._bumps[:, None]
-        each = self._bump_height[:, None] * np.exp(-np.sum(rel * rel, axis=-1) / self._bump_width[:, None])
-        return each.sum(axis=-1), np.sum((-2.0 * each / self._bump_width[:, None])[..., None] * rel, axis=-2)
+        """Heights (N, M) and gradients (N, M, 2) at points (N, M, 2) of each
+        robot's terrain: only robots with bumps, one bump column at a time
+        (the sums in the single env's order)."""
+        heights, gradient = np.zeros(xy.shape[:2]), np.zeros(xy.shape)
+        rows = np.flatnonzero(self._n_bumps)
+        if rows.size:
+            x, y = xy[rows, :, 0], xy[rows, :, 1]
+            h, gx, gy = np.zeros(x.shape), np.zeros(x.shape), np.zeros(x.shape)
+            for b in range(int(self._n_bumps[rows].max())):
+                dx, dy = x - self._bumps[rows, b, :1], y - self._bumps[rows, b, 1:]
+                width = self._bump_width[rows, b, None]
+                each = self._bump_height[rows, b, None] * np.exp(-(dx * dx + dy * dy) / width)
+                h += each
+                c = -2.0 * each / width
+                gx += c * dx
+                gy += c * dy
+            heights[rows], gradient[rows, :, 0], gradient[rows, :, 1] = h, gx, gy
+        return heights, gradient
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
         dt, idx, k = self._dt, np.arange(self.num_envs), np.minimum(self._k, self._steps - 1)

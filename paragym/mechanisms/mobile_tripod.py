@@ -243,18 +243,20 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
         done = np.max(np.abs(res), axis=1) < tol
         if done.all():
             break
-        rows = np.arange(len(active))
-        jac = np.zeros((len(active), 3, 3))
-        jac[:, [0, 1, 2], prev] = np.sum(diff * dd[:, prev], axis=-1) / length
-        jac[:, [0, 1, 2], nxt] = -np.sum(diff * dd[:, nxt], axis=-1) / length
         keep = ~done
-        j, res, rows = jac[keep], res[keep], rows[keep]
-        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = (j[:, i].T for i in range(3))
+        diff, dd, e, res, length = diff[keep], dd[keep], e[keep], res[keep], length[keep]
+        # row i of the Jacobian: d length_i / d eta at prev[i] (a) and nxt[i] (b); zero on the diagonal
+        a = np.sum(diff * dd[:, prev], axis=-1) / length
+        b = -np.sum(diff * dd[:, nxt], axis=-1) / length
+        j00, j01, j02 = 0.0, b[:, 0], a[:, 0]
+        j10, j11, j12 = a[:, 1], 0.0, b[:, 1]
+        j20, j21, j22 = b[:, 2], a[:, 2], 0.0
         det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
-        inv = np.stack([np.stack([j11 * j22 - j12 * j21, j02 * j21 - j01 * j22, j01 * j12 - j02 * j11], -1),
-                        np.stack([j12 * j20 - j10 * j22, j00 * j22 - j02 * j20, j02 * j10 - j00 * j12], -1),
-                        np.stack([j10 * j21 - j11 * j20, j01 * j20 - j00 * j21, j00 * j11 - j01 * j10], -1)], 1)
-        idx = active[rows]
-        eta[idx] = e[rows] - np.einsum("nkm,nm->nk", inv, res) / det[:, None]
-        active = idx
+        r0, r1, r2 = res[:, 0], res[:, 1], res[:, 2]
+        step = np.stack([(j11 * j22 - j12 * j21) * r0 + (j02 * j21 - j01 * j22) * r1 + (j01 * j12 - j02 * j11) * r2,
+                         (j12 * j20 - j10 * j22) * r0 + (j00 * j22 - j02 * j20) * r1 + (j02 * j10 - j00 * j12) * r2,
+                         (j10 * j21 - j11 * j20) * r0 + (j01 * j20 - j00 * j21) * r1 + (j00 * j11 - j01 * j10) * r2],
+                        -1)
+        active = active[keep]
+        eta[active] = e - step / det[:, None]
     return eta
