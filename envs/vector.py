@@ -104,6 +104,17 @@ class ParagymVectorEnv(VectorEnv):
         self._autoreset = terminated | truncated
         return obs, reward, terminated, truncated, self._infos()
 
+    def reset_done(self) -> tuple[np.ndarray, np.ndarray]:
+        """Reset now the robots whose episode ended at the last step (instead
+        of at the next one): gymnasium's SAME_STEP view, which Stable-Baselines3
+        expects. Returns their indices and their first observations."""
+        rows = np.flatnonzero(self._autoreset)
+        if rows.size:
+            self._reset_rows(rows, {})
+            self._elapsed[rows] = 0
+            self._autoreset[rows] = False
+        return rows, self._observe()[rows]
+
     def render(self) -> np.ndarray | None:
         """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
         if self.render_mode != "rgb_array":
