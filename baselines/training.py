@@ -193,13 +193,17 @@ def _count_parameters(model: Any) -> dict[str, int]:
 
 def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = "models",
           progress_bar: bool = True, threads: int = 1, force: bool = False, verbose: int = 0,
-          hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None) -> TrainResult:
+          hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None,
+          vectorized: bool = False, n_envs: int | None = None) -> TrainResult:
     """Train ``algo`` on ``env_id`` with ``seed`` for ``timesteps`` env steps
     (default: the yml's ``n_timesteps``) and save the model, its JSON and its
     curve. A finished run with the same timesteps is returned as it is
     (``skipped``) unless ``force``; an interrupted one resumes from its
     checkpoint. ``hyperparams`` override the yml's entries; ``callbacks``
-    (SB3 callbacks) run beside paragym's own."""
+    (SB3 callbacks) run beside paragym's own. ``vectorized`` trains on the
+    env's native vector env (:func:`paragym.baselines.sb3_vec.as_sb3_vecenv`)
+    instead of one env per copy; ``n_envs`` overrides the yml's number of
+    copies (robots)."""
     import torch
 
     env_id, algo = check_env_id(env_id), check_algo(algo)
@@ -217,9 +221,23 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
             return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
     torch.set_num_threads(int(threads))
 
+    if n_envs is not None:
+        if not isinstance(n_envs, int) or n_envs < 1:
+            raise ValueError(f"n_envs must be a positive integer; got {n_envs!r}")
+        hp["n_envs"] = n_envs
     n_envs = int(hp["n_envs"])
     env_kwargs = dict(hp.get("env_kwargs") or {})
-    env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
+    if vectorized:
+        from stable_baselines3.common.vec_env import VecMonitor
+
+        import paragym.baselines.sb3_vec as sb3_vec
+
+        if env_id not in paragym.VECTOR_ENTRY_POINTS:
+            raise ValueError(f"{env_id} has no native vector env yet; train without --vectorized")
+        env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, n_envs, **env_kwargs))
+        env.seed(int(seed))
+    else:
+        env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
     eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
     if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
         from stable_baselines3.common.vec_env import VecNormalize
@@ -253,6 +271,10 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
         model = cls(hp["policy"], env, seed=int(seed), device="cpu", verbose=verbose, **kwargs)
 
     callbacks = _make_callbacks(hp, eval_env, n_envs, files.checkpoints, curve, off_policy) + list(callbacks or [])
+    import warnings
+
+    # the evaluation env is plain on purpose (raw returns, one robot); SB3 warns when the types differ
+    warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
     t0 = time.perf_counter()
     remaining = max(0, total - resumed_from)
     if remaining:
@@ -265,6 +287,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     model.save(files.model)
     meta = {
         "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
+        "vectorized": bool(vectorized),
         "hyperparams": hp, "train_seconds": seconds, "steps_per_second": remaining / seconds if seconds else None,
         "parameters": _count_parameters(model), "model_bytes": files.model.stat().st_size,
         "versions": _versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",

@@ -390,7 +390,8 @@ def _cmd_train(args: argparse.Namespace) -> int:
     from paragym.baselines.training import train
 
     res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
-                progress_bar=not args.no_progress, threads=args.threads, force=args.force)
+                progress_bar=not args.no_progress, threads=args.threads, force=args.force,
+                vectorized=args.vectorized, n_envs=args.n_envs)
     meta = res.meta
     if res.skipped:
         print(f"{res.files.model} is already trained for {meta['timesteps']:,} steps (--force retrains)")
@@ -461,6 +462,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     p.add_argument("--force", action="store_true", help="retrain even if the model exists; ignore checkpoints")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.add_argument("--vectorized", action="store_true",
+                   help="train on the env's native vector env (N robots per numpy call)")
+    p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
     p.set_defaults(func=_cmd_train)
     p = sub.add_parser("leaderboard", help="evaluate every env x every policy on fixed seeds; resumable; writes "
                                            "LEADERBOARD.md, a CSV and a PNG per env")

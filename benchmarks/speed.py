@@ -1,0 +1,171 @@
+"""The speed report: single envs, gymnasium's vector modes, the native vector envs, PPO.
+
+One table, every figure measured in this run on this machine, random
+scenarios (each env's default), uniformly random actions drawn before the
+clock starts, resets included:
+
+* ``single``: ``gym.make(ENV_ID)`` (kinematic), one core;
+* ``sync 2`` / ``async 2``: ``gym.make_vec(ENV_ID, 2, vectorization_mode="sync" | "async")``;
+* ``native N``: ``gym.make_vec(ENV_ID, N, vectorization_mode="vector_entry_point")``
+  for N = 1, 64, 1024, 4096, one core. Each is timed over at least one full
+  episode of every robot (so that the autoresets are in the figure), after a
+  reset that is not;
+* PandaReach-v3 (panda-gym, when installed) as the anchor, and each figure's
+  ratio to it;
+* the peak resident memory of a fresh process that builds and steps the
+  native env at N = 4096;
+* PPO training throughput (env steps per second of ``model.learn``,
+  Stable-Baselines3, the yml's PPO settings with 64 copies): 64 single envs in
+  a DummyVecEnv against the native vector env with 64 robots.
+
+    python benchmarks/speed.py [--seconds 3] [--skip-ppo] [--envs ID ...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing as mp
+import os
+import resource
+import time
+
+import gymnasium as gym
+import numpy as np
+
+import paragym
+
+TARGET_4096 = {"paragym/Orthoglide2PRRKappa-v0": 1_000_000, "paragym/HybridSingularityFree-v0": 1_000_000,
+               "paragym/CaPaManCollisionFree-v0": 250_000, "paragym/MobileTripodOdometry-v0": 250_000}
+SIZES = (1, 64, 1024, 4096)
+
+
+def single_rate(env_id: str, seconds: float) -> float:
+    """Steps/s of ``gym.make(env_id)`` (any vectorisation mode's sub-env)."""
+    env = gym.make(env_id)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(1000)]
+    steps, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        _, _, terminated, truncated, _ = env.step(actions[steps % 1000])
+        steps += 1
+        if terminated or truncated:
+            env.reset()
+    rate = steps / (time.perf_counter() - t0)
+    env.close()
+    return rate
+
+
+def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0) -> float:
+    """Robot-steps/s of a vector env over at least ``seconds`` and ``min_steps`` batch steps."""
+    env.reset(seed=0)
+    rng = np.random.default_rng(0)
+    space = env.action_space
+    actions = rng.uniform(space.low, space.high, (8, *space.shape)).astype(space.dtype)
+    steps, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds or steps < min_steps:
+        env.step(actions[steps % 8])
+        steps += 1
+    return steps * env.num_envs / (time.perf_counter() - t0)
+
+
+def _native(env_id: str, n: int, seconds: float, queue: mp.Queue) -> None:
+    """In a fresh process: the native env's rate at ``n`` robots and the process's peak RSS (MiB)."""
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
+    env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
+    episode = paragym.ENVIRONMENTS[env_id][1]
+    rate = vector_rate(env, seconds, min_steps=episode + 1 if n > 1 else 0)
+    queue.put((rate, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+
+
+def native_rate(env_id: str, n: int, seconds: float) -> tuple[float, float]:
+    ctx = mp.get_context("spawn")
+    queue = ctx.Queue()
+    proc = ctx.Process(target=_native, args=(env_id, n, seconds, queue))
+    proc.start()
+    out = queue.get()
+    proc.join()
+    return out
+
+
+def ppo_rate(env_id: str, vectorized: bool, steps: int = 16_384, n_envs: int = 64) -> float:
+    """Env steps/s during ``PPO.learn`` (one torch thread)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from paragym.baselines.sb3_vec import as_sb3_vecenv
+    from paragym.baselines.training import PARAGYM_KEYS, load_hyperparams
+
+    torch.set_num_threads(1)
+    hp = load_hyperparams("ppo", env_id)
+    kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
+    kwargs.update(n_steps=64, batch_size=1024)
+    env = as_sb3_vecenv(env_id, n_envs) if vectorized else make_vec_env(env_id, n_envs=n_envs, seed=0)
+    model = PPO("MlpPolicy", env, seed=0, device="cpu", **kwargs)
+    model.learn(n_envs * 64)  # warm-up: one rollout and one update
+    t0 = time.perf_counter()
+    model.learn(steps, reset_num_timesteps=False)
+    return steps / (time.perf_counter() - t0)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=3.0, help="least duration of each measurement")
+    parser.add_argument("--skip-ppo", action="store_true", help="leave out the PPO throughput")
+    parser.add_argument("--envs", nargs="*", default=list(paragym.ENVIRONMENTS), help="env ids to measure")
+    args = parser.parse_args()
+
+    anchor = None
+    try:
+        import panda_gym  # noqa: F401
+
+        anchor = single_rate("PandaReach-v3", args.seconds)
+    except ImportError:
+        print("panda-gym is not installed: no anchor (pip install panda-gym to add it)")
+
+    def fmt(rate: float | None) -> str:
+        if rate is None:
+            return "-"
+        return f"{rate:,.0f}" + (f" ({rate / anchor:,.0f}x)" if anchor else "")
+
+    header = ["environment", "single", "sync 2", "async 2"] + [f"native {n}" for n in SIZES] + [
+        "target @4096", "peak RSS @4096"]
+    rows = []
+    if anchor:
+        rows.append(["PandaReach-v3 (anchor)", f"{anchor:,.0f}"] + ["-"] * (len(header) - 2))
+    ppo = []
+    for env_id in args.envs:
+        name = env_id.split("/")[-1]
+        single = single_rate(env_id, args.seconds)
+        sync = vector_rate(gym.make_vec(env_id, 2, vectorization_mode="sync"), args.seconds)
+        asyn = gym.make_vec(env_id, 2, vectorization_mode="async")
+        a_rate = vector_rate(asyn, args.seconds)
+        asyn.close()
+        native, rss = [], "-"
+        if env_id in paragym.VECTOR_ENTRY_POINTS:
+            for n in SIZES:
+                rate, peak = native_rate(env_id, n, args.seconds)
+                native.append(fmt(rate))
+                rss = f"{peak:,.0f} MiB"
+        else:
+            native = ["no native env"] + ["-"] * (len(SIZES) - 1)
+        rows.append([name, fmt(single), fmt(sync), fmt(a_rate), *native, f"{TARGET_4096[env_id]:,}", rss])
+        print(" | ".join(rows[-1]), flush=True)
+        if not args.skip_ppo and env_id in paragym.VECTOR_ENTRY_POINTS:
+            ppo.append((name, ppo_rate(env_id, False), ppo_rate(env_id, True)))
+
+    widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
+    print("\nsteps/s (robot-steps/s for vector envs), one core; in brackets: ratio to PandaReach-v3\n")
+    for r in [header, ["-" * w for w in widths], *rows]:
+        print("  ".join(c.rjust(w) if i else c.ljust(w) for i, (c, w) in enumerate(zip(r, widths, strict=True))))
+    if ppo:
+        print("\nPPO training throughput (env steps/s in model.learn, 64 copies, one torch thread)\n")
+        print(f"{'environment':28s} {'64 single envs':>15s} {'native, 64 robots':>18s} {'ratio':>6s}")
+        for name, single, native in ppo:
+            print(f"{name:28s} {single:15,.0f} {native:18,.0f} {native / single:6.1f}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,132 @@
+"""Native vector envs: the same numbers as the single envs, autoreset, bad input, SB3."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import paragym
+
+NATIVE = sorted(paragym.VECTOR_ENTRY_POINTS)
+# (env id, env kwargs, batch steps): long enough for every robot to finish at least two episodes
+CASES = [
+    ("paragym/Orthoglide2PRRKappa-v0", {}, 2100),
+    ("paragym/Orthoglide2PRRKappa-v0", {"action_mode": "joint_velocity"}, 2100),
+    ("paragym/Orthoglide2PRRKappa-v0", {"scenario": "paper"}, 2100),
+    ("paragym/HybridSingularityFree-v0", {}, 230),
+    ("paragym/HybridSingularityFree-v0", {"scenario": "paper"}, 230),
+    ("paragym/MobileTripodOdometry-v0", {}, 1300),
+    ("paragym/MobileTripodOdometry-v0", {"scenario": "rough_terrain"}, 1300),
+]
+
+
+def _pair(env_id: str, n: int, **kwargs):
+    native = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    sync = gym.make_vec(env_id, num_envs=n, vectorization_mode="sync", **kwargs)
+    return native, sync
+
+
+@pytest.mark.parametrize(("env_id", "kwargs", "steps"), CASES, ids=lambda v: str(v)[-40:])
+def test_native_equals_single_over_full_episodes(env_id, kwargs, steps):
+    native, sync = _pair(env_id, 3, **kwargs)
+    obs_n, _ = native.reset(seed=11)
+    obs_s, _ = sync.reset(seed=11)
+    np.testing.assert_allclose(obs_n, obs_s, rtol=0, atol=1e-9)
+    rng = np.random.default_rng(3)
+    ended = 0
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, native.action_space.shape).astype(np.float32)
+        a, b = native.step(actions), sync.step(actions)
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=0, atol=1e-9)
+        ended += int(np.sum(a[2] | a[3]))
+    assert ended >= 6  # every robot went through an autoreset at least twice on average
+    native.close()
+    sync.close()
+
+
+def test_autoreset_is_next_step():
+    env = gym.make_vec("paragym/HybridSingularityFree-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    assert env.metadata["autoreset_mode"] == gym.vector.AutoresetMode.NEXT_STEP
+    env.reset(seed=0)
+    zero = np.zeros(env.action_space.shape, np.float32)
+    for step in range(1, 101):
+        obs, reward, terminated, truncated, _ = env.step(zero)
+    assert step == 100 and terminated.all() and truncated.all()  # u reaches 1 at the time limit
+    wild = np.ones(env.action_space.shape, np.float32)  # ignored: this step resets
+    obs, reward, terminated, truncated, _ = env.step(wild)
+    assert np.all(reward == 0) and not terminated.any() and not truncated.any()
+    assert np.allclose(obs[:, 0], 0.0) and np.allclose(obs[:, 13], 0.5)  # u = 0, Delta = 0.5 again
+    obs, *_ = env.step(zero)
+    assert np.allclose(obs[:, 0], 0.01)
+
+
+@pytest.mark.parametrize("env_id", list(paragym.ENVIRONMENTS))
+def test_make_vec_works_for_every_id(env_id):
+    for mode in ("sync", "async"):
+        env = gym.make_vec(env_id, num_envs=2, vectorization_mode=mode)
+        obs, _ = env.reset(seed=0)
+        obs, reward, *_ = env.step(np.zeros(env.action_space.shape, np.float32))
+        assert obs.shape == (2, *env.single_observation_space.shape) and reward.shape == (2,)
+        env.close()
+    if env_id in paragym.VECTOR_ENTRY_POINTS:
+        env = gym.make_vec(env_id, num_envs=5, vectorization_mode="vector_entry_point")
+        obs, _ = env.reset(seed=0)
+        assert obs.shape == (5, *env.single_observation_space.shape) and obs.dtype == np.float32
+        assert env.observation_space.contains(obs)
+    else:
+        with pytest.raises(gym.error.Error, match="vector entry point"):
+            gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+
+
+@pytest.mark.parametrize("env_id", NATIVE)
+def test_bad_batches_are_refused_naming_the_row(env_id):
+    env = gym.make_vec(env_id, num_envs=4, vectorization_mode="vector_entry_point")
+    with pytest.raises(RuntimeError, match="reset"):
+        env.step(np.zeros(env.action_space.shape, np.float32))
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match="shape"):
+        env.step(np.zeros((3, *env.single_action_space.shape), np.float32))
+    actions = np.zeros(env.action_space.shape, np.float32)
+    actions[2, 0] = np.nan
+    with pytest.raises(ValueError, match="row 2"):
+        env.step(actions)
+    with pytest.raises(ValueError, match="num_envs"):
+        gym.make_vec(env_id, num_envs=0, vectorization_mode="vector_entry_point")
+
+
+def test_render_draws_the_chosen_robot():
+    env = gym.make_vec("paragym/HybridSingularityFree-v0", num_envs=3, vectorization_mode="vector_entry_point",
+                       render_mode="rgb_array", render_index=2)
+    env.reset(seed=0)
+    frame = env.render()
+    assert frame.ndim == 3 and frame.shape[2] == 3 and frame.std() > 0
+    env.close()
+
+
+def test_sb3_trains_on_a_native_vector_env(tmp_path):
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import VecMonitor
+
+    from paragym.baselines.sb3_vec import as_sb3_vecenv
+    from paragym.baselines.training import train
+
+    venv = as_sb3_vecenv("paragym/HybridSingularityFree-v0", num_envs=4)
+    venv.seed(0)
+    obs = venv.reset()
+    zero = np.zeros((4, 4), np.float32)
+    for _ in range(100):
+        obs, rewards, dones, infos = venv.step(zero)
+    assert dones.all() and all("terminal_observation" in i for i in infos)
+    assert np.allclose(obs[:, 0], 0.0) and np.allclose([i["terminal_observation"][0] for i in infos], 1.0)
+    model = PPO("MlpPolicy", VecMonitor(venv), n_steps=32, batch_size=64, device="cpu", seed=0)
+    model.learn(256)
+    assert model.num_timesteps >= 256
+    res = train("HybridSingularityFree-v0", "ppo", seed=0, timesteps=512, models_dir=tmp_path, progress_bar=False,
+                vectorized=True, n_envs=8, hyperparams={"n_steps": 32, "batch_size": 64, "eval_freq": 256,
+                                                        "n_eval_episodes": 1})
+    assert res.meta["vectorized"] and res.files.model.is_file()
+    with pytest.raises(ValueError, match="no native vector env"):
+        train("CaPaManCollisionFree-v0", "ppo", timesteps=64, models_dir=tmp_path, vectorized=True)
