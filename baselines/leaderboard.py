@@ -118,15 +118,29 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
         ("final_unit_error_cm", "final unit error [cm]", ".2f"), ("max_unit_error_cm", "max unit error [cm]", ".2f")]),
 }
 
-#: env id -> (metric that breaks ties after the success rate, +1 if higher is better, -1 if lower).
-#: Where the paper's method is optimal for this metric, the reference policy is expected first (tested):
-#: CaPaMan (RRT+GA: every tour collision-free), hybrid (every pose singularity-free within the limits),
-#: Orthoglide (case c minimises kappa), mobile tripod (the encoders bound the odometry's drift).
+#: env id -> (metric that ranks after the success rate, +1 if higher is better, -1 if lower); the return
+#: breaks the remaining ties. The paper's method is optimal for this ranking, and is ranked first (tested),
+#: in three envs: the hybrid (every pose singularity-free within the limits, no detour it does not need),
+#: the Orthoglide (case c minimises kappa), the mobile tripod (the encoders bound the odometry's drift).
+#: In the CaPaMan env RRT+GA has the best return and the shortest joint path but not the best success
+#: rate: with the paper's m = 21 via configurations it finds no tour in about 2% of the random
+#: scenarios, where Dijkstra on Theta (no limit on via points) always does.
 PRIMARY: dict[str, tuple[str, int]] = {
     "paragym/CaPaManCollisionFree-v0": ("return", +1),
     "paragym/HybridSingularityFree-v0": ("bad_poses", -1),
     "paragym/Orthoglide2PRRKappa-v0": ("mean_kappa", -1),
     "paragym/MobileTripodOdometry-v0": ("final_unit_error_cm", -1),
+}
+
+
+#: the success rate each reference policy reaches over the full suite (0.98, 1.00, 1.00 and 0.82 measured),
+#: which the tests hold it to on 20 of its episodes; the mobile tripod's episodes end with a unit error
+#: under 5 cm when the estimator is good, which paper 004's correction is in 4 of 5 random drives
+REFERENCE_SUCCESS: dict[str, tuple[str, float]] = {
+    "paragym/CaPaManCollisionFree-v0": ("rrt-ga", 0.9),
+    "paragym/HybridSingularityFree-v0": ("polynomial-detour", 0.95),
+    "paragym/Orthoglide2PRRKappa-v0": ("gradient-c", 0.95),
+    "paragym/MobileTripodOdometry-v0": ("encoder-correction", 0.7),
 }
 
 
@@ -256,11 +270,12 @@ class Summary:
     rank: int = 0
     extra: dict[str, Any] = field(default_factory=dict)
 
-    def sort_key(self) -> tuple[float, float, str]:
+    def sort_key(self) -> tuple[float, float, float, str]:
+        """Success rate, then the env's primary metric, then the return (all best first)."""
         key, sign = PRIMARY[self.env]
         value = self.return_mean if key == "return" else self.metrics.get(key, math.nan)
         value = -math.inf if not np.isfinite(value) else sign * value
-        return (-self.success_rate, -value, self.policy)
+        return (-self.success_rate, -value, -self.return_mean, self.policy)
 
 
 def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> dict[str, list[Summary]]:
@@ -335,11 +350,32 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
                 out.append(f"KF validation of `{s.policy}` (paper scenario, dynamic fidelity): "
                            f"**{'PASS' if v['passed'] else 'FAIL'}** — {v.get('text', '')}")
                 out.append("")
+        out += [_gap(summaries), ""]
         notes = [f"* `{s.policy}`: {s.description}" for s in summaries if s.description]
         out += notes + [""]
         if env in images:
             out += [f"![{env}]({images[env]})", ""]
     return "\n".join(out)
+
+
+def _gap(summaries: list[Summary]) -> str:
+    """One sentence on how the learned agents compare with the reference and the floor."""
+    by_kind: dict[str, list[Summary]] = {}
+    for s in summaries:
+        by_kind.setdefault(s.kind, []).append(s)
+    learned, ref = by_kind.get("learned", []), by_kind.get("reference", [])
+    if not learned or not ref:
+        return ""
+    floor = {s.policy: s.return_mean for s in by_kind.get("floor", [])}
+    best = min(learned, key=Summary.sort_key)
+    counts = ", ".join(f"`{name}` by {sum(s.return_mean > value for s in learned)} of {len(learned)}"
+                       for name, value in floor.items())
+    text = (f"Learned agents: the best, `{best.policy}`, succeeds in {best.success_rate:.0%} of the episodes with "
+            f"return {best.return_mean:.2f}, against the reference's {ref[0].success_rate:.0%} and "
+            f"{ref[0].return_mean:.2f}. Beaten on return: {counts}.")
+    if any(all(s.return_mean <= value for s in learned) for value in floor.values()):
+        text += " **Some floor is beaten by no learned agent: the gap to the reference is this env's open problem.**"
+    return text
 
 
 def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
