@@ -8,8 +8,8 @@ clock starts, resets included:
 * ``sync 2`` / ``async 2``: ``gym.make_vec(ENV_ID, 2, vectorization_mode="sync" | "async")``;
 * ``native N``: ``gym.make_vec(ENV_ID, N, vectorization_mode="vector_entry_point")``
   for N = 1, 64, 1024, 4096, one core. Each is timed over at least one full
-  episode of every robot (so that the autoresets are in the figure), after a
-  reset that is not;
+  episode of every robot (so that the autoresets are in the figure; at most
+  60 s), after a reset that is not;
 * PandaReach-v3 (panda-gym, when installed) as the anchor, and each figure's
   ratio to it;
 * the peak resident memory of a fresh process that builds and steps the
@@ -56,14 +56,15 @@ def single_rate(env_id: str, seconds: float) -> float:
     return rate
 
 
-def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0) -> float:
-    """Robot-steps/s of a vector env over at least ``seconds`` and ``min_steps`` batch steps."""
+def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0, max_seconds: float = 60.0) -> float:
+    """Robot-steps/s of a vector env over at least ``seconds`` and ``min_steps``
+    batch steps (but no more than ``max_seconds``)."""
     env.reset(seed=0)
     rng = np.random.default_rng(0)
     space = env.action_space
     actions = rng.uniform(space.low, space.high, (8, *space.shape)).astype(space.dtype)
     steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds or steps < min_steps:
+    while (time.perf_counter() - t0 < seconds or steps < min_steps) and time.perf_counter() - t0 < max_seconds:
         env.step(actions[steps % 8])
         steps += 1
     return steps * env.num_envs / (time.perf_counter() - t0)

@@ -18,13 +18,14 @@ from paragym.envs.capaman_scenarios import (
     random_scenario,
     validate_scenario,
 )
+from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
 
-__all__ = ["CaPaManCollisionFreeEnv"]
+__all__ = ["CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
 
 DEG = np.pi / 180
 OBS_SIZE = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 1
@@ -93,7 +94,13 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     or "dynamic" (the closed chain under physics: the action moves the
     motors' commands, which the motors chase for ``control_period`` s of
     simulated time; observations report the encoders and the plate's
-    simulated pose). ``max_joint_step`` (rad), ``reach_tolerance`` (rad, joint-space
+    simulated pose). ``collision``: "pybullet" (default: PyBullet's exact
+    signed distance between the 17 parts and the obstacles) or "grid"
+    (kinematic fidelity only: paper 000's own test, the occupancy grid Psi
+    and the cluster points of eq 2, 10 mm apart; the clearance is the
+    smallest signed distance on Psi at any cluster point, in 0.5 mm steps;
+    PyBullet then only draws). The native vector env uses "grid", and with
+    it gives this env's numbers. ``max_joint_step`` (rad), ``reach_tolerance`` (rad, joint-space
     norm), ``delta`` (m), ``beta``, ``w_length``, ``w_progress``,
     ``reach_bonus``, ``collision_penalty``, ``clearance_cap`` (m),
     ``geometry``, ``render_mode`` ("rgb_array" or "human").
@@ -107,10 +114,15 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
                  reach_tolerance: float = 1 * DEG, delta: float = 0.01, beta: float = 0.1,
                  w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
                  collision_penalty: float = 5.0, clearance_cap: float = 0.05, control_period: float = 0.02,
-                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY) -> None:
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, collision: str = "pybullet") -> None:
         super().__init__(render_mode)
         if fidelity not in ("kinematic", "dynamic"):
             raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
+        if collision not in ("pybullet", "grid"):
+            raise ValueError(f"collision must be 'pybullet' or 'grid'; got {collision!r}")
+        if collision == "grid" and fidelity != "kinematic":
+            raise ValueError("collision='grid' needs fidelity='kinematic' (the dynamic scene is PyBullet's)")
+        self.collision = collision
         if not (np.isfinite(control_period) and control_period > 0):
             raise ValueError(f"control_period must be a positive number of seconds; got {control_period!r}")
         self._check_scenario_arg(scenario)
@@ -134,6 +146,10 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         else:
             self.scene = CaPaManDynamicScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
         self._scenario_scene: CaPaManScene | None = None
+        if collision == "grid":
+            self._grids = occupancy.DistanceGrids(1, cap=clearance_cap)
+            self._grid_clusters = _clusters(geometry)
+            self._part_names = [p.name for p in capaman.part_shapes(geometry)]
         self._lo, self._hi = geometry.alpha_min, geometry.alpha_max
         self._mid, self._half = (self._hi + self._lo) / 2, (self._hi - self._lo) / 2
         self.scenario: CaPaManScenario | None = None
@@ -170,8 +186,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         self._step_length = 0.0
         self._progress = 0.0
         self._just_reached = False
-        self.scene.set_configuration(self._alpha)
-        self._clearance, self._near = self.scene.clearance()
+        if self.collision == "grid":
+            self._grids.set(0, scenario.obstacles)
+        self._place(self._alpha)
         info = self._info()
         info["scenario"] = scenario
         return info
@@ -193,7 +210,6 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         target = self._tp[self._target]
         command = np.clip(self._command + action * self.max_joint_step, self._lo, self._hi)
         if self.fidelity == "kinematic":
-            self.scene.set_configuration(command)
             new = command
         else:  # the motors chase the command for one control period; the encoders say where they got
             self.scene.drive(command, self.control_period)
@@ -204,11 +220,26 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         before = math.hypot(*(target - self._alpha))
         after = math.hypot(*(target - new))
         self._alpha = new
-        self._clearance, self._near = self.scene.clearance()
+        self._place(new, posed=self.fidelity == "dynamic")
         self._progress = before - after
         self._just_reached = after <= self.reach_tolerance and not self._collision
         if self._just_reached:
             self._reached += 1
+
+    def _place(self, alpha: np.ndarray, posed: bool = False) -> None:
+        """The tool tip and the clearance at ``alpha``: by PyBullet (posing the
+        scene unless the dynamics already did), or by the grid."""
+        if self.collision == "grid":
+            a = np.asarray(alpha, float)[None]
+            self._tip = capaman.tool_tip(capaman.forward(a, self.geometry, validate=False), self.geometry)[0]
+            clearance, part = occupancy.grid_clearance(a, self._grids, self._grid_clusters, self.geometry)
+            self._clearance = float(clearance[0])
+            self._near = self._part_names[int(part[0])] if part[0] >= 0 else None
+            return
+        if not posed:
+            self.scene.set_configuration(alpha)
+        self._tip = self.scene.tip
+        self._clearance, self._near = self.scene.clearance()
 
     @property
     def _collision(self) -> bool:
@@ -217,7 +248,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     def _observe(self) -> np.ndarray:
         t = self._target
         obs = np.concatenate([
-            np.clip((self._alpha - self._mid) / self._half, -1.0, 1.0), self.scene.tip,
+            np.clip((self._alpha - self._mid) / self._half, -1.0, 1.0), self._tip,
             (self._tp[t] - self._mid) / self._half, self._tc[t],
             self._obstacle_code,
             [max(self._clearance, -self.scene.clearance_cap), self._reached / len(TOUR)],
@@ -247,13 +278,129 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
             "path_length": self._path_length,
             "is_success": self._reached >= len(TOUR) and not self._collision,
             "alpha": self._alpha.copy(),
-            "tool_tip": self.scene.tip.copy(),
+            "tool_tip": np.array(self._tip),
         }
 
     def _render_rgb(self) -> np.ndarray:
+        if self.collision == "grid":  # the scene is not posed by the steps
+            self.scene.set_configuration(self._alpha)
         return self.scene.render()
 
     def _close(self) -> None:
         self.scene.close()
         if self._scenario_scene is not None:
             self._scenario_scene.close()
+
+
+class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
+    """``num_envs`` copies of :class:`CaPaManCollisionFreeEnv` with
+    ``collision="grid"`` stepped together: closed-form kinematics and paper
+    000's grid test (Psi as signed distances, the cluster points of eq 2) for
+    all robots in numpy (:mod:`paragym.envs.vector`; the same numbers as the
+    single env with ``collision="grid"``). Scenarios are generated (and
+    checked) by the single env's PyBullet scene, robot by robot, at reset.
+    Keyword arguments are the single env's (``collision`` is "grid";
+    ``fidelity`` is "kinematic")."""
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
+                             "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
+        kwargs.update(collision="grid", fidelity="kinematic")
+        super().__init__(num_envs, CaPaManCollisionFreeEnv(**kwargs), max_episode_steps, render_index)
+        e, n = self.single_env, self.num_envs
+        self.geometry = e.geometry
+        self._grids = occupancy.DistanceGrids(n, cap=e.scene.clearance_cap)
+        self._clusters = _clusters(e.geometry)
+        self._tp, self._tc = np.zeros((n, 3, 3)), np.zeros((n, 3, 3))
+        self._code = np.zeros((n, MAX_OBSTACLES * ENCODING_SIZE))
+        self._alpha, self._command, self._tip = np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 3))
+        self._reached = np.zeros(n, np.int64)
+        self._path_length, self._step_length, self._progress = np.zeros(n), np.zeros(n), np.zeros(n)
+        self._just_reached = np.zeros(n, bool)
+        self._clearance = np.zeros(n)
+        self._tour = np.array(TOUR)
+        self._idx = np.arange(n)
+        self._scenarios: list[CaPaManScenario | None] = [None] * n
+
+    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
+        e = self.single_env
+        choice = options.get("scenario", e.scenario_arg)
+        e._check_scenario_arg(choice)
+        checker = e._checker()
+        for i in rows:
+            if choice == "random":
+                scenario = random_scenario(self._rngs[i], checker, _clusters(self.geometry))
+            else:
+                scenario = paper_scenario(self.geometry) if choice == "paper" else choice
+                validate_scenario(scenario, checker)
+            self._scenarios[i] = scenario
+            self._grids.set(int(i), scenario.obstacles)
+            self._tp[i] = scenario.alpha
+            self._tc[i] = np.array(scenario.task_configs) if scenario.task_configs else \
+                capaman.tool_tip(capaman.forward(scenario.alpha, self.geometry), self.geometry)
+            self._code[i] = 0.0
+            for k, o in enumerate(scenario.obstacles):
+                self._code[i, k * ENCODING_SIZE:(k + 1) * ENCODING_SIZE] = o.encode()
+        self._alpha[rows] = self._tp[rows, 0]
+        self._command[rows] = self._alpha[rows]
+        self._reached[rows] = 0
+        self._path_length[rows], self._step_length[rows], self._progress[rows] = 0.0, 0.0, 0.0
+        self._just_reached[rows] = False
+        self._place(rows)
+
+    def _place(self, rows: np.ndarray) -> None:
+        a = self._alpha[rows]
+        self._tip[rows] = capaman.tool_tip(capaman.forward(a, self.geometry, validate=False), self.geometry)
+        self._clearance[rows] = occupancy.grid_clearance(a, self._grids, self._clusters, self.geometry, rows)[0]
+
+    def _target(self) -> np.ndarray:
+        return self._tour[np.minimum(self._reached, len(TOUR) - 1)]
+
+    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
+        e = self.single_env
+        rows = np.flatnonzero(active)
+        target = self._tp[rows, self._target()[rows]]
+        command = np.clip(self._command[rows] + actions[rows] * e.max_joint_step, e._lo, e._hi)
+        old = self._alpha[rows]
+        step = np.sqrt(np.sum((command - old) ** 2, axis=1))
+        before = np.sqrt(np.sum((target - old) ** 2, axis=1))
+        after = np.sqrt(np.sum((target - command) ** 2, axis=1))
+        self._command[rows], self._alpha[rows] = command, command
+        self._step_length[rows] = step
+        self._path_length[rows] += step
+        self._place(rows)
+        self._progress[rows] = before - after
+        reached = (after <= e.reach_tolerance) & (self._clearance[rows] > 0.0)
+        self._just_reached[rows] = reached
+        self._reached[rows] += reached
+
+    def _observe(self) -> np.ndarray:
+        e = self.single_env
+        t = self._target()
+        obs = np.concatenate([np.clip((self._alpha - e._mid) / e._half, -1.0, 1.0), self._tip,
+                              (self._tp[self._idx, t] - e._mid) / e._half, self._tc[self._idx, t], self._code,
+                              np.maximum(self._clearance, -e.scene.clearance_cap)[:, None],
+                              (self._reached / len(TOUR))[:, None]], axis=1)
+        return obs.astype(np.float32)
+
+    def _reward(self) -> np.ndarray:
+        e = self.single_env
+        r = -e.w_length * self._step_length + e.w_progress * self._progress
+        r = r - e.beta * (self._clearance < e.delta) + e.reach_bonus * self._just_reached
+        return r - e.collision_penalty * (self._clearance <= 0.0)
+
+    def _terminated(self) -> np.ndarray:
+        return (self._clearance <= 0.0) | (self._reached >= len(TOUR))
+
+    def _infos(self) -> dict[str, Any]:
+        every = np.ones(self.num_envs, bool)
+        collision = self._clearance <= 0.0
+        return {"clearance": self._clearance.copy(), "_clearance": every, "collision": collision,
+                "_collision": every, "is_success": (self._reached >= len(TOUR)) & ~collision, "_is_success": every}
+
+    def _load_single(self, i: int) -> None:
+        e = self.single_env
+        e.scene.set_obstacles(self._scenarios[i].obstacles)
+        e._alpha = self._alpha[i].copy()

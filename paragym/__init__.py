@@ -33,6 +33,7 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
 
 #: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
 VECTOR_ENTRY_POINTS: dict[str, str] = {
+    "paragym/CaPaManCollisionFree-v0": "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv",
     "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
     "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",

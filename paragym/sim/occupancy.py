@@ -26,7 +26,8 @@ import numpy as np
 from paragym.mechanisms import capaman
 from paragym.sim.obstacles import Box, Obstacle
 
-__all__ = ["ClusterPoints", "OccupancyGrid", "cluster_points", "grid_collision", "joint_matrix"]
+__all__ = ["ClusterPoints", "DistanceGrids", "OccupancyGrid", "cluster_points", "grid_clearance", "grid_collision",
+           "joint_matrix", "signed_distances"]
 
 
 @dataclass(frozen=True)
@@ -40,15 +41,18 @@ class OccupancyGrid:
     resolution: float
 
     @classmethod
-    def from_obstacles(cls, obstacles: Sequence[Obstacle], resolution: float = 0.005) -> OccupancyGrid:
-        """Rasterise ``obstacles`` on a grid that covers their bounding boxes plus one cell."""
+    def from_obstacles(cls, obstacles: Sequence[Obstacle], resolution: float = 0.005,
+                       margin: float | None = None) -> OccupancyGrid:
+        """Rasterise ``obstacles`` on a grid that covers their bounding boxes
+        plus ``margin`` (m; default two cells, at least two cells)."""
         if resolution <= 0:
             raise ValueError(f"resolution must be > 0 m; got {resolution}")
         if not obstacles:
             return cls(np.zeros((1, 1, 1), bool), np.zeros(3), resolution)
-        # Bounding box of the obstacles plus two cells: the outer cell stays free (see lookup).
-        lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) - 2 * resolution
-        hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) + 2 * resolution
+        # Bounding box of the obstacles plus the margin: the outer cell stays free (see lookup).
+        pad = max(2 * resolution, margin or 0.0)
+        lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) - pad
+        hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) + pad
         shape = np.ceil((hi - lo) / resolution).astype(int)
         axes = [lo[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
         centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
@@ -225,3 +229,123 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
         else:
             theta |= grid.lookup(clusters.on_joint_grid(p, alpha, g, (g, points_per_axis))).any(axis=1)
     return theta.reshape((points_per_axis,) * 3), axis
+
+
+# --- the grid's clearance: signed distances on Psi, for many robots at once ---------------------------------
+
+
+def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, cap: float = 0.05,
+                     unit: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
+    """Psi (eq 1) with the distance of every cell to the other kind: for a
+    free cell, the distance between its centre and the nearest occupied
+    cell's, less half a cell (> 0); for an occupied cell, minus the distance
+    to the nearest free cell's centre, plus half a cell (< 0). In steps of
+    ``unit`` (m) as int8, capped at +-``cap``; so a value is negative exactly
+    where eq 2 counts a collision. Returns the values and the grid's origin
+    (m); the grid reaches ``cap`` beyond the obstacles."""
+    from scipy import ndimage
+
+    if cap / unit > 127:
+        raise ValueError(f"cap / unit must fit int8 (<= 127); got {cap / unit:g}")
+    grid = OccupancyGrid.from_obstacles(obstacles, resolution, margin=cap + 2 * resolution)
+    occ = grid.occupied
+    outside = ndimage.distance_transform_edt(~occ) * resolution - resolution / 2
+    inside = ndimage.distance_transform_edt(occ) * resolution - resolution / 2
+    d = np.where(occ, -inside, outside)
+    return np.clip(np.round(d / unit), -round(cap / unit), round(cap / unit)).astype(np.int8), grid.origin
+
+
+class DistanceGrids:
+    """The signed-distance grids of N robots' scenes in one flat buffer (one
+    slot per robot, as big as the largest grid so far), looked up for all
+    robots' cluster points at once."""
+
+    def __init__(self, n: int, resolution: float = 0.005, cap: float = 0.05, unit: float = 0.0005) -> None:
+        self.n, self.resolution, self.cap, self.unit = n, resolution, cap, unit
+        self.origin = np.zeros((n, 3))
+        self.shape = np.ones((n, 3), np.int64)
+        self.slot = 1
+        self.values = np.full(n, round(cap / unit), np.int8)
+
+    def set(self, i: int, obstacles: Sequence[Obstacle]) -> None:
+        """Robot ``i``'s scene becomes ``obstacles``."""
+        values, origin = signed_distances(obstacles, self.resolution, self.cap, self.unit)
+        if values.size > self.slot:  # grow every slot (rare: the first resets set the size)
+            old, old_slot = self.values, self.slot
+            self.slot = int(values.size * 1.25)
+            self.values = np.full(self.n * self.slot, round(self.cap / self.unit), np.int8)
+            for j in range(self.n):
+                self.values[j * self.slot:j * self.slot + old_slot] = old[j * old_slot:(j + 1) * old_slot]
+        self.values[i * self.slot:i * self.slot + values.size] = values.ravel()
+        self.origin[i], self.shape[i] = origin, values.shape
+
+    def lookup(self, points: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
+        """Signed distances (in ``unit`` steps, int) at points (M, P, 3) of
+        robots ``rows`` (M,) (default all); the cap outside a robot's grid."""
+        rows = np.arange(self.n) if rows is None else rows
+        rel = (points - self.origin[rows, None].astype(points.dtype)) * points.dtype.type(1.0 / self.resolution)
+        ix, iy, iz = (np.floor(rel[..., k]).astype(np.int64) for k in range(3))
+        sx, sy, sz = (self.shape[rows, k, None] for k in range(3))
+        # one unsigned comparison per axis: a negative index wraps to a huge one
+        inside = (ix.astype(np.uint64) < sx.astype(np.uint64)) & (iy.astype(np.uint64) < sy.astype(np.uint64)) & (
+            iz.astype(np.uint64) < sz.astype(np.uint64))
+        flat = (rows * self.slot)[:, None] + (ix * sy + iy) * sz + iz
+        out = np.full(inside.shape, round(self.cap / self.unit), np.int64)
+        out[inside] = self.values[flat[inside]]
+        return out
+
+
+def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoints,
+                   geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, rows: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The clearance (m, N) of robots at crank angles ``alpha`` (N, 3) from
+    their grids (``rows`` of ``grids``, default all): the smallest signed
+    distance at any cluster point (negative: a collision by eq 2), and the
+    part (N,) that holds that point (-1 when every point is beyond the cap).
+    A part whose bounding sphere misses a robot's grid is skipped for that
+    robot (its points all read the cap). Element-wise arithmetic only, so
+    that a robot's answer does not depend on the others in the batch."""
+    n = len(alpha)
+    rows = np.arange(n) if rows is None else rows
+    centres, quats = capaman.part_frames(alpha, geometry, validate=False)
+    rot = capaman.quat_to_matrix(quats)  # (N, parts, 3, 3)
+    lo = grids.origin[rows]
+    hi = lo + grids.shape[rows] * grids.resolution
+    cap = round(grids.cap / grids.unit)
+    best = np.full(n, cap, np.int64)
+    part = np.full(n, -1, np.int64)
+    for p, local, middle, radius in _blocks(clusters):  # a loop over blocks of points, each for all robots at once
+        r = rot[:, p]
+        c = centres[:, p] + middle[0] * r[:, :, 0] + middle[1] * r[:, :, 1] + middle[2] * r[:, :, 2]
+        gap = np.sqrt(np.sum((c - np.clip(c, lo, hi)) ** 2, axis=1))
+        near = np.flatnonzero(gap <= radius)
+        if near.size == 0:
+            continue
+        r, cn = r[near].astype(np.float32), centres[near, p].astype(np.float32)  # element-wise float32
+        local = local.astype(np.float32)
+        world = (cn[:, None, :] + local[None, :, 0, None] * r[:, None, :, 0]
+                 + local[None, :, 1, None] * r[:, None, :, 1] + local[None, :, 2, None] * r[:, None, :, 2])
+        low = grids.lookup(world, rows[near]).min(axis=1)
+        closer = (low < best[near]) | ((low == best[near]) & (p < part[near]))
+        best[near[closer]] = low[closer]
+        part[near[closer]] = p
+    return best * grids.unit, part
+
+
+def _blocks(clusters: ClusterPoints, edge: float = 0.06) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+    """The cluster points in blocks of ``edge`` (m) cubes of their part's
+    frame: part index, local points (M, 3), the block's centre (3,) and
+    bounding radius (m) in the part's frame. Kept on the clusters."""
+    key = ("blocks", edge)
+    if key not in clusters._grid_cache:
+        out = []
+        for p in np.unique(clusters.part):
+            pts = clusters.local[clusters.part == p]
+            cells = np.floor(pts / edge).astype(np.int64)
+            _, which = np.unique(cells, axis=0, return_inverse=True)
+            for b in range(which.max() + 1):
+                block = pts[which.ravel() == b]
+                middle = (block.min(axis=0) + block.max(axis=0)) / 2
+                out.append((int(p), block, middle, float(np.sqrt(np.sum((block - middle) ** 2, axis=1)).max()) + 1e-9))
+        clusters._grid_cache[key] = out
+    return clusters._grid_cache[key]
