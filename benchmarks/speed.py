@@ -77,7 +77,19 @@ def _native(env_id: str, n: int, seconds: float, queue: mp.Queue) -> None:
     env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
     episode = paragym.ENVIRONMENTS[env_id][1]
     rate = vector_rate(env, seconds, min_steps=episode + 1 if n > 1 else 0)
-    queue.put((rate, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024))
+    queue.put((rate, _peak_rss_mib()))
+
+
+def _peak_rss_mib() -> float:
+    """This process's peak resident set (MiB): VmHWM, which starts afresh at exec (ru_maxrss
+    does not: a spawned child would report its parent's peak)."""
+    try:
+        for line in open("/proc/self/status"):
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 def native_rate(env_id: str, n: int, seconds: float) -> tuple[float, float]:
