@@ -249,66 +249,73 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
             self._estimate[i] = drive.odometry
         self._errors()
 
-    def _terrain(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Heights (N, M) and gradients (N, M, 2) at points (N, M, 2) of each
-        robot's terrain: only robots with bumps, one bump column at a time
+    def _terrain(self, xy: np.ndarray, rows: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray]:
+        """Heights (M, P) and gradients (M, P, 2) at points (M, P, 2) of robots
+        ``rows``' terrains: only robots with bumps, one bump column at a time
         (the sums in the single env's order)."""
         heights, gradient = np.zeros(xy.shape[:2]), np.zeros(xy.shape)
-        rows = np.flatnonzero(self._n_bumps)
-        if rows.size:
-            x, y = xy[rows, :, 0], xy[rows, :, 1]
+        n_bumps = self._n_bumps[rows]
+        bumpy = np.flatnonzero(n_bumps)
+        if bumpy.size:
+            robots = np.arange(self.num_envs)[rows][bumpy]
+            x, y = xy[bumpy, :, 0], xy[bumpy, :, 1]
             h, gx, gy = np.zeros(x.shape), np.zeros(x.shape), np.zeros(x.shape)
-            for b in range(int(self._n_bumps[rows].max())):
-                dx, dy = x - self._bumps[rows, b, :1], y - self._bumps[rows, b, 1:]
-                width = self._bump_width[rows, b, None]
-                each = self._bump_height[rows, b, None] * np.exp(-(dx * dx + dy * dy) / width)
+            for b in range(int(n_bumps[bumpy].max())):
+                dx, dy = x - self._bumps[robots, b, :1], y - self._bumps[robots, b, 1:]
+                width = self._bump_width[robots, b, None]
+                each = self._bump_height[robots, b, None] * np.exp(-(dx * dx + dy * dy) / width)
                 h += each
                 c = -2.0 * each / width
                 gx += c * dx
                 gy += c * dy
-            heights[rows], gradient[rows, :, 0], gradient[rows, :, 1] = h, gx, gy
+            heights[bumpy], gradient[bumpy, :, 0], gradient[bumpy, :, 1] = h, gx, gy
         return heights, gradient
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        dt, idx, k = self._dt, np.arange(self.num_envs), np.minimum(self._k, self._steps - 1)
-        believed = np.stack([np.cos(self._heading), np.sin(self._heading)], -1)
-        odo = (self._speed * dt)[:, None] * believed  # (N, 2), the same for the three units
-        ang = self._heading[:, None] + self._heading_error
-        true_dir = np.stack([np.cos(ang), np.sin(ang)], -1)
-        slope = np.sum(self._gradient * true_dir, axis=-1)
-        move = (self._speed[:, None] * dt / np.sqrt(1.0 + slope * slope))[..., None] * true_dir
-        a = self._slip_angle[idx, k]
-        move += (self._slip_speed[idx, k] * dt)[..., None] * np.stack([np.cos(a), np.sin(a)], -1)
-        pushed = active & (self._t < self._push[:, 1]) & (self._push[:, 1] <= self._t + dt)
-        for i in np.flatnonzero(pushed):  # at most one step per drive
+        # the robots that step: a slice (views, no copies) in the usual case that all of them do
+        sel: np.ndarray | slice = slice(None) if active.all() else np.flatnonzero(active)
+        dt, k = self._dt, self._k[sel].copy()  # a copy: self._k moves on below
+        idx = np.arange(self.num_envs)[sel]
+        speed, heading = self._speed[sel], self._heading[sel]
+        odo = (speed * dt)[:, None] * np.stack([np.cos(heading), np.sin(heading)], -1)  # (M, 2), all three units
+        ang = heading[:, None] + self._heading_error[sel]
+        cos, sin = np.cos(ang), np.sin(ang)
+        grad = self._gradient[sel]
+        slope = grad[..., 0] * cos + grad[..., 1] * sin
+        scale = speed[:, None] * dt / np.sqrt(1.0 + slope * slope)
+        a, v = self._slip_angle[idx, k], self._slip_speed[idx, k] * dt
+        move = np.stack([scale * cos + v * np.cos(a), scale * sin + v * np.sin(a)], -1)
+        t = self._t[sel]
+        pushed = np.flatnonzero((t < self._push[sel, 1]) & (self._push[sel, 1] <= t + dt))
+        for j in pushed:  # at most one step per drive
+            i = idx[j]
             unit, depth = int(self._push[i, 0]), self._push[i, 2]
             inward = self._true[i, :, :2].mean(axis=0) - self._true[i, unit, :2]
-            move[i, unit] += depth * inward / np.linalg.norm(inward)
-        live = active[:, None, None]
-        self._true[:, :, :2] = np.where(live[..., :1], self._true[:, :, :2] + move, self._true[:, :, :2])
-        self._odometry[:, :, :2] = np.where(live[..., :1], self._odometry[:, :, :2] + odo[:, None],
-                                            self._odometry[:, :, :2])
-        heights, gradient = self._terrain(np.concatenate([self._true[:, :, :2], self._odometry[:, :, :2]], axis=1))
-        self._true[:, :, 2] = np.where(active[:, None], heights[:, :3], self._true[:, :, 2])
-        self._odometry[:, :, 2] = np.where(active[:, None], heights[:, 3:], self._odometry[:, :, 2])
-        self._gradient = np.where(live, gradient[:, :3], self._gradient)
-        self._t = np.where(active, self._t + dt, self._t)
-        rows = np.flatnonzero(active)
-        self._eta_true[rows] = mt.eta_rows(self._true[rows], self._eta_true[rows], self.geometry)
-        self._k = np.where(active, self._k + 1, self._k)
+            move[j, unit] += depth * inward / np.linalg.norm(inward)
+        true, odometry = self._true[sel], self._odometry[sel]
+        true[:, :, :2] += move
+        odometry[:, :, :2] += odo[:, None]
+        heights, gradient = self._terrain(np.concatenate([true[:, :, :2], odometry[:, :, :2]], axis=1), sel)
+        true[:, :, 2], odometry[:, :, 2] = heights[:, :3], heights[:, 3:]
+        self._true[sel], self._odometry[sel], self._gradient[sel] = true, odometry, gradient[:, :3]
+        self._t[sel] = t + dt
+        self._eta_true[sel] = mt.eta_rows(true, self._eta_true[sel], self.geometry)
+        self._k[sel] = k + 1
         e = self.single_env
-        est = self._estimate[:, :, :2] + odo[:, None] + np.clip(actions, -1, 1).reshape(-1, 3, 2) * e.max_correction
-        self._estimate[:, :, :2] = np.where(live[..., :1], est, self._estimate[:, :, :2])
-        est_z, _ = self._terrain(self._estimate[:, :, :2])
-        self._estimate[:, :, 2] = np.where(active[:, None], est_z, self._estimate[:, :, 2])
-        self._eta = np.where(active[:, None], self._eta_true + self._noise[idx, self._k], self._eta)
+        est = self._estimate[sel]
+        est[:, :, :2] += odo[:, None] + np.clip(actions[sel], -1, 1).reshape(-1, 3, 2) * e.max_correction
+        est[:, :, 2], _ = self._terrain(est[:, :, :2], sel)
+        self._estimate[sel] = est
+        self._eta[sel] = self._eta_true[sel] + self._noise[idx, k + 1]
         self._errors()
 
     def _errors(self) -> None:
-        diff = self._estimate[:, :, :2] - self._true[:, :, :2]
-        self._unit_error = np.sqrt((diff * diff).sum(axis=-1)).mean(axis=1)
-        centre = diff.sum(axis=1) / 3.0
-        self._plate_error = np.hypot(centre[:, 0], centre[:, 1])
+        dx = self._estimate[:, :, 0] - self._true[:, :, 0]
+        dy = self._estimate[:, :, 1] - self._true[:, :, 1]
+        d = np.sqrt(dx * dx + dy * dy)
+        self._unit_error = (d[:, 0] + d[:, 1] + d[:, 2]) / 3.0
+        cx, cy = (dx[:, 0] + dx[:, 1] + dx[:, 2]) / 3.0, (dy[:, 0] + dy[:, 1] + dy[:, 2]) / 3.0
+        self._plate_error = np.hypot(cx, cy)
 
     def _observe(self) -> np.ndarray:
         obs = np.concatenate([self._odometry.reshape(-1, 9) / POS_SCALE, self._eta, self._speed[:, None],

@@ -223,31 +223,35 @@ def encoder_distances_one(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GE
 def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY,
              tol: float = 1e-13) -> np.ndarray:
     """:func:`eta_one` for N configurations (N, 3, 3) from guesses (N, 3): the
-    same Newton iteration, each row stopping where :func:`eta_one` would."""
+    same Newton iteration, each row stopping where :func:`eta_one` would.
+    Coordinates are kept as separate (N, 3) arrays: sums over an axis of three
+    are slow in numpy, and written out they keep :func:`eta_one`'s order."""
     g = geometry
     ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
     base, r = g.p / math.sqrt(3), g.r
     prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])  # (i - 1) % 3 and (i + 1) % 3
-    target = np.sqrt(np.sum((units[:, prev] - units[:, nxt]) ** 2, axis=-1))
+    u = units[:, prev] - units[:, nxt]
+    target = np.sqrt(u[..., 0] * u[..., 0] + u[..., 1] * u[..., 1] + u[..., 2] * u[..., 2])
     eta = np.array(eta0, float)
     active = np.arange(len(eta))
     for _ in range(50):
         e = eta[active]
         se, ce = np.sin(e), np.cos(e)
         reach = base + r * ce
-        d = np.stack([reach * ca, reach * sa, -r * se], -1)
-        dd = np.stack([-r * se * ca, -r * se * sa, -r * ce], -1)
-        diff = d[:, prev] - d[:, nxt]
-        length = np.sqrt(np.sum(diff * diff, axis=-1))
+        dx, dy, dz = reach * ca, reach * sa, -r * se
+        ex, ey, ez = -r * se * ca, -r * se * sa, -r * ce
+        fx, fy, fz = dx[:, prev] - dx[:, nxt], dy[:, prev] - dy[:, nxt], dz[:, prev] - dz[:, nxt]
+        length = np.sqrt(fx * fx + fy * fy + fz * fz)
         res = length - target[active]
         done = np.max(np.abs(res), axis=1) < tol
         if done.all():
             break
         keep = ~done
-        diff, dd, e, res, length = diff[keep], dd[keep], e[keep], res[keep], length[keep]
+        fx, fy, fz, e, res, length = fx[keep], fy[keep], fz[keep], e[keep], res[keep], length[keep]
+        ex, ey, ez = ex[keep], ey[keep], ez[keep]
         # row i of the Jacobian: d length_i / d eta at prev[i] (a) and nxt[i] (b); zero on the diagonal
-        a = np.sum(diff * dd[:, prev], axis=-1) / length
-        b = -np.sum(diff * dd[:, nxt], axis=-1) / length
+        a = (fx * ex[:, prev] + fy * ey[:, prev] + fz * ez[:, prev]) / length
+        b = -(fx * ex[:, nxt] + fy * ey[:, nxt] + fz * ez[:, nxt]) / length
         j00, j01, j02 = 0.0, b[:, 0], a[:, 0]
         j10, j11, j12 = a[:, 1], 0.0, b[:, 1]
         j20, j21, j22 = b[:, 2], a[:, 2], 0.0
