@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import numpy as np
 
@@ -92,6 +92,19 @@ class DriveScenario:
         return self.distance / self.speed
 
 
+@lru_cache(maxsize=16)
+def _start(geometry: mt.TripodGeometry, eta0: float) -> tuple[np.ndarray, np.ndarray]:
+    """Leg angles (3,) and unit positions (3, 3) of a tripod at rest on flat
+    ground with every leg at ``eta0``, plate level above the origin (the
+    same for every drive of a geometry: computed once)."""
+    eta = np.full(3, eta0)
+    height = -mt.plate_frame_units(eta, geometry)[0, 0, 2]
+    eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
+    eta.setflags(write=False)
+    units.setflags(write=False)
+    return eta[0], units[0]
+
+
 class TripodDrive:
     """Steps the true units, the odometry and the encoders of one drive.
 
@@ -109,11 +122,9 @@ class TripodDrive:
                  encoder_noise: float = math.radians(1.0), rate: float = 20.0) -> None:
         self.scenario, self.rng, self.geometry = scenario, rng, geometry
         self.encoder_noise, self.dt = encoder_noise, 1.0 / rate
-        eta = np.full(3, eta0)
-        height = -mt.plate_frame_units(eta, geometry)[0, 0, 2]
-        eta, units = mt.inverse(np.eye(3)[None], np.array([[0.0, 0.0, height]]), geometry)
-        self.eta = eta[0]
-        self.true = units[0].copy()
+        eta, units = _start(geometry, float(eta0))
+        self.eta = eta.copy()
+        self.true = units.copy()
         self.true[:, 2], gradient = scenario.terrain.height_and_gradient(self.true[:, :2])
         self._gradient = gradient
         self.odometry = self.true.copy()
