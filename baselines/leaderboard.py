@@ -30,7 +30,7 @@ import io
 import math
 import time
 from collections.abc import Callable, Iterable, Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -268,7 +268,6 @@ class Summary:
     wall_seconds: float
     validation: dict[str, Any] | None = None
     rank: int = 0
-    extra: dict[str, Any] = field(default_factory=dict)
 
     def sort_key(self) -> tuple[float, float, float, str]:
         """Success rate, then the env's primary metric, then the return (all best first)."""
@@ -299,6 +298,12 @@ def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> d
         for i, s in enumerate(summaries, 1):
             s.rank = i
     return ordered
+
+
+def _primary_label(env: str) -> str:
+    """The column label of the env's primary metric (:data:`PRIMARY`)."""
+    key = PRIMARY[env][0]
+    return "return" if key == "return" else {k: label for k, label, _ in METRICS[env][1]}[key]
 
 
 def _verdict(s: Summary) -> str:
@@ -340,10 +345,9 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
         out += [f"## `{env}`", "", "| " + " | ".join(label for label, _ in cols) + " |",
                 "|" + "|".join("---" for _ in cols) + "|"]
         out += ["| " + " | ".join(f(s).replace("|", "/") for _, f in cols) + " |" for s in summaries]
-        key, sign = PRIMARY[env]
-        label = "return" if key == "return" else dict((k, lab) for k, lab, _ in METRICS[env][1])[key]
-        out += ["", f"Ranked by success rate, then {label} ({'higher' if sign > 0 else 'lower'} is better). "
-                f"{summaries[0].episodes} episodes per policy.", ""]
+        sign = PRIMARY[env][1]
+        out += ["", f"Ranked by success rate, then {_primary_label(env)} "
+                f"({'higher' if sign > 0 else 'lower'} is better). {summaries[0].episodes} episodes per policy.", ""]
         for s in summaries:
             if s.validation is not None:
                 v = s.validation
@@ -540,9 +544,7 @@ def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, ou
     images = {}
     files = []
     for env, ss in all_summaries.items():
-        key, sign = PRIMARY[env]
-        label = "return" if key == "return" else dict((k, lab) for k, lab, _ in METRICS[env][1])[key]
-        png = plot_leaderboard(ss, key, label, out / f"{env_name(env)}.png",
+        png = plot_leaderboard(ss, PRIMARY[env][0], _primary_label(env), out / f"{env_name(env)}.png",
                                f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite)")
         files.append(png)
         images[env] = os.path.relpath(png, md_path.parent)

@@ -36,6 +36,7 @@ import numpy as np
 import yaml
 
 import paragym
+from paragym import check_env_id
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
@@ -45,17 +46,6 @@ EVAL_SEED = 10_000
 #: keys of the yml files that paragym consumes; all others go to the SB3 algorithm
 PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes",
                 "action_noise_std", "checkpoint_freq", "normalize_reward")
-
-
-def check_env_id(env_id: str) -> str:
-    """``env_id`` itself, or a ValueError listing the registered ids (the
-    ``paragym/`` prefix may be left out)."""
-    if not isinstance(env_id, str):
-        raise ValueError(f"env id must be a string; got {env_id!r}")
-    full = env_id if env_id.startswith("paragym/") else f"paragym/{env_id}"
-    if full not in paragym.ENVIRONMENTS:
-        raise ValueError(f"unknown env {env_id!r}; registered: {', '.join(paragym.ENVIRONMENTS)}")
-    return full
 
 
 def check_algo(algo: str) -> str:
@@ -183,12 +173,9 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
 
 
 def _count_parameters(model: Any) -> dict[str, int]:
-    params = {name: int(sum(p.numel() for p in module.parameters()))
-              for name, module in (("policy", model.policy),)}
-    actor = getattr(model, "actor", None)
-    if actor is not None:
-        params["actor"] = int(sum(p.numel() for p in actor.parameters()))
-    return params
+    """Parameters of the whole policy and, for SAC/TD3, of the actor alone."""
+    modules = {"policy": model.policy, "actor": getattr(model, "actor", None)}
+    return {name: int(sum(p.numel() for p in m.parameters())) for name, m in modules.items() if m is not None}
 
 
 def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = "models",

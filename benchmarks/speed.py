@@ -31,6 +31,7 @@ import time
 
 import gymnasium as gym
 import numpy as np
+from env_speed import steps_per_second  # this folder is on the path when the script runs
 
 import paragym
 
@@ -40,18 +41,9 @@ SIZES = (1, 64, 1024, 4096)
 
 
 def single_rate(env_id: str, seconds: float) -> float:
-    """Steps/s of ``gym.make(env_id)`` (any vectorisation mode's sub-env)."""
+    """Steps/s of ``gym.make(env_id)`` (any vectorisation mode's sub-env), as env_speed.py measures it."""
     env = gym.make(env_id)
-    env.reset(seed=0)
-    env.action_space.seed(0)
-    actions = [env.action_space.sample() for _ in range(1000)]
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        _, _, terminated, truncated, _ = env.step(actions[steps % 1000])
-        steps += 1
-        if terminated or truncated:
-            env.reset()
-    rate = steps / (time.perf_counter() - t0)
+    rate = steps_per_second(env, seconds)
     env.close()
     return rate
 

@@ -395,10 +395,9 @@ class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
         return (self._clearance <= 0.0) | (self._reached >= len(TOUR))
 
     def _infos(self) -> dict[str, Any]:
-        every = np.ones(self.num_envs, bool)
         collision = self._clearance <= 0.0
-        return {"clearance": self._clearance.copy(), "_clearance": every, "collision": collision,
-                "_collision": every, "is_success": (self._reached >= len(TOUR)) & ~collision, "_is_success": every}
+        return self._for_every_robot(clearance=self._clearance.copy(), collision=collision,
+                                     is_success=(self._reached >= len(TOUR)) & ~collision)
 
     def _load_single(self, i: int) -> None:
         e = self.single_env

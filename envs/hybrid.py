@@ -261,6 +261,8 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         self._delta, self._d_delta = np.full(n, 0.5), np.zeros(n)
         self._offset = np.zeros((n, 3))
         self._all_free = np.ones(n, bool)
+        self._pose, self._lengths = np.zeros((n, 6)), np.zeros((n, 9))
+        self._mu_h, self._mu_t, self._free = np.zeros(n), np.zeros(n), np.zeros(n, bool)
         self._scenarios: list[HybridScenario | None] = [None] * n
 
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
@@ -282,24 +284,13 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         self._all_free[rows] = True
         self._evaluate(rows)
 
-    def _evaluate(self, rows: np.ndarray | slice) -> None:
+    def _evaluate(self, rows: np.ndarray) -> None:
         """The legs and the measures of ``rows`` (all robots after a step)."""
-        if isinstance(rows, slice):
-            self._pose = self._nominal[self._idx, self._k].copy()
-            self._pose[:, :3] += self._offset
-            state = hybrid.solve(self._pose, self._delta, self.geometry, validate=False)
-            self._lengths, self._mu_h, self._mu_t = state.lengths, state.mu_hexapod, state.mu_tripod
-            self._free = state.free
-        else:
-            if not hasattr(self, "_lengths"):
-                self._lengths, self._pose = np.zeros((self.num_envs, 9)), np.zeros((self.num_envs, 6))
-                self._mu_h, self._mu_t = np.zeros(self.num_envs), np.zeros(self.num_envs)
-                self._free = np.zeros(self.num_envs, bool)
-            pose = self._nominal[rows, self._k[rows]].copy()
-            pose[:, :3] += self._offset[rows]
-            state = hybrid.solve(pose, self._delta[rows], self.geometry, validate=False)
-            self._pose[rows], self._lengths[rows] = pose, state.lengths
-            self._mu_h[rows], self._mu_t[rows], self._free[rows] = state.mu_hexapod, state.mu_tripod, state.free
+        pose = self._nominal[rows, self._k[rows]]
+        pose[:, :3] += self._offset[rows]
+        state = hybrid.solve(pose, self._delta[rows], self.geometry, validate=False)
+        self._pose[rows], self._lengths[rows] = pose, state.lengths
+        self._mu_h[rows], self._mu_t[rows], self._free[rows] = state.mu_hexapod, state.mu_tripod, state.free
         self._all_free &= self._free
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
@@ -312,7 +303,7 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         offset = np.where((k == self._last)[:, None], 0.0, a[:, 1:] * e.j_bar)
         self._offset = np.where(active[:, None], offset, self._offset)
         self._k = k
-        self._evaluate(slice(None))
+        self._evaluate(self._idx)
 
     def _observe(self) -> np.ndarray:
         g, e = self.geometry, self.single_env
@@ -335,9 +326,7 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         return self._k >= self._last
 
     def _infos(self) -> dict[str, Any]:
-        every = np.ones(self.num_envs, bool)
-        return {"is_success": self._terminated() & self._all_free, "_is_success": every,
-                "free": self._free.copy(), "_free": every}
+        return self._for_every_robot(is_success=self._terminated() & self._all_free, free=self._free.copy())
 
     def _load_single(self, i: int) -> None:
         e = self.single_env

@@ -330,10 +330,9 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         return self._k >= self._steps
 
     def _infos(self) -> dict[str, Any]:
-        every = np.ones(self.num_envs, bool)
-        return {"unit_error": self._unit_error.copy(), "_unit_error": every,
-                "is_success": self._terminated() & (self._unit_error < self.single_env.success_error),
-                "_is_success": every}
+        return self._for_every_robot(
+            unit_error=self._unit_error.copy(),
+            is_success=self._terminated() & (self._unit_error < self.single_env.success_error))
 
     def _load_single(self, i: int) -> None:
         e = self.single_env

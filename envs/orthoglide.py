@@ -334,9 +334,7 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
         return self._failed | (self._k >= self._last)
 
     def _infos(self) -> dict[str, Any]:
-        success = ~self._failed & (self._k >= self._last)
-        every = np.ones(self.num_envs, bool)
-        return {"kappa": self._kappa.copy(), "_kappa": every, "is_success": success, "_is_success": every}
+        return self._for_every_robot(kappa=self._kappa.copy(), is_success=~self._failed & (self._k >= self._last))
 
     def _load_single(self, i: int) -> None:
         e = self.single_env

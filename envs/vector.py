@@ -157,5 +157,11 @@ class ParagymVectorEnv(VectorEnv):
     def _infos(self) -> dict[str, Any]:
         return {}
 
+    def _for_every_robot(self, **arrays: np.ndarray) -> dict[str, Any]:
+        """Gymnasium's vector info dict: each (N,) array with its ``_key``
+        mask, here true for every robot."""
+        every = np.ones(self.num_envs, bool)
+        return {k: v for name, value in arrays.items() for k, v in ((name, value), (f"_{name}", every))}
+
     def _load_single(self, i: int) -> None:
         raise NotImplementedError

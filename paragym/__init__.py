@@ -43,3 +43,14 @@ for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():
     if _env_id not in registry:
         register(id=_env_id, entry_point=_entry, max_episode_steps=_steps,
                  vector_entry_point=VECTOR_ENTRY_POINTS.get(_env_id))
+
+
+def check_env_id(env_id: str) -> str:
+    """The full id of a registered paragym env (the ``paragym/`` prefix may be
+    left out), or a ValueError listing the registered ids."""
+    if not isinstance(env_id, str):
+        raise ValueError(f"env id must be a string; got {env_id!r}")
+    full = env_id if env_id.startswith("paragym/") else f"paragym/{env_id}"
+    if full not in ENVIRONMENTS:
+        raise ValueError(f"unknown env id {env_id!r}; registered: {', '.join(ENVIRONMENTS)}")
+    return full

@@ -322,15 +322,8 @@ def _cmd_envs(args: argparse.Namespace) -> int:
     return 0
 
 
-def _env_id(name: str) -> str:
-    env_id = name if name.startswith("paragym/") else f"paragym/{name}"
-    if env_id not in paragym.ENVIRONMENTS:
-        raise ValueError(f"unknown env id {name!r}; `paragym envs` lists them")
-    return env_id
-
-
 def _cmd_plan(args: argparse.Namespace) -> int:
-    env_id = _env_id(args.env_id)
+    env_id = paragym.check_env_id(args.env_id)
     if env_id not in PLANS:
         raise ValueError(f"no offline planner for {env_id} yet")
     env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
@@ -344,7 +337,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
-    env_id = _env_id(args.env_id)
+    env_id = paragym.check_env_id(args.env_id)
     if env_id not in VALIDATIONS:
         raise ValueError(f"no validation loop for {env_id} yet")
     env = gym.make(env_id, scenario=args.scenario)
@@ -358,7 +351,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
-    env_id = _env_id(args.env_id)
+    env_id = paragym.check_env_id(args.env_id)
     env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
     best, best_name, plot = DEMOS[env_id]
     policy = {"best": lambda: best(env), "random": lambda: RandomPolicy(env.action_space, args.seed),
