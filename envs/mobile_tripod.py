@@ -249,25 +249,33 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
             self._estimate[i] = drive.odometry
         self._errors()
 
-    def _terrain(self, xy: np.ndarray, rows: np.ndarray | slice = slice(None)) -> tuple[np.ndarray, np.ndarray]:
-        """Heights (M, P) and gradients (M, P, 2) at points (M, P, 2) of robots
-        ``rows``' terrains: only robots with bumps, one bump column at a time
-        (the sums in the single env's order)."""
-        heights, gradient = np.zeros(xy.shape[:2]), np.zeros(xy.shape)
+    def _terrain(self, xy: np.ndarray, rows: np.ndarray | slice = slice(None), slopes: int = 3
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """Heights (M, P) at points (M, P, 2) of robots ``rows``' terrains and
+        the gradients (M, slopes, 2) at the first ``slopes`` points: only
+        robots with bumps, one bump column at a time (the sums in the single
+        env's order), in place where the arithmetic allows."""
+        heights, gradient = np.zeros(xy.shape[:2]), np.zeros((xy.shape[0], slopes, 2))
         n_bumps = self._n_bumps[rows]
         bumpy = np.flatnonzero(n_bumps)
         if bumpy.size:
             robots = np.arange(self.num_envs)[rows][bumpy]
             x, y = xy[bumpy, :, 0], xy[bumpy, :, 1]
-            h, gx, gy = np.zeros(x.shape), np.zeros(x.shape), np.zeros(x.shape)
+            h, gx, gy = np.zeros(x.shape), np.zeros((len(x), slopes)), np.zeros((len(x), slopes))
             for b in range(int(n_bumps[bumpy].max())):
                 dx, dy = x - self._bumps[robots, b, :1], y - self._bumps[robots, b, 1:]
                 width = self._bump_width[robots, b, None]
-                each = self._bump_height[robots, b, None] * np.exp(-(dx * dx + dy * dy) / width)
+                each = dx * dx
+                each += dy * dy
+                each /= width
+                np.negative(each, out=each)
+                np.exp(each, out=each)
+                each *= self._bump_height[robots, b, None]
                 h += each
-                c = -2.0 * each / width
-                gx += c * dx
-                gy += c * dy
+                c = -2.0 * each[:, :slopes]
+                c /= width
+                gx += c * dx[:, :slopes]
+                gy += c * dy[:, :slopes]
             heights[bumpy], gradient[bumpy, :, 0], gradient[bumpy, :, 1] = h, gx, gy
         return heights, gradient
 
@@ -292,20 +300,19 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
             unit, depth = int(self._push[i, 0]), self._push[i, 2]
             inward = self._true[i, :, :2].mean(axis=0) - self._true[i, unit, :2]
             move[j, unit] += depth * inward / np.linalg.norm(inward)
-        true, odometry = self._true[sel], self._odometry[sel]
+        true, odometry, est = self._true[sel], self._odometry[sel], self._estimate[sel]
         true[:, :, :2] += move
         odometry[:, :, :2] += odo[:, None]
-        heights, gradient = self._terrain(np.concatenate([true[:, :, :2], odometry[:, :, :2]], axis=1), sel)
-        true[:, :, 2], odometry[:, :, 2] = heights[:, :3], heights[:, 3:]
+        est[:, :, :2] += odo[:, None] + np.clip(actions[sel], -1, 1).reshape(-1, 3, 2) * self.single_env.max_correction
+        # the terrain under the true units, the odometry and the estimate: one call for all nine points
+        heights, gradient = self._terrain(np.concatenate([true[:, :, :2], odometry[:, :, :2], est[:, :, :2]], axis=1),
+                                          sel)
+        true[:, :, 2], odometry[:, :, 2], est[:, :, 2] = heights[:, :3], heights[:, 3:6], heights[:, 6:]
         self._true[sel], self._odometry[sel], self._gradient[sel] = true, odometry, gradient[:, :3]
+        self._estimate[sel] = est
         self._t[sel] = t + dt
         self._eta_true[sel] = mt.eta_rows(true, self._eta_true[sel], self.geometry)
         self._k[sel] = k + 1
-        e = self.single_env
-        est = self._estimate[sel]
-        est[:, :, :2] += odo[:, None] + np.clip(actions[sel], -1, 1).reshape(-1, 3, 2) * e.max_correction
-        est[:, :, 2], _ = self._terrain(est[:, :, :2], sel)
-        self._estimate[sel] = est
         self._eta[sel] = self._eta_true[sel] + self._noise[idx, k + 1]
         self._errors()
 

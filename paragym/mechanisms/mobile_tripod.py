@@ -246,9 +246,11 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
         done = np.max(np.abs(res), axis=1) < tol
         if done.all():
             break
-        keep = ~done
-        fx, fy, fz, e, res, length = fx[keep], fy[keep], fz[keep], e[keep], res[keep], length[keep]
-        ex, ey, ez = ex[keep], ey[keep], ez[keep]
+        if done.any():  # carry on with the rows still moving (no copies while all of them are)
+            keep = ~done
+            fx, fy, fz, e, res, length = fx[keep], fy[keep], fz[keep], e[keep], res[keep], length[keep]
+            ex, ey, ez = ex[keep], ey[keep], ez[keep]
+            active = active[keep]
         # row i of the Jacobian: d length_i / d eta at prev[i] (a) and nxt[i] (b); zero on the diagonal
         a = (fx * ex[:, prev] + fy * ey[:, prev] + fz * ez[:, prev]) / length
         b = -(fx * ex[:, nxt] + fy * ey[:, nxt] + fz * ez[:, nxt]) / length
@@ -261,6 +263,5 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
                          (j12 * j20 - j10 * j22) * r0 + (j00 * j22 - j02 * j20) * r1 + (j02 * j10 - j00 * j12) * r2,
                          (j10 * j21 - j11 * j20) * r0 + (j01 * j20 - j00 * j21) * r1 + (j00 * j11 - j01 * j10) * r2],
                         -1)
-        active = active[keep]
         eta[active] = e - step / det[:, None]
     return eta
