@@ -12,7 +12,8 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import orthoglide as og
 
-__all__ = ["Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task"]
+__all__ = ["Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
+           "orthoglide_random_tasks", "servable", "start_table_position"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -30,41 +31,104 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     each table-frame point (K, 2): reachable in the working mode and inside
     the joint limits. There J has full rank (det A = r4 x r5 > 0 and B's
     last two columns are r4x e1 and r5y e2 with r4x, r5y > 0), so kappa is
-    finite: the same answer as sweeping kappa itself, several times cheaper."""
+    finite: the same answer as sweeping kappa itself, several times cheaper.
+    Every tenth position is tried first; only the points none of those serve
+    are swept in full (the same answer: any of a subset is any of the whole)."""
     g = geometry
-    r1 = np.tile(np.linspace(g.rho_min[0], g.rho_max[0], samples), len(points))
-    px, py = np.repeat(points[:, 0], samples), np.repeat(points[:, 1], samples)
-    r2, r3, mode = og.inverse_rows(r1, px, py, g)
-    with np.errstate(invalid="ignore"):
-        inside = (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
-    return (mode & inside).reshape(len(points), samples).any(axis=1)
+    r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
+
+    def any_of(table: np.ndarray, pts: np.ndarray) -> np.ndarray:
+        rr = np.tile(table, len(pts))
+        px, py = np.repeat(pts[:, 0], len(table)), np.repeat(pts[:, 1], len(table))
+        r2, r3, mode = og.inverse_rows(rr, px, py, g)
+        with np.errstate(invalid="ignore"):
+            inside = (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
+        return (mode & inside).reshape(len(pts), len(table)).any(axis=1)
+
+    chunk = 2 ** 16 // samples  # points per pass: arrays that stay in the cache
+    out = np.concatenate([any_of(r1[::10], points[lo:lo + chunk]) for lo in range(0, len(points), chunk)])
+    rest = np.flatnonzero(~out)
+    for lo in range(0, rest.size, chunk):
+        out[rest[lo:lo + chunk]] = any_of(r1, points[rest[lo:lo + chunk]])
+    return out
+
+
+def _random_path(rng: np.random.Generator) -> tuple[str, np.ndarray, np.ndarray]:
+    """One candidate path (kind, points (1001, 2), velocities), drawn from ``rng``:
+    a circle, an ellipse or a rest-to-rest line, 10 s."""
+    kind = str(rng.choice(["circle", "ellipse", "line"]))
+    centre = rng.uniform([-0.2, 0.3], [0.4, 0.8])
+    t = _TIMES
+    if kind == "line":
+        a, b = centre, centre + rng.uniform(-0.5, 0.5, 2)
+        s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)  # rest to rest
+        pts = a + (b - a) * s[:, None]
+        vel = (b - a) * (0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0))[:, None]
+    else:
+        rx, ry = rng.uniform(0.1, 0.4), rng.uniform(0.1, 0.4) if kind == "ellipse" else None
+        ry = rx if ry is None else ry
+        w, phi = 2 * np.pi / 10.0, rng.uniform(0, 2 * np.pi)
+        ang = phi + w * t
+        pts = centre + np.stack([rx * np.cos(ang), ry * np.sin(ang)], 1)
+        vel = w * np.stack([-rx * np.sin(ang), ry * np.cos(ang)], 1)
+    return kind, pts, vel
+
+
+_TIMES = np.linspace(0.0, 10.0, 1001)
+
+
+def orthoglide_random_tasks(rngs: list[np.random.Generator],
+                            geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, max_tries: int = 100) -> list[Any]:
+    """One seeded circle, ellipse or line (10 s) per generator, each drawn
+    until some admissible table position serves every tenth point (a sweep of
+    101 table positions, :func:`servable`). Each generator draws exactly what
+    it would alone (a candidate, then the test); the tests of all pending
+    candidates run in one batch."""
+    ng = _task_module()
+    tasks: list[Any] = [None] * len(rngs)
+    pending = list(range(len(rngs)))
+    for _ in range(max_tries):
+        if not pending:
+            return tasks
+        drawn = [_random_path(rngs[i]) for i in pending]
+        ok = servable(np.concatenate([pts[::10] for _, pts, _ in drawn]), geometry).reshape(len(drawn), -1).all(1)
+        for i, (kind, pts, vel), good in zip(pending, drawn, ok, strict=True):
+            if good:
+                tasks[i] = ng.Task(kind, _TIMES.copy(), pts, vel)
+        pending = [i for i, good in zip(pending, ok, strict=True) if not good]
+    if pending:
+        raise RuntimeError(f"no reachable random path in {max_tries} tries")
+    return tasks
 
 
 def orthoglide_random_task(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                            max_tries: int = 100) -> Any:
-    """A seeded circle, ellipse or line (10 s) whose points some admissible
-    table position can serve (checked on every tenth point by a sweep of 101
-    table positions, :func:`servable`)."""
-    ng = _task_module()
-    for _ in range(max_tries):
-        kind = rng.choice(["circle", "ellipse", "line"])
-        centre = rng.uniform([-0.2, 0.3], [0.4, 0.8])
-        t = np.linspace(0.0, 10.0, 1001)
-        if kind == "line":
-            a, b = centre, centre + rng.uniform(-0.5, 0.5, 2)
-            s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)  # rest to rest
-            pts = a + (b - a) * s[:, None]
-            vel = (b - a) * (0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0))[:, None]
-        else:
-            rx, ry = rng.uniform(0.1, 0.4), rng.uniform(0.1, 0.4) if kind == "ellipse" else None
-            ry = rx if ry is None else ry
-            w, phi = 2 * np.pi / 10.0, rng.uniform(0, 2 * np.pi)
-            ang = phi + w * t
-            pts = centre + np.stack([rx * np.cos(ang), ry * np.sin(ang)], 1)
-            vel = w * np.stack([-rx * np.sin(ang), ry * np.cos(ang)], 1)
-        if servable(pts[::10], geometry).all():  # every tenth point
-            return ng.Task(str(kind), t, pts, vel)
-    raise RuntimeError(f"no reachable random path in {max_tries} tries")
+    """:func:`orthoglide_random_tasks` for one generator."""
+    return orthoglide_random_tasks([rng], geometry, max_tries)[0]
+
+
+def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                         samples: int = 401) -> tuple[np.ndarray, np.ndarray]:
+    """The optimal initial configuration for first path points (N, 2): the
+    lowest kappa (N,) over ``samples`` admissible table positions and the
+    rho1 (N,) that gives it (inf where none is admissible). The sweep of
+    ``pointwise_optimum`` in the per-step formulas (:func:`og.jacobian_rows`)."""
+    g = geometry
+    r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
+    kap, best = np.empty(len(points)), np.empty(len(points), np.int64)
+    chunk = max(1, 2 ** 16 // samples)  # robots per pass: arrays that stay in the cache
+    for lo in range(0, len(points), chunk):
+        pts = points[lo:lo + chunk]
+        rr = np.tile(r1, len(pts))
+        px, py = np.repeat(pts[:, 0], samples), np.repeat(pts[:, 1], samples)
+        r2, r3, mode = og.inverse_rows(rr, px, py, g)
+        k = og.kappa_rows(rr, px, py, g)
+        with np.errstate(invalid="ignore"):
+            ok = mode & (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
+        k = np.where(ok & np.isfinite(k), k, np.inf).reshape(len(pts), samples)
+        best[lo:lo + chunk] = k.argmin(axis=1)
+        kap[lo:lo + chunk] = k[np.arange(len(pts)), best[lo:lo + chunk]]
+    return kap, r1[best]
 
 
 class Orthoglide2PRRKappaEnv(ParagymEnv):
@@ -139,8 +203,7 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
             task = ng.paper_task() if choice == "paper" else orthoglide_random_task(self.np_random, self.geometry)
         else:
             task = choice
-        first = ng.Task(task.name, task.t[:1], task.points[:1], task.velocities[:1])
-        kap, r1 = ng.pointwise_optimum(first, self.geometry, samples=401)
+        kap, r1 = start_table_position(task.points[:1], self.geometry)
         if not np.isfinite(kap[0]):
             raise ValueError("the task's first point is outside the reachable set")
         self.task = task
@@ -246,17 +309,14 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
         ng = _task_module()
         e = self.single_env
         choice = options.get("scenario", e.scenario_arg)
-        tasks = []
-        for i in rows:
-            if isinstance(choice, str):
-                if choice not in ("paper", "random"):
-                    raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
-                task = ng.paper_task() if choice == "paper" else orthoglide_random_task(self._rngs[i], self.geometry)
-            else:
-                task = choice
-            tasks.append(task)
+        if isinstance(choice, str) and choice not in ("paper", "random"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+        if choice == "random":
+            tasks = orthoglide_random_tasks([self._rngs[i] for i in rows], self.geometry)
+        else:
+            tasks = [ng.paper_task() if choice == "paper" else choice] * len(rows)
         first = np.array([t.points[0] for t in tasks])
-        kap, r1 = ng.pointwise_optimum(ng.Task("first", np.zeros(len(first)), first, first), self.geometry, 401)
+        kap, r1 = start_table_position(first, self.geometry)
         if not np.all(np.isfinite(kap)):
             raise ValueError("the task's first point is outside the reachable set")
         if self._tasks[0] is None:  # the first reset allocates the path arrays

@@ -295,11 +295,9 @@ def inverse_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: Ort
     return r2, r3, inside & (sx * sy - cy * cx > 0)
 
 
-def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`jacobian_one` for arrays (N,): J's rows (N, 3) twice, kappa (N,)
-    (inf where J J^T is singular) and n (N, 3). Rows out of reach give NaN."""
-    g = geometry
+def _jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, g: OrthoglideGeometry
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """J's two rows (N, 3) each (the float formulas of :func:`jacobian_one`)."""
     d0, d1 = _dir_one(g)
     cx = g.table_origin[0] + rho1 * d0 + px
     cy = g.table_origin[1] + rho1 * d1 + py
@@ -312,11 +310,32 @@ def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: Or
         i00, i01, i10, i11 = r5y / det, -r4y / det, -r5x / det, r4x / det
         j0 = np.stack([i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y], -1)
         j1 = np.stack([i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y], -1)
+    return j0, j1
+
+
+def _kappa_of_rows(j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
+    """kappa (N,) from J's rows: the eigenvalues of J J^T in closed form (inf where singular)."""
+    with np.errstate(invalid="ignore", divide="ignore"):
         m00, m11 = (j0 * j0).sum(-1), (j1 * j1).sum(-1)
         m01 = (j0 * j1).sum(-1)
         half = 0.5 * (m00 + m11)
         disc = np.sqrt(np.maximum(half * half - (m00 * m11 - m01 * m01), 0.0))
-        kap = np.where(half - disc > 0, np.sqrt((half + disc) / (half - disc)), np.inf)
+        return np.where(half - disc > 0, np.sqrt((half + disc) / (half - disc)), np.inf)
+
+
+def kappa_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+               ) -> np.ndarray:
+    """The kappa of :func:`jacobian_rows` alone (N,), for sweeps."""
+    return _kappa_of_rows(*_jacobian_rows(rho1, px, py, geometry))
+
+
+def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`jacobian_one` for arrays (N,): J's rows (N, 3) twice, kappa (N,)
+    (inf where J J^T is singular) and n (N, 3). Rows out of reach give NaN."""
+    j0, j1 = _jacobian_rows(rho1, px, py, geometry)
+    kap = _kappa_of_rows(j0, j1)
+    with np.errstate(invalid="ignore", divide="ignore"):
         n = np.cross(j0, j1)
         norm = np.sqrt((n * n).sum(-1)) * np.where(n[:, 0] < 0, -1.0, 1.0)
         n = n / norm[:, None]
