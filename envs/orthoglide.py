@@ -319,69 +319,81 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
         kap, r1 = start_table_position(first, self.geometry)
         if not np.all(np.isfinite(kap)):
             raise ValueError("the task's first point is outside the reachable set")
+        n = self.num_envs
         if self._tasks[0] is None:  # the first reset allocates the path arrays
             k = len(tasks[0].t)
-            self._points = np.zeros((self.num_envs, k, 2))
-            self._vel = np.zeros((self.num_envs, k, 2))
-            self._dt = np.zeros((self.num_envs, k - 1))
-            self._last = np.zeros(self.num_envs, np.int64)
-            self._rho = np.zeros((self.num_envs, 3))
-            self._k = np.zeros(self.num_envs, np.int64)
+            self._path = np.zeros((n, k, 4))  # per robot and path point: x, y, vx, vy (table frame)
+            self._flat = self._path.reshape(n * k, 4)  # a view, for gathers by flat index
+            self._dt = np.zeros((n, k - 1))
+            self._last = np.zeros(n, np.int64)
+            self._rho, self._k = np.zeros((n, 3)), np.zeros(n, np.int64)
+            self._j, self._n = np.zeros((2, 3, n)), np.zeros((3, n))
+            self._kappa, self._err, self._failed = np.zeros(n), np.zeros(n), np.zeros(n, bool)
+        k = self._path.shape[1]
         for i, task in zip(rows, tasks, strict=True):
-            if len(task.t) != self._points.shape[1]:
-                raise ValueError(f"every task must have {self._points.shape[1]} path points; got {len(task.t)}")
+            if len(task.t) != k:
+                raise ValueError(f"every task must have {k} path points; got {len(task.t)}")
             self._tasks[i] = task
-            self._points[i], self._vel[i], self._dt[i] = task.points, task.velocities, np.diff(task.t)
-            self._last[i] = len(task.t) - 1
+            self._path[i, :, :2], self._path[i, :, 2:], self._dt[i] = task.points, task.velocities, np.diff(task.t)
+            self._last[i] = k - 1
         self._k[rows] = 0
-        r2, r3, _ = og.inverse_rows(r1, first[:, 0], first[:, 1], self.geometry)
+        r2, r3, mode = og.inverse_rows(r1, first[:, 0], first[:, 1], self.geometry)
         self._rho[rows] = np.stack([r1, r2, r3], -1)
-        self._evaluate()
+        self._evaluate(rows, first[:, 0], first[:, 1], mode)
 
-    def _evaluate(self) -> None:
-        g, k = self.geometry, self._k
-        p = self._points[self._idx, k]
-        r1 = self._rho[:, 0]
-        self._err = np.zeros(self.num_envs)
+    def _at(self, k: np.ndarray) -> np.ndarray:
+        """Every robot's path point k (N,) and its velocity: (N, 4)."""
+        return self._flat.take(self._idx * self._path.shape[1] + k, axis=0)
+
+    def _evaluate(self, rows: np.ndarray | slice, px: np.ndarray, py: np.ndarray, mode: np.ndarray) -> None:
+        """kappa, J, n and failure of ``rows`` at path points (px, py), given
+        whether the working mode reaches them (``mode``)."""
+        g = self.geometry
+        rho = self._rho[rows]
+        r1, r2, r3 = rho[:, 0], rho[:, 1], rho[:, 2]
         if self.joint_mode:
-            tool = og.forward(self._rho, g)
-            self._err = np.hypot(tool[:, 0] - p[:, 0], tool[:, 1] - p[:, 1])
-        _, _, mode = og.inverse_rows(r1, p[:, 0], p[:, 1], g)
-        ok = mode & np.all((self._rho >= self._lo) & (self._rho <= self._hi), axis=1)
-        self._j0, self._j1, kap, n = og.jacobian_rows(r1, p[:, 0], p[:, 1], g)
-        self._kappa = np.where(ok, kap, np.inf)
-        self._n = np.where(ok[:, None], n, 0.0)
+            tool = og.forward(rho, g)
+            self._err[rows] = np.hypot(tool[:, 0] - px, tool[:, 1] - py)
+        lo, hi = g.rho_min, g.rho_max
+        ok = mode & (r1 >= lo[0]) & (r1 <= hi[0]) & (r2 >= lo[1]) & (r2 <= hi[1]) & (r3 >= lo[2]) & (r3 <= hi[2])
+        j, kap, n = og.jacobian_rows(r1, px, py, g)
+        kap = np.where(ok, kap, np.inf)
+        self._j[:, :, rows], self._kappa[rows], self._n[:, rows] = j, kap, np.where(ok, n, 0.0)
         with np.errstate(invalid="ignore"):
-            self._failed = ~ok | ~(self._kappa < KAPPA_LIMIT)
+            self._failed[rows] = ~ok | ~(kap < KAPPA_LIMIT)
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
         e, k = self.single_env, self._k
         step = np.minimum(k, self._dt.shape[1] - 1)  # rows being reset may sit at the path's end
-        dt = self._dt[self._idx, step]
+        dt = self._dt.take(self._idx * self._dt.shape[1] + step)
         k1 = np.where(active, np.minimum(k + 1, self._last), k)
+        p = self._at(k1)
         if self.joint_mode:
             a = np.clip(actions, -1.0, 1.0)
             rho = self._rho + dt[:, None] * e.max_joint_rate * a
+            mode = None
         else:
             a = np.clip(actions[:, 0], -1.0, 1.0)
-            v = self._vel[self._idx, step]
+            v = self._at(step)
             with np.errstate(invalid="ignore", divide="ignore"):
-                rate = og.least_norm_rows(self._j0, self._j1, v[:, 0], v[:, 1])
-            r1 = self._rho[:, 0] + dt * (rate[:, 0] + a * e.max_null_rate * self._n[:, 0])
-            p = self._points[self._idx, k1]
-            r2, r3, _ = og.inverse_rows(r1, p[:, 0], p[:, 1], self.geometry)  # exact tracking
+                rate = og.least_norm_rows(self._j, v[:, 2], v[:, 3])
+            r1 = self._rho[:, 0] + dt * (rate[0] + a * e.max_null_rate * self._n[0])
+            r2, r3, mode = og.inverse_rows(r1, p[:, 0], p[:, 1], self.geometry)  # exact tracking
             rho = np.stack([r1, r2, r3], -1)
-        self._rho = np.where(active[:, None], rho, self._rho)
+        all_step = active.all()
+        self._rho = rho if all_step else np.where(active[:, None], rho, self._rho)
         self._k = k1
-        self._evaluate()
+        if mode is None or not all_step:  # the working mode where the robots now are
+            mode = og.inverse_rows(self._rho[:, 0], p[:, 0], p[:, 1], self.geometry)[2]
+        self._evaluate(slice(None), p[:, 0], p[:, 1], mode)
 
     def _observe(self) -> np.ndarray:
         k = self._k
         nxt = np.minimum(k + 1, self._last)
         with np.errstate(divide="ignore", invalid="ignore"):
             kap = np.where(self._kappa < 2.2e4, np.log(self._kappa), 10.0)
-        obs = np.concatenate([2 * (self._rho - self._lo) / (self._hi - self._lo) - 1, self._points[self._idx, k],
-                              self._points[self._idx, nxt], kap[:, None], self._n], axis=1)
+        obs = np.concatenate([2 * (self._rho - self._lo) / (self._hi - self._lo) - 1, self._at(k)[:, :2],
+                              self._at(nxt)[:, :2], kap[:, None], self._n.T], axis=1)
         return np.clip(np.nan_to_num(obs, nan=10.0), -10.0, 10.0).astype(np.float32)
 
     def _reward(self) -> np.ndarray:

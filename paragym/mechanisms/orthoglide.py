@@ -295,9 +295,9 @@ def inverse_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: Ort
     return r2, r3, inside & (sx * sy - cy * cx > 0)
 
 
-def _jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, g: OrthoglideGeometry
-                   ) -> tuple[np.ndarray, np.ndarray]:
-    """J's two rows (N, 3) each (the float formulas of :func:`jacobian_one`)."""
+def _jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, g: OrthoglideGeometry) -> np.ndarray:
+    """J (2, 3, N), component-major (each ``j[r, c]`` a contiguous (N,) array):
+    the float formulas of :func:`jacobian_one`."""
     d0, d1 = _dir_one(g)
     cx = g.table_origin[0] + rho1 * d0 + px
     cy = g.table_origin[1] + rho1 * d1 + py
@@ -308,16 +308,20 @@ def _jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, g: Orthogli
         b00, b10 = -(r4x * d0 + r4y * d1), -(r5x * d0 + r5y * d1)
         det = r4x * r5y - r4y * r5x
         i00, i01, i10, i11 = r5y / det, -r4y / det, -r5x / det, r4x / det
-        j0 = np.stack([i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y], -1)
-        j1 = np.stack([i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y], -1)
-    return j0, j1
+        return np.array([[i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y],
+                         [i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y]])
 
 
-def _kappa_of_rows(j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
-    """kappa (N,) from J's rows: the eigenvalues of J J^T in closed form (inf where singular)."""
+def _gram(j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """J J^T's entries m00, m11, m01 (N,) from J (2, 3, N), summed as :func:`least_norm_one` sums."""
+    (a0, a1, a2), (b0, b1, b2) = j
+    return a0 * a0 + a1 * a1 + a2 * a2, b0 * b0 + b1 * b1 + b2 * b2, a0 * b0 + a1 * b1 + a2 * b2
+
+
+def _kappa_of(j: np.ndarray) -> np.ndarray:
+    """kappa (N,) of J (2, 3, N): the eigenvalues of J J^T in closed form (inf where singular)."""
+    m00, m11, m01 = _gram(j)
     with np.errstate(invalid="ignore", divide="ignore"):
-        m00, m11 = (j0 * j0).sum(-1), (j1 * j1).sum(-1)
-        m01 = (j0 * j1).sum(-1)
         half = 0.5 * (m00 + m11)
         disc = np.sqrt(np.maximum(half * half - (m00 * m11 - m01 * m01), 0.0))
         return np.where(half - disc > 0, np.sqrt((half + disc) / (half - disc)), np.inf)
@@ -326,26 +330,28 @@ def _kappa_of_rows(j0: np.ndarray, j1: np.ndarray) -> np.ndarray:
 def kappa_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
                ) -> np.ndarray:
     """The kappa of :func:`jacobian_rows` alone (N,), for sweeps."""
-    return _kappa_of_rows(*_jacobian_rows(rho1, px, py, geometry))
+    return _kappa_of(_jacobian_rows(rho1, px, py, geometry))
 
 
 def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`jacobian_one` for arrays (N,): J's rows (N, 3) twice, kappa (N,)
-    (inf where J J^T is singular) and n (N, 3). Rows out of reach give NaN."""
-    j0, j1 = _jacobian_rows(rho1, px, py, geometry)
-    kap = _kappa_of_rows(j0, j1)
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`jacobian_one` for arrays (N,), component-major: J (2, 3, N),
+    kappa (N,) (inf where J J^T is singular) and n (3, N). Rows out of reach
+    give NaN. (Component-major because sums over an axis of three are slow
+    in numpy; written out they also keep :func:`jacobian_one`'s order.)"""
+    j = _jacobian_rows(rho1, px, py, geometry)
+    (a0, a1, a2), (b0, b1, b2) = j
     with np.errstate(invalid="ignore", divide="ignore"):
-        n = np.cross(j0, j1)
-        norm = np.sqrt((n * n).sum(-1)) * np.where(n[:, 0] < 0, -1.0, 1.0)
-        n = n / norm[:, None]
-    return j0, j1, kap, n
+        n = np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
+        norm = np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2)
+        norm[n[0] < 0] *= -1.0
+        n /= norm
+    return j, _kappa_of(j), n
 
 
-def least_norm_rows(j0: np.ndarray, j1: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
-    """:func:`least_norm_one` for arrays: J^+ t_dot (N, 3)."""
-    m00, m11 = (j0 * j0).sum(-1), (j1 * j1).sum(-1)
-    m01 = (j0 * j1).sum(-1)
+def least_norm_rows(j: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
+    """:func:`least_norm_one` for arrays: J^+ t_dot (3, N) from J (2, 3, N)."""
+    m00, m11, m01 = _gram(j)
     det = m00 * m11 - m01 * m01
     w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
-    return j0 * w0[:, None] + j1 * w1[:, None]
+    return j[0] * w0 + j[1] * w1
