@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -14,7 +15,7 @@ from paragym.mechanisms import hybrid
 from paragym.trajectories import nominal_path
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
-           "hybrid_random_scenario"]
+           "hybrid_random_scenario", "hybrid_random_scenarios"]
 
 MM = 1e-3
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
@@ -39,9 +40,38 @@ def hybrid_paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOME
     return HybridScenario("paper", p0, p1, geometry)
 
 
-def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
-                           hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
-    """A seeded pair of poses in the workspace: P0 singularity-free within
+def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry: hybrid.HybridGeometry,
+                     chunk: int = 256) -> np.ndarray:
+    """Which candidate pairs (C, 6) + (C, 6) pass the checks of
+    :func:`hybrid_random_scenarios` after the screen (``hard`` (C,): must
+    the nominal path at Delta = 0.5 fail on its every fourth sample). The
+    checks run stage by stage on the survivors, ``chunk`` pairs at a time."""
+    deltas = np.linspace(0, 1, 11)
+    s = _path_shape()[::4]  # every fourth sample of the nominal path
+    out = np.zeros(len(p0), bool)
+    for lo in range(0, len(p0), chunk):
+        a, b, h = p0[lo:lo + chunk], p1[lo:lo + chunk], hard[lo:lo + chunk]
+        nominal = a[:, None] + (b - a)[:, None] * s[None, :, None]  # (c, 26, 6)
+        m = len(s)
+        # a failure found on these samples is a real one; none found: not hard enough
+        keep = ~(h & hybrid.within_limits(nominal.reshape(-1, 6), 0.5, geometry).reshape(-1, m).all(axis=1))
+        idx = np.flatnonzero(keep)
+        # some split keeps the legs within limits at each sample (necessary for a plan) ...
+        table = hybrid.within_limits(np.repeat(nominal[idx].reshape(-1, 6), len(deltas), 0),
+                                     np.tile(deltas, len(idx) * m), geometry).reshape(len(idx), m, len(deltas))
+        idx = idx[table.any(axis=2).all(axis=1)]
+        # ... and eq 14 in full holds at P0 (Delta = 0.5) and at P1 for some split
+        poses = np.concatenate([a[idx, None], np.repeat(b[idx, None], len(deltas), 1)], axis=1)
+        splits = np.tile(np.concatenate([[0.5], deltas]), len(idx))
+        free = hybrid.solve_rows(poses.reshape(-1, 6), splits, geometry)[4].reshape(len(idx), len(deltas) + 1)
+        out[lo + idx[free[:, 0] & free[:, 1:].any(axis=1)]] = True
+    return out
+
+
+def hybrid_random_scenarios(rngs: list[np.random.Generator],
+                            geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, hard_share: float = 0.5,
+                            max_tries: int = 2000) -> list[HybridScenario]:
+    """One seeded pair of poses per generator: P0 singularity-free within
     limits at the starting split Delta = 0.5, P1 at some Delta; x, y in
     +-100 mm, z in 0-120 mm, roll and pitch in +-0.3 rad, yaw in +-0.4 rad.
     With probability ``hard_share`` the pair is drawn again until its nominal
@@ -50,33 +80,61 @@ def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeom
     every fourth pose of the nominal path some split must keep the legs within
     limits, and P0 and P1 must pass eq 14 in full (necessary conditions for a
     plan, cheap enough for every reset; the tests measure how often the
-    planner then succeeds: every time on 60 seeds)."""
-    deltas = np.linspace(0, 1, 11)
+    planner then succeeds: every time on 60 seeds).
+
+    Each generator draws what it would alone (whether hard, then candidate
+    pairs 16 at a time, the first that passes taken); the candidates of all
+    generators are screened and checked together."""
     low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
     high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
-    hard = rng.random() < hard_share
+    deltas = np.linspace(0, 1, 11)
     batch = 16
+    hard = np.array([rng.random() < hard_share for rng in rngs], bool)
+    out: list[HybridScenario | None] = [None] * len(rngs)
+    pending = np.arange(len(rngs))
     for _ in range(max(1, max_tries // batch)):
-        p0, p1 = rng.uniform(low, high, (batch, 6)), rng.uniform(low, high, (batch, 6))
-        # screen every candidate at once with the leg limits alone (cheap), then check one fully
+        if not pending.size:
+            break
+        draws = [(rngs[i].uniform(low, high, (batch, 6)), rngs[i].uniform(low, high, (batch, 6))) for i in pending]
+        p0 = np.array([d[0] for d in draws]).reshape(-1, 6)
+        p1 = np.array([d[1] for d in draws]).reshape(-1, 6)
+        # screen every candidate with the leg limits alone (cheap), then check the survivors fully
         start_ok = hybrid.within_limits(p0, 0.5, geometry)
-        goal_ok = hybrid.within_limits(np.repeat(p1, len(deltas), 0), np.tile(deltas, batch),
-                                       geometry).reshape(batch, -1).any(axis=1)
-        for k in np.flatnonzero(start_ok & goal_ok):
-            nominal = nominal_path(p0[k], p1[k])[1][::4]  # every fourth sample of the nominal path
-            if hard and hybrid.within_limits(nominal, 0.5, geometry).all():
-                continue  # a failure found on these samples is a real one; none found: not hard enough
-            # some split keeps the legs within limits at each sample (necessary for a plan) ...
-            table = hybrid.within_limits(np.repeat(nominal, len(deltas), 0), np.tile(deltas, len(nominal)),
-                                         geometry).reshape(len(nominal), -1)
-            if not table.any(axis=1).all():
-                continue
-            # ... and eq 14 in full holds at P0 (Delta = 0.5) and at P1 for some split
-            free = hybrid.solve(np.vstack([p0[k:k + 1], np.repeat(p1[k:k + 1], len(deltas), 0)]),
-                                np.concatenate([[0.5], deltas]), geometry, validate=False).free
-            if free[0] and free[1:].any():
-                return HybridScenario("random", tuple(map(float, p0[k])), tuple(map(float, p1[k])), geometry)
-    raise RuntimeError(f"no reachable pair of poses in {max_tries} tries")
+        goal_ok = hybrid.within_limits(np.repeat(p1, len(deltas), 0), np.tile(deltas, len(p1)),
+                                       geometry).reshape(len(p1), -1).any(axis=1)
+        screened = (start_ok & goal_ok).reshape(len(pending), batch)
+        # the screened candidates in each generator's order: the first of every generator, then the
+        # second of those not yet served, ... (as one generator alone tries them, one by one)
+        order = np.argsort(~screened, axis=1, kind="stable")
+        waiting = np.arange(len(pending))
+        for rank in range(batch):
+            waiting = waiting[screened[waiting, order[waiting, rank]]]
+            if not waiting.size:
+                break
+            k = waiting * batch + order[waiting, rank]
+            good = _candidates_pass(p0[k], p1[k], hard[pending[waiting]], geometry)
+            for r, kk in zip(waiting[good], k[good], strict=True):
+                out[pending[r]] = HybridScenario("random", tuple(map(float, p0[kk])), tuple(map(float, p1[kk])),
+                                                 geometry)
+            waiting = waiting[~good]
+        pending = np.array([i for i in pending if out[i] is None], np.int64)
+    if pending.size:
+        raise RuntimeError(f"no reachable pair of poses in {max_tries} tries")
+    return out  # type: ignore[return-value]
+
+
+def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                           hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
+    """:func:`hybrid_random_scenarios` for one generator."""
+    return hybrid_random_scenarios([rng], geometry, hard_share, max_tries)[0]
+
+
+@lru_cache(maxsize=4)
+def _path_shape(tau: float = 0.01) -> np.ndarray:
+    """s(u) of the nominal path at its samples (``nominal_path(0, 1, tau)``), read-only."""
+    s = nominal_path(np.zeros(1), np.ones(1), tau)[1][:, 0]
+    s.setflags(write=False)
+    return s
 
 
 class HybridSingularityFreeEnv(ParagymEnv):
@@ -243,7 +301,7 @@ class HybridSingularityFreeEnv(ParagymEnv):
 
 class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
-    one batched :func:`paragym.mechanisms.hybrid.solve` (nine legs, two
+    one batched :func:`paragym.mechanisms.hybrid.solve_rows` (nine legs, two
     singularity measures) per step for all robots (:mod:`paragym.envs.vector`;
     the same numbers as the single env). Keyword arguments are the single env's."""
 
@@ -269,15 +327,15 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         e = self.single_env
         choice = options.get("scenario", e.scenario_arg)
         e._check_scenario(choice)
-        for i in rows:
-            if choice == "random":
-                scenario = hybrid_random_scenario(self._rngs[i], self.geometry)
-            elif choice == "paper":
-                scenario = hybrid_paper_scenario(self.geometry)
-            else:
-                scenario = choice
+        if choice == "random":
+            scenarios = hybrid_random_scenarios([self._rngs[i] for i in rows], self.geometry)
+        else:
+            scenarios = [hybrid_paper_scenario(self.geometry) if choice == "paper" else choice] * len(rows)
+        for i, scenario in zip(rows, scenarios, strict=True):
             self._scenarios[i] = scenario
-            self._nominal[i] = nominal_path(np.array(scenario.p0), np.array(scenario.p1), e.tau)[1]
+        p0 = np.array([sc.p0 for sc in scenarios])
+        p1 = np.array([sc.p1 for sc in scenarios])
+        self._nominal[rows] = p0[:, None] + (p1 - p0)[:, None] * _path_shape(e.tau)[None, :, None]
         self._k[rows] = 0
         self._delta[rows], self._d_delta[rows] = 0.5, 0.0
         self._offset[rows] = 0.0
@@ -288,9 +346,9 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
         """The legs and the measures of ``rows`` (all robots after a step)."""
         pose = self._nominal[rows, self._k[rows]]
         pose[:, :3] += self._offset[rows]
-        state = hybrid.solve(pose, self._delta[rows], self.geometry, validate=False)
-        self._pose[rows], self._lengths[rows] = pose, state.lengths
-        self._mu_h[rows], self._mu_t[rows], self._free[rows] = state.mu_hexapod, state.mu_tripod, state.free
+        lengths, mu_h, mu_t, _, free = hybrid.solve_rows(pose, self._delta[rows], self.geometry)
+        self._pose[rows], self._lengths[rows] = pose, lengths
+        self._mu_h[rows], self._mu_t[rows], self._free[rows] = mu_h, mu_t, free
         self._all_free &= self._free
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:

@@ -164,3 +164,27 @@ def test_single_pose_path_equals_batched():
         assert mu_h == pytest.approx(st_.mu_hexapod[k], abs=1e-12)
         assert mu_t == pytest.approx(st_.mu_tripod[k], abs=1e-12)
         assert within == st_.within_limits[k] and free == st_.free[k]
+    # the component-major path (the vector env's step and the scenario checks), chunked
+    lengths, mu_h, mu_t, within, free = hybrid.solve_rows(poses, deltas, chunk=128)
+    np.testing.assert_allclose(lengths, st_.lengths, atol=1e-12)
+    np.testing.assert_allclose(mu_h, st_.mu_hexapod, atol=1e-12)
+    np.testing.assert_allclose(mu_t, st_.mu_tripod, atol=1e-12)
+    np.testing.assert_array_equal(free, st_.free)
+    np.testing.assert_allclose(hybrid.leg_lengths_rows(poses, deltas, chunk=100), st_.lengths, atol=1e-12)
+
+
+def test_the_measures_are_the_smallest_singular_values():
+    # _sigma_min goes through the eigenvalues of M^T M; an SVD is the definition
+    rng = np.random.default_rng(1)
+    poses = rng.uniform(-1, 1, (200, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
+    t_e, t_a, t_t = hybrid.split(poses, rng.uniform(0, 1, 200))
+    for m in (hybrid.hexapod_matrix(t_a), hybrid.tripod_matrix(t_t)):
+        np.testing.assert_allclose(hybrid._sigma_min(m), np.linalg.svd(m, compute_uv=False)[:, -1], atol=1e-13)
+
+
+def test_random_scenarios_in_a_batch_equal_one_at_a_time():
+    from paragym.envs.hybrid import hybrid_random_scenario, hybrid_random_scenarios
+
+    together = hybrid_random_scenarios([np.random.default_rng(s) for s in range(24)])
+    alone = [hybrid_random_scenario(np.random.default_rng(s)) for s in range(24)]
+    assert together == alone

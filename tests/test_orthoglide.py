@@ -90,6 +90,41 @@ def test_float_path_equals_batched():
         np.testing.assert_allclose(nn, n[i], atol=1e-10)
         t = np.array([0.3, -0.2])
         np.testing.assert_allclose(o.least_norm_one(j0, j1, *t), np.linalg.pinv(j[i]) @ t, atol=1e-10)
+    # the component-major path of the vector env: J (2, 3, N), kappa, n (3, N)
+    jr, kr, nr = o.jacobian_rows(rho[:, 0], p[:, 0], p[:, 1])
+    np.testing.assert_allclose(np.moveaxis(jr, -1, 0), j, atol=1e-12)
+    np.testing.assert_allclose(kr, k, rtol=1e-10)
+    np.testing.assert_allclose(nr.T, n, atol=1e-10)
+    np.testing.assert_allclose(o.kappa_rows(rho[:, 0], p[:, 0], p[:, 1]), kr, rtol=0)
+    t = np.array([0.3, -0.2])
+    np.testing.assert_allclose(o.least_norm_rows(jr, np.full(len(rho), t[0]), np.full(len(rho), t[1])).T,
+                               np.linalg.pinv(j) @ t, atol=1e-10)
+
+
+def test_task_generation_in_batches_equals_one_at_a_time():
+    from paragym.envs.orthoglide import (orthoglide_random_task, orthoglide_random_tasks, servable,
+                                         start_table_position)
+    from paragym.planners import nullspace_gradient as ng
+
+    together = orthoglide_random_tasks([np.random.default_rng(s) for s in range(12)])
+    for s, task in enumerate(together):
+        alone = orthoglide_random_task(np.random.default_rng(s))
+        assert task.name == alone.name
+        np.testing.assert_array_equal(task.points, alone.points)
+    # servable tries every tenth table position first: the same answer as the full sweep
+    pts = np.random.default_rng(0).uniform([-1.5, -1.0], [2.0, 2.0], (3000, 2))
+    full = np.zeros(len(pts), bool)
+    for r1 in np.linspace(-1, 1, 101):
+        rho, ok = o.inverse(np.full(len(pts), r1), pts)
+        full |= ok & o.within_limits(rho)
+    np.testing.assert_array_equal(servable(pts), full)
+    assert 0.2 < full.mean() < 0.9  # both answers occur
+    # the start configuration: the optimum of the 401-position sweep, as the planner finds it
+    first = np.array([t.points[0] for t in together])
+    kap, r1 = start_table_position(first)
+    ref_kap, ref_r1 = ng.pointwise_optimum(ng.Task("first", np.zeros(len(first)), first, first), samples=401)
+    np.testing.assert_allclose(kap, ref_kap, rtol=1e-10)
+    np.testing.assert_allclose(r1, ref_r1, atol=1e-12)
 
 
 def test_the_papers_three_cases():
