@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -174,35 +175,50 @@ def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFA
             tol: float = 1e-13) -> np.ndarray:
     """The eta of :func:`forward` for one configuration, in Python floats:
     Newton's method on eq 4 = eq 5 with the analytic Jacobian and Cramer's
-    rule (the per-sample path of the drive simulation; tested equal)."""
-    g = geometry
-    u = np.asarray(units, float).tolist()
-    target = [math.dist(u[(i - 1) % 3], u[(i + 1) % 3]) for i in range(3)]
+    rule (the per-sample path of the drive simulation; tested equal). Row i
+    of the residual is the distance between units i - 1 and i + 1."""
+    ca0, ca1, ca2, sa0, sa1, sa2, base, r = _eta_consts(geometry)
+    (u0x, u0y, u0z), (u1x, u1y, u1z), (u2x, u2y, u2z) = np.asarray(units, float).tolist()
+    t0 = math.sqrt((u2x - u1x) ** 2 + (u2y - u1y) ** 2 + (u2z - u1z) ** 2)  # units 2 and 1
+    t1 = math.sqrt((u0x - u2x) ** 2 + (u0y - u2y) ** 2 + (u0z - u2z) ** 2)  # units 0 and 2
+    t2 = math.sqrt((u1x - u0x) ** 2 + (u1y - u0y) ** 2 + (u1z - u0z) ** 2)  # units 1 and 0
+    e0, e1, e2 = (float(e) for e in eta0)
+    for _ in range(50):
+        s0, s1, s2, c0, c1, c2 = math.sin(e0), math.sin(e1), math.sin(e2), math.cos(e0), math.cos(e1), math.cos(e2)
+        q0, q1, q2 = base + r * c0, base + r * c1, base + r * c2
+        d0x, d0y, d0z, d1x, d1y, d1z = q0 * ca0, q0 * sa0, -r * s0, q1 * ca1, q1 * sa1, -r * s1
+        d2x, d2y, d2z = q2 * ca2, q2 * sa2, -r * s2
+        # d/d eta_k of unit k's position
+        g0x, g0y, g0z, g1x, g1y, g1z = -r * s0 * ca0, -r * s0 * sa0, -r * c0, -r * s1 * ca1, -r * s1 * sa1, -r * c1
+        g2x, g2y, g2z = -r * s2 * ca2, -r * s2 * sa2, -r * c2
+        f0x, f0y, f0z = d2x - d1x, d2y - d1y, d2z - d1z  # row 0: prev = 2, next = 1
+        f1x, f1y, f1z = d0x - d2x, d0y - d2y, d0z - d2z  # row 1: prev = 0, next = 2
+        f2x, f2y, f2z = d1x - d0x, d1y - d0y, d1z - d0z  # row 2: prev = 1, next = 0
+        l0 = math.sqrt(f0x * f0x + f0y * f0y + f0z * f0z)
+        l1 = math.sqrt(f1x * f1x + f1y * f1y + f1z * f1z)
+        l2 = math.sqrt(f2x * f2x + f2y * f2y + f2z * f2z)
+        r0, r1, r2 = l0 - t0, l1 - t1, l2 - t2
+        if max(abs(r0), abs(r1), abs(r2)) < tol:
+            break
+        j02 = (f0x * g2x + f0y * g2y + f0z * g2z) / l0
+        j01 = -(f0x * g1x + f0y * g1y + f0z * g1z) / l0
+        j10 = (f1x * g0x + f1y * g0y + f1z * g0z) / l1
+        j12 = -(f1x * g2x + f1y * g2y + f1z * g2z) / l1
+        j21 = (f2x * g1x + f2y * g1y + f2z * g1z) / l2
+        j20 = -(f2x * g0x + f2y * g0y + f2z * g0z) / l2
+        # Cramer's rule with a zero diagonal
+        det = -j01 * (-j12 * j20) + j02 * (j10 * j21)
+        e0 -= ((-j12 * j21) * r0 + (j02 * j21) * r1 + (j01 * j12) * r2) / det
+        e1 -= ((j12 * j20) * r0 + (-j02 * j20) * r1 + (j02 * j10) * r2) / det
+        e2 -= ((j10 * j21) * r0 + (j01 * j20) * r1 + (-j01 * j10) * r2) / det
+    return np.array([e0, e1, e2])
+
+
+@lru_cache(maxsize=8)
+def _eta_consts(g: TripodGeometry) -> tuple[float, ...]:
     ca = [math.cos(a) for a in g.alphas]
     sa = [math.sin(a) for a in g.alphas]
-    base, r = g.p / math.sqrt(3), g.r
-    eta = [float(e) for e in eta0]
-    for _ in range(50):
-        reach = [base + r * math.cos(e) for e in eta]
-        d = [(reach[k] * ca[k], reach[k] * sa[k], -r * math.sin(eta[k])) for k in range(3)]
-        dd = [(-r * math.sin(eta[k]) * ca[k], -r * math.sin(eta[k]) * sa[k], -r * math.cos(eta[k])) for k in range(3)]
-        res, jac = [], [[0.0] * 3 for _ in range(3)]
-        for i in range(3):
-            a, b = (i - 1) % 3, (i + 1) % 3
-            diff = (d[a][0] - d[b][0], d[a][1] - d[b][1], d[a][2] - d[b][2])
-            length = math.sqrt(diff[0] ** 2 + diff[1] ** 2 + diff[2] ** 2)
-            res.append(length - target[i])
-            jac[i][a] = (diff[0] * dd[a][0] + diff[1] * dd[a][1] + diff[2] * dd[a][2]) / length
-            jac[i][b] = -(diff[0] * dd[b][0] + diff[1] * dd[b][1] + diff[2] * dd[b][2]) / length
-        if max(abs(x) for x in res) < tol:
-            break
-        (j00, j01, j02), (j10, j11, j12), (j20, j21, j22) = jac
-        det = j00 * (j11 * j22 - j12 * j21) - j01 * (j10 * j22 - j12 * j20) + j02 * (j10 * j21 - j11 * j20)
-        inv = [[j11 * j22 - j12 * j21, j02 * j21 - j01 * j22, j01 * j12 - j02 * j11],
-               [j12 * j20 - j10 * j22, j00 * j22 - j02 * j20, j02 * j10 - j00 * j12],
-               [j10 * j21 - j11 * j20, j01 * j20 - j00 * j21, j00 * j11 - j01 * j10]]
-        eta = [eta[k] - sum(inv[k][m] * res[m] for m in range(3)) / det for k in range(3)]
-    return np.array(eta)
+    return (*ca, *sa, g.p / math.sqrt(3), g.r)
 
 
 def distances_one(units: np.ndarray) -> list[float]:

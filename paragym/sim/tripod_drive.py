@@ -159,13 +159,18 @@ class TripodDrive:
     def step(self) -> np.ndarray:
         """Advance one sample; returns the odometric increments (3, 2) of the units."""
         sc, dt = self.scenario, self.dt
-        believed = np.array([math.cos(sc.heading), math.sin(sc.heading)])
-        odo = np.tile(sc.speed * dt * believed, (3, 1))
-        ang = sc.heading + np.asarray(sc.heading_error)
-        true_dir = np.stack([np.cos(ang), np.sin(ang)], axis=1)
+        way = sc.speed * dt
+        ox, oy = way * math.cos(sc.heading), way * math.sin(sc.heading)
+        odo = np.array([[ox, oy], [ox, oy], [ox, oy]])
         # on a slope the wheel rolls along the ground: less horizontal way than it counts
-        slope = np.sum(self._gradient * true_dir, axis=1)
-        move = (sc.speed * dt / np.sqrt(1.0 + slope * slope))[:, None] * true_dir
+        grad = self._gradient.tolist()
+        move = []
+        for i, err in enumerate(sc.heading_error):  # three units, in floats (cheaper than numpy at this size)
+            c, s = math.cos(sc.heading + err), math.sin(sc.heading + err)
+            slope = grad[i][0] * c + grad[i][1] * s
+            scale = way / math.sqrt(1.0 + slope * slope)
+            move.append([scale * c, scale * s])
+        move = np.array(move)
         if sc.slip > 0:
             a = self.slip_angle[self.k]
             move += (self.slip_speed[self.k] * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
