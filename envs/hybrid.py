@@ -242,7 +242,7 @@ class HybridSingularityFreeEnv(ParagymEnv):
         pose[:3] += self._offset
         self._pose = pose
         lengths, self._mu_h, self._mu_t, self._within, self._free = hybrid.solve_one(pose, self._delta, self.geometry)
-        self._lengths = np.array(lengths)
+        self._lengths, self._lengths_list = np.array(lengths), lengths
         self._all_free &= self._free
 
     def _apply_action(self, action: np.ndarray) -> None:
@@ -269,7 +269,7 @@ class HybridSingularityFreeEnv(ParagymEnv):
         g = self.geometry
         close = sum(max(0.0, 2 * g.singularity_threshold - m) / (2 * g.singularity_threshold)
                     for m in (self._mu_h, self._mu_t))
-        out = int(np.sum((self._lengths < g.l_min) | (self._lengths > g.l_max)))
+        out = sum(1 for v in self._lengths_list if v < g.l_min or v > g.l_max)
         return float(-self.w_offset * np.linalg.norm(self._offset) / self.j_bar
                      - self.w_delta * abs(self._d_delta) / self.max_delta_step
                      - self.w_singular * close - self.w_limit * out)

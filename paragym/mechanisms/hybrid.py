@@ -441,7 +441,7 @@ def solve_one(p: list[float] | np.ndarray, delta: float, geometry: HybridGeometr
     rhs = [-(axes[j][0] * e[j][0] + axes[j][1] * e[j][1] + axes[j][2] * e[j][2]) for j in range(3)]
     ptr = [sum(rhs[j] * pinv_t[j][0] for j in range(3)), sum(rhs[j] * pinv_t[j][1] for j in range(3)),
            g.tripod_home_height + share * z]
-    ra = [[sum(re[i][k] * rt[j][k] for k in range(3)) for j in range(3)] for i in range(3)]  # R_E R_T^T
+    ra = [[a[0] * b[0] + a[1] * b[1] + a[2] * b[2] for b in rt] for a in re]  # R_E R_T^T
     rp = _mv(ra, ptr)
     pa = [pe[0] - rp[0], pe[1] - rp[1], pe[2] - rp[2]]
     lengths, h_cols, t_cols = [], [], []
