@@ -53,28 +53,44 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     return out
 
 
-def _random_path(rng: np.random.Generator) -> tuple[str, np.ndarray, np.ndarray]:
-    """One candidate path (kind, points (1001, 2), velocities), drawn from ``rng``:
-    a circle, an ellipse or a rest-to-rest line, 10 s."""
-    kind = str(rng.choice(["circle", "ellipse", "line"]))
+_KINDS = ("circle", "ellipse", "line")
+
+
+def _draw_path(rng: np.random.Generator) -> tuple[int, list[float]]:
+    """One candidate path's kind (index into circle, ellipse, line) and
+    parameters, drawn from ``rng``: the centre (x, y), then for a line its end
+    (x, y), for a circle or an ellipse the radii rx, ry and the start angle."""
+    kind = str(rng.choice(list(_KINDS)))
     centre = rng.uniform([-0.2, 0.3], [0.4, 0.8])
-    t = _TIMES
     if kind == "line":
-        a, b = centre, centre + rng.uniform(-0.5, 0.5, 2)
-        s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)  # rest to rest
-        pts = a + (b - a) * s[:, None]
-        vel = (b - a) * (0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0))[:, None]
-    else:
-        rx, ry = rng.uniform(0.1, 0.4), rng.uniform(0.1, 0.4) if kind == "ellipse" else None
-        ry = rx if ry is None else ry
-        w, phi = 2 * np.pi / 10.0, rng.uniform(0, 2 * np.pi)
-        ang = phi + w * t
-        pts = centre + np.stack([rx * np.cos(ang), ry * np.sin(ang)], 1)
-        vel = w * np.stack([-rx * np.sin(ang), ry * np.cos(ang)], 1)
-    return kind, pts, vel
+        return 2, [*centre, *(centre + rng.uniform(-0.5, 0.5, 2))]
+    rx = rng.uniform(0.1, 0.4)
+    ry = rng.uniform(0.1, 0.4) if kind == "ellipse" else rx
+    return _KINDS.index(kind), [*centre, rx, ry, rng.uniform(0, 2 * np.pi)]
 
 
-_TIMES = np.linspace(0.0, 10.0, 1001)
+def _path(kind: int, q: list[float], t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Points and velocities (len(t), 2) of a drawn path at times ``t`` (s):
+    a circle or an ellipse run once in 10 s from its start angle, or a
+    rest-to-rest line (0.5 - 0.5 cos(pi t / 10) of the way)."""
+    pts, vel = np.empty((len(t), 2)), np.empty((len(t), 2))
+    if kind == 2:  # from a = q[:2] to b = q[2:4]
+        s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)
+        ds = 0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0)
+        for k in range(2):
+            d = q[2 + k] - q[k]
+            pts[:, k], vel[:, k] = q[k] + d * s, d * ds
+    else:  # centre q[:2], radii q[2:4], start angle q[4]
+        w = 2 * np.pi / 10.0
+        ang = q[4] + w * t
+        c, sn = np.cos(ang), np.sin(ang)
+        pts[:, 0], pts[:, 1] = q[0] + q[2] * c, q[1] + q[3] * sn
+        vel[:, 0], vel[:, 1] = w * (-q[2] * sn), w * (q[3] * c)
+    return pts, vel
+
+
+_TIMES = np.linspace(0.0, 10.0, 1001)  # the random tasks' times (s), shared by them: read-only
+_TIMES.setflags(write=False)
 
 
 def orthoglide_random_tasks(rngs: list[np.random.Generator],
@@ -82,23 +98,22 @@ def orthoglide_random_tasks(rngs: list[np.random.Generator],
     """One seeded circle, ellipse or line (10 s) per generator, each drawn
     until some admissible table position serves every tenth point (a sweep of
     101 table positions, :func:`servable`). Each generator draws exactly what
-    it would alone (a candidate, then the test); the tests of all pending
-    candidates run in one batch."""
+    it would alone (a candidate, then the test); the candidates of all
+    pending generators are tested in one batch."""
     ng = _task_module()
     tasks: list[Any] = [None] * len(rngs)
-    pending = list(range(len(rngs)))
+    pending = np.arange(len(rngs))
     for _ in range(max_tries):
-        if not pending:
+        if not pending.size:
             return tasks
-        drawn = [_random_path(rngs[i]) for i in pending]
-        ok = servable(np.concatenate([pts[::10] for _, pts, _ in drawn]), geometry).reshape(len(drawn), -1).all(1)
-        for i, (kind, pts, vel), good in zip(pending, drawn, ok, strict=True):
-            if good:
-                tasks[i] = ng.Task(kind, _TIMES.copy(), pts, vel)
-        pending = [i for i, good in zip(pending, ok, strict=True) if not good]
-    if pending:
-        raise RuntimeError(f"no reachable random path in {max_tries} tries")
-    return tasks
+        drawn = [_draw_path(rngs[i]) for i in pending]
+        every_tenth = np.concatenate([_path(kind, q, _TIMES[::10])[0] for kind, q in drawn])
+        ok = servable(every_tenth, geometry).reshape(len(drawn), -1).all(axis=1)
+        for j in np.flatnonzero(ok):
+            kind, q = drawn[j]
+            tasks[pending[j]] = ng.Task(_KINDS[kind], _TIMES, *_path(kind, q, _TIMES))
+        pending = pending[~ok]
+    raise RuntimeError(f"no reachable random path in {max_tries} tries")
 
 
 def orthoglide_random_task(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,

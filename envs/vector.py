@@ -14,9 +14,14 @@ after a robot's episode ends resets that robot (its action is ignored; its
 reward is 0 and its termination and truncation flags are False). The time
 limit of the registration (``max_episode_steps``) truncates as ``TimeLimit``.
 
-Only resets (a new scenario per robot) loop over robots; a step is array
-operations on all of them. PyBullet stays the renderer: ``render()`` draws
-robot ``render_index`` in the single env's scene.
+A step is array operations on all robots. A reset draws each resetting
+robot's random numbers from its own generator (a short loop: the draws must
+stay per robot to match the single env); the tests that accept or reject a
+drawn scenario then run for all of them at once where the task allows
+(Orthoglide, hybrid). The tripod builds each robot's drive and the CaPaMan
+its PyBullet-checked scenario and distance grid one robot at a time.
+PyBullet stays the renderer: ``render()`` draws robot ``render_index`` in the
+single env's scene.
 """
 
 from __future__ import annotations

@@ -112,7 +112,7 @@ def test_sb3_trains_on_a_native_vector_env(tmp_path):
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecMonitor
 
-    from paragym.baselines.sb3_vec import as_sb3_vecenv
+    from paragym.baselines import as_sb3_vecenv  # the name the docs give
     from paragym.baselines.training import train
 
     venv = as_sb3_vecenv("paragym/HybridSingularityFree-v0", num_envs=4)
