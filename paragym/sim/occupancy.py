@@ -314,14 +314,18 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
     cap = round(grids.cap / grids.unit)
     best = np.full(n, cap, np.int64)
     part = np.full(n, -1, np.int64)
-    for p, local, middle, radius in _blocks(clusters):  # a loop over blocks of points, each for all robots at once
-        r = rot[:, p]
-        c = centres[:, p] + middle[0] * r[:, :, 0] + middle[1] * r[:, :, 1] + middle[2] * r[:, :, 2]
-        gap = np.sqrt(np.sum((c - np.clip(c, lo, hi)) ** 2, axis=1))
-        near = np.flatnonzero(gap <= radius)
-        if near.size == 0:
-            continue
-        r, cn = r[near].astype(np.float32), centres[near, p].astype(np.float32)  # element-wise float32
+    blocks = _blocks(clusters)
+    parts, middles, radii = _block_arrays(clusters)
+    # every block's bounding sphere against every robot's grid at once: (N, blocks)
+    r = rot[:, parts]
+    c = (centres[:, parts] + middles[None, :, 0, None] * r[..., 0] + middles[None, :, 1, None] * r[..., 1]
+         + middles[None, :, 2, None] * r[..., 2])
+    gap = np.sqrt(np.sum((c - np.clip(c, lo[:, None], hi[:, None])) ** 2, axis=2))
+    close = gap <= radii
+    for b in np.flatnonzero(close.any(axis=0)):  # a loop over the blocks near some grid, each for all robots at once
+        p, local = blocks[b][:2]
+        near = np.flatnonzero(close[:, b])
+        r, cn = rot[near, p].astype(np.float32), centres[near, p].astype(np.float32)  # element-wise float32
         local = local.astype(np.float32)
         world = (cn[:, None, :] + local[None, :, 0, None] * r[:, None, :, 0]
                  + local[None, :, 1, None] * r[:, None, :, 1] + local[None, :, 2, None] * r[:, None, :, 2])
@@ -348,4 +352,14 @@ def _blocks(clusters: ClusterPoints, edge: float = 0.06) -> list[tuple[int, np.n
                 middle = (block.min(axis=0) + block.max(axis=0)) / 2
                 out.append((int(p), block, middle, float(np.sqrt(np.sum((block - middle) ** 2, axis=1)).max()) + 1e-9))
         clusters._grid_cache[key] = out
+    return clusters._grid_cache[key]
+
+
+def _block_arrays(clusters: ClusterPoints, edge: float = 0.06) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_blocks` as arrays: part index (B,), centre (B, 3), radius (B,). Kept on the clusters."""
+    key = ("block arrays", edge)
+    if key not in clusters._grid_cache:
+        blocks = _blocks(clusters, edge)
+        clusters._grid_cache[key] = (np.array([b[0] for b in blocks]), np.array([b[2] for b in blocks]),
+                                     np.array([b[3] for b in blocks]))
     return clusters._grid_cache[key]
