@@ -225,6 +225,9 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
                 self._dt = drive.dt
                 self._noise = np.zeros((self.num_envs, drive.steps + 1, 3))
                 self._slip_angle, self._slip_speed = np.zeros_like(self._noise), np.zeros_like(self._noise)
+                # views with one row per (robot, sample), for gathers by flat index
+                self._noise_rows, self._slip_angle_rows, self._slip_speed_rows = (
+                    arr.reshape(-1, 3) for arr in (self._noise, self._slip_angle, self._slip_speed))
             if drive.steps + 1 != self._noise.shape[1] or drive.dt != self._dt:
                 raise ValueError(f"every drive must have {self._noise.shape[1]} samples at {1 / self._dt:g} Hz; "
                                  f"got {drive.steps + 1} at {1 / drive.dt:g} Hz")
@@ -291,7 +294,8 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         grad = self._gradient[sel]
         slope = grad[..., 0] * cos + grad[..., 1] * sin
         scale = speed[:, None] * dt / np.sqrt(1.0 + slope * slope)
-        a, v = self._slip_angle[idx, k], self._slip_speed[idx, k] * dt
+        at = idx * self._noise.shape[1] + k  # flat row of (robot, sample): one gather instead of two indices
+        a, v = self._slip_angle_rows.take(at, axis=0), self._slip_speed_rows.take(at, axis=0) * dt
         move = np.stack([scale * cos + v * np.cos(a), scale * sin + v * np.sin(a)], -1)
         t = self._t[sel]
         pushed = np.flatnonzero((t < self._push[sel, 1]) & (self._push[sel, 1] <= t + dt))
@@ -313,7 +317,7 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         self._t[sel] = t + dt
         self._eta_true[sel] = mt.eta_rows(true, self._eta_true[sel], self.geometry)
         self._k[sel] = k + 1
-        self._eta[sel] = self._eta_true[sel] + self._noise[idx, k + 1]
+        self._eta[sel] = self._eta_true[sel] + self._noise_rows.take(at + 1, axis=0)
         self._errors()
 
     def _errors(self) -> None:

@@ -259,7 +259,7 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
         fx, fy, fz = dx[:, prev] - dx[:, nxt], dy[:, prev] - dy[:, nxt], dz[:, prev] - dz[:, nxt]
         length = np.sqrt(fx * fx + fy * fy + fz * fz)
         res = length - target[active]
-        done = np.max(np.abs(res), axis=1) < tol
+        done = np.maximum(np.maximum(np.abs(res[:, 0]), np.abs(res[:, 1])), np.abs(res[:, 2])) < tol
         if done.all():
             break
         if done.any():  # carry on with the rows still moving (no copies while all of them are)
