@@ -54,6 +54,10 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
 
 
 _KINDS = ("circle", "ellipse", "line")
+_TIMES = np.linspace(0.0, 10.0, 1001)  # the random tasks' times (s), shared by them: read-only
+_TIMES.setflags(write=False)
+# a line's share of the way and its rate (1/s) at those times
+_LINE_SHAPE = np.array([0.5 - 0.5 * np.cos(np.pi * _TIMES / 10.0), 0.5 * np.pi / 10.0 * np.sin(np.pi * _TIMES / 10.0)])
 
 
 def _draw_path(rng: np.random.Generator) -> tuple[int, list[float]]:
@@ -69,14 +73,15 @@ def _draw_path(rng: np.random.Generator) -> tuple[int, list[float]]:
     return _KINDS.index(kind), [*centre, rx, ry, rng.uniform(0, 2 * np.pi)]
 
 
-def _path(kind: int, q: list[float], t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Points and velocities (len(t), 2) of a drawn path at times ``t`` (s):
-    a circle or an ellipse run once in 10 s from its start angle, or a
-    rest-to-rest line (0.5 - 0.5 cos(pi t / 10) of the way)."""
+def _path(kind: int, q: list[float], step: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """Points and velocities (1001 / step, 2) of a drawn path at every
+    ``step``-th of its times :data:`_TIMES` (10 s): a circle or an ellipse
+    run once from its start angle, or a rest-to-rest line (0.5 - 0.5
+    cos(pi t / 10) of the way)."""
+    t = _TIMES[::step]
     pts, vel = np.empty((len(t), 2)), np.empty((len(t), 2))
     if kind == 2:  # from a = q[:2] to b = q[2:4]
-        s = 0.5 - 0.5 * np.cos(np.pi * t / 10.0)
-        ds = 0.5 * np.pi / 10.0 * np.sin(np.pi * t / 10.0)
+        s, ds = _LINE_SHAPE[0, ::step], _LINE_SHAPE[1, ::step]
         for k in range(2):
             d = q[2 + k] - q[k]
             pts[:, k], vel[:, k] = q[k] + d * s, d * ds
@@ -87,10 +92,6 @@ def _path(kind: int, q: list[float], t: np.ndarray) -> tuple[np.ndarray, np.ndar
         pts[:, 0], pts[:, 1] = q[0] + q[2] * c, q[1] + q[3] * sn
         vel[:, 0], vel[:, 1] = w * (-q[2] * sn), w * (q[3] * c)
     return pts, vel
-
-
-_TIMES = np.linspace(0.0, 10.0, 1001)  # the random tasks' times (s), shared by them: read-only
-_TIMES.setflags(write=False)
 
 
 def orthoglide_random_tasks(rngs: list[np.random.Generator],
@@ -107,11 +108,11 @@ def orthoglide_random_tasks(rngs: list[np.random.Generator],
         if not pending.size:
             return tasks
         drawn = [_draw_path(rngs[i]) for i in pending]
-        every_tenth = np.concatenate([_path(kind, q, _TIMES[::10])[0] for kind, q in drawn])
+        every_tenth = np.concatenate([_path(kind, q, 10)[0] for kind, q in drawn])
         ok = servable(every_tenth, geometry).reshape(len(drawn), -1).all(axis=1)
         for j in np.flatnonzero(ok):
             kind, q = drawn[j]
-            tasks[pending[j]] = ng.Task(_KINDS[kind], _TIMES, *_path(kind, q, _TIMES))
+            tasks[pending[j]] = ng.Task(_KINDS[kind], _TIMES, *_path(kind, q))
         pending = pending[~ok]
     raise RuntimeError(f"no reachable random path in {max_tries} tries")
 
