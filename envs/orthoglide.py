@@ -32,7 +32,7 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     the joint limits. There J has full rank (det A = r4 x r5 > 0 and B's
     last two columns are r4x e1 and r5y e2 with r4x, r5y > 0), so kappa is
     finite: the same answer as sweeping kappa itself, several times cheaper.
-    Every tenth position is tried first; only the points none of those serve
+    Every 25th position is tried first; only the points none of those serve
     are swept in full (the same answer: any of a subset is any of the whole)."""
     g = geometry
     r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
@@ -46,7 +46,7 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
         return (mode & inside).reshape(len(pts), len(table)).any(axis=1)
 
     chunk = 2 ** 16 // samples  # points per pass: arrays that stay in the cache
-    out = np.concatenate([any_of(r1[::10], points[lo:lo + chunk]) for lo in range(0, len(points), chunk)])
+    out = np.concatenate([any_of(r1[::25], points[lo:lo + chunk]) for lo in range(0, len(points), chunk)])
     rest = np.flatnonzero(~out)
     for lo in range(0, rest.size, chunk):
         out[rest[lo:lo + chunk]] = any_of(r1, points[rest[lo:lo + chunk]])
@@ -54,6 +54,8 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
 
 
 _KINDS = ("circle", "ellipse", "line")
+_KIND_ARRAY = np.array(_KINDS)  # what rng.choice makes of the tuple, made once
+_CENTRE_LOW, _CENTRE_HIGH = np.array([-0.2, 0.3]), np.array([0.4, 0.8])  # m, table frame
 _TIMES = np.linspace(0.0, 10.0, 1001)  # the random tasks' times (s), shared by them: read-only
 _TIMES.setflags(write=False)
 # a line's share of the way and its rate (1/s) at those times
@@ -64,8 +66,8 @@ def _draw_path(rng: np.random.Generator) -> tuple[int, list[float]]:
     """One candidate path's kind (index into circle, ellipse, line) and
     parameters, drawn from ``rng``: the centre (x, y), then for a line its end
     (x, y), for a circle or an ellipse the radii rx, ry and the start angle."""
-    kind = str(rng.choice(list(_KINDS)))
-    centre = rng.uniform([-0.2, 0.3], [0.4, 0.8])
+    kind = str(rng.choice(_KIND_ARRAY))
+    centre = rng.uniform(_CENTRE_LOW, _CENTRE_HIGH)
     if kind == "line":
         return 2, [*centre, *(centre + rng.uniform(-0.5, 0.5, 2))]
     rx = rng.uniform(0.1, 0.4)
