@@ -9,7 +9,9 @@ clock starts, resets included:
 * ``native N``: ``gym.make_vec(ENV_ID, N, vectorization_mode="vector_entry_point")``
   for N = 1, 64, 1024, 4096, one core. Each is timed over at least one full
   episode of every robot (so that the autoresets are in the figure; at most
-  60 s), after a reset that is not;
+  60 s), after a reset that is not; ``@4096, 20 steps``: the first 20 steps
+  after that reset at N = 4096, which few robots outlive (about the cost of
+  the step alone);
 * PandaReach-v3 (panda-gym, when installed) as the anchor, and each figure's
   ratio to it;
 * the peak resident memory of a fresh process that builds and steps the
@@ -18,7 +20,7 @@ clock starts, resets included:
   Stable-Baselines3, the yml's PPO settings with 64 copies): 64 single envs in
   a DummyVecEnv against the native vector env with 64 robots.
 
-    python benchmarks/speed.py [--seconds 3] [--skip-ppo] [--envs ID ...]
+    python benchmarks/speed.py [--seconds 3] [--skip-ppo] [--envs ID ...] [--sizes N ...]
 """
 
 from __future__ import annotations
@@ -48,10 +50,12 @@ def single_rate(env_id: str, seconds: float) -> float:
     return rate
 
 
-def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0, max_seconds: float = 60.0) -> float:
+def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0, max_seconds: float = 60.0,
+                reset: bool = True) -> float:
     """Robot-steps/s of a vector env over at least ``seconds`` and ``min_steps``
-    batch steps (but no more than ``max_seconds``)."""
-    env.reset(seed=0)
+    batch steps (but no more than ``max_seconds``), after a reset (``reset``)."""
+    if reset:
+        env.reset(seed=0)
     rng = np.random.default_rng(0)
     space = env.action_space
     actions = rng.uniform(space.low, space.high, (8, *space.shape)).astype(space.dtype)
@@ -63,13 +67,17 @@ def vector_rate(env: gym.vector.VectorEnv, seconds: float, min_steps: int = 0, m
 
 
 def _native(env_id: str, n: int, seconds: float, queue: mp.Queue) -> None:
-    """In a fresh process: the native env's rate at ``n`` robots and the process's peak RSS (MiB)."""
+    """In a fresh process: the native env's rate at ``n`` robots (resets
+    included), its rate over the first 20 steps after a reset (few robots
+    finish so soon: about the step alone) and the process's peak RSS (MiB)."""
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})
     env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
     episode = paragym.ENVIRONMENTS[env_id][1]
-    rate = vector_rate(env, seconds, min_steps=episode + 1 if n > 1 else 0)
-    queue.put((rate, _peak_rss_mib()))
+    env.reset(seed=0)
+    first = vector_rate(env, 0.0, min_steps=20, reset=False)
+    rate = vector_rate(env, seconds, min_steps=episode + 1 if n > 1 else 0, reset=False)
+    queue.put((rate, first, _peak_rss_mib()))
 
 
 def _peak_rss_mib() -> float:
@@ -84,7 +92,8 @@ def _peak_rss_mib() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
-def native_rate(env_id: str, n: int, seconds: float) -> tuple[float, float]:
+def native_rate(env_id: str, n: int, seconds: float) -> tuple[float, float, float]:
+    """:func:`_native` in a spawned process: (rate, rate of the first 20 steps, peak RSS MiB)."""
     ctx = mp.get_context("spawn")
     queue = ctx.Queue()
     proc = ctx.Process(target=_native, args=(env_id, n, seconds, queue))
@@ -120,7 +129,10 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=3.0, help="least duration of each measurement")
     parser.add_argument("--skip-ppo", action="store_true", help="leave out the PPO throughput")
     parser.add_argument("--envs", nargs="*", default=list(paragym.ENVIRONMENTS), help="env ids to measure")
+    parser.add_argument("--sizes", nargs="*", type=int, default=list(SIZES),
+                        help="numbers of robots of the native env (the targets are for 4096)")
     args = parser.parse_args()
+    sizes, big = args.sizes, max(args.sizes)
 
     anchor = None
     try:
@@ -135,8 +147,8 @@ def main() -> None:
             return "-"
         return f"{rate:,.0f}" + (f" ({rate / anchor:,.0f}x)" if anchor else "")
 
-    header = ["environment", "single", "sync 2", "async 2"] + [f"native {n}" for n in SIZES] + [
-        "target @4096", "peak RSS @4096"]
+    header = ["environment", "single", "sync 2", "async 2"] + [f"native {n}" for n in sizes] + [
+        "target @4096", f"@{big}, 20 steps", f"peak RSS @{big}"]
     rows = []
     if anchor:
         rows.append(["PandaReach-v3 (anchor)", f"{anchor:,.0f}"] + ["-"] * (len(header) - 2))
@@ -148,15 +160,15 @@ def main() -> None:
         asyn = gym.make_vec(env_id, 2, vectorization_mode="async")
         a_rate = vector_rate(asyn, args.seconds)
         asyn.close()
-        native, rss = [], "-"
+        native, first, rss = [], "-", "-"
         if env_id in paragym.VECTOR_ENTRY_POINTS:
-            for n in SIZES:
-                rate, peak = native_rate(env_id, n, args.seconds)
+            for n in sizes:
+                rate, first_rate, peak = native_rate(env_id, n, args.seconds)
                 native.append(fmt(rate))
-                rss = f"{peak:,.0f} MiB"
+                first, rss = f"{first_rate:,.0f}", f"{peak:,.0f} MiB"
         else:
-            native = ["no native env"] + ["-"] * (len(SIZES) - 1)
-        rows.append([name, fmt(single), fmt(sync), fmt(a_rate), *native, f"{TARGET_4096[env_id]:,}", rss])
+            native = ["no native env"] + ["-"] * (len(sizes) - 1)
+        rows.append([name, fmt(single), fmt(sync), fmt(a_rate), *native, f"{TARGET_4096[env_id]:,}", first, rss])
         print(" | ".join(rows[-1]), flush=True)
         if not args.skip_ppo and env_id in paragym.VECTOR_ENTRY_POINTS:
             ppo.append((name, ppo_rate(env_id, False), ppo_rate(env_id, True)))

@@ -26,3 +26,13 @@ def test_planner_benchmark_prints_its_table():
 def test_kf_speed_prints_the_comparison():
     out = _run("benchmarks/kf_speed.py")
     assert "Kalman filter" in out and "speed-up" in out and "target" in out
+
+
+def test_speed_report_prints_its_table():
+    out = _run("benchmarks/speed.py", "--seconds", "0.1", "--skip-ppo", "--envs", "paragym/Orthoglide2PRRKappa-v0",
+               "--sizes", "1", "8")
+    lines = [ln for ln in out.splitlines() if ln.startswith("Orthoglide2PRRKappa-v0 ") and " | " not in ln]
+    assert len(lines) == 1  # the table's row (the progress line before it is joined with " | ")
+    cells = lines[0].split()
+    assert "1,000,000" in cells and "MiB" in cells  # the target and the peak RSS
+    assert "native 8" in out and "@8, 20 steps" in out
