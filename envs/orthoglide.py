@@ -140,10 +140,12 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
         rr = np.tile(r1, len(pts))
         px, py = np.repeat(pts[:, 0], samples), np.repeat(pts[:, 1], samples)
         r2, r3, mode = og.inverse_rows(rr, px, py, g)
-        k = og.kappa_rows(rr, px, py, g)
         with np.errstate(invalid="ignore"):
-            ok = mode & (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
-        k = np.where(ok & np.isfinite(k), k, np.inf).reshape(len(pts), samples)
+            ok = np.flatnonzero(mode & (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2])
+                                & (r3 <= g.rho_max[2]))
+        k = np.full(len(rr), np.inf)  # kappa where admissible (element-wise: the same as sweeping all)
+        k[ok] = og.kappa_rows(rr[ok], px[ok], py[ok], g)
+        k = np.where(np.isfinite(k), k, np.inf).reshape(len(pts), samples)
         best[lo:lo + chunk] = k.argmin(axis=1)
         kap[lo:lo + chunk] = k[np.arange(len(pts)), best[lo:lo + chunk]]
     return kap, r1[best]
@@ -352,8 +354,11 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
             if len(task.t) != k:
                 raise ValueError(f"every task must have {k} path points; got {len(task.t)}")
             self._tasks[i] = task
-            self._path[i, :, :2], self._path[i, :, 2:], self._dt[i] = task.points, task.velocities, np.diff(task.t)
-            self._last[i] = k - 1
+        # one stacked copy per array rather than three per robot
+        self._path[rows, :, :2] = np.stack([task.points for task in tasks])
+        self._path[rows, :, 2:] = np.stack([task.velocities for task in tasks])
+        self._dt[rows] = np.diff(np.stack([task.t for task in tasks]), axis=1)
+        self._last[rows] = k - 1
         self._k[rows] = 0
         r2, r3, mode = og.inverse_rows(r1, first[:, 0], first[:, 1], self.geometry)
         self._rho[rows] = np.stack([r1, r2, r3], -1)
