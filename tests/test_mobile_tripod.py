@@ -96,3 +96,25 @@ def test_terrain_gradient_matches_finite_differences():
     for k, d in enumerate(np.eye(2)):
         fd = (terrain.height(pts + 1e-6 * d) - terrain.height(pts - 1e-6 * d)) / 2e-6
         np.testing.assert_allclose(grad[:, k], fd, atol=1e-7)
+
+
+def test_units_the_legs_cannot_reach_give_the_least_squares_reading():
+    # units pulled apart beyond the legs' reach: Newton has no root; both solvers end at the
+    # least-squares eta (from the same guess), which no nearby eta improves on
+    from paragym.sim.tripod_drive import _start
+
+    eta0, units = _start(mt.DEFAULT_GEOMETRY, math.radians(40.0))
+    far = units.copy()
+    far[0, :2] += 0.6 * (units[0, :2] - units[:, :2].mean(axis=0))  # unit 0 well outward
+    one = mt.eta_one(far, eta0)
+    rows = mt.eta_rows(np.stack([units, far]), np.stack([eta0, eta0]))
+    np.testing.assert_allclose(rows[1], one, atol=1e-12)
+    np.testing.assert_allclose(rows[0], eta0, atol=1e-9)  # the reachable row is untouched
+    target = np.array(mt.distances_one(far))
+
+    def cost(eta: np.ndarray) -> float:
+        return float(np.sum((np.array(mt.encoder_distances_one(eta)) - target) ** 2))
+
+    assert cost(one) > 1e-6  # really out of reach
+    for step in np.eye(3) * 1e-4:
+        assert cost(one) <= cost(one + step) + 1e-15 and cost(one) <= cost(one - step) + 1e-15

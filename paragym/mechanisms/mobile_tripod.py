@@ -211,7 +211,25 @@ def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFA
         e0 -= ((-j12 * j21) * r0 + (j02 * j21) * r1 + (j01 * j12) * r2) / det
         e1 -= ((j12 * j20) * r0 + (-j02 * j20) * r1 + (j02 * j10) * r2) / det
         e2 -= ((j10 * j21) * r0 + (j01 * j20) * r1 + (-j01 * j10) * r2) / det
+    else:  # no exact eta: the units stand where the legs cannot reach
+        return _eta_least_squares(np.array([t0, t1, t2]), np.asarray(eta0, float), geometry)
     return np.array([e0, e1, e2])
+
+
+def _eta_least_squares(target: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry) -> np.ndarray:
+    """The eta (3,) whose eq-4 distances come closest to ``target`` (3,) in
+    least squares (Levenberg-Marquardt from ``eta0``): what the encoders read
+    when the units stand farther apart, or closer, than the legs can reach
+    (the drive simulation moves the units independently, so a push or a slip
+    can do that). Newton's method has no root to find there and wanders off;
+    both :func:`eta_one` and :func:`eta_rows` end here instead, so that they
+    still agree."""
+    from scipy.optimize import least_squares
+
+    def residual(eta: np.ndarray) -> np.ndarray:
+        return np.array(encoder_distances_one(eta, geometry)) - target
+
+    return least_squares(residual, eta0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15).x
 
 
 @lru_cache(maxsize=8)
@@ -280,4 +298,7 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
                          (j10 * j21 - j11 * j20) * r0 + (j01 * j20 - j00 * j21) * r1 + (j00 * j11 - j01 * j10) * r2],
                         -1)
         eta[active] = e - step / det[:, None]
+    else:  # the rows without an exact eta (rare): as eta_one, the least-squares reading
+        for i in active:
+            eta[i] = _eta_least_squares(target[i], np.asarray(eta0[i], float), g)
     return eta
