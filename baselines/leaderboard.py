@@ -133,7 +133,7 @@ PRIMARY: dict[str, tuple[str, int]] = {
 }
 
 
-#: the success rate each reference policy reaches over the full suite (0.98, 1.00, 1.00 and 0.82 measured),
+#: the success rate each reference policy reaches over the full suite (0.98, 1.00, 1.00 and 0.84 measured),
 #: which the tests hold it to on 20 of its episodes; the mobile tripod's episodes end with a unit error
 #: under 5 cm when the estimator is good, which paper 004's correction is in 4 of 5 random drives
 REFERENCE_SUCCESS: dict[str, tuple[str, float]] = {
