@@ -37,6 +37,9 @@ import numpy as np
 __all__ = ["FOOT", "TripodGeometry", "distances", "forward", "inverse", "plate_frame_units", "relocate"]
 
 FOOT = 0.3048
+#: Newton's iterations for eta (from the last sample's it converges in 3-5); a configuration that has not
+#: converged by then is out of the legs' reach and gets the least-squares reading
+NEWTON_ITERATIONS = 15
 
 
 @dataclass(frozen=True)
@@ -183,7 +186,7 @@ def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFA
     t1 = math.sqrt((u0x - u2x) ** 2 + (u0y - u2y) ** 2 + (u0z - u2z) ** 2)  # units 0 and 2
     t2 = math.sqrt((u1x - u0x) ** 2 + (u1y - u0y) ** 2 + (u1z - u0z) ** 2)  # units 1 and 0
     e0, e1, e2 = (float(e) for e in eta0)
-    for _ in range(50):
+    for _ in range(NEWTON_ITERATIONS):
         s0, s1, s2, c0, c1, c2 = math.sin(e0), math.sin(e1), math.sin(e2), math.cos(e0), math.cos(e1), math.cos(e2)
         q0, q1, q2 = base + r * c0, base + r * c1, base + r * c2
         d0x, d0y, d0z, d1x, d1y, d1z = q0 * ca0, q0 * sa0, -r * s0, q1 * ca1, q1 * sa1, -r * s1
@@ -212,24 +215,64 @@ def eta_one(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFA
         e1 -= ((j12 * j20) * r0 + (-j02 * j20) * r1 + (j02 * j10) * r2) / det
         e2 -= ((j10 * j21) * r0 + (j01 * j20) * r1 + (-j01 * j10) * r2) / det
     else:  # no exact eta: the units stand where the legs cannot reach
-        return _eta_least_squares(np.array([t0, t1, t2]), np.asarray(eta0, float), geometry)
+        return _eta_least_squares(np.array([[t0, t1, t2]]), np.asarray(eta0, float)[None], geometry)[0]
     return np.array([e0, e1, e2])
 
 
-def _eta_least_squares(target: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry) -> np.ndarray:
-    """The eta (3,) whose eq-4 distances come closest to ``target`` (3,) in
-    least squares (Levenberg-Marquardt from ``eta0``): what the encoders read
-    when the units stand farther apart, or closer, than the legs can reach
-    (the drive simulation moves the units independently, so a push or a slip
-    can do that). Newton's method has no root to find there and wanders off;
-    both :func:`eta_one` and :func:`eta_rows` end here instead, so that they
-    still agree."""
-    from scipy.optimize import least_squares
+def _eta_least_squares(target: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry,
+                       iterations: int = 30) -> np.ndarray:
+    """The eta (M, 3) whose eq-4 distances come closest to ``target`` (M, 3)
+    in least squares, by Levenberg's method from ``eta0`` (M, 3), all rows
+    at once: what the encoders read when the units stand farther apart, or
+    closer, than the legs can reach (the drive simulation moves the units
+    independently, so a push or a slip can do that). Newton's method has no
+    root to find there and wanders off; :func:`eta_one` and :func:`eta_rows`
+    both end here instead, so that they still agree. A row stops when its
+    gradient is below 1e-12 or an accepted step below 1e-9 rad (the encoders'
+    noise is 1 deg; or after ``iterations``), and then stays as it is."""
+    g = geometry
+    ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
+    base, r = g.p / math.sqrt(3), g.r
+    prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])
+    rows3 = np.arange(3)
 
-    def residual(eta: np.ndarray) -> np.ndarray:
-        return np.array(encoder_distances_one(eta, geometry)) - target
+    def residual(eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        se, ce = np.sin(eta), np.cos(eta)
+        reach = base + r * ce
+        d = np.stack([reach * ca, reach * sa, -r * se], -1)  # unit k's joint (M, 3, 3)
+        dd = np.stack([-r * se * ca, -r * se * sa, -r * ce], -1)  # its derivative by eta_k
+        f = d[:, prev] - d[:, nxt]
+        length = np.sqrt(np.sum(f * f, axis=2))
+        jac = np.zeros(eta.shape + (3,))
+        jac[:, rows3, prev] = np.sum(f * dd[:, prev], axis=2) / length
+        jac[:, rows3, nxt] = -np.sum(f * dd[:, nxt], axis=2) / length
+        return length - target, jac
 
-    return least_squares(residual, eta0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15).x
+    eta = np.array(eta0, float)
+    res, jac = residual(eta)
+    cost = np.sum(res * res, axis=1)
+    lam = np.full(len(eta), 1e-3)
+    eye = np.eye(3)
+    live = np.ones(len(eta), bool)  # rows still moving; a row that stops stays put (its answer is its own)
+    for _ in range(iterations):
+        jtj = np.swapaxes(jac, 1, 2) @ jac
+        grad = np.einsum("nij,ni->nj", jac, res)
+        live &= np.abs(grad).max(axis=1) >= 1e-12  # at its minimum
+        if not live.any():
+            break
+        # Levenberg's damping, lam times the mean curvature (one direction may have almost none, which
+        # Marquardt's per-direction scaling would let run away)
+        size = np.trace(jtj, axis1=1, axis2=2) / 3.0 + 1e-12
+        step = -np.linalg.solve(jtj + (lam * size)[:, None, None] * eye, grad[..., None])[..., 0]
+        new_res, new_jac = residual(eta + step)
+        new_cost = np.sum(new_res * new_res, axis=1)
+        better = live & (new_cost < cost)
+        eta = np.where(better[:, None], eta + step, eta)
+        res, jac = np.where(better[:, None], new_res, res), np.where(better[:, None, None], new_jac, jac)
+        cost = np.where(better, new_cost, cost)
+        lam = np.where(better, lam * 0.1, lam * 10.0)
+        live &= ~(better & (np.abs(step).max(axis=1) < 1e-9))  # an accepted step this small: converged
+    return eta
 
 
 @lru_cache(maxsize=8)
@@ -268,7 +311,7 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
     target = np.sqrt(u[..., 0] * u[..., 0] + u[..., 1] * u[..., 1] + u[..., 2] * u[..., 2])
     eta = np.array(eta0, float)
     active = np.arange(len(eta))
-    for _ in range(50):
+    for _ in range(NEWTON_ITERATIONS):
         e = eta[active]
         se, ce = np.sin(e), np.cos(e)
         reach = base + r * ce
@@ -299,6 +342,5 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
                         -1)
         eta[active] = e - step / det[:, None]
     else:  # the rows without an exact eta (rare): as eta_one, the least-squares reading
-        for i in active:
-            eta[i] = _eta_least_squares(target[i], np.asarray(eta0[i], float), g)
+        eta[active] = _eta_least_squares(target[active], np.asarray(eta0, float)[active], g)
     return eta
