@@ -25,6 +25,19 @@ def _task_module() -> Any:
     return nullspace_gradient
 
 
+def _sweep(table: np.ndarray, points: np.ndarray, g: og.OrthoglideGeometry
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Every (point, table position) pair of points (K, 2) and positions (T,),
+    point-major: rho1, px, py (K * T,) and whether the pair is admissible
+    (reachable in the working mode, rho2 and rho3 inside their limits)."""
+    rr = np.tile(table, len(points))
+    px, py = np.repeat(points[:, 0], len(table)), np.repeat(points[:, 1], len(table))
+    r2, r3, mode = og.inverse_rows(rr, px, py, g)
+    with np.errstate(invalid="ignore"):
+        inside = (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
+    return rr, px, py, mode & inside
+
+
 def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
              samples: int = 101) -> np.ndarray:
     """Whether some table position among ``samples`` over its range serves
@@ -38,12 +51,7 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
 
     def any_of(table: np.ndarray, pts: np.ndarray) -> np.ndarray:
-        rr = np.tile(table, len(pts))
-        px, py = np.repeat(pts[:, 0], len(table)), np.repeat(pts[:, 1], len(table))
-        r2, r3, mode = og.inverse_rows(rr, px, py, g)
-        with np.errstate(invalid="ignore"):
-            inside = (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
-        return (mode & inside).reshape(len(pts), len(table)).any(axis=1)
+        return _sweep(table, pts, g)[3].reshape(len(pts), len(table)).any(axis=1)
 
     chunk = 2 ** 16 // samples  # points per pass: arrays that stay in the cache
     out = np.concatenate([any_of(r1[::25], points[lo:lo + chunk]) for lo in range(0, len(points), chunk)])
@@ -137,12 +145,8 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
     chunk = max(1, 2 ** 16 // samples)  # robots per pass: arrays that stay in the cache
     for lo in range(0, len(points), chunk):
         pts = points[lo:lo + chunk]
-        rr = np.tile(r1, len(pts))
-        px, py = np.repeat(pts[:, 0], samples), np.repeat(pts[:, 1], samples)
-        r2, r3, mode = og.inverse_rows(rr, px, py, g)
-        with np.errstate(invalid="ignore"):
-            ok = np.flatnonzero(mode & (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2])
-                                & (r3 <= g.rho_max[2]))
+        rr, px, py, admissible = _sweep(r1, pts, g)
+        ok = np.flatnonzero(admissible)
         k = np.full(len(rr), np.inf)  # kappa where admissible (element-wise: the same as sweeping all)
         k[ok] = og.kappa_rows(rr[ok], px[ok], py[ok], g)
         k = np.where(np.isfinite(k), k, np.inf).reshape(len(pts), samples)

@@ -230,22 +230,12 @@ def _eta_least_squares(target: np.ndarray, eta0: np.ndarray, geometry: TripodGeo
     both end here instead, so that they still agree. A row stops when its
     gradient is below 1e-12 or an accepted step below 1e-9 rad (the encoders'
     noise is 1 deg; or after ``iterations``), and then stays as it is."""
-    g = geometry
-    ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
-    base, r = g.p / math.sqrt(3), g.r
-    prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])
-    rows3 = np.arange(3)
+    prev, nxt, rows3 = np.array([2, 0, 1]), np.array([1, 2, 0]), np.arange(3)
 
     def residual(eta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        se, ce = np.sin(eta), np.cos(eta)
-        reach = base + r * ce
-        d = np.stack([reach * ca, reach * sa, -r * se], -1)  # unit k's joint (M, 3, 3)
-        dd = np.stack([-r * se * ca, -r * se * sa, -r * ce], -1)  # its derivative by eta_k
-        f = d[:, prev] - d[:, nxt]
-        length = np.sqrt(np.sum(f * f, axis=2))
+        length, a, b = _distance_rows(eta, geometry)
         jac = np.zeros(eta.shape + (3,))
-        jac[:, rows3, prev] = np.sum(f * dd[:, prev], axis=2) / length
-        jac[:, rows3, nxt] = -np.sum(f * dd[:, nxt], axis=2) / length
+        jac[:, rows3, prev], jac[:, rows3, nxt] = a, b
         return length - target, jac
 
     eta = np.array(eta0, float)
@@ -297,15 +287,31 @@ def encoder_distances_one(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GE
     return [math.dist(pts[(i - 1) % 3], pts[(i + 1) % 3]) for i in range(3)]
 
 
+def _distance_rows(eta: np.ndarray, g: TripodGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eq 4 for encoder angles (M, 3): the distances (M, 3), row i between
+    units i - 1 and i + 1, and the nonzero entries of their Jacobian, d
+    length_i / d eta at unit i - 1 (a) and at unit i + 1 (b) (M, 3 each).
+    Coordinates as separate arrays: sums over an axis of three are slow in
+    numpy, and written out they keep :func:`eta_one`'s order."""
+    ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
+    base, r = g.p / math.sqrt(3), g.r
+    prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])
+    se, ce = np.sin(eta), np.cos(eta)
+    reach = base + r * ce
+    dx, dy, dz = reach * ca, reach * sa, -r * se
+    ex, ey, ez = -r * se * ca, -r * se * sa, -r * ce  # d/d eta_k of unit k's joint
+    fx, fy, fz = dx[:, prev] - dx[:, nxt], dy[:, prev] - dy[:, nxt], dz[:, prev] - dz[:, nxt]
+    length = np.sqrt(fx * fx + fy * fy + fz * fz)
+    a = (fx * ex[:, prev] + fy * ey[:, prev] + fz * ez[:, prev]) / length
+    b = -(fx * ex[:, nxt] + fy * ey[:, nxt] + fz * ez[:, nxt]) / length
+    return length, a, b
+
+
 def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY,
              tol: float = 1e-13) -> np.ndarray:
     """:func:`eta_one` for N configurations (N, 3, 3) from guesses (N, 3): the
-    same Newton iteration, each row stopping where :func:`eta_one` would.
-    Coordinates are kept as separate (N, 3) arrays: sums over an axis of three
-    are slow in numpy, and written out they keep :func:`eta_one`'s order."""
-    g = geometry
-    ca, sa = np.cos(np.asarray(g.alphas)), np.sin(np.asarray(g.alphas))
-    base, r = g.p / math.sqrt(3), g.r
+    same Newton iteration (:func:`_distance_rows`), each row stopping where
+    :func:`eta_one` would."""
     prev, nxt = np.array([2, 0, 1]), np.array([1, 2, 0])  # (i - 1) % 3 and (i + 1) % 3
     u = units[:, prev] - units[:, nxt]
     target = np.sqrt(u[..., 0] * u[..., 0] + u[..., 1] * u[..., 1] + u[..., 2] * u[..., 2])
@@ -313,24 +319,14 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
     active = np.arange(len(eta))
     for _ in range(NEWTON_ITERATIONS):
         e = eta[active]
-        se, ce = np.sin(e), np.cos(e)
-        reach = base + r * ce
-        dx, dy, dz = reach * ca, reach * sa, -r * se
-        ex, ey, ez = -r * se * ca, -r * se * sa, -r * ce
-        fx, fy, fz = dx[:, prev] - dx[:, nxt], dy[:, prev] - dy[:, nxt], dz[:, prev] - dz[:, nxt]
-        length = np.sqrt(fx * fx + fy * fy + fz * fz)
+        length, a, b = _distance_rows(e, geometry)
         res = length - target[active]
         done = np.maximum(np.maximum(np.abs(res[:, 0]), np.abs(res[:, 1])), np.abs(res[:, 2])) < tol
         if done.all():
             break
         if done.any():  # carry on with the rows still moving (no copies while all of them are)
             keep = ~done
-            fx, fy, fz, e, res, length = fx[keep], fy[keep], fz[keep], e[keep], res[keep], length[keep]
-            ex, ey, ez = ex[keep], ey[keep], ez[keep]
-            active = active[keep]
-        # row i of the Jacobian: d length_i / d eta at prev[i] (a) and nxt[i] (b); zero on the diagonal
-        a = (fx * ex[:, prev] + fy * ey[:, prev] + fz * ez[:, prev]) / length
-        b = -(fx * ex[:, nxt] + fy * ey[:, nxt] + fz * ez[:, nxt]) / length
+            e, res, a, b, active = e[keep], res[keep], a[keep], b[keep], active[keep]
         j00, j01, j02 = 0.0, b[:, 0], a[:, 0]
         j10, j11, j12 = a[:, 1], 0.0, b[:, 1]
         j20, j21, j22 = b[:, 2], a[:, 2], 0.0
@@ -342,5 +338,5 @@ def eta_rows(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEF
                         -1)
         eta[active] = e - step / det[:, None]
     else:  # the rows without an exact eta (rare): as eta_one, the least-squares reading
-        eta[active] = _eta_least_squares(target[active], np.asarray(eta0, float)[active], g)
+        eta[active] = _eta_least_squares(target[active], np.asarray(eta0, float)[active], geometry)
     return eta
