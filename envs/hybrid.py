@@ -47,12 +47,11 @@ def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry:
     the nominal path at Delta = 0.5 fail on its every fourth sample). The
     checks run stage by stage on the survivors, ``chunk`` pairs at a time."""
     deltas = np.linspace(0, 1, 11)
-    s = _path_shape()[::4]  # every fourth sample of the nominal path
     out = np.zeros(len(p0), bool)
     for lo in range(0, len(p0), chunk):
         a, b, h = p0[lo:lo + chunk], p1[lo:lo + chunk], hard[lo:lo + chunk]
-        nominal = a[:, None] + (b - a)[:, None] * s[None, :, None]  # (c, 26, 6)
-        m = len(s)
+        nominal = _nominal_rows(a, b, every=4)  # every fourth sample of the nominal path: (c, 26, 6)
+        m = nominal.shape[1]
         # a failure found on these samples is a real one; none found: not hard enough
         keep = ~(h & hybrid.within_limits(nominal.reshape(-1, 6), 0.5, geometry).reshape(-1, m).all(axis=1))
         idx = np.flatnonzero(keep)
@@ -135,6 +134,12 @@ def _path_shape(tau: float = 0.01) -> np.ndarray:
     s = nominal_path(np.zeros(1), np.ones(1), tau)[1][:, 0]
     s.setflags(write=False)
     return s
+
+
+def _nominal_rows(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01, every: int = 1) -> np.ndarray:
+    """:func:`nominal_path` for pairs (M, 6) at once, every ``every``-th sample: (M, K, 6)."""
+    s = _path_shape(tau)[::every]
+    return p0[:, None] + (p1 - p0)[:, None] * s[None, :, None]
 
 
 class HybridSingularityFreeEnv(ParagymEnv):
@@ -335,7 +340,7 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
             self._scenarios[i] = scenario
         p0 = np.array([sc.p0 for sc in scenarios])
         p1 = np.array([sc.p1 for sc in scenarios])
-        self._nominal[rows] = p0[:, None] + (p1 - p0)[:, None] * _path_shape(e.tau)[None, :, None]
+        self._nominal[rows] = _nominal_rows(p0, p1, e.tau)
         self._k[rows] = 0
         self._delta[rows], self._d_delta[rows] = 0.5, 0.0
         self._offset[rows] = 0.0

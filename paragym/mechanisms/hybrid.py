@@ -355,13 +355,7 @@ def solve(p: np.ndarray, delta: np.ndarray | float = 0.5, geometry: HybridGeomet
     if validate and (not np.all(np.isfinite(d)) or np.any((d < 0) | (d > 1))):
         raise ValueError(f"delta must lie in [0, 1]; got {delta!r}")
     t_e, t_a, t_t = split(p, d, g)
-    lengths = np.concatenate([hexapod_lengths(t_a, g), tripod_lengths(t_t, g)], axis=1)
-    h0, t0 = _home_sigmas(g)
-    sig = _sigma_min(np.concatenate([hexapod_matrix(t_a, g), tripod_matrix(t_t, g)]))  # both stages in one batch
-    mu_h, mu_t = sig[:len(p)] / h0, sig[len(p):] / t0
-    within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
-    free = within & (mu_h >= g.singularity_threshold) & (mu_t >= g.singularity_threshold)
-    return HybridState(t_e, t_a, t_t, lengths, mu_h, mu_t, within, free)
+    return HybridState(t_e, t_a, t_t, *solve_rows(p, d, g))  # lengths, measures and eq 14: one batched path
 
 
 def within_limits(p: np.ndarray, delta: np.ndarray | float = 0.5,
