@@ -14,6 +14,7 @@ from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.client import PyBulletSim
+from paragym.sim.obstacles import Box
 
 G = capaman.DEFAULT_GEOMETRY
 
@@ -115,3 +116,103 @@ def test_clearance_query_on_the_parts_that_can_reach_equals_the_full_query(scene
         scene.set_configuration(a)
         full = scene.sim.clearance(scene.ROBOT, ["obstacles"], scene.clearance_cap)
         assert scene.clearance() == full
+
+
+def _signed_distances_directly(obstacles, resolution=0.005, cap=0.05, unit=0.0005):
+    """Psi with distances the plain way: every cell's centre tested against
+    every obstacle, both distance transforms over the whole grid. Returns
+    the grid's own rasterisation, this one, and the values."""
+    from scipy import ndimage
+
+    grid = occupancy.OccupancyGrid.from_obstacles(obstacles, resolution, margin=cap + 2 * resolution)
+    shape = grid.occupied.shape
+    axes = [grid.origin[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
+    centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+    occ = np.zeros(shape, bool)
+    for o in obstacles:
+        side = resolution / 2 if isinstance(o, Box) else resolution / 2 * np.sqrt(2.0)
+        occ |= o.contains(centres, inflate=(side, resolution / 2))
+    d = np.where(occ, -(ndimage.distance_transform_edt(occ) * resolution - resolution / 2),
+                 ndimage.distance_transform_edt(~occ) * resolution - resolution / 2)
+    return grid.occupied, occ, np.clip(np.round(d / unit), -round(cap / unit), round(cap / unit)).astype(np.int8)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_signed_distances_equal_the_plain_computation_and_hold_the_cap_on_the_border(seed):
+    from paragym.envs.capaman_scenarios import _random_obstacles
+
+    obstacles = _random_obstacles(np.random.default_rng(seed))
+    rasterised, occ, expected = _signed_distances_directly(obstacles)
+    values, _ = occupancy.signed_distances(obstacles)
+    np.testing.assert_array_equal(rasterised, occ)
+    np.testing.assert_array_equal(values, expected)
+    # the clearance reads the border for points beyond the grid: it must hold the cap
+    for k in range(3):
+        assert np.all(np.take(values, [0, -1], axis=k) == 100)
+
+
+def _values_at(grids, g, centres, rot, local):
+    """Grid ``g``'s values (steps of ``grids.unit``) at points ``local`` (M, 3)
+    of parts at ``centres`` (M, 3), ``rot`` (M, 3, 3), one point at a time in
+    the same float32 cell arithmetic as the batch."""
+    inv = 1.0 / grids.resolution
+    m, t = (rot * inv).astype(np.float32), ((centres - grids.origin[g]) * inv).astype(np.float32)
+    local = local.astype(np.float32)
+    idx = [np.clip(t[:, k] + local[:, 0] * m[:, k, 0] + local[:, 1] * m[:, k, 1] + local[:, 2] * m[:, k, 2],
+                   0, grids.shape[g, k] - 1).astype(np.int64) for k in range(3)]
+    return grids.values[g * grids.slot + (idx[0] * grids.shape[g, 1] + idx[1]) * grids.shape[g, 2] + idx[2]]
+
+
+def _clearance_at_every_point(alpha, grids, clusters, rows):
+    """The grid's clearance with no block skipped: every cluster point of every
+    part looked up, robot by robot."""
+    centres, quats = capaman.part_frames(alpha, validate=False)
+    rot = capaman.quat_to_matrix(quats)
+    value, part = [], []
+    for j, g in enumerate(rows):
+        v = _values_at(grids, g, centres[j, clusters.part], rot[j, clusters.part], clusters.local)
+        low = int(v.min())
+        value.append(low * grids.unit)
+        part.append(int(clusters.part[v == low].min()) if low < 100 else -1)
+    return np.array(value), np.array(part)
+
+
+def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
+    """The batched clearance (blocks skipped when their sphere misses a robot's
+    cells below the cap) equals a lookup of every cluster point, for robots
+    in any order, near the task points and anywhere."""
+    from paragym.envs.capaman import _clusters
+
+    clusters = _clusters(G)
+    rng = np.random.default_rng(3)
+    grids = occupancy.DistanceGrids(4)
+    scenarios = [random_scenario(np.random.default_rng(seed), scene, clusters) for seed in range(4)]
+    for i, sc in enumerate(scenarios):
+        grids.set(i, sc.obstacles)
+    rows = rng.integers(4, size=3000)
+    task = np.array([scenarios[g].alpha[rng.integers(3)] for g in rows])
+    alpha = np.where(rng.random((3000, 1)) < 0.3, task + rng.normal(0, 0.1, (3000, 3)),
+                     rng.uniform(G.alpha_min, G.alpha_max, (3000, 3)))
+    alpha = np.clip(alpha, G.alpha_min, G.alpha_max)
+    value, part = occupancy.grid_clearance(alpha, grids, clusters, G, rows, chunk_points=5000)
+    expected_value, expected_part = _clearance_at_every_point(alpha, grids, clusters, rows)
+    # collisions, and robots whose nearest point is near the cap, where a wrongly skipped block would show
+    assert (expected_value < 0).any() and ((expected_value > 0.04) & (expected_value < 0.05)).sum() > 20
+    np.testing.assert_array_equal(value, expected_value)
+    np.testing.assert_array_equal(part, expected_part)
+    # and the blocks skipped read the cap at every point
+    parts, middles, radii, local = occupancy._blocks(clusters)
+    centres, quats = capaman.part_frames(alpha, validate=False)
+    rot, f32 = capaman.quat_to_matrix(quats), np.float32
+    reach = occupancy._reach(centres[:, parts].astype(f32), rot[:, parts].astype(f32), middles.astype(f32),
+                             radii.astype(f32), grids.active_lo[rows, None].astype(f32),
+                             grids.active_hi[rows, None].astype(f32))
+    assert 0.005 < reach.mean() < 0.5
+    robot, block = np.nonzero(~reach)
+    pick = rng.choice(len(robot), 300_000, replace=False)
+    robot, block = np.repeat(robot[pick], local.shape[1]), np.repeat(block[pick], local.shape[1])
+    point = local[block[::local.shape[1]]].reshape(-1, 3)
+    for g in range(4):
+        mine = rows[robot] == g
+        assert np.all(_values_at(grids, g, centres[robot[mine], parts[block[mine]]],
+                                 rot[robot[mine], parts[block[mine]]], point[mine]) == 100)

@@ -55,12 +55,17 @@ class OccupancyGrid:
         hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) + pad
         shape = np.ceil((hi - lo) / resolution).astype(int)
         axes = [lo[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
-        centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+        plane = np.stack(np.meshgrid(axes[0], axes[1], [0.0], indexing="ij"), axis=-1)[:, :, 0]  # (nx, ny, 3)
+        column = np.zeros((shape[2], 3))
+        column[:, 2] = axes[2]
         occupied = np.zeros(tuple(shape), bool)
         half = resolution / 2
         for o in obstacles:  # a handful of obstacles; every cell at once
             side = half if isinstance(o, Box) else half * np.sqrt(2.0)
-            occupied |= o.contains(centres, inflate=(side, half))
+            # both kinds are vertical prisms (a shape in x, y times an interval in z): the cells' centres in the
+            # obstacle's mid plane and on its axis decide, with the same arithmetic as at every centre
+            plane[..., 2], column[:, :2] = o.center[2], o.center[:2]
+            occupied |= o.contains(plane, (side, half))[:, :, None] & o.contains(column, (side, half))[None, None]
         return cls(occupied, lo, resolution)
 
     @property
@@ -100,20 +105,26 @@ class ClusterPoints:
         return ClusterPoints(self.local[keep], self.part[keep], self.spacing)
 
     def on_joint_grid(self, part: int, alpha: np.ndarray, geometry: capaman.CaPaManGeometry,
-                      key: tuple, max_bytes: int = 64 << 20) -> np.ndarray:
-        """World positions (N, M_part, 3) of one part's points at configurations
-        ``alpha``; kept under ``key`` when smaller than ``max_bytes`` (the
-        joint grid does not change between scenarios, only the obstacles do)."""
+                      key: tuple, max_bytes: int = 64 << 20) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World positions float32 of one part's points at configurations
+        ``alpha`` (N, 3), in blocks of 16 points near each other
+        (:func:`_groups`): (N, B, 16, 3), with each block's bounding box at
+        every configuration (lower and upper corners, (N, B, 3)); kept under
+        ``key`` when smaller than ``max_bytes`` (the joint grid does not change
+        between scenarios, only the obstacles do)."""
         cached = self._grid_cache.get((key, part))
         if cached is not None:
             return cached
         centres, quats = capaman.part_frames(alpha, geometry, validate=False)
         f32 = np.float32
-        world = _place(self.local[self.part == part].astype(f32), centres[:, part].astype(f32),
+        local = self.local[self.part == part]
+        world = _place(local.astype(f32), centres[:, part].astype(f32),
                        capaman.quat_to_matrix(quats[:, part]).astype(f32))
-        if world.nbytes <= max_bytes:
-            self._grid_cache[(key, part)] = world
-        return world
+        blocks = world[:, _groups(local, 16)]
+        out = (blocks, blocks.min(axis=2), blocks.max(axis=2))
+        if blocks.nbytes <= max_bytes:
+            self._grid_cache[(key, part)] = out
+        return out
 
 
 def _place(local: np.ndarray, centres: np.ndarray, rot: np.ndarray) -> np.ndarray:
@@ -227,8 +238,29 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
         if len(alpha) * np.count_nonzero(clusters.part == p) > 20_000_000:  # too big to hold at once
             theta |= grid_collision(alpha, grid, clusters.subset([p]), g)
         else:
-            theta |= grid.lookup(clusters.on_joint_grid(p, alpha, g, (g, points_per_axis))).any(axis=1)
+            theta |= _grid_hits(grid, *clusters.on_joint_grid(p, alpha, g, (g, points_per_axis)))
     return theta.reshape((points_per_axis,) * 3), axis
+
+
+def _grid_hits(grid: OccupancyGrid, blocks: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Eq 2 at N configurations from their points' world positions in blocks
+    (N, B, K, 3) float32, with the blocks' bounding boxes ``lo``, ``hi``
+    (N, B, 3): only the blocks that reach the box of a clump of occupied cells
+    (grown by a cell, far more than float32 rounding) are looked up; the
+    others lie in free cells. The same answer as ``grid.lookup(blocks).any(axis=(1, 2))``."""
+    from scipy import ndimage
+
+    reach = np.zeros(lo.shape[:2], bool)
+    labels, _ = ndimage.label(grid.occupied)
+    for box in ndimage.find_objects(labels):  # each clump of occupied cells (an obstacle or touching ones)
+        start = np.array([s.start for s in box])
+        box_lo = (grid.origin + (start - 1) * grid.resolution).astype(np.float32)
+        box_hi = (grid.origin + (np.array([s.stop for s in box]) + 1) * grid.resolution).astype(np.float32)
+        reach |= np.all((hi >= box_lo) & (lo <= box_hi), axis=2)
+    config, block = np.nonzero(reach)
+    out = np.zeros(len(blocks), bool)
+    out[config[grid.lookup(blocks[config, block]).any(axis=1)]] = True
+    return out
 
 
 # --- the grid's clearance: signed distances on Psi, for many robots at once ---------------------------------
@@ -250,15 +282,26 @@ def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, c
     grid = OccupancyGrid.from_obstacles(obstacles, resolution, margin=cap + 2 * resolution)
     occ = grid.occupied
     outside = ndimage.distance_transform_edt(~occ) * resolution - resolution / 2
-    inside = ndimage.distance_transform_edt(occ) * resolution - resolution / 2
+    # inside: only over the occupied cells' box grown by one cell, whose outer layer is free, so no occupied
+    # cell has a nearer free cell beyond it (exact; the grid is mostly free space)
+    inside = np.zeros(occ.shape)
+    if occ.any():
+        box = tuple(slice(max(int(c[0]) - 1, 0), int(c[-1]) + 2)
+                    for c in (np.flatnonzero(occ.any(axis=tuple(j for j in range(3) if j != k))) for k in range(3)))
+        inside[box] = ndimage.distance_transform_edt(occ[box])
+    inside = inside * resolution - resolution / 2
     d = np.where(occ, -inside, outside)
     return np.clip(np.round(d / unit), -round(cap / unit), round(cap / unit)).astype(np.int8), grid.origin
 
 
 class DistanceGrids:
     """The signed-distance grids of N robots' scenes in one flat buffer (one
-    slot per robot, as big as the largest grid so far), looked up for all
-    robots' cluster points at once."""
+    slot per robot, as big as the largest grid so far).
+
+    Every grid reaches ``cap`` beyond its obstacles (:func:`signed_distances`),
+    so its outermost cells hold the cap, as does everything beyond it: a
+    point outside a grid reads the nearest border cell (clipped indices, no
+    mask; the tests check the borders)."""
 
     def __init__(self, n: int, resolution: float = 0.005, cap: float = 0.05, unit: float = 0.0005) -> None:
         self.n, self.resolution, self.cap, self.unit = n, resolution, cap, unit
@@ -266,6 +309,8 @@ class DistanceGrids:
         self.shape = np.ones((n, 3), np.int64)
         self.slot = 1
         self.values = np.full(n, round(cap / unit), np.int8)
+        # the box (m) of the cells below the cap, grown by a hundredth of a cell; empty: lo > hi
+        self.active_lo, self.active_hi = np.full((n, 3), np.inf), np.full((n, 3), -np.inf)
 
     def set(self, i: int, obstacles: Sequence[Obstacle]) -> None:
         """Robot ``i``'s scene becomes ``obstacles``."""
@@ -278,88 +323,132 @@ class DistanceGrids:
                 self.values[j * self.slot:j * self.slot + old_slot] = old[j * old_slot:(j + 1) * old_slot]
         self.values[i * self.slot:i * self.slot + values.size] = values.ravel()
         self.origin[i], self.shape[i] = origin, values.shape
-
-    def lookup(self, points: np.ndarray, rows: np.ndarray | None = None) -> np.ndarray:
-        """Signed distances (in ``unit`` steps, int) at points (M, P, 3) of
-        robots ``rows`` (M,) (default all); the cap outside a robot's grid."""
-        rows = np.arange(self.n) if rows is None else rows
-        rel = (points - self.origin[rows, None].astype(points.dtype)) * points.dtype.type(1.0 / self.resolution)
-        ix, iy, iz = (np.floor(rel[..., k]).astype(np.int64) for k in range(3))
-        sx, sy, sz = (self.shape[rows, k, None] for k in range(3))
-        # one unsigned comparison per axis: a negative index wraps to a huge one
-        inside = (ix.astype(np.uint64) < sx.astype(np.uint64)) & (iy.astype(np.uint64) < sy.astype(np.uint64)) & (
-            iz.astype(np.uint64) < sz.astype(np.uint64))
-        flat = (rows * self.slot)[:, None] + (ix * sy + iy) * sz + iz
-        out = np.full(inside.shape, round(self.cap / self.unit), np.int64)
-        out[inside] = self.values[flat[inside]]
-        return out
+        below = [np.flatnonzero((values < round(self.cap / self.unit)).any(axis=tuple(j for j in range(3) if j != k)))
+                 for k in range(3)]
+        if below[0].size:
+            pad = 0.01 * self.resolution
+            self.active_lo[i] = origin + np.array([b[0] for b in below]) * self.resolution - pad
+            self.active_hi[i] = origin + (np.array([b[-1] for b in below]) + 1) * self.resolution + pad
+        else:
+            self.active_lo[i], self.active_hi[i] = np.inf, -np.inf
 
 
 def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoints,
-                   geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, rows: np.ndarray | None = None
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, rows: np.ndarray | None = None,
+                   chunk_points: int = 1 << 20) -> tuple[np.ndarray, np.ndarray]:
     """The clearance (m, N) of robots at crank angles ``alpha`` (N, 3) from
     their grids (``rows`` of ``grids``, default all): the smallest signed
     distance at any cluster point (negative: a collision by eq 2), and the
-    part (N,) that holds that point (-1 when every point is beyond the cap).
-    A part whose bounding sphere misses a robot's grid is skipped for that
-    robot (its points all read the cap). Element-wise arithmetic only, so
-    that a robot's answer does not depend on the others in the batch."""
+    part (N,) that holds that point (the lowest index on a tie; -1 when every
+    point reads the cap).
+
+    The points are grouped in small blocks (:func:`_blocks`); a block whose
+    bounding sphere misses a robot's grid reads the cap there and is skipped.
+    The pairs (robot, block) that are left are evaluated in one vectorised
+    pass, ``chunk_points`` points at a time, with element-wise arithmetic
+    only, so that a robot's answer does not depend on the others in the
+    batch."""
     n = len(alpha)
     rows = np.arange(n) if rows is None else rows
     centres, quats = capaman.part_frames(alpha, geometry, validate=False)
     rot = capaman.quat_to_matrix(quats)  # (N, parts, 3, 3)
-    lo = grids.origin[rows]
-    hi = lo + grids.shape[rows] * grids.resolution
+    parts, middles, radii, local = _blocks(clusters)
     cap = round(grids.cap / grids.unit)
-    best = np.full(n, cap, np.int64)
-    part = np.full(n, -1, np.int64)
-    blocks = _blocks(clusters)
-    parts, middles, radii = _block_arrays(clusters)
-    # every block's bounding sphere against every robot's grid at once: (N, blocks)
-    r = rot[:, parts]
-    c = (centres[:, parts] + middles[None, :, 0, None] * r[..., 0] + middles[None, :, 1, None] * r[..., 1]
-         + middles[None, :, 2, None] * r[..., 2])
-    gap = np.sqrt(np.sum((c - np.clip(c, lo[:, None], hi[:, None])) ** 2, axis=2))
-    close = gap <= radii
-    for b in np.flatnonzero(close.any(axis=0)):  # a loop over the blocks near some grid, each for all robots at once
-        p, local = blocks[b][:2]
-        near = np.flatnonzero(close[:, b])
-        r, cn = rot[near, p].astype(np.float32), centres[near, p].astype(np.float32)  # element-wise float32
-        local = local.astype(np.float32)
-        world = (cn[:, None, :] + local[None, :, 0, None] * r[:, None, :, 0]
-                 + local[None, :, 1, None] * r[:, None, :, 1] + local[None, :, 2, None] * r[:, None, :, 2])
-        low = grids.lookup(world, rows[near]).min(axis=1)
-        closer = (low < best[near]) | ((low == best[near]) & (p < part[near]))
-        best[near[closer]] = low[closer]
-        part[near[closer]] = p
-    return best * grids.unit, part
+    lo, hi = grids.active_lo[rows].astype(np.float32), grids.active_hi[rows].astype(np.float32)
+    # which robots each part can reach (its bounding sphere), then which of its blocks (theirs): the pairs left
+    near = _reach(centres.astype(np.float32), rot.astype(np.float32), np.zeros((1, 3), np.float32),
+                  _part_radii(clusters).astype(np.float32), lo[:, None], hi[:, None])
+    robot_parts, block_parts = [], []
+    for p in np.flatnonzero(near.any(axis=0)):  # a loop over the (17) parts, each for all robots at once
+        i = np.flatnonzero(near[:, p])
+        bs = np.flatnonzero(parts == p)
+        ri, bi = np.nonzero(_reach(centres[i, p, None].astype(np.float32), rot[i, p, None].astype(np.float32),
+                                   middles[bs].astype(np.float32), radii[bs].astype(np.float32),
+                                   lo[i, None], hi[i, None]))
+        robot_parts.append(i[ri])
+        block_parts.append(bs[bi])
+    robot = np.concatenate(robot_parts) if robot_parts else np.zeros(0, np.int64)
+    block = np.concatenate(block_parts) if block_parts else np.zeros(0, np.int64)
+    # the smallest (value, part) of every pair as one key: value * 32 + part (17 parts)
+    key = np.empty(len(robot), np.int32)
+    step = max(1, chunk_points // local.shape[1])
+    inv = 1.0 / grids.resolution
+    for s in range(0, len(robot), step):
+        i, b = robot[s:s + step], block[s:s + step]
+        g, p = rows[i], parts[b]
+        # the points in cell units of their robot's grid, clipped onto it
+        m = (rot[i, p] * inv).astype(np.float32)  # (K, 3, 3)
+        t = ((centres[i, p] - grids.origin[g]) * inv).astype(np.float32)  # (K, 3)
+        top = (grids.shape[g] - 1).astype(np.float32)
+        pts = local[b]  # (K, P, 3)
+        flat = (g * grids.slot)[:, None]
+        for k, stride in ((0, grids.shape[g, 1] * grids.shape[g, 2]), (1, grids.shape[g, 2]), (2, 1)):
+            x = (t[:, None, k] + pts[..., 0] * m[:, None, k, 0] + pts[..., 1] * m[:, None, k, 1]
+                 + pts[..., 2] * m[:, None, k, 2])
+            np.clip(x, 0.0, top[:, None, k], out=x)
+            flat = flat + x.astype(np.int64) * (stride if k == 2 else stride[:, None])  # floor of x >= 0
+        key[s:s + step] = grids.values[flat].min(axis=1).astype(np.int32) * 32 + p
+    best = np.full(n, cap * 32, np.int64)
+    np.minimum.at(best, robot, key)
+    value, part = best // 32, best % 32
+    part[value >= cap] = -1
+    return np.minimum(value, cap) * grids.unit, part
 
 
-def _blocks(clusters: ClusterPoints, edge: float = 0.06) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
-    """The cluster points in blocks of ``edge`` (m) cubes of their part's
-    frame: part index, local points (M, 3), the block's centre (3,) and
-    bounding radius (m) in the part's frame. Kept on the clusters."""
-    key = ("blocks", edge)
+def _reach(centres: np.ndarray, rot: np.ndarray, middles: np.ndarray, radii: np.ndarray, lo: np.ndarray,
+           hi: np.ndarray) -> np.ndarray:
+    """Which spheres meet which boxes, (M, K): spheres of ``radii`` (K,) about
+    points ``middles`` (K, 3) of frames (centres (M, K or 1, 3), rotations
+    (M, K or 1, 3, 3)), boxes ``lo``, ``hi`` (M, 1, 3); axis by axis, in the
+    arrays' dtype."""
+    gap = np.zeros(np.broadcast_shapes(centres.shape[:2], middles.shape[:1]), centres.dtype)
+    for k in range(3):
+        c = (centres[..., k] + middles[:, 0] * rot[..., k, 0] + middles[:, 1] * rot[..., k, 1]
+             + middles[:, 2] * rot[..., k, 2])
+        d = np.maximum(np.maximum(lo[..., k] - c, c - hi[..., k]), 0)
+        gap += d * d
+    return gap <= radii * radii
+
+
+def _groups(points: np.ndarray, size: int) -> np.ndarray:
+    """Indices (B, size) of ``points`` (M, 3) in groups of at most ``size``
+    near each other: split at the median of the longest side until the
+    pieces are small; a short group is filled with copies of its first index."""
+    out, todo = [], [np.arange(len(points))]
+    while todo:
+        idx = todo.pop()
+        if len(idx) <= size:
+            out.append(idx)
+            continue
+        pts = points[idx]
+        order = idx[np.argsort(pts[:, np.argmax(np.ptp(pts, axis=0))], kind="stable")]
+        todo += [order[:len(idx) // 2], order[len(idx) // 2:]]
+    return np.array([np.concatenate([g, np.full(size - len(g), g[0])]) for g in out])
+
+
+def _part_radii(clusters: ClusterPoints) -> np.ndarray:
+    """The radius (m) of each part's cluster points about the part's origin, (parts,)."""
+    radii = np.zeros(int(clusters.part.max()) + 1)
+    np.maximum.at(radii, clusters.part, np.sqrt(np.sum(clusters.local ** 2, axis=1)) + 1e-9)
+    return radii
+
+
+def _blocks(clusters: ClusterPoints, size: int = 16) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The cluster points in blocks of at most ``size`` points near each other
+    in their part's frame (each part split at the median of its longest side
+    until the pieces are small): part index (B,), centre (B, 3) and bounding
+    radius (B,) (m) in the part's frame, and the points (B, size, 3) float32,
+    a short block padded with copies of its first point. Kept on the clusters."""
+    key = ("blocks", size)
     if key not in clusters._grid_cache:
-        out = []
+        parts, local = [], []
         for p in np.unique(clusters.part):
             pts = clusters.local[clusters.part == p]
-            cells = np.floor(pts / edge).astype(np.int64)
-            _, which = np.unique(cells, axis=0, return_inverse=True)
-            for b in range(which.max() + 1):
-                block = pts[which.ravel() == b]
-                middle = (block.min(axis=0) + block.max(axis=0)) / 2
-                out.append((int(p), block, middle, float(np.sqrt(np.sum((block - middle) ** 2, axis=1)).max()) + 1e-9))
-        clusters._grid_cache[key] = out
-    return clusters._grid_cache[key]
-
-
-def _block_arrays(clusters: ClusterPoints, edge: float = 0.06) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`_blocks` as arrays: part index (B,), centre (B, 3), radius (B,). Kept on the clusters."""
-    key = ("block arrays", edge)
-    if key not in clusters._grid_cache:
-        blocks = _blocks(clusters, edge)
-        clusters._grid_cache[key] = (np.array([b[0] for b in blocks]), np.array([b[2] for b in blocks]),
-                                     np.array([b[3] for b in blocks]))
+            idx = _groups(pts, size)
+            parts.append(np.full(len(idx), p))
+            local.append(pts[idx])
+        blocks = np.concatenate(local)  # (B, size, 3)
+        middles = (blocks.min(axis=1) + blocks.max(axis=1)) / 2
+        radii = np.sqrt(np.sum((blocks - middles[:, None]) ** 2, axis=2)).max(axis=1) + 1e-9
+        clusters._grid_cache[key] = (np.concatenate(parts), middles, radii, blocks.astype(np.float32))
     return clusters._grid_cache[key]
