@@ -231,8 +231,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         scene unless the dynamics already did), or by the grid."""
         if self.collision == "grid":
             a = np.asarray(alpha, float)[None]
-            self._tip = capaman.tool_tip(capaman.forward(a, self.geometry, validate=False), self.geometry)[0]
-            clearance, part = occupancy.grid_clearance(a, self._grids, self._grid_clusters, self.geometry)
+            pose = capaman.forward(a, self.geometry, validate=False)
+            self._tip = capaman.tool_tip(pose, self.geometry)[0]
+            clearance, part = occupancy.grid_clearance(a, self._grids, self._grid_clusters, self.geometry, pose=pose)
             self._clearance = float(clearance[0])
             self._near = self._part_names[int(part[0])] if part[0] >= 0 else None
             return
@@ -352,8 +353,10 @@ class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
 
     def _place(self, rows: np.ndarray) -> None:
         a = self._alpha[rows]
-        self._tip[rows] = capaman.tool_tip(capaman.forward(a, self.geometry, validate=False), self.geometry)
-        self._clearance[rows] = occupancy.grid_clearance(a, self._grids, self._clusters, self.geometry, rows)[0]
+        pose = capaman.forward(a, self.geometry, validate=False)
+        self._tip[rows] = capaman.tool_tip(pose, self.geometry)
+        self._clearance[rows] = occupancy.grid_clearance(a, self._grids, self._clusters, self.geometry, rows,
+                                                         pose=pose)[0]
 
     def _target(self) -> np.ndarray:
         return self._tour[np.minimum(self._reached, len(TOUR) - 1)]
