@@ -40,30 +40,58 @@ def hybrid_paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOME
     return HybridScenario("paper", p0, p1, geometry)
 
 
+SPLITS = np.linspace(0, 1, 11)  # the splits Delta the scenario checks try (0.5 among them, exactly)
+
+
+def _some_split(p: np.ndarray, test: Any, passed: np.ndarray | None = None, at_once: int = 4096) -> np.ndarray:
+    """Whether ``test(poses, splits)`` holds at some split of :data:`SPLITS`
+    for each pose (M, 6) (``passed``: those known to pass at 0.5). Up to
+    ``at_once`` evaluations, every split in one call (a single env's reset);
+    beyond, the splits are tried from 0.5 outwards, each only on the poses no
+    split has passed yet: the same answer for a fraction of the work."""
+    ok = np.zeros(len(p), bool) if passed is None else passed.copy()
+    todo = np.flatnonzero(~ok)
+    if len(todo) * len(SPLITS) <= at_once:
+        hit = test(np.repeat(p[todo], len(SPLITS), 0), np.tile(SPLITS, len(todo)))
+        ok[todo] = hit.reshape(len(todo), len(SPLITS)).any(axis=1)
+        return ok
+    for d in SPLITS[np.argsort(np.abs(SPLITS - 0.5), kind="stable")]:
+        if not todo.size:
+            break
+        if passed is not None and d == 0.5:
+            continue
+        hit = test(p[todo], np.full(len(todo), d))
+        ok[todo[hit]] = True
+        todo = todo[~hit]
+    return ok
+
+
 def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry: hybrid.HybridGeometry,
                      chunk: int = 256) -> np.ndarray:
     """Which candidate pairs (C, 6) + (C, 6) pass the checks of
     :func:`hybrid_random_scenarios` after the screen (``hard`` (C,): must
     the nominal path at Delta = 0.5 fail on its every fourth sample). The
     checks run stage by stage on the survivors, ``chunk`` pairs at a time."""
-    deltas = np.linspace(0, 1, 11)
+    def limits(p: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return hybrid.within_limits(p, d, geometry)
+
+    def free(p: np.ndarray, d: np.ndarray) -> np.ndarray:
+        return hybrid.solve_rows(p, d, geometry)[4]
+
     out = np.zeros(len(p0), bool)
     for lo in range(0, len(p0), chunk):
         a, b, h = p0[lo:lo + chunk], p1[lo:lo + chunk], hard[lo:lo + chunk]
         nominal = _nominal_rows(a, b, every=4)  # every fourth sample of the nominal path: (c, 26, 6)
         m = nominal.shape[1]
+        at_half = limits(nominal.reshape(-1, 6), np.full(len(a) * m, 0.5)).reshape(-1, m)
         # a failure found on these samples is a real one; none found: not hard enough
-        keep = ~(h & hybrid.within_limits(nominal.reshape(-1, 6), 0.5, geometry).reshape(-1, m).all(axis=1))
-        idx = np.flatnonzero(keep)
+        idx = np.flatnonzero(~(h & at_half.all(axis=1)))
         # some split keeps the legs within limits at each sample (necessary for a plan) ...
-        table = hybrid.within_limits(np.repeat(nominal[idx].reshape(-1, 6), len(deltas), 0),
-                                     np.tile(deltas, len(idx) * m), geometry).reshape(len(idx), m, len(deltas))
-        idx = idx[table.any(axis=2).all(axis=1)]
+        table = _some_split(nominal[idx].reshape(-1, 6), limits, at_half[idx].ravel()).reshape(len(idx), m)
+        idx = idx[table.all(axis=1)]
         # ... and eq 14 in full holds at P0 (Delta = 0.5) and at P1 for some split
-        poses = np.concatenate([a[idx, None], np.repeat(b[idx, None], len(deltas), 1)], axis=1)
-        splits = np.tile(np.concatenate([[0.5], deltas]), len(idx))
-        free = hybrid.solve_rows(poses.reshape(-1, 6), splits, geometry)[4].reshape(len(idx), len(deltas) + 1)
-        out[lo + idx[free[:, 0] & free[:, 1:].any(axis=1)]] = True
+        idx = idx[free(a[idx], np.full(len(idx), 0.5))]
+        out[lo + idx[_some_split(b[idx], free)]] = True
     return out
 
 
@@ -86,7 +114,6 @@ def hybrid_random_scenarios(rngs: list[np.random.Generator],
     generators are screened and checked together."""
     low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
     high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
-    deltas = np.linspace(0, 1, 11)
     batch = 16
     hard = np.array([rng.random() < hard_share for rng in rngs], bool)
     out: list[HybridScenario | None] = [None] * len(rngs)
@@ -98,10 +125,9 @@ def hybrid_random_scenarios(rngs: list[np.random.Generator],
         p0 = np.array([d[0] for d in draws]).reshape(-1, 6)
         p1 = np.array([d[1] for d in draws]).reshape(-1, 6)
         # screen every candidate with the leg limits alone (cheap), then check the survivors fully
-        start_ok = hybrid.within_limits(p0, 0.5, geometry)
-        goal_ok = hybrid.within_limits(np.repeat(p1, len(deltas), 0), np.tile(deltas, len(p1)),
-                                       geometry).reshape(len(p1), -1).any(axis=1)
-        screened = (start_ok & goal_ok).reshape(len(pending), batch)
+        screened = hybrid.within_limits(p0, 0.5, geometry)
+        screened[screened] = _some_split(p1[screened], lambda p, d: hybrid.within_limits(p, d, geometry))
+        screened = screened.reshape(len(pending), batch)
         # the screened candidates in each generator's order: the first of every generator, then the
         # second of those not yet served, ... (as one generator alone tries them, one by one)
         order = np.argsort(~screened, axis=1, kind="stable")
