@@ -94,13 +94,15 @@ class ClusterPoints:
         return ClusterPoints(self.local[keep], self.part[keep], self.spacing)
 
     def on_joint_grid(self, part: int, alpha: np.ndarray, geometry: capaman.CaPaManGeometry,
-                      key: tuple, max_bytes: int = 64 << 20) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """World positions float32 of one part's points at configurations
-        ``alpha`` (N, 3), in blocks of 16 points near each other
-        (:func:`_groups`): (N, B, 16, 3), with each block's bounding box at
-        every configuration (lower and upper corners, (N, B, 3)); kept under
-        ``key`` when smaller than ``max_bytes`` (the joint grid does not change
-        between scenarios, only the obstacles do)."""
+                      key: tuple, max_bytes: int = 64 << 20) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """World positions (N, M_part, 3) float32 of one part's points at
+        configurations ``alpha`` (N, 3), in the order of its blocks of up to
+        16 points near each other (:func:`_groups`); the blocks as indices into
+        that order, (B, 16) (a short block repeats its last point); and each
+        block's bounding box at every configuration (lower and upper corners,
+        (N, B, 3)). Kept under ``key`` when the positions take less than
+        ``max_bytes`` (the joint grid does not change between scenarios, only
+        the obstacles do)."""
         cached = self._grid_cache.get((key, part))
         if cached is not None:
             return cached
@@ -109,9 +111,13 @@ class ClusterPoints:
         local = self.local[self.part == part]
         world = _place(local.astype(f32), centres[:, part].astype(f32),
                        capaman.quat_to_matrix(quats[:, part]).astype(f32))
-        blocks = np.ascontiguousarray(world[:, _groups(local, 16)])
-        out = (blocks, blocks.min(axis=2), blocks.max(axis=2))
-        if blocks.nbytes <= max_bytes:
+        groups = _groups(local, 16)
+        world = np.take(world, np.concatenate(groups), axis=1)  # block after block
+        sizes = np.array([len(g) for g in groups])
+        starts = np.cumsum(sizes) - sizes
+        idx = starts[:, None] + np.minimum(np.arange(16), sizes[:, None] - 1)
+        out = (world, idx, np.minimum.reduceat(world, starts, axis=1), np.maximum.reduceat(world, starts, axis=1))
+        if world.nbytes <= max_bytes:
             self._grid_cache[(key, part)] = out
         return out
 
@@ -258,12 +264,14 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
     return theta.reshape((points_per_axis,) * 3), axis
 
 
-def _grid_hits(grid: OccupancyGrid, blocks: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Eq 2 at N configurations from their points' world positions in blocks
-    (N, B, K, 3) float32, with the blocks' bounding boxes ``lo``, ``hi``
-    (N, B, 3): only the blocks that reach the box of a clump of occupied cells
-    (grown by a cell, far more than float32 rounding) are looked up; the
-    others lie in free cells. The same answer as ``grid.lookup(blocks).any(axis=(1, 2))``."""
+def _grid_hits(grid: OccupancyGrid, world: np.ndarray, idx: np.ndarray, lo: np.ndarray, hi: np.ndarray
+               ) -> np.ndarray:
+    """Eq 2 at N configurations from their points' world positions (N, M, 3)
+    float32, in blocks ``idx`` (B, 16) with bounding boxes ``lo``, ``hi``
+    (N, B, 3) (:meth:`ClusterPoints.on_joint_grid`): only the blocks that
+    reach the box of a clump of occupied cells (grown by a cell, far more
+    than float32 rounding) are looked up; the others lie in free cells. The
+    same answer as ``grid.lookup(world).any(axis=1)``."""
     from scipy import ndimage
 
     reach = np.zeros(lo.shape[:2], bool)
@@ -273,10 +281,10 @@ def _grid_hits(grid: OccupancyGrid, blocks: np.ndarray, lo: np.ndarray, hi: np.n
         box_lo = (grid.origin + (start - 1) * grid.resolution).astype(np.float32)
         box_hi = (grid.origin + (np.array([s.stop for s in box]) + 1) * grid.resolution).astype(np.float32)
         reach |= np.all((hi >= box_lo) & (lo <= box_hi), axis=2)
-    pair = np.flatnonzero(reach)  # config * B + block
-    out = np.zeros(len(blocks), bool)
-    hit = grid.lookup(np.take(blocks.reshape(-1, *blocks.shape[2:]), pair, axis=0)).any(axis=1)
-    out[pair[hit] // blocks.shape[1]] = True
+    config, block = np.nonzero(reach)
+    out = np.zeros(len(world), bool)
+    points = np.take(world.reshape(-1, 3), config[:, None] * world.shape[1] + idx[block], axis=0)
+    out[config[grid.lookup(points).any(axis=1)]] = True
     return out
 
 
@@ -442,10 +450,9 @@ def _reach(centres: np.ndarray, rot: np.ndarray, middles: np.ndarray, radii: np.
     return gap <= radii * radii
 
 
-def _groups(points: np.ndarray, size: int) -> np.ndarray:
-    """Indices (B, size) of ``points`` (M, 3) in groups of at most ``size``
-    near each other: split at the median of the longest side until the
-    pieces are small; a short group is filled with copies of its first index."""
+def _groups(points: np.ndarray, size: int) -> list[np.ndarray]:
+    """Indices of ``points`` (M, 3) in groups of at most ``size`` near each
+    other: split at the median of the longest side until the pieces are small."""
     out, todo = [], [np.arange(len(points))]
     while todo:
         idx = todo.pop()
@@ -455,7 +462,7 @@ def _groups(points: np.ndarray, size: int) -> np.ndarray:
         pts = points[idx]
         order = idx[np.argsort(pts[:, np.argmax(np.ptp(pts, axis=0))], kind="stable")]
         todo += [order[:len(idx) // 2], order[len(idx) // 2:]]
-    return np.array([np.concatenate([g, np.full(size - len(g), g[0])]) for g in out])
+    return out
 
 
 def _part_radii(clusters: ClusterPoints) -> np.ndarray:
@@ -478,7 +485,7 @@ def _blocks(clusters: ClusterPoints, size: int = 16) -> tuple[np.ndarray, np.nda
         parts, local = [], []
         for p in np.unique(clusters.part):
             pts = clusters.local[clusters.part == p]
-            idx = _groups(pts, size)
+            idx = np.array([np.concatenate([g, np.full(size - len(g), g[0])]) for g in _groups(pts, size)])
             parts.append(np.full(len(idx), p))
             local.append(pts[idx])
         blocks = np.concatenate(local)  # (B, size, 3)
