@@ -66,14 +66,19 @@ class OccupancyGrid:
         The grid has a free border one cell wide, so indices are clipped onto
         it instead of masking points outside.
         """
+        return self.lookup_axes(*np.moveaxis(np.asarray(points, dtype=np.float32), -1, 0))
+
+    def lookup_axes(self, x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+        """:meth:`lookup` at points given as their three coordinates (arrays of
+        one shape, float32/int32: half the memory traffic), axis by axis."""
         shape = self.occupied.shape
-        pts = np.asarray(points, dtype=np.float32)  # float32/int32: half the memory traffic
-        x = pts - self.origin.astype(np.float32)
-        x *= np.float32(1.0 / self.resolution)
-        np.maximum(x, 0, out=x)  # clipped onto the grid, so that truncating is flooring
-        np.minimum(x, np.array(shape, np.float32) - 1, out=x)
-        idx = x.astype(np.int32)
-        flat = (idx[..., 0] * shape[1] + idx[..., 1]) * shape[2] + idx[..., 2]
+        flat = 0
+        for k, c in enumerate((x, y, z)):
+            i = c - np.float32(self.origin[k])
+            i *= np.float32(1.0 / self.resolution)
+            np.maximum(i, 0, out=i)  # clipped onto the grid, so that truncating is flooring
+            np.minimum(i, np.float32(shape[k] - 1), out=i)
+            flat = flat * shape[k] + i.astype(np.int32)
         return self.occupied.ravel()[flat]
 
 
@@ -95,14 +100,14 @@ class ClusterPoints:
 
     def on_joint_grid(self, part: int, alpha: np.ndarray, geometry: capaman.CaPaManGeometry,
                       key: tuple, max_bytes: int = 64 << 20) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """World positions (N, M_part, 3) float32 of one part's points at
-        configurations ``alpha`` (N, 3), in the order of its blocks of up to
-        16 points near each other (:func:`_groups`); the blocks as indices into
-        that order, (B, 16) (a short block repeats its last point); and each
-        block's bounding box at every configuration (lower and upper corners,
-        (N, B, 3)). Kept under ``key`` when the positions take less than
-        ``max_bytes`` (the joint grid does not change between scenarios, only
-        the obstacles do)."""
+        """World positions (3, N, M_part) float32, axis by axis, of one part's
+        points at configurations ``alpha`` (N, 3), in the order of its blocks
+        of up to 16 points near each other (:func:`_groups`); the blocks as
+        indices into that order, (B, 16) (a short block repeats its last
+        point); and each block's bounding box at every configuration (lower
+        and upper corners, (3, N, B)). Kept under ``key`` when the positions
+        take less than ``max_bytes`` (the joint grid does not change between
+        scenarios, only the obstacles do)."""
         cached = self._grid_cache.get((key, part))
         if cached is not None:
             return cached
@@ -112,11 +117,12 @@ class ClusterPoints:
         world = _place(local.astype(f32), centres[:, part].astype(f32),
                        capaman.quat_to_matrix(quats[:, part]).astype(f32))
         groups = _groups(local, 16)
-        world = np.take(world, np.concatenate(groups), axis=1)  # block after block
+        order = np.concatenate(groups)  # block after block
+        world = np.stack([np.take(world[..., k], order, axis=1) for k in range(3)])
         sizes = np.array([len(g) for g in groups])
         starts = np.cumsum(sizes) - sizes
         idx = starts[:, None] + np.minimum(np.arange(16), sizes[:, None] - 1)
-        out = (world, idx, np.minimum.reduceat(world, starts, axis=1), np.maximum.reduceat(world, starts, axis=1))
+        out = (world, idx, np.minimum.reduceat(world, starts, axis=2), np.maximum.reduceat(world, starts, axis=2))
         if world.nbytes <= max_bytes:
             self._grid_cache[(key, part)] = out
         return out
@@ -266,25 +272,26 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
 
 def _grid_hits(grid: OccupancyGrid, world: np.ndarray, idx: np.ndarray, lo: np.ndarray, hi: np.ndarray
                ) -> np.ndarray:
-    """Eq 2 at N configurations from their points' world positions (N, M, 3)
+    """Eq 2 at N configurations from their points' world positions (3, N, M)
     float32, in blocks ``idx`` (B, 16) with bounding boxes ``lo``, ``hi``
-    (N, B, 3) (:meth:`ClusterPoints.on_joint_grid`): only the blocks that
+    (3, N, B) (:meth:`ClusterPoints.on_joint_grid`): only the blocks that
     reach the box of a clump of occupied cells (grown by a cell, far more
     than float32 rounding) are looked up; the others lie in free cells. The
-    same answer as ``grid.lookup(world).any(axis=1)``."""
+    same answer as ``grid.lookup(world).any(axis=1)`` in (N, M, 3) order."""
     from scipy import ndimage
 
-    reach = np.zeros(lo.shape[:2], bool)
+    reach = np.zeros(lo.shape[1:], bool)
     labels, _ = ndimage.label(grid.occupied)
     for box in ndimage.find_objects(labels):  # each clump of occupied cells (an obstacle or touching ones)
-        start = np.array([s.start for s in box])
-        box_lo = (grid.origin + (start - 1) * grid.resolution).astype(np.float32)
-        box_hi = (grid.origin + (np.array([s.stop for s in box]) + 1) * grid.resolution).astype(np.float32)
-        reach |= np.all((hi >= box_lo) & (lo <= box_hi), axis=2)
+        inside = np.ones(lo.shape[1:], bool)
+        for k, s in enumerate(box):
+            inside &= hi[k] >= np.float32(grid.origin[k] + (s.start - 1) * grid.resolution)
+            inside &= lo[k] <= np.float32(grid.origin[k] + (s.stop + 1) * grid.resolution)
+        reach |= inside
     config, block = np.nonzero(reach)
-    out = np.zeros(len(world), bool)
-    points = np.take(world.reshape(-1, 3), config[:, None] * world.shape[1] + idx[block], axis=0)
-    out[config[grid.lookup(points).any(axis=1)]] = True
+    out = np.zeros(world.shape[1], bool)
+    flat = config[:, None] * world.shape[2] + idx[block]
+    out[config[grid.lookup_axes(*(np.take(world[k], flat) for k in range(3))).any(axis=1)]] = True
     return out
 
 
