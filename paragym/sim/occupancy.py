@@ -416,7 +416,8 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
         block_parts.append(bs[bi])
     robot = np.concatenate(robot_parts) if robot_parts else np.zeros(0, np.int64)
     block = np.concatenate(block_parts) if block_parts else np.zeros(0, np.int64)
-    # the smallest (value, part) of every pair as one key: value * 32 + part (17 parts)
+    # the smallest (value, part) of every pair as one key: value * parts + part
+    n_parts = len(_part_radii(clusters))
     key = np.empty(len(robot), np.int32)
     step = max(1, chunk_points // local.shape[1])
     inv = 1.0 / grids.resolution
@@ -428,16 +429,18 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
         t = ((centres[i, p] - grids.origin[g]) * inv).astype(np.float32)  # (K, 3)
         top = (grids.shape[g] - 1).astype(np.float32)
         pts = local[b]  # (K, P, 3)
-        flat = (g * grids.slot)[:, None]
-        for k, stride in ((0, grids.shape[g, 1] * grids.shape[g, 2]), (1, grids.shape[g, 2]), (2, 1)):
+        cells = []
+        for k in range(3):
             x = (t[:, None, k] + pts[..., 0] * m[:, None, k, 0] + pts[..., 1] * m[:, None, k, 1]
                  + pts[..., 2] * m[:, None, k, 2])
             np.clip(x, 0.0, top[:, None, k], out=x)
-            flat = flat + x.astype(np.int64) * (stride if k == 2 else stride[:, None])  # floor of x >= 0
-        key[s:s + step] = grids.values[flat].min(axis=1).astype(np.int32) * 32 + p
-    best = np.full(n, cap * 32, np.int64)
+            cells.append(x.astype(np.int64))  # the floor, x being >= 0
+        sy, sz = grids.shape[g, 1, None], grids.shape[g, 2, None]
+        flat = (g * grids.slot)[:, None] + (cells[0] * sy + cells[1]) * sz + cells[2]
+        key[s:s + step] = grids.values[flat].min(axis=1).astype(np.int32) * n_parts + p
+    best = np.full(n, cap * n_parts, np.int64)
     np.minimum.at(best, robot, key)
-    value, part = best // 32, best % 32
+    value, part = best // n_parts, best % n_parts
     part[value >= cap] = -1
     return np.minimum(value, cap) * grids.unit, part
 
