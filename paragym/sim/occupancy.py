@@ -50,10 +50,7 @@ class OccupancyGrid:
         if not obstacles:
             return cls(np.zeros((1, 1, 1), bool), np.zeros(3), resolution)
         origin, shape, prisms = _prisms(obstacles, resolution, margin)
-        occupied = np.zeros(shape, bool)
-        for plane, column in prisms:
-            occupied |= plane[:, :, None] & column[None, None]
-        return cls(occupied, origin, resolution)
+        return cls(_occupied(shape, prisms), origin, resolution)
 
     @property
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
@@ -298,6 +295,20 @@ def _grid_hits(grid: OccupancyGrid, world: np.ndarray, idx: np.ndarray, lo: np.n
 # --- the grid's clearance: signed distances on Psi, for many robots at once ---------------------------------
 
 
+def _mask_bounds(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """First and last index (3,) along each axis of the True cells of a 3-D ``mask`` (some cell True)."""
+    spans = [np.flatnonzero(mask.any(axis=tuple(j for j in range(3) if j != k))) for k in range(3)]
+    return np.array([c[0] for c in spans]), np.array([c[-1] for c in spans])
+
+
+def _occupied(shape: tuple[int, int, int], prisms: list[tuple[np.ndarray, np.ndarray]]) -> np.ndarray:
+    """Psi (eq 1) from the obstacles' prisms (:func:`_prisms`)."""
+    occupied = np.zeros(shape, bool)
+    for plane, column in prisms:
+        occupied |= plane[:, :, None] & column[None, None]
+    return occupied
+
+
 def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, cap: float = 0.05,
                      unit: float = 0.0005) -> tuple[np.ndarray, np.ndarray]:
     """Psi (eq 1) with the distance of every cell to the other kind: for a
@@ -317,11 +328,10 @@ def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, c
     # outside: the squared distance (cells) to a prism is the squared distance in (x, y) to its mask plus that
     # in z to its interval, and to the union the least of those; integers, so the same figures as a distance
     # transform of the whole grid, at the cost of one in two dimensions per obstacle
-    occ = np.zeros(shape, bool)
+    occ = _occupied(shape, prisms)
     d2 = np.full(shape, np.iinfo(np.int64).max)
     k = np.arange(shape[2])
     for plane, column in prisms:
-        occ |= plane[:, :, None] & column[None, None]
         near = ndimage.distance_transform_edt(~plane, return_distances=False, return_indices=True)
         dxy2 = (near[0] - np.arange(shape[0])[:, None]) ** 2 + (near[1] - np.arange(shape[1])[None, :]) ** 2
         z = np.flatnonzero(column)
@@ -332,8 +342,8 @@ def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, c
     # cell has a nearer free cell beyond it (exact; the grid is mostly free space)
     inside = np.zeros(occ.shape)
     if occ.any():
-        box = tuple(slice(max(int(c[0]) - 1, 0), int(c[-1]) + 2)
-                    for c in (np.flatnonzero(occ.any(axis=tuple(j for j in range(3) if j != k))) for k in range(3)))
+        first, last = _mask_bounds(occ)
+        box = tuple(slice(max(int(a) - 1, 0), int(b) + 2) for a, b in zip(first, last, strict=True))
         inside[box] = ndimage.distance_transform_edt(occ[box])
     inside = inside * resolution - resolution / 2
     d = np.where(occ, -inside, outside)
@@ -369,12 +379,12 @@ class DistanceGrids:
                 self.values[j * self.slot:j * self.slot + old_slot] = old[j * old_slot:(j + 1) * old_slot]
         self.values[i * self.slot:i * self.slot + values.size] = values.ravel()
         self.origin[i], self.shape[i] = origin, values.shape
-        below = [np.flatnonzero((values < round(self.cap / self.unit)).any(axis=tuple(j for j in range(3) if j != k)))
-                 for k in range(3)]
-        if below[0].size:
+        below = values < round(self.cap / self.unit)
+        if below.any():
+            first, last = _mask_bounds(below)
             pad = 0.01 * self.resolution
-            self.active_lo[i] = origin + np.array([b[0] for b in below]) * self.resolution - pad
-            self.active_hi[i] = origin + (np.array([b[-1] for b in below]) + 1) * self.resolution + pad
+            self.active_lo[i] = origin + first * self.resolution - pad
+            self.active_hi[i] = origin + (last + 1) * self.resolution + pad
         else:
             self.active_lo[i], self.active_hi[i] = np.inf, -np.inf
 
