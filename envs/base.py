@@ -13,7 +13,49 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ParagymEnv"]
+__all__ = ["ParagymEnv", "check_action"]
+
+
+def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows: int | None = None) -> np.ndarray:
+    """The action as float64, clipped to ``space`` (one rule for every env).
+
+    An action outside the Box is clipped to it, as Gymnasium's own envs and
+    Stable-Baselines3 expect; everything else that is not a finite real
+    number of the right shape raises at once: strings, complex numbers and
+    objects a ``TypeError``, NaN, inf, numbers beyond float64 and a wrong
+    shape a ``ValueError``, each naming ``name``. ``rows``: a batch of that
+    many actions (a native vector env), whose bad row is named.
+    """
+    if action is None:
+        raise TypeError(f"{name} must be an array of real numbers; got None")
+    try:
+        arr = np.asarray(action)
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise TypeError(f"{name} must be an array of real numbers; got {action!r:.80}") from exc
+    if arr.dtype.kind == "O":  # Python ints beyond float64 or other objects
+        try:
+            arr = arr.astype(np.float64)
+        except OverflowError:
+            raise ValueError(f"{name} must be finite; got a number beyond float64's range") from None
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"{name} must be an array of real numbers; got {action!r:.80}") from exc
+    if arr.dtype.kind not in "biuf":
+        raise TypeError(f"{name} must be an array of real numbers; got dtype {arr.dtype} ({action!r:.80})")
+    arr = arr.astype(np.float64, copy=False)
+    want = space.shape if rows is None else (rows, *space.shape)
+    if arr.shape != want:
+        what = " (one row per robot)" if rows is not None else ""
+        raise ValueError(f"{name} must have shape {want}{what}; got {arr.shape}")
+    if rows is None:
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name} must be finite; got {arr}")
+    else:
+        bad = ~np.isfinite(arr.reshape(rows, -1)).all(axis=1)
+        if bad.any():
+            idx = np.flatnonzero(bad)
+            raise ValueError(f"{name} must be finite; row {idx[0]} is {arr[idx[0]]}"
+                             + (f" ({len(idx)} rows are not: {idx[:10].tolist()}...)" if len(idx) > 1 else ""))
+    return np.clip(arr, space.low, space.high)
 
 
 class ParagymEnv(gym.Env):
@@ -58,13 +100,7 @@ class ParagymEnv(gym.Env):
 
     # --- shared input check ---------------------------------------------------------------
     def _check_action(self, action: np.ndarray) -> np.ndarray:
-        arr = np.asarray(action, dtype=np.float64)
-        space = self.action_space
-        if arr.shape != space.shape:
-            raise ValueError(f"action must have shape {space.shape}; got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
-            raise ValueError(f"action must be finite; got {arr}")
-        return arr
+        return check_action(action, self.action_space)
 
     # --- hooks ---------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:

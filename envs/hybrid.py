@@ -186,6 +186,9 @@ class HybridSingularityFreeEnv(ParagymEnv):
     ``max_delta_step`` = 0.05, Delta held in [0, 1]) and the offset of E's
     x, y, z from the nominal path (times ``j_bar`` = 20 mm). The last pose is
     P1 exactly: its offset is ignored.
+    An action outside the Box is clipped to it (the rule of every paragym env,
+    :func:`paragym.envs.base.check_action`); NaN/inf or a wrong shape raise
+    ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
     ``Box(-10, 10, (28,), float32)``: u; the nominal pose at this step and at

@@ -59,6 +59,9 @@ class MobileTripodOdometryEnv(ParagymEnv):
     ``Box(-1, 1, (6,))``: a correction of the estimated horizontal unit
     positions, times ``max_correction`` (5 cm), added after the odometric
     prediction.
+    An action outside the Box is clipped to it (the rule of every paragym env,
+    :func:`paragym.envs.base.check_action`); NaN/inf or a wrong shape raise
+    ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
     ``Box(-100, 100, (21,))``: odometric unit positions (9, / 10 m), measured

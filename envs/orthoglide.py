@@ -172,6 +172,9 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     rate times ``max_null_rate`` (m/s along the unit null vector n).
     ``action_mode="joint_velocity"``: ``Box(-1, 1, (3,))``, joint rates times
     ``max_joint_rate`` (m/s); the tool then tracks only as well as the agent does.
+    An action outside the Box is clipped to it (the rule of every paragym env,
+    :func:`paragym.envs.base.check_action`); NaN/inf or a wrong shape raise
+    ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
     ``Box(-10, 10, (11,))``: rho normalised to [-1, 1] over its limits; the

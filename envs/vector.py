@@ -33,6 +33,8 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from paragym.envs.base import check_action
+
 __all__ = ["ParagymVectorEnv"]
 
 
@@ -132,16 +134,7 @@ class ParagymVectorEnv(VectorEnv):
 
     # --- input check --------------------------------------------------------------------
     def _check_actions(self, actions: np.ndarray) -> np.ndarray:
-        arr = np.asarray(actions, dtype=np.float64)
-        want = (self.num_envs, *self.single_action_space.shape)
-        if arr.shape != want:
-            raise ValueError(f"actions must have shape {want} (one row per robot); got {arr.shape}")
-        bad = ~np.isfinite(arr.reshape(self.num_envs, -1)).all(axis=1)
-        if bad.any():
-            rows = np.flatnonzero(bad)
-            raise ValueError(f"actions must be finite; row {rows[0]} is {arr[rows[0]]}"
-                             + (f" ({len(rows)} rows are not: {rows[:10].tolist()}...)" if len(rows) > 1 else ""))
-        return arr
+        return check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
 
     # --- hooks --------------------------------------------------------------------------
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
