@@ -38,7 +38,7 @@ import gymnasium as gym
 import numpy as np
 
 import paragym
-from paragym.baselines.policies import PolicySpec, default_models_dir, policies_for
+from paragym.baselines.policies import PolicySpec, policies_for
 from paragym.baselines.store import EpisodeRow, ResultStore
 from paragym.baselines.training import check_env_id, env_name
 from paragym.rollout import Episode, run_episode
@@ -178,7 +178,7 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
     metrics = METRICS[spec.env_id][0](ep)
     metrics["policy_failed"] = failed
     return EpisodeRow(spec.env_id, spec.name, seed, episode, spec.kind, ep.episode_return, len(ep.actions),
-                      ep.success, metrics, wall)
+                      ep.success, metrics, wall, producer=spec.producer())
 
 
 # --- executors: each yields finished rows as they come --------------------------------------------------------
@@ -186,7 +186,8 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
 Job = tuple[PolicySpec, int, int]
 
 
-def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
+               ) -> Iterator[EpisodeRow]:
     for spec, seed, episode in jobs:
         yield evaluate_episode(spec, seed, episode)
 
@@ -200,13 +201,14 @@ def _init_worker() -> None:
         pass
 
 
-def _evaluate_by_name(env_id: str, name: str, models_dir: str, seed: int, episode: int) -> EpisodeRow:
+def _evaluate_by_name(env_id: str, name: str, models_dir: str | None, seed: int, episode: int) -> EpisodeRow:
     from paragym.baselines.policies import get_policy
 
     return evaluate_episode(get_policy(env_id, name, models_dir), seed, episode)
 
 
-def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
+              ) -> Iterator[EpisodeRow]:
     """A fork-started process pool: workers inherit the policy registry, so
     policies registered in the calling script work too."""
     import multiprocessing as mp
@@ -223,7 +225,8 @@ def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir
                 fut.cancel()
 
 
-def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str) -> Iterator[EpisodeRow]:
+def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
+             ) -> Iterator[EpisodeRow]:
     """Ray tasks (one per episode; the policy spec travels with the task,
     pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
     try:
@@ -268,6 +271,7 @@ class Summary:
     wall_seconds: float
     validation: dict[str, Any] | None = None
     rank: int = 0
+    producer: str = ""
 
     def sort_key(self) -> tuple[float, float, float, str]:
         """Success rate, then the env's primary metric, then the return (all best first)."""
@@ -278,7 +282,8 @@ class Summary:
 
 
 def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> dict[str, list[Summary]]:
-    """The ranked summaries, per env (in registration order)."""
+    """The ranked summaries, per env (in registration order). The rows of one
+    (env, policy) must come from one producer (the caller filters them)."""
     groups: dict[tuple[str, str], list[EpisodeRow]] = {}
     for row in rows:
         groups.setdefault((row.env, row.policy), []).append(row)
@@ -291,7 +296,7 @@ def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> d
             env, policy, rs[0].kind, "", len(rs),
             float(np.mean([r.success for r in rs])), float(returns.mean()), float(returns.std()), metrics,
             float(np.mean([r.wall_seconds for r in rs])),
-            store.validation(env, policy) if store is not None else None))
+            store.validation(env, policy, rs[0].producer) if store is not None else None, producer=rs[0].producer))
     ordered = {env: out[env] for env in paragym.ENVIRONMENTS if env in out}
     for summaries in ordered.values():
         summaries.sort(key=Summary.sort_key)
@@ -388,13 +393,13 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
     writer = csv.writer(buf)
     keys = sorted({k for ss in all_summaries.values() for s in ss for k in s.metrics})
     writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "return_mean", "return_std",
-                     *keys, "wall_seconds_per_episode", "kf_validation"])
+                     *keys, "wall_seconds_per_episode", "kf_validation", "producer"])
     for ss in all_summaries.values():
         for s in ss:
             writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
                              f"{s.return_mean:.6g}", f"{s.return_std:.6g}",
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
-                             f"{s.wall_seconds:.4f}", _verdict(s)])
+                             f"{s.wall_seconds:.4f}", _verdict(s), s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
     return path
@@ -459,7 +464,7 @@ class LeaderboardRun:
 
 
 def _select(env_ids: list[str] | None, policy_names: list[str] | None,
-            models_dir: Path) -> dict[str, dict[str, PolicySpec]]:
+            models_dir: Path | None) -> dict[str, dict[str, PolicySpec]]:
     envs = [check_env_id(e) for e in env_ids] if env_ids else list(paragym.ENVIRONMENTS)
     chosen: dict[str, dict[str, PolicySpec]] = {}
     for env in envs:
@@ -486,24 +491,30 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     """Evaluate what is missing from ``db`` for ``suite``, then write the
     reports (to ``out``: ``LEADERBOARD.md`` unless ``markdown_path``,
     ``leaderboard.csv``, ``<env>.png``; nothing written when ``out`` is None).
-    ``on_row`` sees each new row after it is stored."""
+    ``on_row`` sees each new row after it is stored. The shipped models
+    always take part; ``models_dir`` adds your own (``user-...``). An
+    episode is taken from ``db`` only when its stored row has the policy's
+    current producer (model hash, planner parameters); the others are run
+    again, and ``echo`` says so."""
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; known: {', '.join(EXECUTORS)}")
     if not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
-    models = Path(models_dir) if models_dir is not None else default_models_dir()
+    models = Path(models_dir) if models_dir is not None else None
     chosen = _select(env_ids, policies, models)
+    producers = {(env, name): spec.producer() for env, specs in chosen.items() for name, spec in specs.items()}
     t0 = time.perf_counter()
     with ResultStore(db) as store:
         done = store.done_keys()
         jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
-                if (spec.env_id, spec.name, s, k, store.version) not in done]
+                if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
+        _say_what_is_rerun(jobs, done, store.version, producers, echo)
         total = sum(len(specs) for specs in chosen.values()) * len(suite.keys())
         echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
              f"{store.path}; running {len(jobs)} with the {executor} executor")
         run = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}[executor]
-        stream = run(jobs, workers, ray_address, str(models))
+        stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
         from tqdm.auto import tqdm
 
         with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
@@ -515,12 +526,14 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
                     on_row(row)
         if validate:
             for env, (name, check) in VALIDATED.items():
-                if env in chosen and name in chosen[env] and store.validation(env, name) is None:
+                producer = producers.get((env, name))
+                if env in chosen and name in chosen[env] and store.validation(env, name, producer) is None:
                     echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
                     passed, summary = check(0)
-                    store.set_validation(env, name, passed, summary)
-        wanted = {(env, name) for env, specs in chosen.items() for name in specs}
-        rows = [r for r in store.rows() if (r.env, r.policy) in wanted and (r.seed, r.episode) in set(suite.keys())]
+                    store.set_validation(env, name, passed, summary, producer)
+        keys = set(suite.keys())
+        rows = [r for r in store.rows()
+                if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
         all_summaries = summarise(rows, store)
         for env, ss in all_summaries.items():
             for s in ss:
@@ -530,6 +543,36 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     for env, ss in all_summaries.items():
         echo(f"\n{env}\n{terminal_table(ss)}")
     return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds)
+
+
+def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producers: dict[tuple[str, str], str],
+                       echo: Callable[[str], None]) -> None:
+    """One line per (env, policy) whose stored episodes came from another producer."""
+    stored: dict[tuple, list[str]] = {}
+    for key in done:
+        stored.setdefault(key[:5], []).append(key[5])
+    stale: dict[tuple[str, str], set[str]] = {}
+    for spec, s, k in jobs:
+        for old in stored.get((spec.env_id, spec.name, s, k, version), ()):
+            stale.setdefault((spec.env_id, spec.name), set()).add(old)
+    for (env, name), old in stale.items():
+        n = sum(1 for spec, _, _ in jobs if (spec.env_id, spec.name) == (env, name))
+        echo(f"{env_name(env)} {name}: the stored episodes were made by another producer "
+             f"({_short(next(iter(old)))} -> {_short(producers[env, name])}); re-running {n} of them")
+
+
+def _short(producer: str) -> str:
+    """A producer in a few characters: the model's hash, or a hash of the parameters."""
+    import hashlib
+    import json
+
+    try:
+        params = json.loads(producer).get("params", {})
+    except ValueError:
+        params = {}
+    if "model_sha256" in params:
+        return f"model sha256 {params['model_sha256'][:12]}"
+    return f"parameters {hashlib.sha256(producer.encode()).hexdigest()[:12]}"
 
 
 def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out: str | Path,

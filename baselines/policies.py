@@ -10,17 +10,29 @@ own seeds, never on which worker ran it or what it ran before.
 Built in, per env: the paper's method (``kind="reference"``), the paper's
 other cases where they differ from the trivial policies (``"paper case"``),
 other planners of ours (``"other"``), the shipped Stable-Baselines3 models
-found under ``models/<env name>/`` (``"learned"``) and the floor every agent
-must beat, uniformly random and zero actions (``"floor"``). A zero action
-*is* one of the paper's cases in three envs; its description says which.
+(package data, :func:`shipped_models_dir`; named ``ppo-seed0`` and so on,
+``"learned"``) and the floor every agent must beat, uniformly random and
+zero actions (``"floor"``). A zero action *is* one of the paper's cases in
+three envs; its description says which. Models you trained yourself join
+only when you name their folder (``models_dir``, ``--models``), listed
+apart from the shipped ones as ``user-ppo-seed0`` and so on.
+
+Every policy has a producer (:meth:`PolicySpec.producer`): what exactly
+makes its actions, recorded with every leaderboard row: the model file's
+SHA-256 for a learned policy, the planner's parameters for a planner.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import hashlib
+import inspect
+import json
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -31,8 +43,8 @@ import paragym
 from paragym.baselines.simple import RandomPolicy, ZeroPolicy
 from paragym.baselines.training import check_env_id, env_name, load_model
 
-__all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "default_models_dir", "get_policy", "policies_for",
-           "register_policy"]
+__all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "get_policy", "init_defaults", "policies_for", "register_policy",
+           "shipped_models_dir"]
 
 KINDS = ("reference", "paper case", "other", "learned", "floor", "user")
 DEG = np.pi / 180
@@ -47,15 +59,41 @@ class PolicySpec:
     factory: Callable[[gym.Env, int], Any]
     kind: str = "user"
     description: str = ""
+    #: what defines the policy beyond its code: a dict, or a function that returns it (called when needed)
+    params: dict[str, Any] | Callable[[], dict[str, Any]] | None = None
+
+    def producer(self) -> str:
+        """What makes this policy's actions, as canonical JSON: the factory's
+        qualified name and the parameters (for a learned policy, the model
+        file's SHA-256). Two rows with different producers are never mixed."""
+        f = self.factory
+        code = f if inspect.isfunction(f) or inspect.ismethod(f) else type(f)
+        params = self.params() if callable(self.params) else (self.params or {})
+        return json.dumps({"policy": f"{code.__module__}.{code.__qualname__}", "params": params},
+                          sort_keys=True, default=repr)
+
+
+def init_defaults(cls: type, **overrides: Any) -> dict[str, Any]:
+    """The keyword defaults of ``cls.__init__`` (dataclasses as dicts), with
+    ``overrides``: a planner's parameters as its constructor sets them."""
+    out: dict[str, Any] = {}
+    for name, p in inspect.signature(cls.__init__).parameters.items():
+        if name != "self" and p.default is not inspect.Parameter.empty:
+            out[name] = p.default
+    out.update(overrides)
+    return {k: dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v for k, v in out.items()}
 
 
 _REGISTRY: dict[str, dict[str, PolicySpec]] = {env_id: {} for env_id in paragym.ENVIRONMENTS}
 
 
 def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], Any], kind: str = "user",
-                    description: str = "", replace: bool = False) -> PolicySpec:
+                    description: str = "", replace: bool = False,
+                    params: dict[str, Any] | Callable[[], dict[str, Any]] | None = None) -> PolicySpec:
     """Add a policy to ``env_id``'s leaderboard. ``name`` is its row label
-    (letters, digits, ``-_.()+`` and spaces); an existing name needs ``replace``."""
+    (letters, digits, ``-_.()+`` and spaces); an existing name needs ``replace``.
+    ``params``: what defines the policy beyond its code (recorded with its
+    rows; a change of them re-runs its episodes)."""
     env_id = check_env_id(env_id)
     if not isinstance(name, str) or not re.fullmatch(r"[\w\-.()+ ]{1,60}", name):
         raise ValueError(f"policy name must be 1-60 letters, digits, spaces or -_.()+; got {name!r}")
@@ -65,18 +103,15 @@ def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], An
         raise ValueError(f"kind must be one of {KINDS}; got {kind!r}")
     if name in _REGISTRY[env_id] and not replace:
         raise ValueError(f"{env_id} already has a policy named {name!r} (replace=True overrides it)")
-    spec = PolicySpec(env_id, name, factory, kind, description)
+    spec = PolicySpec(env_id, name, factory, kind, description, params)
     _REGISTRY[env_id][name] = spec
     return spec
 
 
-def default_models_dir() -> Path:
-    """``models/`` in the working directory if there is one, else the one
-    beside the package in a source checkout (where the shipped models live)."""
-    here = Path("models")
-    if here.is_dir():
-        return here
-    return Path(__file__).resolve().parents[1] / "models"
+def shipped_models_dir() -> Path:
+    """The folder of the shipped models (package data ``paragym.models``),
+    wherever paragym is installed and whatever the working directory."""
+    return Path(str(resources.files("paragym.models")))
 
 
 class LearnedPolicy:
@@ -148,43 +183,74 @@ def _numpy_actor(model: Any) -> tuple[list[tuple[np.ndarray, np.ndarray, Any]] |
     return [tuple(layer) for layer in layers], squash
 
 
+@lru_cache(maxsize=256)
+def file_sha256(path: str, mtime_ns: int, size: int) -> str:
+    """The SHA-256 of a file (cached by path, modification time and size)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
+
+
+def _sha256(path: Path) -> str:
+    st = path.stat()
+    return file_sha256(str(path), st.st_mtime_ns, st.st_size)
+
+
 @lru_cache(maxsize=64)
-def _cached_model(path: str, mtime: float) -> Any:
+def _cached_model(path: str, sha256: str) -> Any:
     return load_model(path)
 
 
 @dataclass(frozen=True)
 class _LearnedFactory:
-    """Loads the model once per process (picklable, for worker pools and Ray)."""
+    """Loads the model once per process (picklable, for worker pools and Ray),
+    and only the file whose SHA-256 the leaderboard recorded."""
 
     path: str
+    sha256: str
 
     def __call__(self, env: gym.Env, seed: int) -> LearnedPolicy:
         p = Path(self.path)
-        model = _cached_model(str(p), p.stat().st_mtime if p.exists() else 0.0)
+        if not p.is_file() or _sha256(p) != self.sha256:
+            raise ValueError(f"model {p} changed (or went) since the leaderboard listed it: its episodes would not "
+                             f"be the model's recorded in their rows (SHA-256 {self.sha256[:12]}); run again")
+        model = _cached_model(str(p), self.sha256)
         if model.observation_space.shape != env.observation_space.shape:
             raise ValueError(f"model {p} expects observations of shape {model.observation_space.shape}, "
                              f"the env gives {env.observation_space.shape}")
         return LearnedPolicy(model)
 
 
-def _learned(env_id: str, models_dir: Path) -> dict[str, PolicySpec]:
+def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[str, PolicySpec]:
     folder = models_dir / env_name(env_id)
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
         m = re.fullmatch(r"(ppo|sac|td3)_seed(\d+)", path.stem)
         if m:
-            name = f"{m[1]}-seed{m[2]}"
-            found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path)), "learned",
-                                     f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}: {path}")
+            name = f"{prefix}{m[1]}-seed{m[2]}"
+            sha = _sha256(path)
+            found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path), sha), "learned",
+                                     f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}, {origin}: {path}",
+                                     {"model_sha256": sha})
     return found
 
 
 def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str, PolicySpec]:
-    """Every policy of ``env_id``: the registered ones and the learned models
-    under ``models_dir`` (default :func:`default_models_dir`), in table order."""
+    """Every policy of ``env_id``: the registered ones, the shipped models and,
+    when ``models_dir`` is given, your own models under it (named
+    ``user-<algo>-seed<N>``), in table order. A ``models_dir`` that does not
+    exist is an error, not an empty list."""
     env_id = check_env_id(env_id)
-    learned = _learned(env_id, Path(models_dir) if models_dir is not None else default_models_dir())
+    learned = _learned(env_id, shipped_models_dir(), "", "shipped")
+    if models_dir is not None:
+        folder = Path(models_dir)
+        if not folder.is_dir():
+            raise ValueError(f"models folder {folder} does not exist (models you trained: paragym train writes them "
+                             f"to runs/models by default)")
+        if folder.resolve() != shipped_models_dir().resolve():
+            learned.update(_learned(env_id, folder, "user-", "trained by you"))
     specs = {**_REGISTRY[env_id], **learned}
     return dict(sorted(specs.items(), key=lambda kv: (KINDS.index(kv[1].kind), kv[0])))
 
@@ -281,31 +347,69 @@ class _Estimator:
 _encoder_correction = _Estimator("EncoderCorrection")
 _ukf_fusion = _Estimator("FusionEstimator")
 
-_BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str], ...] = (
+def _rrt_ga_params() -> dict[str, Any]:
+    from paragym.planners import RrtGaPlanner, RrtGaPolicy
+    from paragym.planners.rrt_ga import RrtGaSettings
+
+    return {"policy": init_defaults(RrtGaPolicy, planner=None),
+            "planner": init_defaults(RrtGaPlanner, settings=RrtGaSettings(), seed="the episode's seed")}
+
+
+def _grid_path_params() -> dict[str, Any]:
+    from paragym.planners import GridPathPolicy
+    from paragym.planners.grid_path import GridPathPlanner
+
+    return {"policy": init_defaults(GridPathPolicy, planner=None), "planner": init_defaults(GridPathPlanner)}
+
+
+def _polynomial_detour_params() -> dict[str, Any]:
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+
+    return {"planner": init_defaults(PolynomialDetourPlanner)}
+
+
+def _gradient_params() -> dict[str, Any]:
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    return {"policy": init_defaults(GradientPolicy)}
+
+
+def _estimator_params(kind: str) -> Callable[[], dict[str, Any]]:
+    def params() -> dict[str, Any]:
+        from paragym.planners import encoder_correction as ec
+
+        return {"estimator": kind, "estimator_params": init_defaults(getattr(ec, kind)),
+                "policy": init_defaults(ec.EstimatorPolicy, estimator=kind)}
+    return params
+
+
+_BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], ...] = (
     ("paragym/CaPaManCollisionFree-v0", "rrt-ga", _rrt_ga, "reference",
-     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step"),
+     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step", _rrt_ga_params),
     ("paragym/CaPaManCollisionFree-v0", "grid-dijkstra", _grid_path, "other",
-     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term"),
-    ("paragym/CaPaManCollisionFree-v0", "zero", _zero, "floor", "stand still at T.P.1"),
+     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term", _grid_path_params),
+    ("paragym/CaPaManCollisionFree-v0", "zero", _zero, "floor", "stand still at T.P.1", None),
     ("paragym/HybridSingularityFree-v0", "polynomial-detour", _polynomial_detour, "reference",
-     "7th-degree path + serial optimisation of Delta + detour via-poses (paper 002)"),
+     "7th-degree path + serial optimisation of Delta + detour via-poses (paper 002)", _polynomial_detour_params),
     ("paragym/HybridSingularityFree-v0", "zero", _zero, "floor",
-     "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)"),
+     "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)", None),
     ("paragym/Orthoglide2PRRKappa-v0", "gradient-c", _gradient, "reference",
-     "null-space gradient of kappa (paper 003, case c, eqs 9-10)"),
+     "null-space gradient of kappa (paper 003, case c, eqs 9-10)", _gradient_params),
     ("paragym/Orthoglide2PRRKappa-v0", "fixed-table-a", _fixed_table, "paper case",
-     "case (a): the table held still (at the env's start; see FixedTablePolicy)"),
+     "case (a): the table held still (at the env's start; see FixedTablePolicy)", None),
     ("paragym/Orthoglide2PRRKappa-v0", "zero", _zero, "floor",
-     "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)"),
+     "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)", None),
     ("paragym/MobileTripodOdometry-v0", "encoder-correction", _encoder_correction, "reference",
-     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection)"),
+     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection)",
+     _estimator_params("EncoderCorrection")),
     ("paragym/MobileTripodOdometry-v0", "ukf-fusion", _ukf_fusion, "other",
-     "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper"),
+     "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper",
+     _estimator_params("FusionEstimator")),
     ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
-     "= odometry only: no correction (paper 004's uncorrected estimate)"),
+     "= odometry only: no correction (paper 004's uncorrected estimate)", None),
 )
 
-for _env_id, _name, _factory, _kind, _doc in _BUILT_IN:
-    register_policy(_env_id, _name, _factory, _kind, _doc)
+for _env_id, _name, _factory, _kind, _doc, _params in _BUILT_IN:
+    register_policy(_env_id, _name, _factory, _kind, _doc, params=_params)
 for _env_id in paragym.ENVIRONMENTS:
     register_policy(_env_id, "random", _random, "floor", "uniform random actions")

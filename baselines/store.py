@@ -1,8 +1,12 @@
 """The leaderboard's results: one SQLite file, one row per episode.
 
-Rows are keyed by (env, policy, seed, episode, paragym version) and each is
-committed as soon as its episode finishes, so an interrupted run loses at
-most the episodes in flight and a rerun skips what is already there. A
+Rows are keyed by (env, policy, seed, episode, paragym version, producer)
+and each is committed as soon as its episode finishes, so an interrupted
+run loses at most the episodes in flight and a rerun skips what is already
+there. The producer (:meth:`paragym.baselines.policies.PolicySpec.producer`)
+is what made the row: a model file's SHA-256, a planner's parameters. A
+retrained model or a changed planner is a new producer: its episodes are
+run again, never mixed with the old ones, which stay in the file. A
 file written by another paragym version (or not a paragym database at all)
 is refused with a clear error and left untouched: its numbers would not be
 comparable, and the ``--db`` option takes a new file.
@@ -21,7 +25,7 @@ import paragym
 
 __all__ = ["SCHEMA_VERSION", "EpisodeRow", "ResultStore"]
 
-SCHEMA_VERSION = "1"
+SCHEMA_VERSION = "2"
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -29,10 +33,10 @@ CREATE TABLE IF NOT EXISTS episodes (
     env TEXT NOT NULL, policy TEXT NOT NULL, seed INTEGER NOT NULL, episode INTEGER NOT NULL,
     version TEXT NOT NULL, kind TEXT NOT NULL, episode_return REAL NOT NULL, length INTEGER NOT NULL,
     success INTEGER NOT NULL, metrics TEXT NOT NULL, wall_seconds REAL NOT NULL, finished_at REAL NOT NULL,
-    PRIMARY KEY (env, policy, seed, episode, version));
+    producer TEXT NOT NULL, PRIMARY KEY (env, policy, seed, episode, version, producer));
 CREATE TABLE IF NOT EXISTS validations (
     env TEXT NOT NULL, policy TEXT NOT NULL, version TEXT NOT NULL, passed INTEGER NOT NULL,
-    summary TEXT NOT NULL, PRIMARY KEY (env, policy, version));
+    summary TEXT NOT NULL, producer TEXT NOT NULL, PRIMARY KEY (env, policy, version, producer));
 """
 
 
@@ -51,10 +55,11 @@ class EpisodeRow:
     metrics: dict[str, float] = field(default_factory=dict)
     wall_seconds: float = 0.0
     version: str = paragym.__version__
+    producer: str = ""
 
     @property
-    def key(self) -> tuple[str, str, int, int, str]:
-        return (self.env, self.policy, self.seed, self.episode, self.version)
+    def key(self) -> tuple[str, str, int, int, str, str]:
+        return (self.env, self.policy, self.seed, self.episode, self.version, self.producer)
 
 
 class ResultStore:
@@ -96,34 +101,35 @@ class ResultStore:
     def __exit__(self, *exc: Any) -> None:
         self.close()
 
-    def done_keys(self) -> set[tuple[str, str, int, int, str]]:
+    def done_keys(self) -> set[tuple[str, str, int, int, str, str]]:
         """The keys of every stored episode."""
-        return set(self.db.execute("SELECT env, policy, seed, episode, version FROM episodes").fetchall())
+        return set(self.db.execute("SELECT env, policy, seed, episode, version, producer FROM episodes").fetchall())
 
     def add(self, row: EpisodeRow) -> None:
         """Store one episode now (a key already stored is kept as it was)."""
         with self.db:
-            self.db.execute("INSERT OR IGNORE INTO episodes VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
+            self.db.execute("INSERT OR IGNORE INTO episodes VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
                             (row.env, row.policy, row.seed, row.episode, row.version, row.kind,
                              float(row.episode_return), int(row.length), int(row.success),
-                             json.dumps(row.metrics, sort_keys=True), float(row.wall_seconds), time.time()))
+                             json.dumps(row.metrics, sort_keys=True), float(row.wall_seconds), time.time(),
+                             row.producer))
 
     def rows(self, env: str | None = None) -> list[EpisodeRow]:
         """This version's episodes (of ``env``), in key order."""
         query = ("SELECT env, policy, seed, episode, kind, episode_return, length, success, metrics, wall_seconds, "
-                 "version FROM episodes WHERE version = ?" + (" AND env = ?" if env else "") +
-                 " ORDER BY env, policy, seed, episode")
+                 "version, producer FROM episodes WHERE version = ?" + (" AND env = ?" if env else "") +
+                 " ORDER BY env, policy, seed, episode, producer")
         args = (self.version, env) if env else (self.version,)
-        return [EpisodeRow(e, p, s, k, kind, r, n, bool(ok), json.loads(m), w, v)
-                for e, p, s, k, kind, r, n, ok, m, w, v in self.db.execute(query, args)]
+        return [EpisodeRow(e, p, s, k, kind, r, n, bool(ok), json.loads(m), w, v, prod)
+                for e, p, s, k, kind, r, n, ok, m, w, v, prod in self.db.execute(query, args)]
 
-    def set_validation(self, env: str, policy: str, passed: bool, summary: dict[str, Any]) -> None:
+    def set_validation(self, env: str, policy: str, passed: bool, summary: dict[str, Any], producer: str = "") -> None:
         with self.db:
-            self.db.execute("INSERT OR REPLACE INTO validations VALUES (?,?,?,?,?)",
-                            (env, policy, self.version, int(passed), json.dumps(summary, sort_keys=True)))
+            self.db.execute("INSERT OR REPLACE INTO validations VALUES (?,?,?,?,?,?)",
+                            (env, policy, self.version, int(passed), json.dumps(summary, sort_keys=True), producer))
 
-    def validation(self, env: str, policy: str) -> dict[str, Any] | None:
-        """The stored verdict ``{"passed": bool, **summary}`` or None."""
-        got = self.db.execute("SELECT passed, summary FROM validations WHERE env=? AND policy=? AND version=?",
-                              (env, policy, self.version)).fetchone()
+    def validation(self, env: str, policy: str, producer: str = "") -> dict[str, Any] | None:
+        """The stored verdict ``{"passed": bool, **summary}`` of ``producer``'s policy, or None."""
+        got = self.db.execute("SELECT passed, summary FROM validations WHERE env=? AND policy=? AND version=? AND "
+                              "producer=?", (env, policy, self.version, producer)).fetchone()
         return None if got is None else {"passed": bool(got[0]), **json.loads(got[1])}

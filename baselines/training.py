@@ -1,7 +1,9 @@
 """Train Stable-Baselines3 agents on the paragym envs (``paragym train``).
 
 Hyper-parameters come from ``hyperparams/<algo>.yml`` keyed by env id, as in
-rl-baselines3-zoo. A run writes, under ``models/<env name>/``:
+rl-baselines3-zoo. A run writes, under ``<models_dir>/<env name>/``
+(default ``runs/models``; never the shipped models, which are read-only
+package data):
 
 * ``<algo>_seed<N>.zip``: the final model (SB3's format: weights, optimiser
   state, hyper-parameters);
@@ -14,7 +16,12 @@ rl-baselines3-zoo. A run writes, under ``models/<env name>/``:
   ``checkpoint_freq`` steps. A run started again with the same arguments
   resumes from there (the env's random streams restart, so a resumed run is
   a continuation, not a bit-identical replay); the folder goes when the run
-  completes.
+  completes. Resuming loads the checkpoint with SB3's own ``load``, which
+  unpickles it: resume only from checkpoints you made. (Evaluating a model,
+  :func:`load_model`, unpickles nothing.)
+
+A finished model is never overwritten without ``force``: the same command
+again says it is done, another ``timesteps`` is refused.
 
 Everything runs on the CPU; ``threads`` (default 1) caps torch's threads so
 that two runs share a 2-core machine without contention.
@@ -81,7 +88,11 @@ class RunFiles:
     checkpoints: Path
 
 
-def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = "models") -> RunFiles:
+#: where ``paragym train`` writes by default
+USER_MODELS = Path("runs") / "models"
+
+
+def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = USER_MODELS) -> RunFiles:
     """The files of a run under ``models_dir/<env name>/``."""
     folder = Path(models_dir) / env_name(env_id)
     stem = f"{check_algo(algo)}_seed{int(seed)}"
@@ -178,15 +189,16 @@ def _count_parameters(model: Any) -> dict[str, int]:
     return {name: int(sum(p.numel() for p in m.parameters())) for name, m in modules.items() if m is not None}
 
 
-def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = "models",
+def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = USER_MODELS,
           progress_bar: bool = True, threads: int = 1, force: bool = False, verbose: int = 0,
           hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None,
           vectorized: bool = False, n_envs: int | None = None) -> TrainResult:
     """Train ``algo`` on ``env_id`` with ``seed`` for ``timesteps`` env steps
     (default: the yml's ``n_timesteps``) and save the model, its JSON and its
-    curve. A finished run with the same timesteps is returned as it is
-    (``skipped``) unless ``force``; an interrupted one resumes from its
-    checkpoint. ``hyperparams`` override the yml's entries; ``callbacks``
+    curve under ``models_dir`` (default ``runs/models``; the shipped models'
+    folder is refused). A finished run with the same timesteps is returned
+    as it is (``skipped``) and one with other timesteps is refused, unless
+    ``force``; an interrupted one resumes from its checkpoint. ``hyperparams`` override the yml's entries; ``callbacks``
     (SB3 callbacks) run beside paragym's own. ``vectorized`` trains on the
     env's native vector env (:func:`paragym.baselines.sb3_vec.as_sb3_vecenv`)
     instead of one env per copy; ``n_envs`` overrides the yml's number of
@@ -200,12 +212,19 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     total = int(hp["n_timesteps"] if timesteps is None else timesteps)
     if total <= 0:
         raise ValueError(f"timesteps must be positive; got {timesteps!r}")
+    from paragym.baselines.policies import shipped_models_dir
+
+    if Path(models_dir).resolve() == shipped_models_dir().resolve():
+        raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "
+                         f"(the default is {USER_MODELS})")
     files = run_files(env_id, algo, seed, models_dir)
     cls = _algorithm(algo)
-    if files.model.exists() and files.meta.exists() and not force:
-        meta = json.loads(files.meta.read_text())
+    if files.model.exists() and not force:
+        meta = json.loads(files.meta.read_text()) if files.meta.exists() else {}
         if meta.get("timesteps") == total:
             return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
+        raise ValueError(f"{files.model} is already trained ({meta.get('timesteps', 'an unknown number of')} steps); "
+                         f"--force retrains it over that file, or choose another --models folder or --seed")
     torch.set_num_threads(int(threads))
 
     if n_envs is not None:
@@ -302,14 +321,20 @@ def _versions() -> dict[str, str]:
 
 
 def load_model(path: str | Path, algo: str | None = None) -> Any:
-    """Load a saved SB3 model on the CPU; the algorithm from ``algo`` or the
-    file name (``ppo_seed0.zip``). A missing or unreadable file raises a
-    ValueError naming it."""
+    """Load a saved SB3 model on the CPU without unpickling anything from it
+    (:mod:`paragym.baselines.safe_load`: every cloudpickled entry is rebuilt
+    from its readable form, the weights are read as tensors only). The
+    algorithm comes from ``algo`` or the file name (``ppo_seed0.zip``). A
+    missing, damaged or unsafe file raises a ValueError naming it."""
+    from paragym.baselines.safe_load import safe_custom_objects
+
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"no model file at {path}")
     algo = check_algo(algo if algo is not None else path.stem.split("_", 1)[0])
+    cls = _algorithm(algo)
     try:
-        return _algorithm(algo).load(path, device="cpu")
-    except Exception as exc:  # SB3 raises zipfile, pickle, torch or key errors for a damaged file
+        custom = safe_custom_objects(path, cls)
+        return cls.load(path, device="cpu", custom_objects=custom)
+    except Exception as exc:  # zipfile, JSON, torch or key errors for a damaged file; ours for an unsafe one
         raise ValueError(f"cannot load {algo.upper()} model {path}: {type(exc).__name__}: {exc}") from exc

@@ -451,7 +451,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--algo", default="ppo", help="ppo, sac or td3 (hyper-parameters: baselines/hyperparams/)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--timesteps", type=int, default=None, help="env steps (default: the yml's n_timesteps)")
-    p.add_argument("--models", default="models", help="folder of the saved models (default: models)")
+    p.add_argument("--models", default="runs/models",
+                   help="folder for the trained model (default: %(default)s; the shipped models are read-only)")
     p.add_argument("--threads", type=int, default=1, help="torch threads (default 1)")
     p.add_argument("--force", action="store_true", help="retrain even if the model exists; ignore checkpoints")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -467,7 +468,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")
     p.add_argument("--env", action="append", help="only this env (repeatable)")
     p.add_argument("--policy", action="append", help="only this policy name (repeatable)")
-    p.add_argument("--models", default=None, help="folder of learned models (default: ./models or the shipped ones)")
+    p.add_argument("--models", default=None,
+                   help="also rank the models you trained in this folder (as user-<algo>-seed<N>; the shipped "
+                        "models always take part)")
     p.add_argument("--executor", choices=("local", "workers", "ray"), default="local")
     p.add_argument("--workers", type=int, default=1, help="processes (a local pool) or Ray CPUs")
     p.add_argument("--ray-address", default=None, help="a Ray cluster's address (default: start a local Ray)")

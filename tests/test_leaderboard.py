@@ -119,9 +119,9 @@ def test_bad_input_is_refused_and_nothing_is_overwritten(tmp_path, capsys):
     bad_models = tmp_path / "models" / "Orthoglide2PRRKappa-v0"
     bad_models.mkdir(parents=True)
     (bad_models / "ppo_seed0.zip").write_bytes(b"corrupt")
-    spec = policies_for(ORTHO, tmp_path / "models")["ppo-seed0"]
+    spec = policies_for(ORTHO, tmp_path / "models")["user-ppo-seed0"]
     with pytest.raises(ValueError, match="cannot load PPO model"):
-        run_leaderboard(db=tmp_path / "c.sqlite", **{**SMALL, "policies": ["ppo-seed0"], "env_ids": [ORTHO],
+        run_leaderboard(db=tmp_path / "c.sqlite", **{**SMALL, "policies": ["user-ppo-seed0"], "env_ids": [ORTHO],
                                                      "models_dir": tmp_path / "models"})
     assert spec.kind == "learned" and (bad_models / "ppo_seed0.zip").read_bytes() == b"corrupt"
 
@@ -138,13 +138,10 @@ def test_summaries_rank_by_success_then_the_primary_metric():
 
 import paragym  # noqa: E402
 from paragym.baselines.leaderboard import REFERENCE_SUCCESS  # noqa: E402
-from paragym.baselines.policies import default_models_dir  # noqa: E402
 
 CAPAMAN, TRIPOD = "paragym/CaPaManCollisionFree-v0", "paragym/MobileTripodOdometry-v0"
-#: learned agents that do not beat a floor on return, as the committed LEADERBOARD.md says; a test below
-#: keeps this list true (a model that improves must leave it)
-BELOW_ZERO = {CAPAMAN, TRIPOD}  # no learned agent beats standing still / raw odometry
-BELOW_RANDOM = {(TRIPOD, f"sac-seed{s}") for s in range(3)}  # SAC does not learn the estimator (README)
+#: where learning works today: a learned agent beats both floors on return (README, LEADERBOARD.md)
+LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0"}
 
 
 @pytest.fixture(scope="module")
@@ -177,18 +174,22 @@ def learned(tmp_path_factory):
     """Every shipped model, random and zero on evaluation seed 0 x 5 episodes."""
     run = run_leaderboard(db=tmp_path_factory.mktemp("learned") / "l.sqlite", suite=EvalSuite("test", (0,), 5),
                           out=None, validate=False, progress=False, echo=lambda s: None, executor="workers",
-                          workers=2, policies=None, models_dir=default_models_dir())
+                          workers=2, policies=None)
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
-def test_the_shipped_models_load_and_beat_random_and_zero_where_the_leaderboard_says(learned):
+def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):
+    """Behaviour, not today's ranking: every shipped model runs its episodes to a finite
+    return, and where learning works the best of them beats random and zero actions (a model
+    that improves can only keep this true)."""
     pytest.importorskip("stable_baselines3")
+    import math
+
     for env_id in paragym.ENVIRONMENTS:
         rows = learned[env_id]
         models = [s for s in rows.values() if s.kind == "learned"]
         assert sorted(s.policy for s in models) == sorted(f"{a}-seed{k}" for a in ("ppo", "sac") for k in range(3))
-        for s in models:
-            below_random = (env_id, s.policy) in BELOW_RANDOM
-            assert (s.return_mean <= rows["random"].return_mean) == below_random, (env_id, s.policy)
-        best = max(s.return_mean for s in models)
-        assert (best <= rows["zero"].return_mean) == (env_id in BELOW_ZERO), env_id
+        assert all(math.isfinite(s.return_mean) and s.episodes == 5 for s in models)
+        if env_id in LEARNS:
+            best = max(s.return_mean for s in models)
+            assert best > rows["zero"].return_mean and best > rows["random"].return_mean, env_id

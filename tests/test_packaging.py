@@ -29,11 +29,14 @@ def test_wheel_installs_and_registers_the_envs(wheel, tmp_path):
         "env = gym.make('paragym/CaPaManCollisionFree-v0', scenario='paper')\n"
         "obs, info = env.reset(seed=0)\n"
         "print(obs.shape, info['scenario'].name)\n"
+        "from paragym.baselines.policies import shipped_models_dir\n"
+        f"assert str(shipped_models_dir()).startswith({str(target)!r}), shipped_models_dir()\n"
+        "print(len(list(shipped_models_dir().glob('*/*_seed*.zip'))), 'shipped models')\n"
     )
     env = dict(os.environ, PYTHONPATH=str(target))
     res = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert "(38,) paper" in res.stdout
+    assert "(38,) paper" in res.stdout and "24 shipped models" in res.stdout
 
 
 def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):

@@ -1,0 +1,138 @@
+"""Load a Stable-Baselines3 model file without running any code from it.
+
+SB3 keeps an algorithm's attributes in the zip's ``data`` entry as JSON;
+what JSON cannot hold (the policy class, the spaces, schedules, buffers)
+it stores as a cloudpickle payload under ``":serialized:"``, which
+``Algorithm.load`` unpickles, and an unpickled payload can run any code.
+:func:`safe_custom_objects` reads the JSON itself and supplies a
+replacement for *every* serialized entry, built only from the readable
+fields SB3 writes beside each payload (parsed as literals, never
+evaluated): SB3's ``custom_objects`` then stand in for them, so nothing is
+unpickled. The weights (``*.pth``) are read by SB3 with
+``torch.load(weights_only=True)``: tensors only.
+
+What the replacements are:
+
+* ``observation_space``, ``action_space``: a ``Box`` from the readable
+  shape, dtype and bounds (only ``Box`` spaces, which every paragym env
+  has);
+* ``policy_class``: the algorithm's ``MlpPolicy``;
+* ``policy_kwargs`` (when it holds a class, such as ``activation_fn``):
+  its entries as literals, activation functions from a fixed list of
+  ``torch.nn`` modules;
+* schedules (``lr_schedule``, ``clip_range``, ...): the constant read from
+  their readable form, or 0 (they only matter for further training);
+* ``train_freq`` (off-policy algorithms): one step (only training reads it);
+* anything else (the last observations, episode buffers, buffer classes):
+  ``None``, which SB3 treats as unset.
+
+Resuming training from your *own* checkpoints (``paragym train`` after an
+interruption) does unpickle them, as SB3 does: only resume from files you
+made.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import re
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["safe_custom_objects"]
+
+#: entries that hold a schedule (a function of the remaining progress), whatever SB3 version wrote them
+SCHEDULES = ("lr_schedule", "learning_rate", "clip_range", "clip_range_vf", "exploration_schedule")
+#: activation functions a policy_kwargs entry may name (torch.nn classes)
+ACTIVATIONS = ("Tanh", "ReLU", "ELU", "LeakyReLU", "GELU", "SiLU", "Sigmoid", "Softplus", "Mish")
+
+
+def _literal(text: Any, what: str) -> Any:
+    if not isinstance(text, str):  # SB3 wrote it as JSON already
+        return text
+    try:
+        return ast.literal_eval(text)
+    except (ValueError, SyntaxError) as exc:
+        raise ValueError(f"{what} is not a plain value ({text[:60]!r}); refusing to unpickle it") from exc
+
+
+def _numbers(text: Any, dtype: np.dtype, size: int, what: str) -> np.ndarray:
+    """A numpy array printed by ``str(array)`` (brackets, spaces, inf), read back."""
+    text = str(text)
+    if "..." in text:
+        raise ValueError(f"{what} is printed in summary form; cannot rebuild it without unpickling")
+    tokens = text.replace("[", " ").replace("]", " ").split()
+    try:
+        values = np.array([float(t) for t in tokens], dtype=dtype)
+    except ValueError as exc:
+        raise ValueError(f"{what} has a value that is not a number ({text[:60]!r})") from exc
+    if values.size != size:
+        raise ValueError(f"{what} has {values.size} values; its shape needs {size}")
+    return values
+
+
+def _box(entry: dict[str, str], what: str) -> Any:
+    from gymnasium import spaces
+
+    kind = entry.get(":type:", "")
+    if not kind.endswith("spaces.box.Box'>"):
+        raise ValueError(f"{what} is a {kind or 'space of unknown type'}; only Box spaces load without unpickling")
+    shape = tuple(int(n) for n in _literal(entry["_shape"], f"{what} shape"))
+    dtype = np.dtype(entry["dtype"])
+    size = int(np.prod(shape))
+    low = _numbers(entry["low"], dtype, size, f"{what} low").reshape(shape)
+    high = _numbers(entry["high"], dtype, size, f"{what} high").reshape(shape)
+    return spaces.Box(low, high, shape, dtype)
+
+
+def _schedule(entry: dict[str, str]) -> Any:
+    from stable_baselines3.common.utils import ConstantSchedule, FloatSchedule
+
+    found = re.search(r"ConstantSchedule\(val=([-+0-9.eE]+)\)", entry.get("value_schedule", ""))
+    return FloatSchedule(ConstantSchedule(float(found[1]) if found else 0.0))
+
+
+def _policy_kwargs(entry: dict[str, str]) -> dict[str, Any]:
+    import torch.nn as nn
+
+    out: dict[str, Any] = {}
+    for key, text in entry.items():
+        if key.startswith(":"):
+            continue
+        found = re.fullmatch(r"<class 'torch\.nn\.modules\.activation\.(\w+)'>", str(text))
+        if found and found[1] in ACTIVATIONS:
+            out[key] = getattr(nn, found[1])
+        else:
+            out[key] = _literal(text, f"policy_kwargs[{key!r}]")
+    return out
+
+
+def safe_custom_objects(path: str | Path, algorithm: type) -> dict[str, Any]:
+    """Replacements for every cloudpickled entry of the model file at
+    ``path`` (see the module docstring), to pass as SB3's ``custom_objects``.
+    A ValueError says which entry cannot be rebuilt without unpickling."""
+    with zipfile.ZipFile(path) as archive:
+        data = json.loads(archive.read("data").decode())
+    if not isinstance(data, dict):
+        raise ValueError(f"{path}: its 'data' entry is not a JSON object")
+    out: dict[str, Any] = {}
+    for key, entry in data.items():
+        if not (isinstance(entry, dict) and ":serialized:" in entry):
+            continue
+        readable = {k: v for k, v in entry.items() if k != ":serialized:"}
+        if key in ("observation_space", "action_space"):
+            out[key] = _box(readable, key)
+        elif key == "policy_class":
+            out[key] = algorithm.policy_aliases["MlpPolicy"]
+        elif key == "policy_kwargs":
+            out[key] = _policy_kwargs(readable)
+        elif key == "train_freq":  # a (frequency, unit) named tuple with no readable form; only training reads it
+            out[key] = (1, "step")
+        elif "Schedule" in readable.get(":type:", "") or key in SCHEDULES:
+            out[key] = _schedule(readable)
+        else:
+            out[key] = None
+    return out
