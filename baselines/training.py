@@ -242,9 +242,12 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
             raise ValueError(f"{env_id} has no native vector env yet; train without --vectorized")
         env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, n_envs, **env_kwargs))
         env.seed(int(seed))
+        # evaluated on one robot of the native env, wrapped as the training env is (SB3 syncs the two wrapper chains)
+        eval_env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, 1, **env_kwargs))
+        eval_env.seed(EVAL_SEED)
     else:
         env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
-    eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
+        eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
     if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
         from stable_baselines3.common.vec_env import VecNormalize
 
@@ -283,6 +286,9 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
     t0 = time.perf_counter()
     remaining = max(0, total - resumed_from)
+    if algo == "ppo":  # PPO learns in whole rollouts of n_steps x n_envs: ask for what it will do
+        rollout = int(model.n_steps) * n_envs
+        remaining = -(-remaining // rollout) * rollout
     if remaining:
         model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=resumed_from == 0)
     seconds = time.perf_counter() - t0
@@ -293,6 +299,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     model.save(files.model)
     meta = {
         "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
+        "num_timesteps": int(model.num_timesteps),
         "vectorized": bool(vectorized),
         "hyperparams": hp, "train_seconds": seconds, "steps_per_second": remaining / seconds if seconds else None,
         "parameters": _count_parameters(model), "model_bytes": files.model.stat().st_size,

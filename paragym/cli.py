@@ -393,7 +393,9 @@ def _cmd_train(args: argparse.Namespace) -> int:
     last = (f"last evaluation {curve['eval_mean_return'][-1]:.3f} +- {curve['eval_std_return'][-1]:.3f}"
             if curve["eval_mean_return"] else "no evaluation yet")
     resumed = f", resumed at {res.resumed_from:,}" if res.resumed_from else ""
-    print(f"{meta['algo'].upper()} seed {meta['seed']} on {meta['env_id']}: {meta['timesteps']:,} steps in "
+    whole = (f" ({meta['num_timesteps']:,} done: PPO learns in whole rollouts)"
+             if meta["num_timesteps"] > meta["timesteps"] else "")
+    print(f"{meta['algo'].upper()} seed {meta['seed']} on {meta['env_id']}: {meta['timesteps']:,} steps{whole} in "
           f"{meta['train_seconds']:.0f} s{resumed}; {last}")
     print(f"wrote {res.files.model} ({meta['model_bytes'] / 1024:.0f} KiB, {meta['parameters']['policy']:,} "
           f"parameters), {res.files.meta.name}, {res.files.curve_png.name}")

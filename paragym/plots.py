@@ -304,7 +304,11 @@ def plot_training_curve(curve: dict[str, list], path: str | Path, title: str = "
             ax2.set_ylabel("success rate", color="C2")
     ax.set_xlabel("env steps")
     ax.set_ylabel("episode return")
-    ax.legend(loc="lower right", fontsize=8)
+    if len(ret) or len(ev_t):
+        ax.legend(loc="lower right", fontsize=8)
+    else:  # a run too short to finish an episode or reach an evaluation: say so instead of an empty frame
+        ax.text(0.5, 0.5, "no training episode finished and no evaluation yet", ha="center", va="center",
+                transform=ax.transAxes, color="0.4")
     return _save(fig, path, title, dpi=90)
 
 

@@ -98,3 +98,33 @@ def test_bad_names_and_corrupt_files_are_clear_errors(tmp_path, capsys):
     assert main(["train", HYBRID, "--algo", "dqn"]) == 2
     err = capsys.readouterr().err
     assert "unknown env" in err and "unknown algorithm" in err
+
+
+@pytest.mark.parametrize("env_id", sorted(__import__("paragym").ENVIRONMENTS))
+def test_vectorized_training_runs_for_every_env_with_its_yml(tmp_path, env_id, recwarn):
+    """--vectorized with the yml's own settings (reward normalisation among them) evaluates,
+    counts its steps truthfully and draws a curve, for every env id (issue 15, item 5)."""
+    import warnings
+
+    small = {"n_steps": 32, "batch_size": 64, "n_epochs": 1, "eval_freq": 64, "n_eval_episodes": 1}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", UserWarning)
+        res = train(env_id, "ppo", seed=0, timesteps=100, models_dir=tmp_path, progress_bar=False,
+                    hyperparams=small, vectorized=True, n_envs=4)
+    assert res.meta["hyperparams"].get("normalize_reward") == load_hyperparams("ppo", env_id).get("normalize_reward")
+    assert res.meta["num_timesteps"] == res.model.num_timesteps == 128  # whole rollouts of 4 x 32, said as such
+    assert res.meta["curve"]["eval_timesteps"]
+    assert res.files.curve_png.stat().st_size > 5_000
+
+
+def test_a_run_too_short_for_any_episode_still_draws_an_honest_curve(tmp_path):
+    import warnings
+
+    from paragym.plots import plot_training_curve
+
+    empty = {k: [] for k in ("eval_timesteps", "eval_mean_return", "eval_std_return", "eval_success_rate",
+                             "train_timesteps", "train_return")}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        png = plot_training_curve(empty, tmp_path / "c.png", "nothing yet")
+    assert png.stat().st_size > 2_000
