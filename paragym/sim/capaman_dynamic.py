@@ -93,12 +93,7 @@ class CaPaManDynamicScene:
         self.obstacles: tuple = ()
         self.dynamics = d = dynamics or CaPaManDynamics()
         self.sim = PyBulletSim(gui=gui)
-        c = self.sim.client
-        pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
-        pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
-                                     physicsClientId=c)
         self.sim.add_tree_body(self.ROBOT, _dynamic_links(g, d))
-        self.body = self.sim.body(self.ROBOT)
         idx = lambda link: self.sim.link_index(self.ROBOT, link)  # noqa: E731
         legs = (1, 2, 3)
         self.motors = [idx(f"leg{k}_crank_a") for k in legs]
@@ -107,6 +102,21 @@ class CaPaManDynamicScene:
         self.sliders = [idx(f"leg{k}_slider") for k in legs]
         self.plate = idx("plate")
         self.float_joints = [idx("plate_x"), idx("plate_y"), idx("plate_z")]
+        self.sim.on_rebuild(self._set_up_physics)
+        self.set_configuration(g.alpha_home)
+
+    @property
+    def body(self) -> int:
+        """The mechanism's PyBullet body id now (it changes when the world is rebuilt)."""
+        return self.sim.body(self.ROBOT)
+
+    def _set_up_physics(self) -> None:
+        """Gravity, the engine's parameters, the passive joints, no self-collision and the six loop
+        closures (run again whenever the world is rebuilt)."""
+        g, d, c = self.geometry, self.dynamics, self.sim.client
+        pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
+        pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
+                                     physicsClientId=c)
         no_collision = pb.getNumJoints(self.body, physicsClientId=c)
         for i in range(-1, no_collision):  # the parts of one mechanism do not collide with each other
             for j in range(i + 1, no_collision):
@@ -121,7 +131,6 @@ class CaPaManDynamicScene:
                                 [0, 0, 0], [0, 0, g.a / 2], [0, 0, g.c / 2], physicsClientId=c)
             pb.createConstraint(self.body, self.sliders[k], self.body, self.plate, pb.JOINT_POINT2POINT,
                                 [0, 0, 0], [0, 0, 0], list(g.plate_points[k]), physicsClientId=c)
-        self.set_configuration(g.alpha_home)
 
     def reset(self, alpha: np.ndarray) -> None:
         """Put every joint where the analytic model has it at ``alpha`` (rad), at rest."""
@@ -193,7 +202,8 @@ class CaPaManDynamicScene:
         if obstacles == self.obstacles:
             return
         if "obstacles" in self.sim.body_names:
-            self.sim.remove("obstacles")
+            self.sim.remove("obstacles")  # rebuilds the world: pose the mechanism again
+            self.set_configuration(self._target if hasattr(self, "_target") else self.geometry.alpha_home)
         self.obstacles = obstacles
         if obstacles:
             self.sim.add_static_group("obstacles", obstacles)

@@ -111,7 +111,9 @@ class CaPaManScene:
             return
         self.obstacles = obstacles
         for name in self._obstacles:
-            self.sim.remove(name)
+            self.sim.remove(name)  # rebuilds the world (PyBullet frees nothing else): pose the mechanism again
+        if self._obstacles:
+            self.set_configuration(self.alpha)
         self._obstacles = []
         if obstacles:
             self.sim.add_static_group("obstacles", obstacles, rgba=_OBSTACLE_COLOR)
