@@ -192,7 +192,36 @@ def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_di
         yield evaluate_episode(spec, seed, episode)
 
 
-def _init_worker() -> None:
+def die_with_parent(parent: int) -> None:
+    """Make this process end when ``parent`` does, however it ends (SIGKILL
+    included): Linux's parent-death signal where there is one, and a watchdog
+    thread that polls the parent's pid everywhere (it also covers a parent
+    that died before the signal was armed)."""
+    import ctypes
+    import os
+    import signal
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent:
+                os._exit(1)
+            time.sleep(0.5)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="paragym-parent-watchdog", daemon=True).start()
+
+
+def _init_worker(parent: int) -> None:
+    die_with_parent(parent)
     try:
         import torch
 
@@ -210,19 +239,27 @@ def _evaluate_by_name(env_id: str, name: str, models_dir: str | None, seed: int,
 def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
               ) -> Iterator[EpisodeRow]:
     """A fork-started process pool: workers inherit the policy registry, so
-    policies registered in the calling script work too."""
+    policies registered in the calling script work too. The workers die with
+    this process (:func:`die_with_parent`), and an interrupted run stops them
+    at once instead of waiting for their episodes."""
     import multiprocessing as mp
+    import os
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
-    with ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"), initializer=_init_worker) as pool:
+    pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"), initializer=_init_worker,
+                               initargs=(os.getpid(),))
+    finished = False
+    try:
         futures = [pool.submit(_evaluate_by_name, spec.env_id, spec.name, models_dir, seed, episode)
                    for spec, seed, episode in jobs]
-        try:
-            for fut in as_completed(futures):
-                yield fut.result()
-        finally:
-            for fut in futures:
-                fut.cancel()
+        for fut in as_completed(futures):
+            yield fut.result()
+        finished = True
+    finally:
+        if not finished:
+            for proc in list(getattr(pool, "_processes", {}).values()):
+                proc.terminate()
+        pool.shutdown(wait=finished, cancel_futures=True)
 
 
 def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
@@ -234,20 +271,83 @@ def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir:
     except ImportError as exc:
         raise ValueError("--executor ray needs Ray: pip install 'paragym[ray]'") from exc
     started = not ray.is_initialized()
+    reaper = None
     if started:
         kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
         ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+        if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
+            reaper = _start_reaper()
     remote = ray.remote(num_cpus=1)(evaluate_episode)
     pending = [remote.remote(spec, seed, episode) for spec, seed, episode in jobs]
     try:
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
-            yield ray.get(done[0])
+            try:
+                yield ray.get(done[0])
+            except ray.exceptions.RayTaskError as exc:  # the task's own error, without Ray's coloured traceback
+                cause = getattr(exc, "cause", None)
+                if isinstance(cause, ValueError):
+                    raise ValueError(str(cause)) from None
+                raise RuntimeError(f"a Ray task failed: {type(cause).__name__}: {cause}") from None
     finally:
         for ref in pending:
             ray.cancel(ref)
         if started:
             ray.shutdown()
+        if reaper is not None:
+            reaper.terminate()
+
+
+def _start_reaper() -> Any:
+    """A small process that ends the local Ray's processes (its head, raylet and
+    agents, as found now among this process's descendants) if this process
+    dies without shutting Ray down (SIGKILL): Ray's own agents otherwise
+    outlive their driver for minutes."""
+    import os
+    import subprocess
+    import sys
+
+    import psutil
+
+    me = psutil.Process()
+    procs = [f"{p.pid}:{p.create_time()!r}" for p in me.children(recursive=True)]
+    code = "from paragym.baselines.leaderboard import _reap; _reap()"
+    return subprocess.Popen([sys.executable, "-c", code, str(os.getpid()), *procs], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+
+
+def _reap() -> None:
+    """The reaper's loop (:func:`_start_reaper`): wait for the driver to go,
+    then end the processes named on the command line (pid:create_time, so a
+    reused pid is left alone)."""
+    import sys
+
+    import psutil
+
+    parent, *named = sys.argv[1:]
+    driver = int(parent)
+    while psutil.pid_exists(driver) and psutil.Process(driver).status() != psutil.STATUS_ZOMBIE:
+        time.sleep(0.5)
+    procs = []
+    for item in named:
+        pid, created = item.split(":")
+        try:
+            p = psutil.Process(int(pid))
+            if repr(p.create_time()) == created:
+                procs.append(p)
+        except psutil.Error:
+            continue
+    for p in procs:
+        try:
+            p.terminate()
+        except psutil.Error:
+            pass
+    _, alive = psutil.wait_procs(procs, timeout=3)
+    for p in alive:
+        try:
+            p.kill()
+        except psutil.Error:
+            pass
 
 
 EXECUTORS = ("local", "workers", "ray")
@@ -452,6 +552,15 @@ VALIDATED: dict[str, tuple[str, Callable[[int], tuple[bool, dict[str, Any]]]]] =
 
 # --- the run ----------------------------------------------------------------------------------------------------
 
+class LeaderboardInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM in the CLI) during a run: what was saved by then."""
+
+    def __init__(self, saved: int, planned: int, db: Path) -> None:
+        super().__init__(f"interrupted: {saved} episodes saved in {db} ({planned - saved} of this run left); "
+                         f"run the same command again to continue from there")
+        self.saved, self.planned, self.db = saved, planned, db
+
+
 @dataclass
 class LeaderboardRun:
     """What :func:`run_leaderboard` did and produced."""
@@ -517,13 +626,19 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
         from tqdm.auto import tqdm
 
-        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
-            for row in stream:
-                store.add(row)
-                bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
-                bar.update()
-                if on_row is not None:
-                    on_row(row)
+        saved = 0
+        try:
+            with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
+                for row in stream:
+                    store.add(row)
+                    saved += 1
+                    bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
+                    bar.update()
+                    if on_row is not None:
+                        on_row(row)
+        except KeyboardInterrupt:
+            stream.close()  # stops the workers now
+            raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
         if validate:
             for env, (name, check) in VALIDATED.items():
                 producer = producers.get((env, name))

@@ -403,7 +403,14 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
 
 def _cmd_leaderboard(args: argparse.Namespace) -> int:
+    import signal
+
     from paragym.baselines.leaderboard import FULL, QUICK, run_leaderboard
+
+    def stop(signum: int, frame: Any) -> None:  # SIGTERM stops as Ctrl-C does: workers ended, rows kept
+        raise KeyboardInterrupt
+
+    signal.signal(signal.SIGTERM, stop)
 
     run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env, policies=args.policy,
                           models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
@@ -487,6 +494,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
+    except KeyboardInterrupt as exc:  # one line, no traceback: what was kept and how to go on
+        print(f"\nparagym: {exc}" if str(exc) else "\nparagym: interrupted", file=sys.stderr)
+        return 130
     except ValueError as exc:  # bad input: say it plainly, no traceback
         print(f"paragym: error: {exc}", file=sys.stderr)
         return 2
