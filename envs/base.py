@@ -13,7 +13,27 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ParagymEnv", "check_action"]
+__all__ = ["ParagymEnv", "check_action", "check_reset_args", "check_seed"]
+
+
+def check_seed(seed: Any, name: str = "seed") -> int | None:
+    """``seed`` if it is None or a non-negative integer (numpy's seeds), else a
+    TypeError or ValueError naming it."""
+    if seed is None:
+        return None
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer):
+        raise TypeError(f"{name} must be a non-negative integer or None; got {seed!r}")
+    if seed < 0:
+        raise ValueError(f"{name} must be a non-negative integer or None; got {seed!r}")
+    return int(seed)
+
+
+def check_reset_args(seed: Any, options: Any) -> None:
+    """The arguments of ``reset``: a seed (see :func:`check_seed`) and options
+    that are a dict or None."""
+    check_seed(seed)
+    if options is not None and not isinstance(options, dict):
+        raise TypeError(f"options must be a dict or None; got {type(options).__name__}")
 
 
 def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows: int | None = None) -> np.ndarray:
@@ -77,6 +97,7 @@ class ParagymEnv(gym.Env):
     # --- the loop -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
+        check_reset_args(seed, options)
         super().reset(seed=seed)
         info = self._reset_task(options or {})
         return self._observe(), info

@@ -168,6 +168,33 @@ def _nominal_rows(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01, every: int 
     return p0[:, None] + (p1 - p0)[:, None] * s[None, :, None]
 
 
+def resolve_hybrid(choice: Any) -> str | HybridScenario:
+    """The scenario argument checked at the boundary (single and vector env
+    alike): "paper", "random", or a HybridScenario whose start is in the
+    workspace at Delta = 0.5 and whose goal some split Delta reaches
+    singularity-free within the leg limits (finite poses, angles within
+    +-pi/2). Anything else is a ValueError or TypeError naming ``scenario``."""
+    if isinstance(choice, str):
+        if choice not in ("paper", "random"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {choice!r}")
+        return choice
+    if not isinstance(choice, HybridScenario):
+        raise TypeError(f"scenario must be 'paper', 'random' or a HybridScenario; got {choice!r}")
+    try:
+        p0 = hybrid.check_pose(np.array(choice.p0, dtype=float), "scenario.p0")
+        p1 = hybrid.check_pose(np.array(choice.p1, dtype=float), "scenario.p1")
+    except (TypeError, ValueError) as exc:
+        raise ValueError(str(exc)) from None
+    if not hybrid.solve(p0, 0.5, choice.geometry).free[0]:
+        raise ValueError("scenario.p0 is outside the workspace: at Delta = 0.5 a leg is out of "
+                         "[226.11, 326.11] mm or a stage is singular")
+    splits = np.linspace(0, 1, 21)
+    if not hybrid.solve(np.repeat(p1, 21, 0), splits, choice.geometry).free.any():
+        raise ValueError("scenario.p1 is outside the workspace: no split Delta keeps it singularity-free "
+                         "within the leg limits")
+    return choice
+
+
 class HybridSingularityFreeEnv(ParagymEnv):
     """Move a hexapod + tripod's end-effector along a polynomial path without
     singular poses or leg-limit violations.
@@ -236,29 +263,16 @@ class HybridSingularityFreeEnv(ParagymEnv):
 
     @staticmethod
     def _check_scenario(scenario: Any) -> None:
-        if isinstance(scenario, str) and scenario not in ("paper", "random"):
-            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {scenario!r}")
-        if not isinstance(scenario, str | HybridScenario):
-            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {scenario!r}")
+        resolve_hybrid(scenario)
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        choice = options.get("scenario", self.scenario_arg)
-        self._check_scenario(choice)
+        choice = resolve_hybrid(options.get("scenario", self.scenario_arg))
         if choice == "random":
             scenario = hybrid_random_scenario(self.np_random, self.geometry)
         elif choice == "paper":
             scenario = hybrid_paper_scenario(self.geometry)
         else:
             scenario = choice
-            p0 = hybrid.check_pose(np.array(scenario.p0), "scenario.p0")
-            p1 = hybrid.check_pose(np.array(scenario.p1), "scenario.p1")
-            if not hybrid.solve(p0, 0.5, scenario.geometry).free[0]:
-                raise ValueError("scenario.p0 is outside the workspace: at Delta = 0.5 a leg is out of "
-                                 "[226.11, 326.11] mm or a stage is singular")
-            splits = np.linspace(0, 1, 21)
-            if not hybrid.solve(np.repeat(p1, 21, 0), splits, scenario.geometry).free.any():
-                raise ValueError("scenario.p1 is outside the workspace: no split Delta keeps it singularity-free "
-                                 "within the leg limits")
         self.scenario = scenario
         self._u, self._nominal = nominal_path(np.array(scenario.p0), np.array(scenario.p1), self.tau)
         self._k = 0
@@ -359,8 +373,7 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
 
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
         e = self.single_env
-        choice = options.get("scenario", e.scenario_arg)
-        e._check_scenario(choice)
+        choice = resolve_hybrid(options.get("scenario", e.scenario_arg))  # before any robot changes
         if choice == "random":
             scenarios = hybrid_random_scenarios([self._rngs[i] for i in rows], self.geometry)
         else:

@@ -11,7 +11,7 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
-from paragym.sim.tripod_drive import DriveScenario, Terrain, TripodDrive
+from paragym.sim.tripod_drive import DriveScenario, Terrain, TripodDrive, validate_drive_scenario
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
@@ -43,6 +43,18 @@ def drive_scenario(name: str, rng: np.random.Generator) -> DriveScenario:
         return DriveScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
                              push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
     raise ValueError(f"scenario must be one of {SCENARIOS}; got {name!r}")
+
+
+def resolve_drive(choice: Any) -> str | DriveScenario:
+    """The scenario argument checked at the boundary (single and vector env
+    alike): a name of :data:`SCENARIOS` or a valid :class:`DriveScenario`."""
+    if isinstance(choice, str):
+        if choice not in SCENARIOS:
+            raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
+        return choice
+    if not isinstance(choice, DriveScenario):
+        raise TypeError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
+    return validate_drive_scenario(choice)
 
 
 class MobileTripodOdometryEnv(ParagymEnv):
@@ -103,10 +115,8 @@ class MobileTripodOdometryEnv(ParagymEnv):
         self.observation_space = spaces.Box(-100.0, 100.0, (OBS_SIZE,), np.float32)
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        choice = options.get("scenario", self.scenario_arg)
+        choice = resolve_drive(options.get("scenario", self.scenario_arg))
         scenario = drive_scenario(choice, self.np_random) if isinstance(choice, str) else choice
-        if not isinstance(scenario, DriveScenario):
-            raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
         self.scenario = scenario
         self.drive = TripodDrive(scenario, self.np_random, self.geometry, encoder_noise=self.encoder_noise)
         self._estimate = self.drive.odometry.copy()
@@ -216,11 +226,11 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
 
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
         e = self.single_env
-        choice = options.get("scenario", e.scenario_arg)
+        choice = resolve_drive(options.get("scenario", e.scenario_arg))
+        if isinstance(choice, DriveScenario) and len(choice.terrain.bumps) > MAX_BUMPS:
+            raise ValueError(f"the vector env takes at most {MAX_BUMPS} terrain bumps; got {len(choice.terrain.bumps)}")
         for i in rows:
             sc = drive_scenario(choice, self._rngs[i]) if isinstance(choice, str) else choice
-            if not isinstance(sc, DriveScenario):
-                raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
             if len(sc.terrain.bumps) > MAX_BUMPS:
                 raise ValueError(f"the vector env takes at most {MAX_BUMPS} terrain bumps; got {len(sc.terrain.bumps)}")
             drive = TripodDrive(sc, self._rngs[i], self.geometry, encoder_noise=e.encoder_noise)

@@ -155,6 +155,38 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
     return kap, r1[best]
 
 
+def resolve_task(choice: Any, geometry: og.OrthoglideGeometry) -> Any:
+    """The scenario argument checked at the boundary (single and vector env
+    alike): "paper", "random", or a Task of finite, increasing times (at
+    least two) with points and velocities (K, 2) whose first point the
+    manipulator reaches. Anything else is a ValueError or TypeError naming
+    ``scenario``."""
+    ng = _task_module()
+    if isinstance(choice, str):
+        if choice not in ("paper", "random"):
+            raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+        return choice
+    if not isinstance(choice, ng.Task):
+        raise TypeError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+    try:
+        t = np.asarray(choice.t, dtype=float)
+        points = np.asarray(choice.points, dtype=float)
+        velocities = np.asarray(choice.velocities, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise TypeError(f"scenario's t, points and velocities must be arrays of real numbers ({exc})") from None
+    if t.ndim != 1 or len(t) < 2 or points.shape != (len(t), 2) or velocities.shape != (len(t), 2):
+        raise ValueError(f"scenario must have times (K,) with K >= 2 and points and velocities (K, 2); got "
+                         f"{t.shape}, {points.shape}, {velocities.shape}")
+    if not (np.isfinite(t).all() and np.isfinite(points).all() and np.isfinite(velocities).all()):
+        raise ValueError("scenario's times, points and velocities must be finite")
+    if not np.all(np.diff(t) > 0):
+        raise ValueError("scenario's times must increase")
+    kap, _ = start_table_position(points[:1], geometry)
+    if not np.isfinite(kap[0]):
+        raise ValueError("scenario's first point is outside the reachable set")
+    return choice
+
+
 class Orthoglide2PRRKappaEnv(ParagymEnv):
     """Track a path with the 2-dof Orthoglide assisted by a translating table,
     keeping the condition number of J low.
@@ -211,9 +243,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         super().__init__(render_mode)
         if action_mode not in ("null_space", "joint_velocity"):
             raise ValueError(f"action_mode must be 'null_space' or 'joint_velocity'; got {action_mode!r}")
-        if not (isinstance(scenario, str) and scenario in ("paper", "random")) and not hasattr(scenario, "points"):
-            raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {scenario!r}")
-        self.scenario_arg, self.action_mode, self.geometry = scenario, action_mode, geometry
+        self.scenario_arg = resolve_task(scenario, geometry)
+        self.action_mode, self.geometry = action_mode, geometry
         self.max_null_rate, self.max_joint_rate = float(max_null_rate), float(max_joint_rate)
         self.w_track, self.limit_penalty = float(w_track), float(limit_penalty)
         dim = 1 if action_mode == "null_space" else 3
@@ -223,16 +254,12 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
         ng = _task_module()
-        choice = options.get("scenario", self.scenario_arg)
+        choice = resolve_task(options.get("scenario", self.scenario_arg), self.geometry)
         if isinstance(choice, str):
-            if choice not in ("paper", "random"):
-                raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
             task = ng.paper_task() if choice == "paper" else orthoglide_random_task(self.np_random, self.geometry)
         else:
             task = choice
         kap, r1 = start_table_position(task.points[:1], self.geometry)
-        if not np.isfinite(kap[0]):
-            raise ValueError("the task's first point is outside the reachable set")
         self.task = task
         self._points, self._vel = task.points.tolist(), task.velocities.tolist()
         self._dt, self._last = np.diff(task.t).tolist(), len(task.t) - 1
@@ -335,9 +362,7 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
         ng = _task_module()
         e = self.single_env
-        choice = options.get("scenario", e.scenario_arg)
-        if isinstance(choice, str) and choice not in ("paper", "random"):
-            raise ValueError(f"scenario must be 'paper', 'random' or a Task; got {choice!r}")
+        choice = resolve_task(options.get("scenario", e.scenario_arg), self.geometry)
         if choice == "random":
             tasks = orthoglide_random_tasks([self._rngs[i] for i in rows], self.geometry)
         else:

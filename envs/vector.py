@@ -33,7 +33,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from paragym.envs.base import check_action
+from paragym.envs.base import check_action, check_seed
 
 __all__ = ["ParagymVectorEnv"]
 
@@ -73,21 +73,47 @@ class ParagymVectorEnv(VectorEnv):
     # --- the loop ---------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset every robot, or those of ``options["reset_mask"]`` (a boolean
+        array of ``num_envs``, as gymnasium's vector envs take it). Every
+        argument is checked before any robot changes: a bad seed list or mask
+        leaves the env as it was."""
+        if options is not None and not isinstance(options, dict):
+            raise TypeError(f"options must be a dict or None; got {type(options).__name__}")
+        options = dict(options or {})
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
-        elif isinstance(seed, int | np.integer):
-            seeds = [int(seed) + i for i in range(self.num_envs)]
-        else:
+        elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
+            seeds = [check_seed(seed) + i for i in range(self.num_envs)]
+        elif isinstance(seed, list | tuple | np.ndarray):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be an int, None or a list of {self.num_envs} seeds; got {len(seeds)}")
-        for i, s in enumerate(seeds):
-            if s is not None or self._rngs[i] is None:
-                self._rngs[i], _ = seeding.np_random(s)
-        rows = np.arange(self.num_envs)
-        self._reset_rows(rows, dict(options or {}))
-        self._elapsed[:] = 0
-        self._autoreset[:] = False
+            seeds = [check_seed(s, f"seed[{i}]") for i, s in enumerate(seeds)]
+        else:
+            raise TypeError(f"seed must be an int, None or a list of {self.num_envs} seeds; got {seed!r}")
+        mask = np.ones(self.num_envs, bool)
+        if "reset_mask" in options:
+            mask = options.pop("reset_mask")
+            if not isinstance(mask, np.ndarray) or mask.dtype != np.bool_ or mask.shape != (self.num_envs,):
+                raise TypeError(f"options['reset_mask'] must be a boolean numpy array of shape ({self.num_envs},); "
+                                f"got {mask!r:.80}")
+            if not mask.any():
+                raise ValueError("options['reset_mask'] must be true for at least one robot")
+            if not self._started and not mask.all():
+                raise ValueError("the first reset resets every robot: leave out options['reset_mask']")
+        rows = np.flatnonzero(mask)
+        saved = [self._rngs[i] for i in rows]
+        for i in rows:
+            if seeds[i] is not None or self._rngs[i] is None:
+                self._rngs[i], _ = seeding.np_random(seeds[i])
+        try:
+            self._reset_rows(rows, options)
+        except BaseException:
+            for i, rng in zip(rows, saved, strict=True):  # a refused scenario leaves the generators as they were
+                self._rngs[i] = rng
+            raise
+        self._elapsed[rows] = 0
+        self._autoreset[rows] = False
         self._started = True
         return self._observe(), self._infos()
 
