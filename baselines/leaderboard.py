@@ -611,6 +611,12 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
     models = Path(models_dir) if models_dir is not None else None
     chosen = _select(env_ids, policies, models)
+    partial = _partial_label(env_ids, policies)
+    if out is not None:  # a filtered run writes apart, so that it cannot be taken for the full table
+        out = Path(out) / f"partial-{partial}" if partial else Path(out)
+        _check_writable(out)
+        if markdown_path is not None:
+            _check_writable(Path(markdown_path).parent)
     producers = {(env, name): spec.producer() for env, specs in chosen.items() for name, spec in specs.items()}
     t0 = time.perf_counter()
     with ResultStore(db) as store:
@@ -653,7 +659,7 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         for env, ss in all_summaries.items():
             for s in ss:
                 s.description = chosen[env][s.policy].description
-        files = _write_reports(all_summaries, suite, out, markdown_path) if out is not None else []
+        files = _write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
     seconds = time.perf_counter() - t0
     for env, ss in all_summaries.items():
         echo(f"\n{env}\n{terminal_table(ss)}")
@@ -690,8 +696,33 @@ def _short(producer: str) -> str:
     return f"parameters {hashlib.sha256(producer.encode()).hexdigest()[:12]}"
 
 
+def _partial_label(env_ids: list[str] | None, policies: list[str] | None) -> str:
+    """'' for the full table; else a folder-safe name of the filter (and a short hash of it)."""
+    import hashlib
+    import re
+
+    if not env_ids and not policies:
+        return ""
+    parts = [env_name(e) for e in env_ids or []] + list(policies or [])
+    text = re.sub(r"[^\w.+-]+", "_", "_".join(parts))[:60]
+    return f"{text}-{hashlib.sha256('|'.join(parts).encode()).hexdigest()[:6]}"
+
+
+def _check_writable(folder: Path) -> None:
+    """Make ``folder`` and write a probe file in it now, so that a bad ``--out``
+    fails before any episode runs (a ValueError naming it)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".paragym-write-check"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"cannot write the reports to {folder}: {exc.strerror or exc} (choose another --out)") from exc
+
+
 def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out: str | Path,
-                   markdown_path: str | Path | None) -> list[Path]:
+                   markdown_path: str | Path | None, env_ids: list[str] | None = None,
+                   policies: list[str] | None = None) -> list[Path]:
     import os
     import platform
 
@@ -712,6 +743,10 @@ def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, ou
               f"(reset seed 100000 + 1000 seed + episode), random scenarios, kinematic fidelity; "
               f"wall times on {platform.machine()} with {os.cpu_count()} cores. Written by `paragym leaderboard"
               f"{' --quick' if suite is QUICK else ''}`; every episode is a row of the SQLite results database.")
+    if env_ids or policies:
+        header += ("\n\n**A partial table**, not the full leaderboard: only "
+                   + "; ".join(x for x in (f"envs {', '.join(env_name(e) for e in env_ids)}" if env_ids else "",
+                                           f"policies {', '.join(policies)}" if policies else "") if x) + ".")
     md_path.parent.mkdir(parents=True, exist_ok=True)
     md_path.write_text(markdown(all_summaries, suite, images, header))
     files.append(md_path)

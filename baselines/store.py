@@ -62,35 +62,63 @@ class EpisodeRow:
         return (self.env, self.policy, self.seed, self.episode, self.version, self.producer)
 
 
+#: SQLite's application id of a paragym results file ("PGYM"): a file without it was not made by paragym
+APPLICATION_ID = 0x5047594D
+
+
 class ResultStore:
-    """The SQLite file at ``path`` (made, with its folder, if missing)."""
+    """The SQLite file at ``path`` (made, with its folder, if missing).
+
+    An existing file is opened only if paragym made it (its SQLite
+    application id), for this version and schema, and it passes SQLite's
+    ``quick_check``; anything else is refused with a ValueError naming the
+    file, before a byte is written to it. A file that cannot be created or
+    written (a read-only folder, a path through a file) is a ValueError too.
+    """
 
     def __init__(self, path: str | Path, version: str = paragym.__version__) -> None:
         self.path, self.version = Path(path), version
-        if self.path.exists():
-            self._check_existing()
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        self.db = sqlite3.connect(self.path)
-        self.db.executescript(_SCHEMA)
-        with self.db:
-            self.db.execute("INSERT OR IGNORE INTO meta VALUES ('schema', ?)", (SCHEMA_VERSION,))
-            self.db.execute("INSERT OR IGNORE INTO meta VALUES ('paragym_version', ?)", (version,))
+        try:
+            if self.path.exists():
+                self._check_existing()
+                self.db = sqlite3.connect(self.path)
+                self.db.execute("PRAGMA user_version").fetchone()  # opens it for writing now, not mid-run
+            else:
+                self.path.parent.mkdir(parents=True, exist_ok=True)
+                self.db = sqlite3.connect(self.path)
+                with self.db:
+                    self.db.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+                    self.db.executescript(_SCHEMA)
+                    self.db.execute("INSERT INTO meta VALUES ('schema', ?)", (SCHEMA_VERSION,))
+                    self.db.execute("INSERT INTO meta VALUES ('paragym_version', ?)", (version,))
+        except (sqlite3.Error, OSError) as exc:
+            raise ValueError(f"cannot use {self.path} as the results database: {exc} (choose another file with "
+                             f"--db)") from exc
 
     def _check_existing(self) -> None:
         """Refuse (ValueError) a file that is not this version's paragym database, before writing anything."""
         try:
             db = sqlite3.connect(f"file:{self.path}?mode=ro", uri=True)
             try:
-                meta = dict(db.execute("SELECT key, value FROM meta").fetchall())
+                app = db.execute("PRAGMA application_id").fetchone()[0]
+                meta = dict(db.execute("SELECT key, value FROM meta").fetchall()) if app == APPLICATION_ID or (
+                    db.execute("SELECT 1 FROM sqlite_master WHERE name = 'meta'").fetchone()) else {}
+                check = db.execute("PRAGMA quick_check").fetchone()[0] if app == APPLICATION_ID else "ok"
             finally:
                 db.close()
         except sqlite3.DatabaseError as exc:
-            raise ValueError(f"{self.path} is not a paragym results database ({exc}); choose another file "
-                             f"with --db") from exc
-        if meta.get("schema") != SCHEMA_VERSION or meta.get("paragym_version") != self.version:
+            raise ValueError(f"{self.path} is not a paragym results database, or it is damaged ({exc}); choose "
+                             f"another file with --db") from exc
+        if "paragym_version" in meta and (meta.get("schema") != SCHEMA_VERSION or
+                                          meta.get("paragym_version") != self.version):
             raise ValueError(f"{self.path} holds results of paragym {meta.get('paragym_version', '?')} (schema "
                              f"{meta.get('schema', '?')}); this is paragym {self.version} (schema {SCHEMA_VERSION}). "
                              f"Results of different versions are not comparable: use --db for a new file")
+        if app != APPLICATION_ID:
+            raise ValueError(f"{self.path} is not a paragym results database (paragym writes only to files it "
+                             f"made); choose another file with --db")
+        if check != "ok":
+            raise ValueError(f"{self.path} is damaged (SQLite's quick_check: {check}); choose another file with --db")
 
     def close(self) -> None:
         self.db.close()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import sqlite3
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -497,11 +498,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as exc:  # one line, no traceback: what was kept and how to go on
         print(f"\nparagym: {exc}" if str(exc) else "\nparagym: interrupted", file=sys.stderr)
         return 130
-    except ValueError as exc:  # bad input: say it plainly, no traceback
+    except (ValueError, TypeError) as exc:  # bad input: say it plainly, no traceback
         print(f"paragym: error: {exc}", file=sys.stderr)
         return 2
-    except RuntimeError as exc:  # a planner that found no path, a GUI without display
+    except (RuntimeError, OSError) as exc:  # a planner that found no path, a GUI without display, a full disk
         print(f"paragym: failed: {exc}", file=sys.stderr)
+        return 1
+    except sqlite3.Error as exc:  # the results file went bad during the run
+        print(f"paragym: failed: the results database: {exc}", file=sys.stderr)
         return 1
 
 

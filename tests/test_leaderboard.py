@@ -71,9 +71,11 @@ def test_reports_are_written(tmp_path):
     names = sorted(p.name for p in run.files)
     assert names == ["HybridSingularityFree-v0.png", "LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
                      "leaderboard.csv"]
-    md = (tmp_path / "out" / "LEADERBOARD.md").read_text()
+    folder = run.files[-1].parent  # a filtered run writes under out/partial-...
+    assert folder.parent == tmp_path / "out" and folder.name.startswith("partial-")
+    md = (folder / "LEADERBOARD.md").read_text()
     assert f"## `{ORTHO}`" in md and "| 1 |" in md and "mean kappa" in md
-    csv = (tmp_path / "out" / "leaderboard.csv").read_text().splitlines()
+    csv = (folder / "leaderboard.csv").read_text().splitlines()
     assert len(csv) == 1 + 4 and csv[0].startswith("env,rank,policy")
 
 

@@ -1,0 +1,79 @@
+"""The CLI says what is wrong in one line, before it runs anything, and writes to no file it did not
+make (issue 15, items 10-11)."""
+
+from __future__ import annotations
+
+import sqlite3
+
+import pytest
+
+from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
+from paragym.baselines.store import ResultStore
+from paragym.cli import main
+
+QUICK = ["leaderboard", "--quick", "--no-progress", "--no-validation", "--env", "Orthoglide2PRRKappa-v0",
+         "--policy", "zero"]
+
+
+def _run(capsys, *args):
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    assert "Traceback" not in err
+    return code, out, err
+
+
+def test_a_damaged_database_is_a_message(tmp_path, capsys):
+    db = tmp_path / "r.sqlite"
+    assert _run(capsys, *QUICK, "--db", str(db), "--out", str(tmp_path / "o"))[0] == 0
+    data = bytearray(db.read_bytes())
+    for k in range(4096, len(data), 4096):  # every page after the first, overwritten
+        data[k:k + 4096] = bytes(range(256)) * 16
+    db.write_bytes(bytes(data))
+    damaged = db.read_bytes()
+    code, _, err = _run(capsys, *QUICK, "--db", str(db), "--out", str(tmp_path / "o"))
+    assert code == 2 and ("damaged" in err or "not a paragym results database" in err) and str(db) in err
+    assert db.read_bytes() == damaged
+
+
+def test_a_database_of_another_program_is_never_written_to(tmp_path, capsys):
+    db = tmp_path / "theirs.sqlite"
+    con = sqlite3.connect(db)
+    con.execute("CREATE TABLE users (name TEXT)")
+    con.execute("CREATE TABLE meta (key TEXT PRIMARY KEY, value TEXT NOT NULL)")
+    con.commit()
+    con.close()
+    before = db.read_bytes()
+    code, _, err = _run(capsys, *QUICK, "--db", str(db), "--out", str(tmp_path / "o"))
+    assert code == 2 and "not a paragym results database" in err
+    assert db.read_bytes() == before
+
+
+@pytest.mark.parametrize("where", ["db", "out"])
+def test_an_unusable_path_fails_before_any_episode_runs(tmp_path, capsys, where):
+    blocker = tmp_path / "a_file"
+    blocker.write_text("mine")
+    db, out = tmp_path / "r.sqlite", tmp_path / "o"
+    if where == "db":
+        db = blocker / "r.sqlite"  # a folder that is a file
+    else:
+        out = blocker
+    code, _, err = _run(capsys, *QUICK, "--db", str(db), "--out", str(out))
+    assert code == 2 and str(blocker) in err and "Traceback" not in err
+    assert blocker.read_text() == "mine"
+    if where == "out":
+        with ResultStore(db) as store:
+            assert store.rows() == []  # nothing ran
+
+
+def test_a_filtered_run_never_overwrites_the_full_table(tmp_path):
+    kw = dict(db=tmp_path / "r.sqlite", suite=EvalSuite("t", (0,), 1), validate=False, progress=False,
+              echo=lambda s: None, out=tmp_path / "out")
+    full = run_leaderboard(env_ids=None, policies=["zero"], **{**kw, "out": None})  # fills the store cheaply
+    assert full.new_episodes == 4
+    run = run_leaderboard(env_ids=["Orthoglide2PRRKappa-v0"], policies=["zero"], **kw)
+    md = [p for p in run.files if p.name == "LEADERBOARD.md"][0]
+    assert md.parent != tmp_path / "out" and md.parent.parent == tmp_path / "out"
+    assert "A partial table" in md.read_text()
+    assert not (tmp_path / "out" / "LEADERBOARD.md").exists()
+    assert sorted(p.name for p in md.parent.iterdir()) == ["LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
+                                                          "leaderboard.csv"]
