@@ -734,7 +734,8 @@ def _write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, ou
     files = []
     for env, ss in all_summaries.items():
         png = plot_leaderboard(ss, PRIMARY[env][0], _primary_label(env), out / f"{env_name(env)}.png",
-                               f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite)")
+                               f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite)",
+                               higher_is_better=PRIMARY[env][1] > 0)
         files.append(png)
         images[env] = os.path.relpath(png, md_path.parent)
     files.append(write_csv(all_summaries, out / "leaderboard.csv"))

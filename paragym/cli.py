@@ -302,6 +302,22 @@ def _plan_tripod(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -
     return 0
 
 
+#: env id -> the scenario demo, plan and validate use when --scenario is not given: the paper's case
+DEFAULT_SCENARIO: dict[str, str] = {
+    "paragym/CaPaManCollisionFree-v0": "paper",
+    "paragym/HybridSingularityFree-v0": "paper",
+    "paragym/Orthoglide2PRRKappa-v0": "paper",
+    "paragym/MobileTripodOdometry-v0": "push",  # paper 004's scenario 2 (the paper has three; no single "paper")
+}
+
+
+def _scenario(env_id: str, args: argparse.Namespace) -> str:
+    """The --scenario argument, or the env's default (:data:`DEFAULT_SCENARIO`); kept in ``args``."""
+    if args.scenario is None:
+        args.scenario = DEFAULT_SCENARIO[env_id]
+    return args.scenario
+
+
 #: env id -> the reference planner's offline run
 PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v0": _plan_capaman,
@@ -327,7 +343,7 @@ def _cmd_plan(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     if env_id not in PLANS:
         raise ValueError(f"no offline planner for {env_id} yet")
-    env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
+    env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = env_id.split("/")[1] + f"_plan_{args.scenario}_seed{args.seed}"
@@ -341,7 +357,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     if env_id not in VALIDATIONS:
         raise ValueError(f"no validation loop for {env_id} yet")
-    env = gym.make(env_id, scenario=args.scenario)
+    env = gym.make(env_id, scenario=_scenario(env_id, args))
     out = Path(args.out)
     stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}" + (
         f"_dt{args.dt:g}" if "CaPaMan" in env_id else f"_{args.duration:g}s")
@@ -353,7 +369,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    env = gym.make(env_id, scenario=args.scenario, render_mode="rgb_array")
+    env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
     best, best_name, plot = DEMOS[env_id]
     policy = {"best": lambda: best(env), "random": lambda: RandomPolicy(env.action_space, args.seed),
               "zero": lambda: ZeroPolicy(env.action_space)}[args.policy]()
@@ -364,11 +380,12 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         ep.frames.append(env.render())
     env.close()
     out = Path(args.out)
-    stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}"
+    stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}_{args.policy}"
     png = plot(ep, out / f"{stem}.png")
     end = ep.infos[-1]
-    print(f"steps {len(ep.actions)}  return {ep.episode_return:.3f}  success {end.get('is_success')}  "
-          f"collision {end.get('collision')}  reset+plan {ep.reset_seconds:.2f} s  steps {ep.step_seconds:.2f} s")
+    collision = f"  collision {end['collision']}" if "collision" in end else ""
+    print(f"steps {len(ep.actions)}  return {ep.episode_return:.3f}  success {end.get('is_success')}{collision}  "
+          f"reset+plan {ep.reset_seconds:.2f} s  steps {ep.step_seconds:.2f} s")
     print(f"wrote {png}")
     if args.gif:
         from PIL import Image
@@ -422,6 +439,10 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
     return 0
 
 
+SCENARIO_HELP = ("the paper's case by default ('paper'; the mobile tripod: 'push'), or 'random'; the mobile tripod "
+                 "also initial_heading, random_slip, rough_terrain")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``paragym`` command."""
     parser = argparse.ArgumentParser(prog="paragym", description=paragym.__doc__.splitlines()[0])
@@ -431,7 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_envs)
     p = sub.add_parser("demo", help="run one episode with the best available policy and save a picture")
     p.add_argument("env_id", help="e.g. paragym/CaPaManCollisionFree-v0 (the 'paragym/' may be omitted)")
-    p.add_argument("--scenario", default="paper", help="'paper' (default) or 'random'")
+    p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--policy", choices=("best", "random", "zero"), default="best")
     p.add_argument("--out", default="runs/demo", help="folder for the PNG (and GIF)")
@@ -440,8 +461,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_demo)
     p = sub.add_parser("plan", help="run the reference planner offline; print its figures and save pictures")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
-    p.add_argument("--scenario", default="paper",
-                   help="'paper' (default) or 'random'; the mobile tripod: initial_heading, push, random_slip, ...")
+    p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario (random) and planner seed")
     p.add_argument("--dt", type=float, default=0.45, help="seconds between via points (paper: 0.09, 0.45, 0.9)")
     p.add_argument("--out", default="runs/plan", help="folder for the PNG and the JSON")
@@ -449,7 +469,7 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("validate", help="plan, execute in the dynamic simulation, validate with the accelerometer "
                                         "array and the Kalman filter; print the report, save Figs 8-9")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
-    p.add_argument("--scenario", default="paper", help="'paper' (default) or 'random'")
+    p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario, planner and sensor-noise seed")
     p.add_argument("--dt", type=float, default=0.9,
                    help="CaPaMan: seconds between via points (paper: 0.09, 0.45, 0.9)")

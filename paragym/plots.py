@@ -21,10 +21,11 @@ __all__ = ["plot_capaman_episode", "plot_capaman_motion", "plot_hybrid_episode",
            "plot_training_curve"]
 
 
-def _save(fig: Any, path: str | Path, title: str, dpi: int = 100) -> Path:
-    """Title, lay out, write the PNG (making its folder), close; the path."""
+def _save(fig: Any, path: str | Path, title: str, dpi: int = 100,
+          rect: tuple[float, float, float, float] = (0, 0, 1, 1)) -> Path:
+    """Title, lay out (within ``rect`` of the figure), write the PNG (making its folder), close; the path."""
     fig.suptitle(title)
-    fig.tight_layout()
+    fig.tight_layout(rect=rect)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(out, dpi=dpi)
@@ -312,23 +313,38 @@ def plot_training_curve(curve: dict[str, list], path: str | Path, title: str = "
     return _save(fig, path, title, dpi=90)
 
 
-def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str | Path, title: str = "") -> Path:
+def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str | Path, title: str = "",
+                     higher_is_better: bool = False) -> Path:
     """One env's leaderboard as three bar panels, in rank order: success
-    rate, return (mean +- std over episodes), and the env's primary metric."""
+    rate, return (mean +- std over episodes), and the env's primary metric
+    (which way is better written on its axis; its axis starts near the
+    smallest value, not at 0, when the values differ by little). Bar
+    colours are the policy kinds, in a legend."""
+    from matplotlib.patches import Patch
+
     names = [s.policy for s in summaries]
     colours = {"reference": "C3", "paper case": "C1", "other": "C4", "learned": "C0", "floor": "0.6", "user": "C2"}
     col = [colours.get(s.kind, "C2") for s in summaries]
     y = np.arange(len(names))
-    panels = [("success rate", [s.success_rate for s in summaries], None),
-              ("return (mean +- std)", [s.return_mean for s in summaries], [s.return_std for s in summaries])]
+    panels = [("success rate (higher is better)", np.array([s.success_rate for s in summaries]), None),
+              ("return, mean +- std (higher is better)", np.array([s.return_mean for s in summaries]),
+               [s.return_std for s in summaries])]
     if key != "return":
-        panels.append((label, [s.metrics.get(key, np.nan) for s in summaries], None))
-    fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 0.45 * len(names) + 1.6), sharey=True)
-    for ax, (name, values, err) in zip(axes, panels, strict=True):
-        ax.barh(y, values, xerr=err, color=col, capsize=2)
+        panels.append((f"{label} ({'higher' if higher_is_better else 'lower'} is better)",
+                       np.array([s.metrics.get(key, np.nan) for s in summaries], float), None))
+    fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 0.45 * len(names) + 2.0), sharey=True)
+    for i, (ax, (name, values, err)) in enumerate(zip(axes, panels, strict=True)):
+        base = 0.0
+        finite = values[np.isfinite(values)]
+        if i == 2 and len(finite) and finite.min() > 0 and np.ptp(finite) < 0.5 * finite.max():
+            base = finite.min() - 0.1 * max(np.ptp(finite), 0.02 * finite.min())  # show the differences
+        ax.barh(y, values - base, left=base, xerr=err, color=col, capsize=2)
         ax.set_xlabel(name)
         ax.grid(axis="x", alpha=0.3)
     axes[0].set_yticks(y, names)
     axes[0].invert_yaxis()
     axes[0].set_xlim(0, 1.05)
-    return _save(fig, path, title, dpi=90)
+    kinds = [k for k in colours if any(s.kind == k for s in summaries)]
+    fig.legend(handles=[Patch(color=colours[k], label=k) for k in kinds], loc="lower center", ncol=len(kinds),
+               fontsize=8, frameon=False)
+    return _save(fig, path, title, dpi=90, rect=(0, 0.5 / (0.45 * len(names) + 2.0), 1, 1))

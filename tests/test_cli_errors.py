@@ -77,3 +77,14 @@ def test_a_filtered_run_never_overwrites_the_full_table(tmp_path):
     assert not (tmp_path / "out" / "LEADERBOARD.md").exists()
     assert sorted(p.name for p in md.parent.iterdir()) == ["LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
                                                           "leaderboard.csv"]
+
+
+def test_demo_and_plan_work_on_every_env_with_their_defaults_and_name_the_policy(tmp_path, capsys):
+    code, out, _ = _run(capsys, "demo", "MobileTripodOdometry-v0", "--out", str(tmp_path))
+    assert code == 0 and "push scenario" in out and "collision" not in out
+    code, out, _ = _run(capsys, "demo", "MobileTripodOdometry-v0", "--policy", "zero", "--out", str(tmp_path))
+    assert code == 0
+    names = sorted(p.name for p in tmp_path.glob("*.png"))
+    assert names == ["MobileTripodOdometry-v0_push_seed0_best.png", "MobileTripodOdometry-v0_push_seed0_zero.png"]
+    code, out, _ = _run(capsys, "plan", "MobileTripodOdometry-v0", "--out", str(tmp_path / "plan"))
+    assert code == 0 and "correction (paper)" in out

@@ -47,8 +47,8 @@ def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):
                          capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
     assert "success True" in res.stdout and "RRT + GA" in res.stdout
-    png = tmp_path / "CaPaManCollisionFree-v0_paper_seed0.png"
-    assert png.stat().st_size > 50_000 and (tmp_path / "CaPaManCollisionFree-v0_paper_seed0.gif").exists()
+    png = tmp_path / "CaPaManCollisionFree-v0_paper_seed0_best.png"
+    assert png.stat().st_size > 50_000 and (tmp_path / "CaPaManCollisionFree-v0_paper_seed0_best.gif").exists()
     res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "Nope-v0"], capture_output=True, text=True)
     assert res.returncode == 2 and "unknown env id" in res.stderr
     res = subprocess.run([sys.executable, "-m", "paragym.cli", "demo", "CaPaManCollisionFree-v0",
