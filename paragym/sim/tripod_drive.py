@@ -99,7 +99,8 @@ def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt:
     than one sample, heading errors that are not three finite angles within
     +-90 deg, a push on a unit other than 0, 1, 2 or at a time outside the
     drive, a negative or non-finite slip, terrain bumps that are not
-    (x, y, height, radius) with a positive radius."""
+    (x, y, height, radius) with a radius of at least 1 mm (a thinner one
+    underflows the Gaussian) and a height within +-0.5 m."""
     if not isinstance(scenario, DriveScenario):
         raise TypeError(f"{name} must be a DriveScenario; got {type(scenario).__name__}")
 
@@ -142,8 +143,10 @@ def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt:
             raise ValueError(f"{name}.terrain.bumps[{k}] must be (x, y, height, radius); got {bump!r}")
         for j, what in enumerate(("x", "y", "height", "radius")):
             real(bump[j], f"terrain.bumps[{k}].{what}")
-        if bump[3] <= 0:
-            raise ValueError(f"{name}.terrain.bumps[{k}] radius must be > 0 m; got {bump[3]!r}")
+        if not bump[3] >= 1e-3:
+            raise ValueError(f"{name}.terrain.bumps[{k}] radius must be at least 1 mm; got {bump[3]!r}")
+        if not abs(bump[2]) <= 0.5:
+            raise ValueError(f"{name}.terrain.bumps[{k}] height must lie within +-0.5 m; got {bump[2]!r}")
     return scenario
 
 
