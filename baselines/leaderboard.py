@@ -298,56 +298,82 @@ def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir:
             reaper.terminate()
 
 
+#: the reaper's program (:func:`_start_reaper`), self-contained so that it starts in milliseconds: while the
+#: driver lives, note its descendants every 0.2 s (pid and start time, so that a reused pid is left alone);
+#: when it is gone, end those still running. It first leaves the driver's family (Ray ends a dead driver's
+#: child processes) and disarms any parent-death signal that the driver's fork hooks armed.
+REAPER = """
+import ctypes, os, sys, time
+import psutil
+if os.fork():
+    os._exit(0)
+if sys.platform.startswith("linux"):
+    try:
+        ctypes.CDLL(None).prctl(1, 0)
+    except (OSError, AttributeError):
+        pass
+me, driver = os.getpid(), int(sys.argv[1])
+known = {}
+for item in sys.argv[2:]:
+    pid, created = item.split(":")
+    known[int(pid)] = float(created)
+try:
+    parent = psutil.Process(driver)
+    while parent.status() != psutil.STATUS_ZOMBIE:
+        try:
+            children = parent.children(recursive=True)
+        except psutil.Error:
+            children = []
+        for child in children:
+            try:
+                if child.pid != me:
+                    known.setdefault(child.pid, child.create_time())
+            except psutil.Error:
+                pass
+        time.sleep(0.2)
+except psutil.Error:
+    pass
+procs = []
+for pid, created in known.items():
+    try:
+        p = psutil.Process(pid)
+        if abs(p.create_time() - created) < 1e-3:
+            procs.append(p)
+    except psutil.Error:
+        pass
+for p in procs:
+    try:
+        p.terminate()
+    except psutil.Error:
+        pass
+gone, alive = psutil.wait_procs(procs, timeout=3)
+for p in alive:
+    try:
+        p.kill()
+    except psutil.Error:
+        pass
+"""
+
+
 def _start_reaper() -> Any:
-    """A small process that ends the local Ray's processes (its head, raylet and
-    agents, as found now among this process's descendants) if this process
-    dies without shutting Ray down (SIGKILL): Ray's own agents otherwise
-    outlive their driver for minutes."""
+    """A small process (:data:`REAPER`) that ends the local Ray's processes
+    (its head, raylet, agents and workers: the descendants of this process)
+    if this process dies without shutting Ray down (SIGKILL): Ray's own
+    agents otherwise outlive their driver for minutes."""
     import os
     import subprocess
     import sys
 
     import psutil
 
-    me = psutil.Process()
-    procs = [f"{p.pid}:{p.create_time()!r}" for p in me.children(recursive=True)]
-    code = "from paragym.baselines.leaderboard import _reap; _reap()"
-    return subprocess.Popen([sys.executable, "-c", code, str(os.getpid()), *procs], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
-
-
-def _reap() -> None:
-    """The reaper's loop (:func:`_start_reaper`): wait for the driver to go,
-    then end the processes named on the command line (pid:create_time, so a
-    reused pid is left alone)."""
-    import sys
-
-    import psutil
-
-    parent, *named = sys.argv[1:]
-    driver = int(parent)
-    while psutil.pid_exists(driver) and psutil.Process(driver).status() != psutil.STATUS_ZOMBIE:
-        time.sleep(0.5)
-    procs = []
-    for item in named:
-        pid, created = item.split(":")
+    now = []
+    for child in psutil.Process().children(recursive=True):
         try:
-            p = psutil.Process(int(pid))
-            if repr(p.create_time()) == created:
-                procs.append(p)
+            now.append(f"{child.pid}:{child.create_time()!r}")
         except psutil.Error:
             continue
-    for p in procs:
-        try:
-            p.terminate()
-        except psutil.Error:
-            pass
-    _, alive = psutil.wait_procs(procs, timeout=3)
-    for p in alive:
-        try:
-            p.kill()
-        except psutil.Error:
-            pass
+    return subprocess.Popen([sys.executable, "-c", REAPER, str(os.getpid()), *now], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
 
 
 EXECUTORS = ("local", "workers", "ray")

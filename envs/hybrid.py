@@ -244,6 +244,10 @@ class HybridSingularityFreeEnv(ParagymEnv):
 
     ## Version History
     * v0: initial release (kinematic fidelity).
+      Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
+      the workspace, malformed) and non-dict ``options`` are refused at reset
+      with a ValueError or TypeError naming them; every episode that ran
+      before runs the same (tested against recorded rollouts).
     """
 
     def __init__(self, scenario: str | HybridScenario = "random", render_mode: str | None = None,

@@ -33,8 +33,21 @@ def _workers(proc, n, timeout=90.0):
     raise AssertionError(f"{n} workers did not start")
 
 
+def _running(p) -> bool:
+    """A zombie has ended: it only awaits its parent."""
+    try:
+        return p.is_running() and p.status() != psutil.STATUS_ZOMBIE
+    except psutil.Error:
+        return False
+
+
 def _gone(procs, timeout=10.0) -> list:
-    _, alive = psutil.wait_procs(procs, timeout=timeout)
+    """Those of ``procs`` still running after ``timeout`` s."""
+    end = time.time() + timeout
+    alive = [p for p in procs if _running(p)]
+    while alive and time.time() < end:
+        time.sleep(0.2)
+        alive = [p for p in alive if _running(p)]
     return alive
 
 
@@ -83,7 +96,7 @@ def test_the_local_ray_that_paragym_started_goes_with_its_driver(tmp_path):
     proc.wait(timeout=30)
     kids = [k for k in kids if k.is_running()]
     alive = _gone(kids, timeout=20)
-    names = sorted({p.name() for p in alive if p.is_running()})
+    names = sorted({p.name() for p in alive if _running(p)})
     for p in alive:
         p.kill()
     assert not alive, f"left behind: {names}"
