@@ -272,14 +272,15 @@ def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir:
         raise ValueError("--executor ray needs Ray: pip install 'paragym[ray]'") from exc
     started = not ray.is_initialized()
     reaper = None
-    if started:
-        kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
-        ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
-        if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
-            reaper = _start_reaper()
-    remote = ray.remote(num_cpus=1)(evaluate_episode)
-    pending = [remote.remote(spec, seed, episode) for spec, seed, episode in jobs]
+    pending: list[Any] = []
     try:
+        if started:
+            kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
+            if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
+                reaper = _start_reaper()
+            ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+        remote = ray.remote(num_cpus=1)(evaluate_episode)
+        pending = [remote.remote(spec, seed, episode) for spec, seed, episode in jobs]
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             try:
@@ -295,7 +296,7 @@ def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir:
         if started:
             ray.shutdown()
         if reaper is not None:
-            reaper.terminate()
+            _stop_reaper(reaper)
 
 
 #: the reaper's program (:func:`_start_reaper`), self-contained so that it starts in milliseconds: while the
@@ -307,6 +308,8 @@ import ctypes, os, sys, time
 import psutil
 if os.fork():
     os._exit(0)
+print(os.getpid(), flush=True)
+sys.stdout.close()
 if sys.platform.startswith("linux"):
     try:
         ctypes.CDLL(None).prctl(1, 0)
@@ -355,25 +358,32 @@ for p in alive:
 """
 
 
-def _start_reaper() -> Any:
-    """A small process (:data:`REAPER`) that ends the local Ray's processes
-    (its head, raylet, agents and workers: the descendants of this process)
-    if this process dies without shutting Ray down (SIGKILL): Ray's own
-    agents otherwise outlive their driver for minutes."""
+def _start_reaper() -> int:
+    """Start :data:`REAPER`, which ends the local Ray's processes (its head,
+    raylet, agents and workers: whatever descends from this process from now
+    on) if this process dies without shutting Ray down (SIGKILL): Ray's own
+    agents otherwise outlive their driver for minutes. Started before Ray, so
+    that it sees every process Ray starts. Returns its pid, to end it when
+    Ray was shut down normally."""
     import os
     import subprocess
     import sys
 
-    import psutil
+    proc = subprocess.Popen([sys.executable, "-c", REAPER, str(os.getpid())], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True, text=True)
+    pid = int(proc.stdout.readline())
+    proc.wait()
+    return pid
 
-    now = []
-    for child in psutil.Process().children(recursive=True):
-        try:
-            now.append(f"{child.pid}:{child.create_time()!r}")
-        except psutil.Error:
-            continue
-    return subprocess.Popen([sys.executable, "-c", REAPER, str(os.getpid()), *now], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+
+def _stop_reaper(pid: int) -> None:
+    import os
+    import signal
+
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except OSError:
+        pass
 
 
 EXECUTORS = ("local", "workers", "ray")
