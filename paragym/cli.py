@@ -400,9 +400,13 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_train(args: argparse.Namespace) -> int:
     from paragym.baselines.training import train
 
-    res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
-                progress_bar=not args.no_progress, threads=args.threads, force=args.force,
-                vectorized=args.vectorized, n_envs=args.n_envs)
+    try:
+        res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
+                    progress_bar=not args.no_progress, threads=args.threads, force=args.force,
+                    vectorized=args.vectorized, n_envs=args.n_envs)
+    except KeyboardInterrupt:
+        raise KeyboardInterrupt(f"interrupted: the last checkpoint under {args.models} is kept; run the same "
+                                f"command again to resume from it") from None
     meta = res.meta
     if res.skipped:
         print(f"{res.files.model} is already trained for {meta['timesteps']:,} steps (--force retrains)")
