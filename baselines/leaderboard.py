@@ -162,7 +162,7 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
     the robot standing still for the episode, which is then scored as it
     goes (metric ``policy_failed`` = 1)."""
     from paragym.baselines.simple import ZeroPolicy
-    from paragym.planners.grid_path import PlanningError
+    from paragym.planners.base import PlanningError
 
     env = _env(spec.env_id)
     s = episode_seed(seed, episode)

@@ -47,7 +47,6 @@ __all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "get_policy", "init_defaults"
            "shipped_models_dir"]
 
 KINDS = ("reference", "paper case", "other", "learned", "floor", "user")
-DEG = np.pi / 180
 
 
 @dataclass(frozen=True)

@@ -34,8 +34,8 @@ from paragym.planners import PlanningError, RrtGaPlanner
 from paragym.planners.rrt_ga import LEG_INTERVALS, JointSpaceModel
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.trajectories import JointPath
+from paragym.units import DEG
 
-DEG = np.pi / 180
 MIN_LEG_BUDGET = 0.1  # s: RRT* gets at least this per leg, even when RRT + GA needed less
 LEGS = ((0, 1), (1, 2), (2, 0))
 

@@ -24,10 +24,10 @@ from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
+from paragym.units import DEG
 
 __all__ = ["CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
 
-DEG = np.pi / 180
 #: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
 #: the 17 parts moves more than 4.7 mm (measured over the joint space, tested), under the 5 mm cell of the
 #: occupancy grid, so checking the end of each such step checks the motion at the grid's resolution

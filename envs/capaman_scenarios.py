@@ -29,13 +29,13 @@ from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder, Obstacle
+from paragym.units import DEG
 
 __all__ = ["CaPaManScenario", "paper_scenario", "random_scenario", "validate_scenario",
            "MAX_OBSTACLES", "TOUR"]
 
 MAX_OBSTACLES = 3
 TOUR = (1, 2, 0)  # indices of the T.C.s visited after starting at T.C.1 (index 0)
-DEG = np.pi / 180
 
 
 @dataclass(frozen=True)

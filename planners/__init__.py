@@ -1,7 +1,7 @@
 """Reference policies and planners (imported as ``paragym.planners``)."""
 
-from paragym.planners.base import Policy
-from paragym.planners.grid_path import GridPathPlanner, GridPathPolicy, PlanningError
+from paragym.planners.base import PlanningError, Policy
+from paragym.planners.grid_path import GridPathPlanner, GridPathPolicy
 from paragym.planners.rrt_ga import RrtGaPlanner, RrtGaPolicy, RrtGaResult, RrtGaSettings
 
 __all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError", "Policy", "RrtGaPlanner", "RrtGaPolicy",

@@ -6,7 +6,11 @@ from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
-__all__ = ["PathFollowingPolicy", "Policy"]
+__all__ = ["PathFollowingPolicy", "PlanningError", "Policy"]
+
+
+class PlanningError(RuntimeError):
+    """A planner found no plan (at its resolution, within its budget); every planner raises this one."""
 
 
 @runtime_checkable

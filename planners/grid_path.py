@@ -20,17 +20,12 @@ from scipy.sparse.csgraph import dijkstra
 
 from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
 from paragym.mechanisms import capaman
-from paragym.planners.base import PathFollowingPolicy
+from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.sim import occupancy
 from paragym.trajectories import JointPath
+from paragym.units import DEG
 
 __all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError"]
-
-DEG = np.pi / 180
-
-
-class PlanningError(RuntimeError):
-    """No path at the grid's resolution."""
 
 
 def _offsets() -> np.ndarray:

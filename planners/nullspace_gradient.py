@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import orthoglide as og
-from paragym.planners.grid_path import PlanningError
+from paragym.planners.base import PlanningError
 
 __all__ = ["CaseResult", "GradientPolicy", "Task", "case_fixed_table", "case_gradient", "case_least_norm",
            "paper_task", "pointwise_optimum"]

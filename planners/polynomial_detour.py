@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import hybrid
-from paragym.planners.grid_path import PlanningError
+from paragym.planners.base import PlanningError
 from paragym.trajectories import nominal_path
 
 __all__ = ["HybridPlan", "PolynomialDetourPlanner", "PolynomialDetourPolicy", "nominal_path"]

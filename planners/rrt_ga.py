@@ -45,15 +45,14 @@ from scipy import ndimage
 
 from paragym.envs.capaman_scenarios import CaPaManScenario, validate_scenario
 from paragym.mechanisms import capaman
-from paragym.planners.base import PathFollowingPolicy
-from paragym.planners.grid_path import PlanningError
+from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.trajectories import JointPath, JointTrajectory
+from paragym.units import DEG
 
 __all__ = ["JointSpaceModel", "RrtGaPlanner", "RrtGaPolicy", "RrtGaResult", "RrtGaSettings", "fitness"]
 
-DEG = np.pi / 180
 LEG_INTERVALS = (7, 7, 6)  # 20 intervals: m = 21 configurations, T.P.s at 0, 7, 14, 20
 
 

@@ -46,6 +46,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from paragym.units import DEG
+
 __all__ = [
     "CaPaManGeometry",
     "CaPaManPose",
@@ -65,7 +67,6 @@ __all__ = [
     "tool_tip",
 ]
 
-DEG = np.pi / 180.0
 
 
 @dataclass(frozen=True)

@@ -44,13 +44,14 @@ from functools import lru_cache
 
 import numpy as np
 
+from paragym.units import DEG
+
 __all__ = [
     "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
     "hexapod_matrix", "is_singularity_free", "within_limits", "pose_matrix", "solve", "split", "tripod_forward",
     "tripod_lengths", "tripod_pose",
 ]
 
-DEG = np.pi / 180
 
 
 @dataclass(frozen=True)
