@@ -9,16 +9,28 @@ filter validation as CaPaMan's plate (:mod:`paragym.validation.report`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
-from paragym.planners.polynomial_detour import HybridPlan
 from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene, HybridRun
 from paragym.validation.motion import RigidMotion, pose_path_motion
 from paragym.validation.report import ValidationReport, validate
 from paragym.validation.sensors import AccelerometerArray
 
-__all__ = ["HybridValidation", "validate_hybrid"]
+__all__ = ["HybridPlanned", "HybridValidation", "validate_hybrid"]
+
+
+class HybridPlanned(Protocol):
+    """What the validation needs of a plan (paper 002's planner's ``HybridPlan`` has it; validation imports
+    no planner): the path parameter u (K,), the nine strokes (K, 9) m, E's displacements from home (K, 6)
+    and E's pose in the base frame (K, 6: x, y, z m, roll, pitch, yaw rad), the split Delta (K,)."""
+
+    u: np.ndarray
+    lengths: np.ndarray
+    path: np.ndarray
+    e_pose: np.ndarray
+    delta: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -31,7 +43,7 @@ class HybridValidation:
     run: HybridRun
 
 
-def validate_hybrid(plan: HybridPlan, duration: float = 5.0, dynamics: HybridDynamics | None = None,
+def validate_hybrid(plan: HybridPlanned, duration: float = 5.0, dynamics: HybridDynamics | None = None,
                     sensors: AccelerometerArray | None = None, settle: float = 0.3, seed: int = 0,
                     delay: float = 0.0) -> HybridValidation:
     """Execute ``plan`` over ``duration`` s (u = t / duration) on the dynamic
