@@ -13,7 +13,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ParagymEnv", "check_action", "check_reset_args", "check_seed"]
+__all__ = ["ParagymEnv", "check_action", "check_options", "check_seed"]
 
 
 def check_seed(seed: Any, name: str = "seed") -> int | None:
@@ -28,12 +28,11 @@ def check_seed(seed: Any, name: str = "seed") -> int | None:
     return int(seed)
 
 
-def check_reset_args(seed: Any, options: Any) -> None:
-    """The arguments of ``reset``: a seed (see :func:`check_seed`) and options
-    that are a dict or None."""
-    check_seed(seed)
+def check_options(options: Any) -> dict[str, Any]:
+    """``reset``'s options as a new dict (None: empty), or a TypeError naming them."""
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None; got {type(options).__name__}")
+    return dict(options or {})
 
 
 _BOUNDS: dict[int, tuple[Any, list[float], list[float]]] = {}
@@ -118,9 +117,10 @@ class ParagymEnv(gym.Env):
     # --- the loop -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
-        check_reset_args(seed, options)
+        check_seed(seed)
+        options = check_options(options)
         super().reset(seed=seed)
-        info = self._reset_task(options or {})
+        info = self._reset_task(options)
         return self._observe(), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:

@@ -255,7 +255,7 @@ class HybridSingularityFreeEnv(ParagymEnv):
                  w_singular: float = 1.0, w_limit: float = 1.0,
                  geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01) -> None:
         super().__init__(render_mode)
-        self._check_scenario(scenario)
+        resolve_hybrid(scenario)
         for name, value in (("max_delta_step", max_delta_step), ("j_bar", j_bar), ("tau", tau)):
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number; got {value!r}")
@@ -264,10 +264,6 @@ class HybridSingularityFreeEnv(ParagymEnv):
         self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
-
-    @staticmethod
-    def _check_scenario(scenario: Any) -> None:
-        resolve_hybrid(scenario)
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
         choice = resolve_hybrid(options.get("scenario", self.scenario_arg))

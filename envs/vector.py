@@ -33,7 +33,7 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from paragym.envs.base import check_action, check_seed
+from paragym.envs.base import check_action, check_options, check_seed
 
 __all__ = ["ParagymVectorEnv"]
 
@@ -77,9 +77,7 @@ class ParagymVectorEnv(VectorEnv):
         array of ``num_envs``, as gymnasium's vector envs take it). Every
         argument is checked before any robot changes: a bad seed list or mask
         leaves the env as it was."""
-        if options is not None and not isinstance(options, dict):
-            raise TypeError(f"options must be a dict or None; got {type(options).__name__}")
-        options = dict(options or {})
+        options = check_options(options)
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
         elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
