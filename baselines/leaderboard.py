@@ -544,8 +544,8 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
 # --- KF validation of the reference plans ----------------------------------------------------------------------
 
 def _validate_capaman(seed: int) -> tuple[bool, dict[str, Any]]:
-    from paragym.envs.capaman_scenarios import paper_scenario
     from paragym.planners import RrtGaPlanner
+    from paragym.tasks.capaman import paper_scenario
     from paragym.validation.capaman import validate_capaman
 
     planner = RrtGaPlanner(seed=seed)
@@ -566,8 +566,8 @@ def _worst(rep: Any) -> str:
 
 
 def _validate_hybrid(seed: int) -> tuple[bool, dict[str, Any]]:
-    from paragym.envs.hybrid import hybrid_paper_scenario
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+    from paragym.tasks.hybrid import hybrid_paper_scenario
     from paragym.validation.hybrid import validate_hybrid
 
     sc = hybrid_paper_scenario()

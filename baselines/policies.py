@@ -32,7 +32,6 @@ import re
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -42,6 +41,7 @@ import numpy as np
 import paragym
 from paragym.baselines.simple import RandomPolicy, ZeroPolicy
 from paragym.baselines.training import check_env_id, env_name, load_model
+from paragym.models import shipped_models_dir
 
 __all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "get_policy", "init_defaults", "policies_for", "register_policy",
            "shipped_models_dir"]
@@ -105,12 +105,6 @@ def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], An
     spec = PolicySpec(env_id, name, factory, kind, description, params)
     _REGISTRY[env_id][name] = spec
     return spec
-
-
-def shipped_models_dir() -> Path:
-    """The folder of the shipped models (package data ``paragym.models``),
-    wherever paragym is installed and whatever the working directory."""
-    return Path(str(resources.files("paragym.models")))
 
 
 class LearnedPolicy:

@@ -44,6 +44,7 @@ import yaml
 
 import paragym
 from paragym import check_env_id
+from paragym.models import shipped_models_dir
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
@@ -212,7 +213,6 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     total = int(hp["n_timesteps"] if timesteps is None else timesteps)
     if total <= 0:
         raise ValueError(f"timesteps must be positive; got {timesteps!r}")
-    from paragym.baselines.policies import shipped_models_dir
 
     if Path(models_dir).resolve() == shipped_models_dir().resolve():
         raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "

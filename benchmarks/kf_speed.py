@@ -15,8 +15,8 @@ import time
 
 import numpy as np
 
-from paragym.envs.capaman_scenarios import paper_scenario
 from paragym.planners import RrtGaPlanner
+from paragym.tasks.capaman import paper_scenario
 from paragym.validation.kalman import filter_filterpy, filter_vectorised, smooth_filterpy, smooth_vectorised
 from paragym.validation.motion import capaman_planned_motion
 from paragym.validation.report import validate

@@ -29,10 +29,10 @@ import time
 import numpy as np
 from tqdm import tqdm
 
-from paragym.envs.capaman_scenarios import paper_scenario, random_scenario
 from paragym.planners import PlanningError, RrtGaPlanner
 from paragym.planners.rrt_ga import LEG_INTERVALS, JointSpaceModel
 from paragym.sim.capaman_model import CaPaManScene
+from paragym.tasks.capaman import paper_scenario, random_scenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG
 

@@ -10,20 +10,19 @@ import numpy as np
 from gymnasium import spaces
 
 from paragym.envs.base import ParagymEnv
-from paragym.envs.capaman_scenarios import (
-    MAX_OBSTACLES,
-    TOUR,
-    CaPaManScenario,
-    paper_scenario,
-    random_scenario,
-    validate_scenario,
-)
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
+from paragym.tasks.capaman import (
+    MAX_OBSTACLES,
+    TOUR,
+    CaPaManScenario,
+    draw_scenario,
+    resolve_capaman,
+)
 from paragym.units import DEG
 
 __all__ = ["CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
@@ -122,7 +121,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     * v0: initial release (kinematic and dynamic fidelity). Since paragym 0.2.0
       an action outside the Box is clipped to it (before, an action of 30 moved
       a crank 60 deg in one step past obstacles); episodes of in-Box actions are
-      unchanged, bit for bit (tested against recorded rollouts).
+      unchanged, bit for bit (tested against recorded rollouts). Since
+      paragym 0.3.0 a scenario argument of the wrong type is a TypeError (it
+      was a ValueError), as in every paragym env; no episode changes.
     """
 
     def __init__(self, scenario: str | CaPaManScenario = "random", fidelity: str = "kinematic",
@@ -141,7 +142,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         self.collision = collision
         if not (np.isfinite(control_period) and control_period > 0):
             raise ValueError(f"control_period must be a positive number of seconds; got {control_period!r}")
-        self._check_scenario_arg(scenario)
+        resolve_capaman(scenario)
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
                             ("clearance_cap", clearance_cap)):
             if not (np.isfinite(value) and value > 0):
@@ -172,23 +173,10 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         self._mid, self._half = (self._hi + self._lo) / 2, (self._hi - self._lo) / 2
         self.scenario: CaPaManScenario | None = None
 
-    @staticmethod
-    def _check_scenario_arg(scenario: Any) -> None:
-        if isinstance(scenario, str) and scenario not in ("paper", "random"):
-            raise ValueError(f"scenario must be 'paper', 'random' or a CaPaManScenario; got {scenario!r}")
-        if not isinstance(scenario, str | CaPaManScenario):
-            raise ValueError(f"scenario must be 'paper', 'random' or a CaPaManScenario; got {scenario!r}")
-
     # --- hooks ---------------------------------------------------------------------------
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        choice = options.get("scenario", self.scenario_arg)
-        self._check_scenario_arg(choice)
-        checker = self._checker()
-        if choice == "random":
-            scenario = random_scenario(self.np_random, checker, _clusters(self.geometry))
-        else:
-            scenario = paper_scenario(self.geometry) if choice == "paper" else choice
-            validate_scenario(scenario, checker)
+        scenario = draw_scenario(options.get("scenario", self.scenario_arg), self.np_random, self._checker(),
+                                 _clusters(self.geometry))
         self.scene.set_obstacles(scenario.obstacles)
         self.scenario = scenario
         self._tp = scenario.alpha
@@ -351,15 +339,10 @@ class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
 
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
         e = self.single_env
-        choice = options.get("scenario", e.scenario_arg)
-        e._check_scenario_arg(choice)
+        choice = resolve_capaman(options.get("scenario", e.scenario_arg))
         checker = e._checker()
         for i in rows:
-            if choice == "random":
-                scenario = random_scenario(self._rngs[i], checker, _clusters(self.geometry))
-            else:
-                scenario = paper_scenario(self.geometry) if choice == "paper" else choice
-                validate_scenario(scenario, checker)
+            scenario = draw_scenario(choice, self._rngs[i], checker, _clusters(self.geometry))
             self._scenarios[i] = scenario
             self._grids.set(int(i), scenario.obstacles)
             self._tp[i] = scenario.alpha

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -12,187 +10,21 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
+from paragym.tasks.hybrid import (
+    HybridScenario,
+    hybrid_paper_scenario,
+    hybrid_random_scenario,
+    hybrid_random_scenarios,
+    nominal_rows,
+    resolve_hybrid,
+)
 from paragym.trajectories import nominal_path
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
-MM = 1e-3
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
 OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
-
-
-@dataclass(frozen=True)
-class HybridScenario:
-    """Start and goal of the end-effector, as displacements from home (m, rad)."""
-
-    name: str
-    p0: tuple[float, ...]
-    p1: tuple[float, ...]
-    geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
-    seed: int | None = None
-
-
-def hybrid_paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> HybridScenario:
-    """Paper 002's example: P0 = [10, 10, 10, 0, 0, 0], P1 = [100, 80, 110, 0.15, 0.25, 0] (mm, rad)."""
-    p0 = (10 * MM, 10 * MM, 10 * MM, 0.0, 0.0, 0.0)
-    p1 = (100 * MM, 80 * MM, 110 * MM, 0.15, 0.25, 0.0)
-    return HybridScenario("paper", p0, p1, geometry)
-
-
-SPLITS = np.linspace(0, 1, 11)  # the splits Delta the scenario checks try (0.5 among them, exactly)
-
-
-def _some_split(p: np.ndarray, test: Any, passed: np.ndarray | None = None, at_once: int = 4096) -> np.ndarray:
-    """Whether ``test(poses, splits)`` holds at some split of :data:`SPLITS`
-    for each pose (M, 6) (``passed``: those known to pass at 0.5). Up to
-    ``at_once`` evaluations, every split in one call (a single env's reset);
-    beyond, the splits are tried from 0.5 outwards, each only on the poses no
-    split has passed yet: the same answer for a fraction of the work."""
-    ok = np.zeros(len(p), bool) if passed is None else passed.copy()
-    todo = np.flatnonzero(~ok)
-    if len(todo) * len(SPLITS) <= at_once:
-        hit = test(np.repeat(p[todo], len(SPLITS), 0), np.tile(SPLITS, len(todo)))
-        ok[todo] = hit.reshape(len(todo), len(SPLITS)).any(axis=1)
-        return ok
-    for d in SPLITS[np.argsort(np.abs(SPLITS - 0.5), kind="stable")]:
-        if not todo.size:
-            break
-        if passed is not None and d == 0.5:
-            continue
-        hit = test(p[todo], np.full(len(todo), d))
-        ok[todo[hit]] = True
-        todo = todo[~hit]
-    return ok
-
-
-def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry: hybrid.HybridGeometry,
-                     chunk: int = 256) -> np.ndarray:
-    """Which candidate pairs (C, 6) + (C, 6) pass the checks of
-    :func:`hybrid_random_scenarios` after the screen (``hard`` (C,): must
-    the nominal path at Delta = 0.5 fail on its every fourth sample). The
-    checks run stage by stage on the survivors, ``chunk`` pairs at a time."""
-    def limits(p: np.ndarray, d: np.ndarray) -> np.ndarray:
-        return hybrid.within_limits(p, d, geometry)
-
-    def free(p: np.ndarray, d: np.ndarray) -> np.ndarray:
-        return hybrid.solve_rows(p, d, geometry)[4]
-
-    out = np.zeros(len(p0), bool)
-    for lo in range(0, len(p0), chunk):
-        a, b, h = p0[lo:lo + chunk], p1[lo:lo + chunk], hard[lo:lo + chunk]
-        nominal = _nominal_rows(a, b, every=4)  # every fourth sample of the nominal path: (c, 26, 6)
-        m = nominal.shape[1]
-        at_half = limits(nominal.reshape(-1, 6), np.full(len(a) * m, 0.5)).reshape(-1, m)
-        # a failure found on these samples is a real one; none found: not hard enough
-        idx = np.flatnonzero(~(h & at_half.all(axis=1)))
-        # some split keeps the legs within limits at each sample (necessary for a plan) ...
-        table = _some_split(nominal[idx].reshape(-1, 6), limits, at_half[idx].ravel()).reshape(len(idx), m)
-        idx = idx[table.all(axis=1)]
-        # ... and eq 14 in full holds at P0 (Delta = 0.5) and at P1 for some split
-        idx = idx[free(a[idx], np.full(len(idx), 0.5))]
-        out[lo + idx[_some_split(b[idx], free)]] = True
-    return out
-
-
-def hybrid_random_scenarios(rngs: list[np.random.Generator],
-                            geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, hard_share: float = 0.5,
-                            max_tries: int = 2000) -> list[HybridScenario]:
-    """One seeded pair of poses per generator: P0 singularity-free within
-    limits at the starting split Delta = 0.5, P1 at some Delta; x, y in
-    +-100 mm, z in 0-120 mm, roll and pitch in +-0.3 rad, yaw in +-0.4 rad.
-    With probability ``hard_share`` the pair is drawn again until its nominal
-    path at Delta = 0.5 meets a singularity or a leg limit (of unbiased pairs
-    about a quarter do), so that doing nothing does not solve the env. At
-    every fourth pose of the nominal path some split must keep the legs within
-    limits, and P0 and P1 must pass eq 14 in full (necessary conditions for a
-    plan, cheap enough for every reset; the tests measure how often the
-    planner then succeeds: every time on 60 seeds).
-
-    Each generator draws what it would alone (whether hard, then candidate
-    pairs 16 at a time, the first that passes taken); the candidates of all
-    generators are screened and checked together."""
-    low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
-    high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
-    batch = 16
-    hard = np.array([rng.random() < hard_share for rng in rngs], bool)
-    out: list[HybridScenario | None] = [None] * len(rngs)
-    pending = np.arange(len(rngs))
-    for _ in range(max(1, max_tries // batch)):
-        if not pending.size:
-            break
-        draws = [(rngs[i].uniform(low, high, (batch, 6)), rngs[i].uniform(low, high, (batch, 6))) for i in pending]
-        p0 = np.array([d[0] for d in draws]).reshape(-1, 6)
-        p1 = np.array([d[1] for d in draws]).reshape(-1, 6)
-        # screen every candidate with the leg limits alone (cheap), then check the survivors fully
-        screened = hybrid.within_limits(p0, 0.5, geometry)
-        screened[screened] = _some_split(p1[screened], lambda p, d: hybrid.within_limits(p, d, geometry))
-        screened = screened.reshape(len(pending), batch)
-        # the screened candidates in each generator's order: the first of every generator, then the
-        # second of those not yet served, ... (as one generator alone tries them, one by one)
-        order = np.argsort(~screened, axis=1, kind="stable")
-        waiting = np.arange(len(pending))
-        for rank in range(batch):
-            waiting = waiting[screened[waiting, order[waiting, rank]]]
-            if not waiting.size:
-                break
-            k = waiting * batch + order[waiting, rank]
-            good = _candidates_pass(p0[k], p1[k], hard[pending[waiting]], geometry)
-            for r, kk in zip(waiting[good], k[good], strict=True):
-                out[pending[r]] = HybridScenario("random", tuple(map(float, p0[kk])), tuple(map(float, p1[kk])),
-                                                 geometry)
-            waiting = waiting[~good]
-        pending = np.array([i for i in pending if out[i] is None], np.int64)
-    if pending.size:
-        raise RuntimeError(f"no reachable pair of poses in {max_tries} tries")
-    return out  # type: ignore[return-value]
-
-
-def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
-                           hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
-    """:func:`hybrid_random_scenarios` for one generator."""
-    return hybrid_random_scenarios([rng], geometry, hard_share, max_tries)[0]
-
-
-@lru_cache(maxsize=4)
-def _path_shape(tau: float = 0.01) -> np.ndarray:
-    """s(u) of the nominal path at its samples (``nominal_path(0, 1, tau)``), read-only."""
-    s = nominal_path(np.zeros(1), np.ones(1), tau)[1][:, 0]
-    s.setflags(write=False)
-    return s
-
-
-def _nominal_rows(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01, every: int = 1) -> np.ndarray:
-    """:func:`nominal_path` for pairs (M, 6) at once, every ``every``-th sample: (M, K, 6)."""
-    s = _path_shape(tau)[::every]
-    return p0[:, None] + (p1 - p0)[:, None] * s[None, :, None]
-
-
-def resolve_hybrid(choice: Any) -> str | HybridScenario:
-    """The scenario argument checked at the boundary (single and vector env
-    alike): "paper", "random", or a HybridScenario whose start is in the
-    workspace at Delta = 0.5 and whose goal some split Delta reaches
-    singularity-free within the leg limits (finite poses, angles within
-    +-pi/2). Anything else is a ValueError or TypeError naming ``scenario``."""
-    if isinstance(choice, str):
-        if choice not in ("paper", "random"):
-            raise ValueError(f"scenario must be 'paper', 'random' or a HybridScenario; got {choice!r}")
-        return choice
-    if not isinstance(choice, HybridScenario):
-        raise TypeError(f"scenario must be 'paper', 'random' or a HybridScenario; got {choice!r}")
-    try:
-        p0 = hybrid.check_pose(np.array(choice.p0, dtype=float), "scenario.p0")
-        p1 = hybrid.check_pose(np.array(choice.p1, dtype=float), "scenario.p1")
-    except (TypeError, ValueError) as exc:
-        raise ValueError(str(exc)) from None
-    if not hybrid.solve(p0, 0.5, choice.geometry).free[0]:
-        raise ValueError("scenario.p0 is outside the workspace: at Delta = 0.5 a leg is out of "
-                         "[226.11, 326.11] mm or a stage is singular")
-    splits = np.linspace(0, 1, 21)
-    if not hybrid.solve(np.repeat(p1, 21, 0), splits, choice.geometry).free.any():
-        raise ValueError("scenario.p1 is outside the workspace: no split Delta keeps it singularity-free "
-                         "within the leg limits")
-    return choice
 
 
 class HybridSingularityFreeEnv(ParagymEnv):
@@ -382,7 +214,7 @@ class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
             self._scenarios[i] = scenario
         p0 = np.array([sc.p0 for sc in scenarios])
         p1 = np.array([sc.p1 for sc in scenarios])
-        self._nominal[rows] = _nominal_rows(p0, p1, e.tau)
+        self._nominal[rows] = nominal_rows(p0, p1, e.tau)
         self._k[rows] = 0
         self._delta[rows], self._d_delta[rows] = 0.5, 0.0
         self._offset[rows] = 0.0

@@ -11,50 +11,13 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
-from paragym.sim.tripod_drive import DriveScenario, Terrain, TripodDrive, validate_drive_scenario
+from paragym.sim.tripod_drive import TripodDrive
+from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenario, resolve_drive
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
-SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
 OBS_SIZE = 9 + 3 + 3 + 6
 POS_SCALE = 10.0  # m per observation unit
-
-
-def drive_scenario(name: str, rng: np.random.Generator) -> DriveScenario:
-    """The paper's named drives (section 4) and seeded random mixtures."""
-    if name == "initial_heading":  # a 2 deg initial heading error on one unit; 20 m at 0.66 m/s
-        return DriveScenario(name, heading_error=(math.radians(2.0), 0.0, 0.0))
-    if name == "push":  # unit 1 pushed 2.5 cm toward the centre at t = 15 s
-        return DriveScenario(name, push=(0, 15.0, 0.025))
-    if name == "random_slip":  # random odometric errors up to 1 cm/s on all three units at once
-        return DriveScenario(name, slip=0.01)
-    if name == "rough_terrain":  # bumps and holes on the way
-        bumps = tuple((float(x), float(y), float(h), 0.4) for x, y, h in
-                      zip(np.linspace(2, 18, 8), rng.uniform(-1.5, 1.5, 8), rng.choice([-1, 1], 8) * 0.08,
-                          strict=True))
-        return DriveScenario(name, terrain=Terrain(bumps))
-    if name == "random":
-        errors = np.zeros(3)
-        errors[rng.integers(3)] = math.radians(rng.uniform(-2, 2))
-        push = (int(rng.integers(3)), float(rng.uniform(5, 25)), float(rng.uniform(0.01, 0.03))) \
-            if rng.random() < 0.5 else None
-        bumps = tuple((float(rng.uniform(2, 18)), float(rng.uniform(-2, 2)), float(rng.choice([-1, 1]) * 0.06), 0.4)
-                      for _ in range(int(rng.integers(0, 5))))
-        return DriveScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
-                             push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
-    raise ValueError(f"scenario must be one of {SCENARIOS}; got {name!r}")
-
-
-def resolve_drive(choice: Any) -> str | DriveScenario:
-    """The scenario argument checked at the boundary (single and vector env
-    alike): a name of :data:`SCENARIOS` or a valid :class:`DriveScenario`."""
-    if isinstance(choice, str):
-        if choice not in SCENARIOS:
-            raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
-        return choice
-    if not isinstance(choice, DriveScenario):
-        raise TypeError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {choice!r}")
-    return validate_drive_scenario(choice)
 
 
 class MobileTripodOdometryEnv(ParagymEnv):
@@ -102,15 +65,17 @@ class MobileTripodOdometryEnv(ParagymEnv):
       Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
-      before runs the same (tested against recorded rollouts).
+      before runs the same (tested against recorded rollouts). Since paragym
+      0.3.0 the native vector env runs every drive the single env runs (it
+      refused drives of more than 8 terrain bumps, or longer than its first).
     """
 
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
                  success_error: float = 0.05, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY) -> None:
         super().__init__(render_mode)
-        if isinstance(scenario, str) and scenario not in SCENARIOS:
-            raise ValueError(f"scenario must be one of {SCENARIOS} or a DriveScenario; got {scenario!r}")
+        if isinstance(scenario, str):  # a custom drive is checked at reset, as before
+            resolve_drive(scenario)
         if not (np.isfinite(encoder_noise) and encoder_noise >= 0):
             raise ValueError(f"encoder_noise must be >= 0 rad; got {encoder_noise!r}")
         self.scenario_arg, self.geometry = scenario, geometry
@@ -119,8 +84,7 @@ class MobileTripodOdometryEnv(ParagymEnv):
         self.observation_space = spaces.Box(-100.0, 100.0, (OBS_SIZE,), np.float32)
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        choice = resolve_drive(options.get("scenario", self.scenario_arg))
-        scenario = drive_scenario(choice, self.np_random) if isinstance(choice, str) else choice
+        scenario = draw_drive(options.get("scenario", self.scenario_arg), self.np_random)
         self.scenario = scenario
         self.drive = TripodDrive(scenario, self.np_random, self.geometry, encoder_noise=self.encoder_noise)
         self._estimate = self.drive.odometry.copy()
@@ -193,7 +157,7 @@ class MobileTripodOdometryEnv(ParagymEnv):
         self._close_render_scene()
 
 
-MAX_BUMPS = 8  # the most bumps a built-in scenario has (rough_terrain)
+MAX_BUMPS = 8  # the bump arrays' first size: the most a built-in scenario has (rough_terrain); they grow
 
 
 class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
@@ -228,26 +192,35 @@ class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
         self._slip_angle: np.ndarray | None = None
         self._slip_speed: np.ndarray | None = None
 
+    def _make_room(self, samples: int, bumps: int) -> None:
+        """Grow the per-robot arrays of noise samples and terrain bumps to hold
+        a drive of ``samples`` samples over ``bumps`` bumps (any drive the
+        single env runs runs here: the arrays are as long as the longest)."""
+        if self._noise is None or samples > self._noise.shape[1]:
+            old = self._noise
+            self._noise = np.zeros((self.num_envs, samples, 3))
+            grown = [np.zeros_like(self._noise), np.zeros_like(self._noise)]
+            if old is not None:
+                for new, was in zip((self._noise, *grown), (old, self._slip_angle, self._slip_speed), strict=True):
+                    new[:, :was.shape[1]] = was
+            self._slip_angle, self._slip_speed = grown
+            # views with one row per (robot, sample), for gathers by flat index
+            self._noise_rows, self._slip_angle_rows, self._slip_speed_rows = (
+                arr.reshape(-1, 3) for arr in (self._noise, self._slip_angle, self._slip_speed))
+        if bumps > self._bumps.shape[1]:
+            extra = bumps - self._bumps.shape[1]
+            self._bumps = np.pad(self._bumps, ((0, 0), (0, extra), (0, 0)))
+            self._bump_height = np.pad(self._bump_height, ((0, 0), (0, extra)))
+            self._bump_width = np.pad(self._bump_width, ((0, 0), (0, extra)), constant_values=1.0)
+
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
         e = self.single_env
         choice = resolve_drive(options.get("scenario", e.scenario_arg))
-        if isinstance(choice, DriveScenario) and len(choice.terrain.bumps) > MAX_BUMPS:
-            raise ValueError(f"the vector env takes at most {MAX_BUMPS} terrain bumps; got {len(choice.terrain.bumps)}")
         for i in rows:
-            sc = drive_scenario(choice, self._rngs[i]) if isinstance(choice, str) else choice
-            if len(sc.terrain.bumps) > MAX_BUMPS:
-                raise ValueError(f"the vector env takes at most {MAX_BUMPS} terrain bumps; got {len(sc.terrain.bumps)}")
+            sc = draw_drive(choice, self._rngs[i])
             drive = TripodDrive(sc, self._rngs[i], self.geometry, encoder_noise=e.encoder_noise)
-            if self._noise is None:  # the first drive sets the length of the noise arrays
-                self._dt = drive.dt
-                self._noise = np.zeros((self.num_envs, drive.steps + 1, 3))
-                self._slip_angle, self._slip_speed = np.zeros_like(self._noise), np.zeros_like(self._noise)
-                # views with one row per (robot, sample), for gathers by flat index
-                self._noise_rows, self._slip_angle_rows, self._slip_speed_rows = (
-                    arr.reshape(-1, 3) for arr in (self._noise, self._slip_angle, self._slip_speed))
-            if drive.steps + 1 != self._noise.shape[1] or drive.dt != self._dt:
-                raise ValueError(f"every drive must have {self._noise.shape[1]} samples at {1 / self._dt:g} Hz; "
-                                 f"got {drive.steps + 1} at {1 / drive.dt:g} Hz")
+            self._make_room(drive.steps + 1, len(sc.terrain.bumps))
+            self._dt = drive.dt  # the rate every drive samples at (TripodDrive's default, 20 Hz)
             self._drives[i] = drive
             self._steps[i], self._k[i], self._t[i] = drive.steps, 0, drive.t
             self._speed[i], self._heading[i], self._heading_error[i] = sc.speed, sc.heading, sc.heading_error

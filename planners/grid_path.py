@@ -18,10 +18,10 @@ from scipy import ndimage
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from paragym.envs.capaman_scenarios import TOUR, CaPaManScenario
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.sim import occupancy
+from paragym.tasks.capaman import TOUR, CaPaManScenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG
 

@@ -26,38 +26,10 @@ import numpy as np
 
 from paragym.mechanisms import orthoglide as og
 from paragym.planners.base import PlanningError
+from paragym.tasks.orthoglide import Task, paper_task
 
 __all__ = ["CaseResult", "GradientPolicy", "Task", "case_fixed_table", "case_gradient", "case_least_norm",
            "paper_task", "pointwise_optimum"]
-
-
-@dataclass(frozen=True)
-class Task:
-    """A path in the table frame: times (K,) s, points (K, 2) m, velocities (K, 2) m/s."""
-
-    name: str
-    t: np.ndarray
-    points: np.ndarray
-    velocities: np.ndarray
-
-
-def circle_task(centre: tuple[float, float], radius: float, duration: float = 10.0, start: float = 0.0,
-                steps: int = 1000, name: str = "circle") -> Task:
-    """A circle run once counter-clockwise from angle ``start`` (rad) in ``duration`` s."""
-    t = np.linspace(0.0, duration, steps + 1)
-    w = 2 * np.pi / duration
-    ang = start + w * t
-    pts = np.asarray(centre) + radius * np.stack([np.cos(ang), np.sin(ang)], 1)
-    vel = radius * w * np.stack([-np.sin(ang), np.cos(ang)], 1)
-    return Task(name, t, pts, vel)
-
-
-def paper_task() -> Task:
-    """Paper 003, section 6: a 0.8 m circle centred at (0.1, 0.55) m in the
-    table frame, in 10 s. The paper does not say where the circle starts; it
-    starts here where the fixed table's worst kappa falls near t = 2.2 s, as
-    in the paper's Fig 11 (angle 5.70 rad)."""
-    return circle_task((0.1, 0.55), 0.4, 10.0, start=np.pi + 2 * np.pi * 0.407, name="paper")
 
 
 @dataclass(frozen=True)

@@ -43,11 +43,11 @@ from typing import Any
 import numpy as np
 from scipy import ndimage
 
-from paragym.envs.capaman_scenarios import CaPaManScenario, validate_scenario
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
+from paragym.tasks.capaman import CaPaManScenario, validate_scenario
 from paragym.trajectories import JointPath, JointTrajectory
 from paragym.units import DEG
 

@@ -2,8 +2,8 @@
 
 import pytest
 
-from paragym.envs.capaman_scenarios import paper_scenario
 from paragym.planners import RrtGaPlanner
+from paragym.tasks.capaman import paper_scenario
 
 
 @pytest.fixture(scope="session")

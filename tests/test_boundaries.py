@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 import paragym
-from paragym.envs.hybrid import HybridScenario
-from paragym.planners.nullspace_gradient import Task
-from paragym.sim.tripod_drive import DriveScenario, Terrain
+from paragym.sim.tripod_drive import Terrain
+from paragym.tasks.hybrid import HybridScenario
+from paragym.tasks.mobile_tripod import DriveScenario
+from paragym.tasks.orthoglide import Task
 
 IDS = sorted(paragym.ENVIRONMENTS)
 HYBRID, ORTHO, TRIPOD = ("paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",

@@ -11,12 +11,12 @@ from gymnasium.utils.passive_env_checker import env_render_passive_checker
 
 import paragym
 from paragym.envs import CaPaManScenario
-from paragym.envs.capaman_scenarios import paper_scenario
 from paragym.mechanisms import capaman
 from paragym.planners import GridPathPolicy
 from paragym.rollout import run_episode
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Cylinder
+from paragym.tasks.capaman import paper_scenario
 
 ENV_ID = "paragym/CaPaManCollisionFree-v0"
 PARAGYM_IDS = sorted(i for i in gym.registry if i.startswith("paragym/"))
@@ -151,7 +151,7 @@ def test_bad_arguments_are_refused():
     with pytest.raises(ValueError, match="render_mode"), pytest.warns(UserWarning, match="render_mode"):
         gym.make(ENV_ID, render_mode="ascii")
     env = gym.make(ENV_ID)
-    with pytest.raises(ValueError, match="scenario must be"):
+    with pytest.raises(TypeError, match="scenario must be"):  # a wrong type: TypeError, as in every env
         env.reset(options={"scenario": 42})
 
 

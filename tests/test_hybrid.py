@@ -8,11 +8,11 @@ from hypothesis import strategies as st
 
 import paragym  # noqa: F401
 from paragym.baselines import ZeroPolicy
-from paragym.envs.hybrid import HybridScenario, hybrid_paper_scenario
 from paragym.mechanisms import hybrid
 from paragym.planners import PlanningError
 from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
 from paragym.rollout import run_episode
+from paragym.tasks.hybrid import HybridScenario, hybrid_paper_scenario
 from paragym.trajectories import nominal_path
 
 G = hybrid.DEFAULT_GEOMETRY
@@ -196,7 +196,7 @@ def test_the_measures_are_the_smallest_singular_values():
 
 
 def test_random_scenarios_in_a_batch_equal_one_at_a_time():
-    from paragym.envs.hybrid import hybrid_random_scenario, hybrid_random_scenarios
+    from paragym.tasks.hybrid import hybrid_random_scenario, hybrid_random_scenarios
 
     together = hybrid_random_scenarios([np.random.default_rng(s) for s in range(24)])
     alone = [hybrid_random_scenario(np.random.default_rng(s)) for s in range(24)]

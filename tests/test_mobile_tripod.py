@@ -60,7 +60,8 @@ def test_the_90_ft_example():
     believes it (the paper: about 1.5 ft), whatever the direction of the drive (two tried); the
     plate's yaw error depends on the legs' angle, which the paper does not give: 3.6 deg with the
     legs starting at 40 deg and the drive along x (the paper: 2.62 deg)."""
-    from paragym.sim.tripod_drive import DriveScenario, TripodDrive
+    from paragym.sim.tripod_drive import TripodDrive
+    from paragym.tasks.mobile_tripod import DriveScenario
 
     for heading in (0.0, math.radians(60)):
         sc = DriveScenario("90 ft", distance=90 * mt.FOOT, heading=heading,

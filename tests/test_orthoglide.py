@@ -102,8 +102,8 @@ def test_float_path_equals_batched():
 
 
 def test_task_generation_in_batches_equals_one_at_a_time():
-    from paragym.envs.orthoglide import orthoglide_random_task, orthoglide_random_tasks, servable, start_table_position
     from paragym.planners import nullspace_gradient as ng
+    from paragym.tasks.orthoglide import orthoglide_random_task, orthoglide_random_tasks, servable, start_table_position
 
     together = orthoglide_random_tasks([np.random.default_rng(s) for s in range(12)])
     for s, task in enumerate(together):

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from paragym.envs.capaman_scenarios import CaPaManScenario, paper_scenario
 from paragym.planners import GridPathPlanner, PlanningError, Policy
 from paragym.planners.grid_path import GridPathPolicy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box
+from paragym.tasks.capaman import CaPaManScenario, paper_scenario
 
 
 def test_paper_plan_visits_the_task_points_in_order_without_collision():

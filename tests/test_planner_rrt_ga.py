@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 import paragym  # noqa: F401
-from paragym.envs.capaman_scenarios import CaPaManScenario, paper_scenario
 from paragym.mechanisms import capaman
 from paragym.planners import PlanningError, RrtGaPlanner, RrtGaPolicy, RrtGaSettings
 from paragym.planners.rrt_ga import fitness
 from paragym.rollout import run_episode
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder
+from paragym.tasks.capaman import CaPaManScenario, paper_scenario
 from paragym.trajectories import JointPath, JointTrajectory
 
 DEG = np.pi / 180

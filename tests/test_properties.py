@@ -16,9 +16,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import paragym
-from paragym.envs.hybrid import HybridScenario
-from paragym.planners.nullspace_gradient import Task, circle_task
-from paragym.sim.tripod_drive import DriveScenario, Terrain
+from paragym.sim.tripod_drive import Terrain
+from paragym.tasks.hybrid import HybridScenario
+from paragym.tasks.mobile_tripod import DriveScenario
+from paragym.tasks.orthoglide import Task, circle_task
 
 IDS = sorted(paragym.ENVIRONMENTS)
 SCENARIOS = {

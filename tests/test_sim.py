@@ -9,12 +9,12 @@ import pybullet as pb
 import pytest
 
 import paragym  # noqa: F401  (registers the envs)
-from paragym.envs.capaman_scenarios import paper_scenario, random_scenario
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box
+from paragym.tasks.capaman import paper_scenario, random_scenario
 
 G = capaman.DEFAULT_GEOMETRY
 
@@ -139,7 +139,7 @@ def _signed_distances_directly(obstacles, resolution=0.005, cap=0.05, unit=0.000
 
 @pytest.mark.parametrize("seed", range(6))
 def test_signed_distances_equal_the_plain_computation_and_hold_the_cap_on_the_border(seed):
-    from paragym.envs.capaman_scenarios import _random_obstacles
+    from paragym.tasks.capaman import _random_obstacles
 
     obstacles = _random_obstacles(np.random.default_rng(seed))
     rasterised, occ, expected = _signed_distances_directly(obstacles)

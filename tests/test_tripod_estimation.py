@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 import paragym  # noqa: F401
-from paragym.envs.mobile_tripod import drive_scenario
 from paragym.planners.encoder_correction import (
     EncoderCorrection,
     EstimatorPolicy,
@@ -16,6 +15,7 @@ from paragym.planners.encoder_correction import (
 )
 from paragym.rollout import run_episode
 from paragym.sim.tripod_drive import TripodDrive
+from paragym.tasks.mobile_tripod import drive_scenario
 
 
 def _final_error(scenario_name: str, kind: type, seed: int = 0) -> tuple[float, list]:

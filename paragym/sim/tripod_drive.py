@@ -19,7 +19,7 @@ it as a heightfield with the robot (:class:`TripodScene`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from functools import cached_property, lru_cache
 from typing import Any
 
@@ -27,7 +27,7 @@ import numpy as np
 
 from paragym.mechanisms import mobile_tripod as mt
 
-__all__ = ["DriveScenario", "Terrain", "TripodDrive", "validate_drive_scenario"]
+__all__ = ["Terrain", "TripodDrive"]
 
 
 @dataclass(frozen=True)
@@ -68,88 +68,6 @@ class Terrain:
         return (both[0] - both[1]) / (2 * h)
 
 
-@dataclass(frozen=True)
-class DriveScenario:
-    """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
-
-    ``heading_error`` (3,) rad: each unit's true heading minus the one it
-    believes; ``push`` (unit, time s, inward distance m) or None;
-    ``slip`` m/s: the largest random slip velocity of each unit per sample
-    (uniform in [0, slip] in a random direction); ``terrain``.
-    """
-
-    name: str
-    speed: float = 0.66
-    heading: float = 0.0
-    distance: float = 20.0
-    heading_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    push: tuple[int, float, float] | None = None
-    slip: float = 0.0
-    terrain: Terrain = field(default_factory=Terrain)
-    seed: int | None = None
-
-    @property
-    def duration(self) -> float:
-        return self.distance / self.speed
-
-
-def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt: float = 0.05) -> DriveScenario:
-    """Refuse (ValueError/TypeError naming the field) a drive that could not be
-    simulated: non-finite or non-positive speed or distance, a drive shorter
-    than one sample, heading errors that are not three finite angles within
-    +-90 deg, a push on a unit other than 0, 1, 2 or at a time outside the
-    drive, a negative or non-finite slip, terrain bumps that are not
-    (x, y, height, radius) with a radius of at least 1 mm (a thinner one
-    underflows the Gaussian) and a height within +-0.5 m."""
-    if not isinstance(scenario, DriveScenario):
-        raise TypeError(f"{name} must be a DriveScenario; got {type(scenario).__name__}")
-
-    def real(value: Any, what: str) -> float:
-        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-            raise TypeError(f"{name}.{what} must be a real number; got {value!r}")
-        if not np.isfinite(value):
-            raise ValueError(f"{name}.{what} must be finite; got {value!r}")
-        return float(value)
-
-    if real(scenario.speed, "speed") <= 0:
-        raise ValueError(f"{name}.speed must be > 0 m/s; got {scenario.speed!r}")
-    if real(scenario.distance, "distance") <= 0:
-        raise ValueError(f"{name}.distance must be > 0 m; got {scenario.distance!r}")
-    if scenario.distance / scenario.speed < dt:
-        raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, less than one sample ({dt} s)")
-    real(scenario.heading, "heading")
-    errors = np.asarray(scenario.heading_error, dtype=object)
-    if errors.shape != (3,):
-        raise ValueError(f"{name}.heading_error must be three angles (rad); got {scenario.heading_error!r}")
-    for k, value in enumerate(errors):
-        if abs(real(value, f"heading_error[{k}]")) > np.pi / 2:
-            raise ValueError(f"{name}.heading_error[{k}] must lie within +-pi/2 rad; got {value!r}")
-    if scenario.push is not None:
-        if not isinstance(scenario.push, tuple | list) or len(scenario.push) != 3:
-            raise ValueError(f"{name}.push must be (unit, time s, inward distance m) or None; got {scenario.push!r}")
-        unit, when, how_far = scenario.push
-        if isinstance(unit, bool) or not isinstance(unit, int | np.integer) or unit not in (0, 1, 2):
-            raise ValueError(f"{name}.push unit must be 0, 1 or 2; got {unit!r}")
-        if not 0 <= real(when, "push time") <= scenario.duration:
-            raise ValueError(f"{name}.push time must lie within the drive, 0-{scenario.duration:.3g} s; got {when!r}")
-        if abs(real(how_far, "push distance")) > 1.0:
-            raise ValueError(f"{name}.push distance must be within +-1 m; got {how_far!r}")
-    if real(scenario.slip, "slip") < 0:
-        raise ValueError(f"{name}.slip must be >= 0 m/s; got {scenario.slip!r}")
-    if not isinstance(scenario.terrain, Terrain):
-        raise TypeError(f"{name}.terrain must be a Terrain; got {type(scenario.terrain).__name__}")
-    for k, bump in enumerate(scenario.terrain.bumps):
-        if len(bump) != 4:
-            raise ValueError(f"{name}.terrain.bumps[{k}] must be (x, y, height, radius); got {bump!r}")
-        for j, what in enumerate(("x", "y", "height", "radius")):
-            real(bump[j], f"terrain.bumps[{k}].{what}")
-        if not bump[3] >= 1e-3:
-            raise ValueError(f"{name}.terrain.bumps[{k}] radius must be at least 1 mm; got {bump[3]!r}")
-        if not abs(bump[2]) <= 0.5:
-            raise ValueError(f"{name}.terrain.bumps[{k}] height must lie within +-0.5 m; got {bump[2]!r}")
-    return scenario
-
-
 @lru_cache(maxsize=16)
 def _start(geometry: mt.TripodGeometry, eta0: float) -> tuple[np.ndarray, np.ndarray]:
     """Leg angles (3,) and unit positions (3, 3) of a tripod at rest on flat
@@ -175,7 +93,7 @@ class TripodDrive:
         rate: sampling rate (Hz; paper: 20).
     """
 
-    def __init__(self, scenario: DriveScenario, rng: np.random.Generator,
+    def __init__(self, scenario: Any, rng: np.random.Generator,
                  geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY, eta0: float = math.radians(40.0),
                  encoder_noise: float = math.radians(1.0), rate: float = 20.0) -> None:
         self.scenario, self.rng, self.geometry = scenario, rng, geometry

@@ -1,5 +1,7 @@
 """Scenarios of the CaPaMan collision-free task (paper 000, section 4).
 
+One module for the env, the vector env, the planners and the CLI.
+
 A scenario is the obstacles plus the task configurations T.C.1..3 (tool-tip
 positions) and their task points T.P.1..3 in the joint space (crank angles
 from the inverse kinematics). The tour is T.C.1 -> T.C.2 -> T.C.3 -> T.C.1.
@@ -21,6 +23,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from scipy import ndimage
@@ -29,10 +32,13 @@ from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder, Obstacle
+from paragym.tasks.base import resolve_scenario
 from paragym.units import DEG
 
-__all__ = ["CaPaManScenario", "paper_scenario", "random_scenario", "validate_scenario",
-           "MAX_OBSTACLES", "TOUR"]
+__all__ = ["CaPaManScenario", "draw_scenario", "paper_scenario", "random_scenario", "resolve_capaman",
+           "validate_scenario", "MAX_OBSTACLES", "SCENARIOS", "TOUR"]
+
+SCENARIOS = ("paper", "random")
 
 MAX_OBSTACLES = 3
 TOUR = (1, 2, 0)  # indices of the T.C.s visited after starting at T.C.1 (index 0)
@@ -96,8 +102,7 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene) -> None:
     """Raise ``ValueError`` if the scenario is malformed, a task point is out
     of range, or the manipulator collides at a task configuration
     (PyBullet's exact check). Leaves the scene's obstacles set."""
-    if not isinstance(scenario, CaPaManScenario):
-        raise ValueError(f"scenario must be 'paper', 'random' or a CaPaManScenario; got {scenario!r}")
+    resolve_scenario(scenario, (), CaPaManScenario)
     if not 1 <= len(scenario.obstacles) <= MAX_OBSTACLES:
         raise ValueError(f"a scenario has 1 to {MAX_OBSTACLES} obstacles; got {len(scenario.obstacles)}")
     alpha = capaman.check_joint_angles(scenario.alpha, scene.geometry, name="scenario.task_points")
@@ -108,7 +113,7 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene) -> None:
         scene.set_configuration(a)
         d, part = scene.clearance()
         if d <= 0.0:
-            raise ValueError(f"T.C.{i + 1} collides: the {part} is {-d * 1000:.1f} mm inside an obstacle")
+            raise ValueError(f"scenario T.C.{i + 1} collides: the {part} is {-d * 1000:.1f} mm inside an obstacle")
 
 
 def _random_obstacles(rng: np.random.Generator) -> list[Obstacle]:
@@ -170,3 +175,23 @@ def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
                 tips = capaman.tool_tip(capaman.forward(alpha, g, validate=False), g)
                 return CaPaManScenario("random", tuple(obstacles), _tuples(alpha), _tuples(tips))
     raise RuntimeError(f"no feasible random scenario in {max_tries} tries")
+
+
+def resolve_capaman(choice: Any) -> str | CaPaManScenario:
+    """The scenario argument's kind checked (:func:`paragym.tasks.base.resolve_scenario`):
+    "paper", "random" or a :class:`CaPaManScenario`. Whether a custom one
+    can run needs PyBullet: :func:`draw_scenario` checks it at reset."""
+    return resolve_scenario(choice, SCENARIOS, CaPaManScenario)
+
+
+def draw_scenario(choice: Any, rng: np.random.Generator, scene: CaPaManScene,
+                  clusters: occupancy.ClusterPoints | None = None) -> CaPaManScenario:
+    """An episode's scenario (single env, vector env and CLI alike): the
+    paper's, a random one drawn from ``rng``, or the custom one once
+    :func:`validate_scenario` accepts it. Leaves ``scene``'s obstacles set."""
+    choice = resolve_capaman(choice)
+    if choice == "random":
+        return random_scenario(rng, scene, clusters)
+    scenario = paper_scenario(scene.geometry) if choice == "paper" else choice
+    validate_scenario(scenario, scene)
+    return scenario

@@ -1,0 +1,32 @@
+"""What every task's scenario layer shares: resolving the ``scenario`` argument.
+
+An env, its vector env, a planner and the CLI all take a scenario as a name
+("paper", "random", ...) or as a custom scenario object; this one helper
+checks it, with one message for every task.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, TypeVar
+
+__all__ = ["resolve_scenario"]
+
+S = TypeVar("S")
+
+
+def resolve_scenario(choice: Any, names: tuple[str, ...], custom: type[S],
+                     validate: Callable[[S], Any] | None = None, name: str = "scenario") -> str | S:
+    """``choice`` if it is one of ``names`` or a ``custom`` object that
+    ``validate`` accepts (``validate`` raises ValueError/TypeError naming the
+    field that cannot run). An unknown name is a ValueError, any other type a
+    TypeError, both saying "<name> must be one of ... or a <Custom>"."""
+    if isinstance(choice, str) and choice in names:
+        return choice
+    if isinstance(choice, custom):
+        if validate is not None:
+            validate(choice)
+        return choice
+    error = ValueError if isinstance(choice, str) else TypeError
+    one_of = f"one of {', '.join(map(repr, names))} or " if names else ""
+    raise error(f"{name} must be {one_of}a {custom.__name__}; got {choice!r:.120}")

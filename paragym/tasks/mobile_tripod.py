@@ -1,0 +1,142 @@
+"""The mobile tripod's drives (paper 004, section 4): the paper's named disturbances and random mixtures.
+
+A :class:`DriveScenario` is the straight drive the tripod makes and what
+disturbs it. Used by the env, the vector env, the planner and the CLI alike.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from paragym.sim.tripod_drive import Terrain
+from paragym.tasks.base import resolve_scenario
+
+__all__ = ["SCENARIOS", "DriveScenario", "draw_drive", "drive_scenario", "resolve_drive", "validate_drive_scenario"]
+
+#: the paper's named drives (section 4) and seeded random mixtures
+SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
+
+
+@dataclass(frozen=True)
+class DriveScenario:
+    """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
+
+    ``heading_error`` (3,) rad: each unit's true heading minus the one it
+    believes; ``push`` (unit, time s, inward distance m) or None;
+    ``slip`` m/s: the largest random slip velocity of each unit per sample
+    (uniform in [0, slip] in a random direction); ``terrain``.
+    """
+
+    name: str
+    speed: float = 0.66
+    heading: float = 0.0
+    distance: float = 20.0
+    heading_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    push: tuple[int, float, float] | None = None
+    slip: float = 0.0
+    terrain: Terrain = field(default_factory=Terrain)
+    seed: int | None = None
+
+    @property
+    def duration(self) -> float:
+        return self.distance / self.speed
+
+
+def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt: float = 0.05) -> DriveScenario:
+    """Refuse (ValueError/TypeError naming the field) a drive that could not be
+    simulated: non-finite or non-positive speed or distance, a drive shorter
+    than one sample, heading errors that are not three finite angles within
+    +-90 deg, a push on a unit other than 0, 1, 2 or at a time outside the
+    drive, a negative or non-finite slip, terrain bumps that are not
+    (x, y, height, radius) with a radius of at least 1 mm (a thinner one
+    underflows the Gaussian) and a height within +-0.5 m."""
+    if not isinstance(scenario, DriveScenario):
+        raise TypeError(f"{name} must be a DriveScenario; got {type(scenario).__name__}")
+
+    def real(value: Any, what: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+            raise TypeError(f"{name}.{what} must be a real number; got {value!r}")
+        if not np.isfinite(value):
+            raise ValueError(f"{name}.{what} must be finite; got {value!r}")
+        return float(value)
+
+    if real(scenario.speed, "speed") <= 0:
+        raise ValueError(f"{name}.speed must be > 0 m/s; got {scenario.speed!r}")
+    if real(scenario.distance, "distance") <= 0:
+        raise ValueError(f"{name}.distance must be > 0 m; got {scenario.distance!r}")
+    if scenario.distance / scenario.speed < dt:
+        raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, less than one sample ({dt} s)")
+    real(scenario.heading, "heading")
+    errors = np.asarray(scenario.heading_error, dtype=object)
+    if errors.shape != (3,):
+        raise ValueError(f"{name}.heading_error must be three angles (rad); got {scenario.heading_error!r}")
+    for k, value in enumerate(errors):
+        if abs(real(value, f"heading_error[{k}]")) > np.pi / 2:
+            raise ValueError(f"{name}.heading_error[{k}] must lie within +-pi/2 rad; got {value!r}")
+    if scenario.push is not None:
+        if not isinstance(scenario.push, tuple | list) or len(scenario.push) != 3:
+            raise ValueError(f"{name}.push must be (unit, time s, inward distance m) or None; got {scenario.push!r}")
+        unit, when, how_far = scenario.push
+        if isinstance(unit, bool) or not isinstance(unit, int | np.integer) or unit not in (0, 1, 2):
+            raise ValueError(f"{name}.push unit must be 0, 1 or 2; got {unit!r}")
+        if not 0 <= real(when, "push time") <= scenario.duration:
+            raise ValueError(f"{name}.push time must lie within the drive, 0-{scenario.duration:.3g} s; got {when!r}")
+        if abs(real(how_far, "push distance")) > 1.0:
+            raise ValueError(f"{name}.push distance must be within +-1 m; got {how_far!r}")
+    if real(scenario.slip, "slip") < 0:
+        raise ValueError(f"{name}.slip must be >= 0 m/s; got {scenario.slip!r}")
+    if not isinstance(scenario.terrain, Terrain):
+        raise TypeError(f"{name}.terrain must be a Terrain; got {type(scenario.terrain).__name__}")
+    for k, bump in enumerate(scenario.terrain.bumps):
+        if len(bump) != 4:
+            raise ValueError(f"{name}.terrain.bumps[{k}] must be (x, y, height, radius); got {bump!r}")
+        for j, what in enumerate(("x", "y", "height", "radius")):
+            real(bump[j], f"terrain.bumps[{k}].{what}")
+        if not bump[3] >= 1e-3:
+            raise ValueError(f"{name}.terrain.bumps[{k}] radius must be at least 1 mm; got {bump[3]!r}")
+        if not abs(bump[2]) <= 0.5:
+            raise ValueError(f"{name}.terrain.bumps[{k}] height must lie within +-0.5 m; got {bump[2]!r}")
+    return scenario
+
+
+
+def drive_scenario(name: str, rng: np.random.Generator) -> DriveScenario:
+    """The paper's named drives (section 4) and seeded random mixtures."""
+    resolve_scenario(name, SCENARIOS, DriveScenario)  # an unknown name: the one message
+    if name == "initial_heading":  # a 2 deg initial heading error on one unit; 20 m at 0.66 m/s
+        return DriveScenario(name, heading_error=(math.radians(2.0), 0.0, 0.0))
+    if name == "push":  # unit 1 pushed 2.5 cm toward the centre at t = 15 s
+        return DriveScenario(name, push=(0, 15.0, 0.025))
+    if name == "random_slip":  # random odometric errors up to 1 cm/s on all three units at once
+        return DriveScenario(name, slip=0.01)
+    if name == "rough_terrain":  # bumps and holes on the way
+        bumps = tuple((float(x), float(y), float(h), 0.4) for x, y, h in
+                      zip(np.linspace(2, 18, 8), rng.uniform(-1.5, 1.5, 8), rng.choice([-1, 1], 8) * 0.08,
+                          strict=True))
+        return DriveScenario(name, terrain=Terrain(bumps))
+    # "random": a seeded mixture of every disturbance
+    errors = np.zeros(3)
+    errors[rng.integers(3)] = math.radians(rng.uniform(-2, 2))
+    push = (int(rng.integers(3)), float(rng.uniform(5, 25)), float(rng.uniform(0.01, 0.03))) \
+        if rng.random() < 0.5 else None
+    bumps = tuple((float(rng.uniform(2, 18)), float(rng.uniform(-2, 2)), float(rng.choice([-1, 1]) * 0.06), 0.4)
+                  for _ in range(int(rng.integers(0, 5))))
+    return DriveScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
+                         push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
+
+
+def resolve_drive(choice: Any) -> str | DriveScenario:
+    """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
+    a name of :data:`SCENARIOS` or a :class:`DriveScenario` that can run."""
+    return resolve_scenario(choice, SCENARIOS, DriveScenario, validate_drive_scenario)
+
+
+def draw_drive(choice: Any, rng: np.random.Generator) -> DriveScenario:
+    """An episode's drive (single env, vector env and CLI alike): a named or
+    random one drawn from ``rng``, or the custom one once checked."""
+    choice = resolve_drive(choice)
+    return drive_scenario(choice, rng) if isinstance(choice, str) else choice
