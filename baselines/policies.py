@@ -311,11 +311,11 @@ class FixedTablePolicy:
         k = min(info["step"], len(self.task.t) - 1)
         r1 = float(info["rho"][0])
         px, py = self.task.points[k]
-        j0, j1, kap, n = og.jacobian_one(r1, float(px), float(py), self.geometry)
-        rate = og.least_norm_one(j0, j1, *map(float, self.task.velocities[k]))
-        if abs(n[0]) < 1e-9:
+        j, _, n = og.jacobian_at(r1, px, py, self.geometry)
+        rate = og.least_norm(j, self.task.velocities[k])[0]
+        if abs(n[0, 0]) < 1e-9:
             return np.zeros(1, np.float32)
-        return np.array([np.clip(-rate[0] / (self.max_null_rate * n[0]), -1.0, 1.0)], np.float32)
+        return np.array([np.clip(-rate[0] / (self.max_null_rate * n[0, 0]), -1.0, 1.0)], np.float32)
 
 
 def _fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:

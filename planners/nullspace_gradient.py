@@ -90,12 +90,12 @@ def case_least_norm(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEO
         out[i] = rho[0]
         if i + 1 < len(task.t):
             dt = task.t[i + 1] - task.t[i]
-            j0, j1, _, _ = og.jacobian_one(r1, *task.points[i], geometry)
-            half = r1 + 0.5 * dt * og.least_norm_one(j0, j1, *task.velocities[i])[0]
+            j, _, _ = og.jacobian_at(r1, *task.points[i], geometry)
+            half = r1 + 0.5 * dt * og.least_norm(j, task.velocities[i])[0, 0]
             mid = 0.5 * (task.points[i] + task.points[i + 1])
             vmid = 0.5 * (task.velocities[i] + task.velocities[i + 1])
-            j0, j1, _, _ = og.jacobian_one(half, *mid, geometry)
-            r1 = r1 + dt * og.least_norm_one(j0, j1, *vmid)[0]
+            j, _, _ = og.jacobian_at(half, *mid, geometry)
+            r1 = r1 + dt * og.least_norm(j, vmid)[0, 0]
     return CaseResult("(b) least norm", task.t, out, og.kappa(out, geometry))
 
 

@@ -77,28 +77,27 @@ def test_singularities_and_bad_input():
         o.check_joints(np.array([np.nan, 0.5, 0.5]))
 
 
-def test_float_path_equals_batched():
+def test_the_point_and_the_joint_parametrisations_agree():
+    """J, kappa and n from the joints (planners) and from the table point (the
+    env, which knows the path point) are the same equations (one kernel,
+    :func:`o._j_of_links`) on links found two ways: equal to rounding."""
     rho, p = _configs(100, seed=3)
     _, _, j = o.jacobian(rho)
     k, n = o.kappa(rho), o.null_direction(rho)
-    for i in range(len(rho)):
-        r2, r3, ok = o.inverse_one(rho[i, 0], *p[i])
-        assert ok and r2 == pytest.approx(rho[i, 1], abs=1e-12) and r3 == pytest.approx(rho[i, 2], abs=1e-12)
-        j0, j1, kap, nn = o.jacobian_one(rho[i, 0], *p[i])
-        np.testing.assert_allclose([j0, j1], j[i], atol=1e-12)
-        assert kap == pytest.approx(k[i], rel=1e-10)
-        np.testing.assert_allclose(nn, n[i], atol=1e-10)
-        t = np.array([0.3, -0.2])
-        np.testing.assert_allclose(o.least_norm_one(j0, j1, *t), np.linalg.pinv(j[i]) @ t, atol=1e-10)
-    # the component-major path of the vector env: J (2, 3, N), kappa, n (3, N)
-    jr, kr, nr = o.jacobian_rows(rho[:, 0], p[:, 0], p[:, 1])
-    np.testing.assert_allclose(np.moveaxis(jr, -1, 0), j, atol=1e-12)
-    np.testing.assert_allclose(kr, k, rtol=1e-10)
-    np.testing.assert_allclose(nr.T, n, atol=1e-10)
-    np.testing.assert_allclose(o.kappa_rows(rho[:, 0], p[:, 0], p[:, 1]), kr, rtol=0)
+    r, ok = o.inverse(rho[:, 0], p)
+    assert ok.all()
+    np.testing.assert_allclose(r, rho, atol=1e-12)
+    jp, kp, np_ = o.jacobian_at(rho[:, 0], p[:, 0], p[:, 1])
+    np.testing.assert_allclose(jp, j, atol=1e-12)
+    np.testing.assert_allclose(kp, k, rtol=1e-10)
+    np.testing.assert_allclose(np_, n, atol=1e-10)
+    np.testing.assert_array_equal(o.kappa_at(rho[:, 0], p[:, 0], p[:, 1]), kp)
     t = np.array([0.3, -0.2])
-    np.testing.assert_allclose(o.least_norm_rows(jr, np.full(len(rho), t[0]), np.full(len(rho), t[1])).T,
-                               np.linalg.pinv(j) @ t, atol=1e-10)
+    np.testing.assert_allclose(o.least_norm(jp, t), np.linalg.pinv(j) @ t, atol=1e-10)
+    # one robot through the kernels equals the batch: the same code
+    one = o.jacobian_at(rho[7, 0], p[7, 0], p[7, 1])
+    np.testing.assert_array_equal(one[0][0], jp[7])
+    assert one[1][0] == kp[7]
 
 
 def test_task_generation_in_batches_equals_one_at_a_time():

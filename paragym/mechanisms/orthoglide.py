@@ -25,8 +25,12 @@ pointwise-optimal kappa of at most 1.108 (mean 1.063); the sliders' origins
 (-1.2 m on each axis) then keep rho2 and rho3 inside [0, 1.5] m for the
 three cases of the paper.
 
-SI units (m, rad). Batched functions take rho (N, 3) and table-frame points
-(N, 2); the ``*_one`` functions are the per-step path in Python floats.
+SI units (m, rad). Every function takes N configurations at once: joint
+values rho (N, 3), or a table position rho1 (N,) with table-frame points
+(N, 2). The equations are written once, as scalar kernels compiled by numba
+(``k_*``): the array functions here loop them over N, and the tasks' step
+kernels call them per robot, so that one robot and 4096 run the same code.
+:func:`kappa` also compiles for complex input (the complex-step gradient).
 """
 
 from __future__ import annotations
@@ -36,11 +40,12 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 from scipy.optimize import minimize
 
-__all__ = ["OrthoglideGeometry", "check_joints", "fixed_point", "forward", "inverse", "inverse_one",
-           "isotropic_point", "jacobian", "jacobian_one", "kappa", "kappa_gradient", "least_norm_one",
-           "null_direction", "singularity", "within_limits"]
+__all__ = ["OrthoglideGeometry", "check_joints", "fixed_point", "forward", "inverse", "isotropic_point",
+           "jacobian", "jacobian_at", "k_forward", "k_inverse", "k_jacobian", "k_least_norm", "kappa", "kappa_at",
+           "kappa_gradient", "least_norm", "null_direction", "params", "singularity", "within_limits"]
 
 
 @dataclass(frozen=True)
@@ -77,27 +82,20 @@ def check_joints(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETR
     return arr
 
 
+@lru_cache(maxsize=8)
+def params(geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The geometry as the kernels take it: [L, table origin x, y, d_x, d_y,
+    slider 2 origin, slider 3 origin] (read-only)."""
+    g = geometry
+    out = np.array([g.link, *g.table_origin, math.cos(g.theta1), math.sin(g.theta1), g.slider2_origin,
+                    g.slider3_origin])
+    out.setflags(write=False)
+    return out
+
+
 def fixed_point(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
     """C in the fixed frame (N, 2) for table positions rho1 (N,) and table-frame points p (N, 2)."""
     return np.asarray(geometry.table_origin) + np.asarray(rho1)[..., None] * geometry.direction + np.asarray(p)
-
-
-def inverse(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """rho (N, 3) putting C on table point p (N, 2) with the table at rho1 (N,),
-    in the working mode, and whether that is possible (N,). The working mode:
-    C to the right of A and above B, and det A = r4 x r5 > 0 (the branch of
-    the isotropic pose; det A = 0 is the parallel singularity between the
-    branches). Joint limits are checked apart, by :func:`within_limits`."""
-    g = geometry
-    c = fixed_point(rho1, p, g)
-    cx, cy = c[..., 0], c[..., 1]
-    sx, sy = np.sqrt(np.clip(g.link ** 2 - cy ** 2, 0, None)), np.sqrt(np.clip(g.link ** 2 - cx ** 2, 0, None))
-    # working mode: C right of A and above B (r4_x, r5_y > 0) with det A = r4 x r5 = sx sy - cy cx > 0
-    ok = (np.abs(cy) < g.link) & (np.abs(cx) < g.link) & (sx * sy - cy * cx > 0)
-    rho2 = cx - sx - g.slider2_origin
-    rho3 = cy - sy - g.slider3_origin
-    return np.stack([np.broadcast_to(rho1, rho2.shape), rho2, rho3], axis=-1), ok
 
 
 def within_limits(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
@@ -105,55 +103,208 @@ def within_limits(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMET
     return np.all((rho >= np.array(geometry.rho_min)) & (rho <= np.array(geometry.rho_max)), axis=-1)
 
 
-def _links(rho: np.ndarray, g: OrthoglideGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """C (N, 2) and unit link vectors r4, r5 (N, 2) from rho (working mode)."""
-    a = np.stack([g.slider2_origin + rho[..., 1], np.zeros_like(rho[..., 1])], -1)
-    b = np.stack([np.zeros_like(rho[..., 2]), g.slider3_origin + rho[..., 2]], -1)
-    m = 0.5 * (a + b)
-    half = b - a
-    dist = np.sqrt(half[..., 0] ** 2 + half[..., 1] ** 2)
-    h = np.sqrt(g.link ** 2 - (dist / 2) ** 2 + 0j) if np.iscomplexobj(rho) else \
-        np.sqrt(np.clip(g.link ** 2 - (dist / 2) ** 2, 0, None))
-    perp = np.stack([half[..., 1], -half[..., 0]], -1) / dist[..., None]
-    c = m + h[..., None] * perp
-    other = m - h[..., None] * perp
-    # the working mode: det A = r4 x r5 > 0 (see inverse)
-    u, v = c - a, c - b
-    mode = np.real(u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]) > 0
-    c = np.where(mode[..., None], c, other)
-    return c, (c - a) / g.link, (c - b) / g.link
+# --- the equations, once: scalar kernels (float, and complex where the complex step needs it) -------
+
+
+@njit(cache=True, error_model="numpy")
+def k_inverse(rho1: float, px: float, py: float, p: np.ndarray) -> tuple[float, float, bool]:
+    """Sliders (rho2, rho3) putting C on table point (px, py) with the table
+    at rho1, and whether that is the working mode: C right of A and above B
+    (r4_x, r5_y > 0) with det A = r4 x r5 = sx sy - cy cx > 0 (the branch of
+    the isotropic pose; det A = 0 is the parallel singularity between the
+    branches). NaN when C is out of the links' reach."""
+    link = p[0]
+    cx = p[1] + rho1 * p[3] + px
+    cy = p[2] + rho1 * p[4] + py
+    if not (abs(cx) < link and abs(cy) < link):
+        return math.nan, math.nan, False
+    sx, sy = math.sqrt(link * link - cy * cy), math.sqrt(link * link - cx * cx)
+    return cx - sx - p[5], cy - sy - p[6], sx * sy - cy * cx > 0
+
+
+@njit(cache=True, error_model="numpy")
+def _j_of_links(r4x, r4y, r5x, r5y, d0, d1):  # float or complex (numba compiles each)
+    """J = A^-1 B (eqs 1-6) from the unit link vectors r4, r5 and the table
+    direction d, written out: A = [r4; r5], B = [[-r4.d, r4x, 0], [-r5.d, 0, r5y]]."""
+    b00, b10 = -(r4x * d0 + r4y * d1), -(r5x * d0 + r5y * d1)
+    det = r4x * r5y - r4y * r5x
+    i00, i01, i10, i11 = r5y / det, -r4y / det, -r5x / det, r4x / det
+    return i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y, i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y
+
+
+@njit(cache=True, error_model="numpy")
+def _kappa_of(j0, j1, j2, j3, j4, j5):
+    """kappa(J) = sigma_max / sigma_min (eq 8) from J's rows (j0 j1 j2; j3 j4
+    j5): the eigenvalues of J J^T in closed form; inf where J J^T is singular."""
+    m00 = j0 * j0 + j1 * j1 + j2 * j2
+    m11 = j3 * j3 + j4 * j4 + j5 * j5
+    m01 = j0 * j3 + j1 * j4 + j2 * j5
+    half = 0.5 * (m00 + m11)
+    q = half * half - (m00 * m11 - m01 * m01)
+    if q.real < 0:
+        q = q - q  # a zero of q's type
+    disc = np.sqrt(q)
+    if (half - disc).real > 0:
+        return np.sqrt((half + disc) / (half - disc))
+    return (half - half) + math.inf
+
+
+@njit(cache=True, error_model="numpy")
+def _null_of(j0, j1, j2, j3, j4, j5):
+    """The unit null vector n = J's two rows crossed, oriented with n_1 >= 0
+    (the projector of eq 5 is I - J^+ J = n n^T)."""
+    n0, n1, n2 = j1 * j5 - j2 * j4, j2 * j3 - j0 * j5, j0 * j4 - j1 * j3
+    norm = np.sqrt(n0 * n0 + n1 * n1 + n2 * n2)
+    if n0.real < 0:
+        norm = -norm
+    return n0 / norm, n1 / norm, n2 / norm
+
+
+@njit(cache=True, error_model="numpy")
+def k_jacobian(rho1: float, px: float, py: float, p: np.ndarray):
+    """J's six entries (row-major), kappa and n's three at the tool on table
+    point (px, py) with the table at rho1 (working mode): the links from the
+    inverse solution, r4 = (sx, cy) / L and r5 = (cx, sy) / L."""
+    link = p[0]
+    cx = p[1] + rho1 * p[3] + px
+    cy = p[2] + rho1 * p[4] + py
+    sx, sy = math.sqrt(link * link - cy * cy), math.sqrt(link * link - cx * cx)
+    j0, j1, j2, j3, j4, j5 = _j_of_links(sx / link, cy / link, cx / link, sy / link, p[3], p[4])
+    n0, n1, n2 = _null_of(j0, j1, j2, j3, j4, j5)
+    return j0, j1, j2, j3, j4, j5, _kappa_of(j0, j1, j2, j3, j4, j5), n0, n1, n2
+
+
+@njit(cache=True, error_model="numpy")
+def k_least_norm(j0: float, j1: float, j2: float, j3: float, j4: float, j5: float, tx: float, ty: float
+                 ) -> tuple[float, float, float]:
+    """J^+ t_dot = J^T (J J^T)^-1 t_dot (eq 5's first term)."""
+    m00 = j0 * j0 + j1 * j1 + j2 * j2
+    m11 = j3 * j3 + j4 * j4 + j5 * j5
+    m01 = j0 * j3 + j1 * j4 + j2 * j5
+    det = m00 * m11 - m01 * m01
+    w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
+    return j0 * w0 + j3 * w1, j1 * w0 + j4 * w1, j2 * w0 + j5 * w1
+
+
+@njit(cache=True, error_model="numpy")
+def _links(rho1, rho2, rho3, p):
+    """C (fixed frame) and the unit links r4 = (C - A) / L, r5 = (C - B) / L
+    from the joints: the two circles of radius L about A = (s2 + rho2, 0) and
+    B = (0, s3 + rho3) meet in two points; the working mode's has det A > 0."""
+    link = p[0]
+    ax, by = p[5] + rho2, p[6] + rho3
+    mx, my = 0.5 * ax, 0.5 * by
+    hx, hy = -ax, by  # B - A
+    dist = np.sqrt(hx * hx + hy * hy)
+    q = link * link - (dist / 2) * (dist / 2)
+    if q.real < 0:
+        q = q - q
+    h = np.sqrt(q)
+    ux, uy = hy / dist, -hx / dist
+    cx, cy = mx + h * ux, my + h * uy
+    if ((cx - ax) * (cy - by) - cy * cx).real <= 0:  # (C - A) x (C - B) <= 0: the other intersection
+        cx, cy = mx - h * ux, my - h * uy
+    return cx, cy, (cx - ax) / link, cy / link, cx / link, (cy - by) / link
+
+
+@njit(cache=True, error_model="numpy")
+def k_forward(rho1: float, rho2: float, rho3: float, p: np.ndarray) -> tuple[float, float]:
+    """The tool point in the table frame from the joints."""
+    cx, cy, _, _, _, _ = _links(rho1, rho2, rho3, p)
+    return cx - (p[1] + rho1 * p[3]), cy - (p[2] + rho1 * p[4])
+
+
+# --- the array functions: the kernels looped over N ------------------------------------------
+
+
+@njit(cache=True, error_model="numpy")
+def _inverse_all(rho1, px, py, p, out, ok):
+    for i in range(len(rho1)):
+        out[i, 0] = rho1[i]
+        out[i, 1], out[i, 2], ok[i] = k_inverse(rho1[i], px[i], py[i], p)
+
+
+@njit(cache=True, error_model="numpy")
+def _at_point_all(rho1, px, py, p, j, kap, n):
+    for i in range(len(rho1)):
+        j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5], kap[i], n[i, 0], n[i, 1], n[i, 2] = \
+            k_jacobian(rho1[i], px[i], py[i], p)
+
+
+@njit(cache=True, error_model="numpy")
+def _kappa_at_all(rho1, px, py, p, kap):
+    for i in range(len(rho1)):
+        kap[i] = k_jacobian(rho1[i], px[i], py[i], p)[6]
+
+
+@njit(cache=True, error_model="numpy")
+def _at_joints_all(rho, p, links, j, kap, n):
+    """C, r4, r5 (N, 6), J (N, 6), kappa (N,) and n (N, 3) from joints (N, 3): float or complex."""
+    for i in range(rho.shape[0]):
+        cx, cy, r4x, r4y, r5x, r5y = _links(rho[i, 0], rho[i, 1], rho[i, 2], p)
+        links[i, 0], links[i, 1], links[i, 2], links[i, 3], links[i, 4], links[i, 5] = cx, cy, r4x, r4y, r5x, r5y
+        j0, j1, j2, j3, j4, j5 = _j_of_links(r4x, r4y, r5x, r5y, p[3], p[4])
+        j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5] = j0, j1, j2, j3, j4, j5
+        kap[i] = _kappa_of(j0, j1, j2, j3, j4, j5)
+        n[i, 0], n[i, 1], n[i, 2] = _null_of(j0, j1, j2, j3, j4, j5)
+
+
+@njit(cache=True, error_model="numpy")
+def _least_norm_all(j, t, out):
+    for i in range(j.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = k_least_norm(j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5],
+                                                       t[i, 0], t[i, 1])
+
+
+def _rows(*arrays: np.ndarray, dtype: type = float) -> list[np.ndarray]:
+    """The arguments as contiguous 1-D arrays of one length (broadcast)."""
+    return [np.ascontiguousarray(a, dtype) for a in np.broadcast_arrays(*(np.ravel(x) for x in arrays))]
+
+
+def _at_joints(rho: np.ndarray, g: OrthoglideGeometry) -> tuple[np.ndarray, ...]:
+    rho = np.ascontiguousarray(np.atleast_2d(rho))
+    kind = complex if np.iscomplexobj(rho) else float
+    rho = rho.astype(kind, copy=False)
+    n = len(rho)
+    links, j, kap, nv = np.empty((n, 6), kind), np.empty((n, 6), kind), np.empty(n, kind), np.empty((n, 3), kind)
+    with np.errstate(all="ignore"):
+        _at_joints_all(rho, params(g), links, j, kap, nv)
+    return links, j.reshape(n, 2, 3), kap, nv
+
+
+def inverse(rho1: np.ndarray, p: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """rho (N, 3) putting C on table points p (N, 2) with the table at rho1
+    (N,), in the working mode, and whether that is possible (N,) (NaN where
+    C is out of reach; :func:`k_inverse`). Joint limits are checked apart, by
+    :func:`within_limits`."""
+    pts = np.asarray(p, float).reshape(-1, 2)
+    r1, px, py = _rows(rho1, pts[:, 0], pts[:, 1])
+    out, ok = np.empty((len(r1), 3)), np.empty(len(r1), bool)
+    _inverse_all(r1, px, py, params(geometry), out, ok)
+    return out, ok
 
 
 def forward(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
     """The tool point in the table frame (N, 2) from rho (N, 3)."""
-    c, _, _ = _links(np.atleast_2d(rho), geometry)
-    return c - fixed_point(np.atleast_2d(rho)[:, 0], np.zeros(2), geometry)
+    links, _, _, _ = _at_joints(rho, geometry)
+    return links[:, :2] - fixed_point(np.atleast_2d(rho)[:, 0], np.zeros(2), geometry)
 
 
 def jacobian(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """A (N, 2, 2), B (N, 2, 3) and J = A^-1 B (N, 2, 3) at rho (N, 3) (eqs 1-3, 6)."""
-    rho = np.atleast_2d(rho)
-    _, r4, r5 = _links(rho, geometry)
+    links, j, _, _ = _at_joints(rho, geometry)
+    r4, r5 = links[:, 2:4], links[:, 4:6]
     d = geometry.direction
-    a = np.stack([r4, r5], axis=-2)
-    zero = np.zeros_like(r4[..., 0])
-    b = np.stack([np.stack([-(r4 @ d), r4[..., 0], zero], -1), np.stack([-(r5 @ d), zero, r5[..., 1]], -1)], -2)
-    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
-    a_inv = np.stack([np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)],
-                     -2) / det[..., None, None]
-    return a, b, a_inv @ b
+    zero = np.zeros(len(links))
+    b = np.stack([np.stack([-(r4 @ d), r4[:, 0], zero], -1), np.stack([-(r5 @ d), zero, r5[:, 1]], -1)], -2)
+    return np.stack([r4, r5], axis=-2), b, j
 
 
 def kappa(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """kappa(J) = sigma_max / sigma_min (eq 8) at rho (N, 3), from the
-    eigenvalues of J J^T in closed form (works on complex input, for the
-    complex-step derivative)."""
-    _, _, j = jacobian(rho, geometry)
-    m = j @ np.swapaxes(j, -1, -2)
-    tr, det = m[..., 0, 0] + m[..., 1, 1], m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
-    disc = np.sqrt((tr / 2) ** 2 - det + 0j) if np.iscomplexobj(m) else np.sqrt(np.clip((tr / 2) ** 2 - det, 0, None))
-    return np.sqrt((tr / 2 + disc) / (tr / 2 - disc))
+    """kappa(J) (eq 8) at rho (N, 3); complex input gives the complex step."""
+    return _at_joints(rho, geometry)[2]
 
 
 def kappa_gradient(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY, h: float = 1e-20
@@ -169,12 +320,39 @@ def kappa_gradient(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOME
 
 
 def null_direction(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """Unit vector n (N, 3) spanning the null space of J; the projector of
-    eq 5 is ``I - J^+ J = n n^T``. Oriented so that the table's rate n_1 >= 0."""
-    _, _, j = jacobian(rho, geometry)
-    n = np.cross(j[..., 0, :], j[..., 1, :])
-    n = n / np.linalg.norm(n, axis=-1, keepdims=True)
-    return n * np.where(n[..., :1] < 0, -1.0, 1.0)
+    """Unit vector n (N, 3) spanning the null space of J, n_1 >= 0; the
+    projector of eq 5 is ``I - J^+ J = n n^T``."""
+    return _at_joints(rho, geometry)[3]
+
+
+def jacobian_at(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """J (N, 2, 3), kappa (N,) and n (N, 3) for the tool on table points
+    (px, py) (N,) with the table at rho1 (N,) (:func:`k_jacobian`): the
+    env's parametrisation, where the path point is known."""
+    r1, x, y = _rows(rho1, px, py)
+    j, kap, n = np.empty((len(r1), 6)), np.empty(len(r1)), np.empty((len(r1), 3))
+    with np.errstate(all="ignore"):
+        _at_point_all(r1, x, y, params(geometry), j, kap, n)
+    return j.reshape(-1, 2, 3), kap, n
+
+
+def kappa_at(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
+             ) -> np.ndarray:
+    """The kappa of :func:`jacobian_at` alone (N,), for sweeps."""
+    r1, x, y = _rows(rho1, px, py)
+    kap = np.empty(len(r1))
+    _kappa_at_all(r1, x, y, params(geometry), kap)
+    return kap
+
+
+def least_norm(j: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """J^+ t_dot (N, 3) for J (N, 2, 3) and task rates t_dot (N, 2) (:func:`k_least_norm`)."""
+    jj = np.ascontiguousarray(np.reshape(j, (-1, 6)), float)
+    tt = np.ascontiguousarray(np.broadcast_to(np.reshape(t, (-1, 2)), (len(jj), 2)), float)
+    out = np.empty((len(jj), 3))
+    _least_norm_all(jj, tt, out)
+    return out
 
 
 def singularity(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY, tol: float = 1e-3
@@ -182,10 +360,9 @@ def singularity(rho: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
     """(parallel, serial) singularity flags (N,) (section 3.2): A singular when
     the links are parallel; B loses rank when r4 is orthogonal to the slider 2
     axis or r5 to the slider 3 axis."""
-    with np.errstate(divide="ignore", invalid="ignore"):  # J itself is undefined at the parallel singularity
-        a, _, _ = jacobian(rho, geometry)
-    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
-    return np.abs(det) < tol, (np.abs(a[..., 0, 0]) < tol) | (np.abs(a[..., 1, 1]) < tol)
+    links, _, _, _ = _at_joints(rho, geometry)
+    r4x, r4y, r5x, r5y = links[:, 2], links[:, 3], links[:, 4], links[:, 5]
+    return np.abs(r4x * r5y - r4y * r5x) < tol, (np.abs(r4x) < tol) | (np.abs(r5y) < tol)
 
 
 @lru_cache(maxsize=8)
@@ -216,142 +393,3 @@ def isotropic_point(geometry: OrthoglideGeometry = DEFAULT_GEOMETRY) -> tuple[fl
         raise ValueError("no isotropic pose in reach for this geometry")
     best = min(found, key=lambda c: float(np.hypot(*c)))  # the one nearest the fixed frame's origin
     return float(best[0]), float(best[1])
-
-
-# --- one configuration in Python floats: the environment's per-step path -----------------
-
-
-def inverse_one(rho1: float, px: float, py: float, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                ) -> tuple[float, float, bool]:
-    """:func:`inverse` for one point: (rho2, rho3, reachable)."""
-    g = geometry
-    d = _dir_one(g)
-    cx = g.table_origin[0] + rho1 * d[0] + px
-    cy = g.table_origin[1] + rho1 * d[1] + py
-    if abs(cx) >= g.link or abs(cy) >= g.link:
-        return math.nan, math.nan, False
-    sx, sy = math.sqrt(g.link ** 2 - cy * cy), math.sqrt(g.link ** 2 - cx * cx)
-    return cx - sx - g.slider2_origin, cy - sy - g.slider3_origin, sx * sy - cy * cx > 0
-
-
-@lru_cache(maxsize=8)
-def _dir_one(g: OrthoglideGeometry) -> tuple[float, float]:
-    return math.cos(g.theta1), math.sin(g.theta1)
-
-
-def jacobian_one(rho1: float, px: float, py: float, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                 ) -> tuple[list[float], list[float], float, list[float]]:
-    """J's two rows, kappa and the null direction n (n_1 >= 0) for the tool on
-    table point (px, py) with the table at rho1 (working mode), in floats.
-    The same equations as :func:`jacobian`, :func:`kappa`, :func:`null_direction`."""
-    g = geometry
-    d0, d1 = _dir_one(g)
-    cx = g.table_origin[0] + rho1 * d0 + px
-    cy = g.table_origin[1] + rho1 * d1 + py
-    sx, sy = math.sqrt(g.link ** 2 - cy * cy), math.sqrt(g.link ** 2 - cx * cx)
-    r4x, r4y = sx / g.link, cy / g.link  # C - A with A = (cx - sx, 0)
-    r5x, r5y = cx / g.link, sy / g.link  # C - B with B = (0, cy - sy)
-    b = [[-(r4x * d0 + r4y * d1), r4x, 0.0], [-(r5x * d0 + r5y * d1), 0.0, r5y]]
-    det = r4x * r5y - r4y * r5x
-    inv = [[r5y / det, -r4y / det], [-r5x / det, r4x / det]]
-    j0 = [inv[0][0] * b[0][k] + inv[0][1] * b[1][k] for k in range(3)]
-    j1 = [inv[1][0] * b[0][k] + inv[1][1] * b[1][k] for k in range(3)]
-    m00 = j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2]
-    m11 = j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2]
-    m01 = j0[0] * j1[0] + j0[1] * j1[1] + j0[2] * j1[2]
-    half = 0.5 * (m00 + m11)
-    disc = math.sqrt(max(half * half - (m00 * m11 - m01 * m01), 0.0))
-    kap = math.sqrt((half + disc) / (half - disc)) if half - disc > 0 else math.inf
-    n = [j0[1] * j1[2] - j0[2] * j1[1], j0[2] * j1[0] - j0[0] * j1[2], j0[0] * j1[1] - j0[1] * j1[0]]
-    norm = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2) * (-1.0 if n[0] < 0 else 1.0)
-    return j0, j1, kap, [n[0] / norm, n[1] / norm, n[2] / norm]
-
-
-def least_norm_one(j0: list[float], j1: list[float], tx: float, ty: float) -> list[float]:
-    """J^+ t_dot = J^T (J J^T)^-1 t_dot for one configuration (eq 5's first term)."""
-    m00 = j0[0] * j0[0] + j0[1] * j0[1] + j0[2] * j0[2]
-    m11 = j1[0] * j1[0] + j1[1] * j1[1] + j1[2] * j1[2]
-    m01 = j0[0] * j1[0] + j0[1] * j1[1] + j0[2] * j1[2]
-    det = m00 * m11 - m01 * m01
-    w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
-    return [j0[k] * w0 + j1[k] * w1 for k in range(3)]
-
-
-# --- many configurations, the same float formulas: the vector environment's per-step path ---
-
-
-def inverse_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`inverse_one` for arrays (N,): (rho2, rho3, reachable); NaN where out of reach."""
-    g = geometry
-    d0, d1 = _dir_one(g)
-    cx = g.table_origin[0] + rho1 * d0 + px
-    cy = g.table_origin[1] + rho1 * d1 + py
-    inside = (np.abs(cx) < g.link) & (np.abs(cy) < g.link)
-    with np.errstate(invalid="ignore"):
-        sx, sy = np.sqrt(g.link ** 2 - cy * cy), np.sqrt(g.link ** 2 - cx * cx)
-    r2 = np.where(inside, cx - sx - g.slider2_origin, np.nan)
-    r3 = np.where(inside, cy - sy - g.slider3_origin, np.nan)
-    return r2, r3, inside & (sx * sy - cy * cx > 0)
-
-
-def _jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, g: OrthoglideGeometry) -> np.ndarray:
-    """J (2, 3, N), component-major (each ``j[r, c]`` a contiguous (N,) array):
-    the float formulas of :func:`jacobian_one`."""
-    d0, d1 = _dir_one(g)
-    cx = g.table_origin[0] + rho1 * d0 + px
-    cy = g.table_origin[1] + rho1 * d1 + py
-    with np.errstate(invalid="ignore", divide="ignore"):
-        sx, sy = np.sqrt(g.link ** 2 - cy * cy), np.sqrt(g.link ** 2 - cx * cx)
-        r4x, r4y = sx / g.link, cy / g.link
-        r5x, r5y = cx / g.link, sy / g.link
-        b00, b10 = -(r4x * d0 + r4y * d1), -(r5x * d0 + r5y * d1)
-        det = r4x * r5y - r4y * r5x
-        i00, i01, i10, i11 = r5y / det, -r4y / det, -r5x / det, r4x / det
-        return np.array([[i00 * b00 + i01 * b10, i00 * r4x, i01 * r5y],
-                         [i10 * b00 + i11 * b10, i10 * r4x, i11 * r5y]])
-
-
-def _gram(j: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """J J^T's entries m00, m11, m01 (N,) from J (2, 3, N), summed as :func:`least_norm_one` sums."""
-    (a0, a1, a2), (b0, b1, b2) = j
-    return a0 * a0 + a1 * a1 + a2 * a2, b0 * b0 + b1 * b1 + b2 * b2, a0 * b0 + a1 * b1 + a2 * b2
-
-
-def _kappa_of(j: np.ndarray) -> np.ndarray:
-    """kappa (N,) of J (2, 3, N): the eigenvalues of J J^T in closed form (inf where singular)."""
-    m00, m11, m01 = _gram(j)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        half = 0.5 * (m00 + m11)
-        disc = np.sqrt(np.maximum(half * half - (m00 * m11 - m01 * m01), 0.0))
-        return np.where(half - disc > 0, np.sqrt((half + disc) / (half - disc)), np.inf)
-
-
-def kappa_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-               ) -> np.ndarray:
-    """The kappa of :func:`jacobian_rows` alone (N,), for sweeps."""
-    return _kappa_of(_jacobian_rows(rho1, px, py, geometry))
-
-
-def jacobian_rows(rho1: np.ndarray, px: np.ndarray, py: np.ndarray, geometry: OrthoglideGeometry = DEFAULT_GEOMETRY
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`jacobian_one` for arrays (N,), component-major: J (2, 3, N),
-    kappa (N,) (inf where J J^T is singular) and n (3, N). Rows out of reach
-    give NaN. (Component-major because sums over an axis of three are slow
-    in numpy; written out they also keep :func:`jacobian_one`'s order.)"""
-    j = _jacobian_rows(rho1, px, py, geometry)
-    (a0, a1, a2), (b0, b1, b2) = j
-    with np.errstate(invalid="ignore", divide="ignore"):
-        n = np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
-        norm = np.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2)
-        norm[n[0] < 0] *= -1.0
-        n /= norm
-    return j, _kappa_of(j), n
-
-
-def least_norm_rows(j: np.ndarray, tx: np.ndarray, ty: np.ndarray) -> np.ndarray:
-    """:func:`least_norm_one` for arrays: J^+ t_dot (3, N) from J (2, 3, N)."""
-    m00, m11, m01 = _gram(j)
-    det = m00 * m11 - m01 * m01
-    w0, w1 = (m11 * tx - m01 * ty) / det, (m00 * ty - m01 * tx) / det
-    return j[0] * w0 + j[1] * w1

@@ -58,7 +58,8 @@ def _sweep(table: np.ndarray, points: np.ndarray, g: og.OrthoglideGeometry
     (reachable in the working mode, rho2 and rho3 inside their limits)."""
     rr = np.tile(table, len(points))
     px, py = np.repeat(points[:, 0], len(table)), np.repeat(points[:, 1], len(table))
-    r2, r3, mode = og.inverse_rows(rr, px, py, g)
+    rho, mode = og.inverse(rr, np.stack([px, py], 1), g)
+    r2, r3 = rho[:, 1], rho[:, 2]
     with np.errstate(invalid="ignore"):
         inside = (r2 >= g.rho_min[1]) & (r2 <= g.rho_max[1]) & (r3 >= g.rho_min[2]) & (r3 <= g.rho_max[2])
     return rr, px, py, mode & inside
@@ -163,7 +164,7 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
     """The optimal initial configuration for first path points (N, 2): the
     lowest kappa (N,) over ``samples`` admissible table positions and the
     rho1 (N,) that gives it (inf where none is admissible). The sweep of
-    ``pointwise_optimum`` in the per-step formulas (:func:`og.jacobian_rows`)."""
+    ``pointwise_optimum`` at the path point (:func:`og.kappa_at`)."""
     g = geometry
     r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
     kap, best = np.empty(len(points)), np.empty(len(points), np.int64)
@@ -173,7 +174,7 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
         rr, px, py, admissible = _sweep(r1, pts, g)
         ok = np.flatnonzero(admissible)
         k = np.full(len(rr), np.inf)  # kappa where admissible (element-wise: the same as sweeping all)
-        k[ok] = og.kappa_rows(rr[ok], px[ok], py[ok], g)
+        k[ok] = og.kappa_at(rr[ok], px[ok], py[ok], g)
         k = np.where(np.isfinite(k), k, np.inf).reshape(len(pts), samples)
         best[lo:lo + chunk] = k.argmin(axis=1)
         kap[lo:lo + chunk] = k[np.arange(len(pts)), best[lo:lo + chunk]]

@@ -1,0 +1,188 @@
+"""The Orthoglide task's transition, written once over N robots (paper 003).
+
+The state of N robots is a dataclass of arrays (:class:`OrthoglideState`);
+:func:`reset` puts the chosen rows at their tasks' optimal start and
+:func:`step` moves the active rows one path point on. Both end by evaluating
+the rows they touched (kappa, J, n, failure, observation, reward) in one
+numba kernel that calls the mechanism's own kernels
+(:mod:`paragym.mechanisms.orthoglide`), so that the single env (N = 1) and
+the native vector env (N = 4096) run the same code: they are shells over
+this module (:mod:`paragym.envs.orthoglide`), like gymnax's and Brax's envs
+over their step functions.
+
+One step, for a robot at path point k (table position rho1, path point
+p_k, task rate t_k, J and n at k):
+
+* null-space mode (default): rho1 += dt (J^+ t_k + a * max_null_rate * n)_1,
+  then rho2, rho3 by inverse kinematics at p_{k+1} (exact tracking; eq 5);
+* joint-velocity mode: rho += dt * max_joint_rate * a;
+* then at p_{k+1}: the working mode and the joint limits (else failure),
+  J, kappa (eq 8) and n; kappa above :data:`KAPPA_LIMIT` is a failure too.
+  Reward: -log kappa - w_track * tracking error / 0.01 m, or
+  -limit_penalty on failure; terminated on failure or at the path's end.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from paragym.mechanisms import orthoglide as og
+from paragym.tasks.orthoglide import Task, start_table_position
+
+__all__ = ["KAPPA_LIMIT", "OBS_SIZE", "OrthoglideParams", "OrthoglideState", "reset", "step"]
+
+OBS_SIZE = 3 + 2 + 2 + 1 + 3
+KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
+
+
+@dataclass(frozen=True)
+class OrthoglideParams:
+    """The env's arguments that shape the transition (see the env's docstring)."""
+
+    joint_mode: bool = False
+    max_null_rate: float = 0.5  # m/s along n per unit of action
+    max_joint_rate: float = 0.5  # m/s per unit of action
+    w_track: float = 1.0
+    limit_penalty: float = 10.0
+    geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY
+
+    @property
+    def kernel_args(self) -> tuple[Any, ...]:
+        g = self.geometry
+        return (og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode, self.max_null_rate,
+                self.max_joint_rate, self.w_track, self.limit_penalty)
+
+
+@dataclass
+class OrthoglideState:
+    """N robots: joints, progress along their paths, what was evaluated at
+    their path points, and the observation and reward of their last step.
+
+    ``path`` (N, K, 4) holds every robot's path points and rates (x, y, vx,
+    vy, table frame) and ``dt`` (N, K - 1) its time steps; ``last`` (N,) is
+    each robot's last path index (paths may differ in length: the arrays are
+    as long as the longest). ``j`` (N, 6) is J row-major.
+    """
+
+    rho: np.ndarray
+    k: np.ndarray
+    last: np.ndarray
+    path: np.ndarray
+    dt: np.ndarray
+    j: np.ndarray
+    n: np.ndarray
+    kappa: np.ndarray
+    err: np.ndarray
+    failed: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    tasks: list[Task | None] = field(default_factory=list)
+
+    @classmethod
+    def empty(cls, n: int, points: int = 2) -> OrthoglideState:
+        """N robots with room for paths of ``points`` points (it grows on reset)."""
+        return cls(rho=np.zeros((n, 3)), k=np.zeros(n, np.int64), last=np.zeros(n, np.int64),
+                   path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
+                   n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
+                   terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
+                   tasks=[None] * n)
+
+    def _room(self, points: int) -> None:
+        """Grow the path arrays to hold ``points`` points."""
+        extra = points - self.path.shape[1]
+        if extra > 0:
+            self.path = np.pad(self.path, ((0, 0), (0, extra), (0, 0)))
+            self.dt = np.pad(self.dt, ((0, 0), (0, extra)))
+
+
+def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, tasks: list[Task]) -> None:
+    """Start ``rows`` on ``tasks`` (checked ones: :func:`paragym.tasks.orthoglide.draw_tasks`):
+    at the admissible table position with the lowest kappa at the first path
+    point, the sliders by inverse kinematics; then evaluate them."""
+    first = np.array([t.points[0] for t in tasks])
+    kap, r1 = start_table_position(first, params.geometry)
+    if not np.all(np.isfinite(kap)):
+        raise ValueError("scenario's first point is outside the reachable set")
+    state._room(max(len(t.t) for t in tasks))
+    for i, task in zip(rows, tasks, strict=True):
+        m = len(task.t)
+        state.path[i, :m, :2], state.path[i, :m, 2:] = task.points, task.velocities
+        state.dt[i, :m - 1] = np.diff(task.t)
+        state.last[i] = m - 1
+        state.tasks[i] = task
+    rho, _ = og.inverse(r1, first, params.geometry)
+    state.rho[rows], state.k[rows], state.failed[rows] = rho, 0, False
+    mask = np.zeros(len(state.k), bool)
+    mask[rows] = True
+    _advance(state, params, np.zeros((len(state.k), 3 if params.joint_mode else 1)), mask, False)
+
+
+def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray) -> None:
+    """Move the ``active`` robots (N,) one path point on with ``actions``
+    (N, 1) or (N, 3), inside the Box (the env clips), and evaluate them."""
+    _advance(state, params, actions, active, True)
+
+
+def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
+             move: bool) -> None:
+    s = state
+    _advance_kernel(s.rho, s.k, s.last, s.path, s.dt, s.j, s.n, s.kappa, s.err, s.failed, s.terminated, s.obs,
+                    s.reward, np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args)
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated, obs, reward, actions, rows, move,
+                    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty):
+    """The transition of every robot with ``rows[i]`` (see the module docstring):
+    move it if ``move``, then evaluate it at its path point."""
+    for i in range(len(k)):
+        if not rows[i]:
+            continue
+        if move and k[i] < last[i]:
+            h = dt[i, k[i]]
+            if joint_mode:
+                for c in range(3):
+                    rho[i, c] = rho[i, c] + h * max_joint_rate * actions[i, c]
+                k[i] += 1
+            else:
+                t0, t1, t2 = og.k_least_norm(j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5],
+                                             path[i, k[i], 2], path[i, k[i], 3])
+                r1 = rho[i, 0] + h * (t0 + actions[i, 0] * max_null_rate * n[i, 0])
+                k[i] += 1
+                r2, r3, _ = og.k_inverse(r1, path[i, k[i], 0], path[i, k[i], 1], p)  # exact tracking
+                rho[i, 0], rho[i, 1], rho[i, 2] = r1, r2, r3
+        px, py = path[i, k[i], 0], path[i, k[i], 1]
+        err[i] = 0.0
+        if joint_mode:
+            tx, ty = og.k_forward(rho[i, 0], rho[i, 1], rho[i, 2], p)
+            err[i] = math.hypot(tx - px, ty - py)
+        mode = og.k_inverse(rho[i, 0], px, py, p)[2]
+        inside = True
+        for c in range(3):
+            inside = inside and lo[c] <= rho[i, c] <= hi[c]
+        if mode and inside:
+            (j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5], kappa[i],
+             n[i, 0], n[i, 1], n[i, 2]) = og.k_jacobian(rho[i, 0], px, py, p)
+            if not kappa[i] < KAPPA_LIMIT:
+                failed[i] = True
+        else:
+            kappa[i] = math.inf
+            j[i, :] = math.nan
+            n[i, :] = 0.0
+            failed[i] = True
+        terminated[i] = failed[i] or k[i] >= last[i]
+        reward[i] = -limit_penalty if failed[i] else -math.log(kappa[i]) - w_track * err[i] / 0.01
+        # observation: rho normalised to [-1, 1], the path point now and next, log kappa, n; clipped to +-10
+        nxt = min(k[i] + 1, last[i])
+        row = (2 * (rho[i, 0] - lo[0]) / (hi[0] - lo[0]) - 1, 2 * (rho[i, 1] - lo[1]) / (hi[1] - lo[1]) - 1,
+               2 * (rho[i, 2] - lo[2]) / (hi[2] - lo[2]) - 1, px, py, path[i, nxt, 0], path[i, nxt, 1],
+               math.log(kappa[i]) if kappa[i] < 2.2e4 else 10.0, n[i, 0], n[i, 1], n[i, 2])
+        for c in range(11):
+            v = row[c]
+            obs[i, c] = 10.0 if v != v else min(10.0, max(-10.0, v))
