@@ -1,4 +1,9 @@
-"""``paragym/HybridSingularityFree-v0``: the hexapod + tripod along a polynomial path (paper 002)."""
+"""``paragym/HybridSingularityFree-v0``: the hexapod + tripod along a polynomial path (paper 002).
+
+The single env and the native vector env are shells over one transition,
+:mod:`paragym.tasks.hybrid_step` (the single env is its N = 1 case); the
+scenarios come from :mod:`paragym.tasks.hybrid`.
+"""
 
 from __future__ import annotations
 
@@ -10,21 +15,21 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
+from paragym.tasks import hybrid_step as task_step
 from paragym.tasks.hybrid import (
     HybridScenario,
+    draw_scenarios,
     hybrid_paper_scenario,
     hybrid_random_scenario,
     hybrid_random_scenarios,
-    nominal_rows,
     resolve_hybrid,
 )
-from paragym.trajectories import nominal_path
+from paragym.tasks.hybrid_step import OBS_SIZE, HybridParams, HybridTaskState
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
-POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
-OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
+_ONE = np.ones(1, bool)
 
 
 class HybridSingularityFreeEnv(ParagymEnv):
@@ -94,83 +99,53 @@ class HybridSingularityFreeEnv(ParagymEnv):
         self.scenario_arg, self.geometry = scenario, geometry
         self.max_delta_step, self.j_bar, self.tau = float(max_delta_step), float(j_bar), float(tau)
         self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
+        self.params = HybridParams(self.max_delta_step, self.j_bar, float(w_offset), float(w_delta),
+                                   float(w_singular), float(w_limit), geometry, self.tau)
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
+        self.state = HybridTaskState.empty(1, self.tau)
+
+    @property
+    def scenario(self) -> HybridScenario | None:
+        """The episode's start and goal."""
+        return self.state.scenarios[0]
 
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        choice = resolve_hybrid(options.get("scenario", self.scenario_arg))
-        if choice == "random":
-            scenario = hybrid_random_scenario(self.np_random, self.geometry)
-        elif choice == "paper":
-            scenario = hybrid_paper_scenario(self.geometry)
-        else:
-            scenario = choice
-        self.scenario = scenario
-        self._u, self._nominal = nominal_path(np.array(scenario.p0), np.array(scenario.p1), self.tau)
-        self._k = 0
-        self._delta = 0.5
-        self._d_delta = 0.0
-        self._offset = np.zeros(3)
-        self._all_free = True
-        self._evaluate()
+        scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), [self.np_random], self.geometry)
+        task_step.reset(self.state, self.params, np.zeros(1, np.int64), scenarios)
         info = self._info()
-        info["scenario"] = scenario
+        info["scenario"] = scenarios[0]
         return info
 
-    def _evaluate(self) -> None:
-        pose = self._nominal[self._k].copy()
-        pose[:3] += self._offset
-        self._pose = pose
-        lengths, self._mu_h, self._mu_t, self._within, self._free = hybrid.solve_one(pose, self._delta, self.geometry)
-        self._lengths, self._lengths_list = np.array(lengths), lengths
-        self._all_free &= self._free
-
     def _apply_action(self, action: np.ndarray) -> None:
-        if self._k >= len(self._u) - 1:
+        if self.state.terminated[0]:
             raise RuntimeError("the episode has ended: call reset()")
-        a = np.clip(action, -1.0, 1.0)
-        new_delta = float(np.clip(self._delta + a[0] * self.max_delta_step, 0.0, 1.0))
-        self._d_delta = new_delta - self._delta
-        self._delta = new_delta
-        self._k += 1
-        self._offset = np.zeros(3) if self._k == len(self._u) - 1 else a[1:] * self.j_bar
-        self._evaluate()
+        task_step.step(self.state, self.params, action[None], _ONE)
 
     def _observe(self) -> np.ndarray:
-        g = self.geometry
-        nxt = min(self._k + 1, len(self._u) - 1)
-        strokes = 2 * (self._lengths - g.l_min) / (g.l_max - g.l_min) - 1
-        obs = np.concatenate([[self._u[self._k]], self._nominal[self._k] / POSE_SCALE,
-                              self._nominal[nxt] / POSE_SCALE, [self._delta], strokes,
-                              [self._mu_h, self._mu_t], self._offset / self.j_bar])
-        return np.clip(obs, -10.0, 10.0).astype(np.float32)
+        return self.state.obs[0].copy()
 
     def _reward(self) -> float:
-        g = self.geometry
-        close = sum(max(0.0, 2 * g.singularity_threshold - m) / (2 * g.singularity_threshold)
-                    for m in (self._mu_h, self._mu_t))
-        out = sum(1 for v in self._lengths_list if v < g.l_min or v > g.l_max)
-        return float(-self.w_offset * np.linalg.norm(self._offset) / self.j_bar
-                     - self.w_delta * abs(self._d_delta) / self.max_delta_step
-                     - self.w_singular * close - self.w_limit * out)
+        return float(self.state.reward[0])
 
     def _terminated(self) -> bool:
-        return self._k >= len(self._u) - 1
+        return bool(self.state.terminated[0])
 
     def _info(self) -> dict[str, Any]:
-        return {"step": self._k, "u": float(self._u[self._k]), "delta": self._delta,
-                "offset": self._offset.copy(), "lengths": self._lengths.copy(),
-                "mu_hexapod": self._mu_h, "mu_tripod": self._mu_t,
-                "free": self._free, "within_limits": self._within,
-                "is_success": self._terminated() and self._all_free,
+        s = self.state
+        return {"step": int(s.k[0]), "u": float(s.u[s.k[0]]), "delta": float(s.delta[0]),
+                "offset": s.offset[0].copy(), "lengths": s.lengths[0].copy(),
+                "mu_hexapod": float(s.mu_h[0]), "mu_tripod": float(s.mu_t[0]),
+                "free": bool(s.free[0]), "within_limits": bool(s.within[0]),
+                "is_success": bool(s.terminated[0] and s.all_free[0]),
                 "max_delta_step": self.max_delta_step, "j_bar": self.j_bar}
 
     def _render_rgb(self) -> np.ndarray:
         from paragym.sim.hybrid_model import HybridScene
 
-        state = hybrid.solve(self._pose[None], self._delta, self.geometry, validate=False)
+        solved = hybrid.solve(self.state.pose[:1], self.state.delta[0], self.geometry, validate=False)
         return self._drawn(lambda gui: HybridScene(self.geometry, gui=gui),
-                           lambda scene: scene.set_state(state.t_a[0], state.t_e[0]))
+                           lambda scene: scene.set_state(solved.t_a[0], solved.t_e[0]))
 
     def _show(self) -> None:
         self._render_rgb()  # the scene is posed when drawn
@@ -181,90 +156,36 @@ class HybridSingularityFreeEnv(ParagymEnv):
 
 class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
-    one batched :func:`paragym.mechanisms.hybrid.solve_rows` (nine legs, two
-    singularity measures) per step for all robots (:mod:`paragym.envs.vector`;
-    the same numbers as the single env). Keyword arguments are the single env's."""
+    the same transition (:mod:`paragym.tasks.hybrid_step`) over N robots.
+    Keyword arguments are the single env's."""
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
                  **kwargs: Any) -> None:
         super().__init__(num_envs, HybridSingularityFreeEnv(**kwargs), max_episode_steps, render_index)
-        e = self.single_env
-        self.geometry = e.geometry
-        self._u = nominal_path(np.zeros(6), np.zeros(6), e.tau)[0]
-        self._last = len(self._u) - 1
-        n = self.num_envs
-        self._idx = np.arange(n)
-        self._nominal = np.zeros((n, len(self._u), 6))
-        self._k = np.zeros(n, np.int64)
-        self._delta, self._d_delta = np.full(n, 0.5), np.zeros(n)
-        self._offset = np.zeros((n, 3))
-        self._all_free = np.ones(n, bool)
-        self._pose, self._lengths = np.zeros((n, 6)), np.zeros((n, 9))
-        self._mu_h, self._mu_t, self._free = np.zeros(n), np.zeros(n), np.zeros(n, bool)
-        self._scenarios: list[HybridScenario | None] = [None] * n
+        self.geometry, self.params = self.single_env.geometry, self.single_env.params
+        self.state = HybridTaskState.empty(self.num_envs, self.params.tau)
 
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        e = self.single_env
-        choice = resolve_hybrid(options.get("scenario", e.scenario_arg))  # before any robot changes
-        if choice == "random":
-            scenarios = hybrid_random_scenarios([self._rngs[i] for i in rows], self.geometry)
-        else:
-            scenarios = [hybrid_paper_scenario(self.geometry) if choice == "paper" else choice] * len(rows)
-        for i, scenario in zip(rows, scenarios, strict=True):
-            self._scenarios[i] = scenario
-        p0 = np.array([sc.p0 for sc in scenarios])
-        p1 = np.array([sc.p1 for sc in scenarios])
-        self._nominal[rows] = nominal_rows(p0, p1, e.tau)
-        self._k[rows] = 0
-        self._delta[rows], self._d_delta[rows] = 0.5, 0.0
-        self._offset[rows] = 0.0
-        self._all_free[rows] = True
-        self._evaluate(rows)
-
-    def _evaluate(self, rows: np.ndarray) -> None:
-        """The legs and the measures of ``rows`` (all robots after a step)."""
-        pose = self._nominal[rows, self._k[rows]]
-        pose[:, :3] += self._offset[rows]
-        lengths, mu_h, mu_t, _, free = hybrid.solve_rows(pose, self._delta[rows], self.geometry)
-        self._pose[rows], self._lengths[rows] = pose, lengths
-        self._mu_h[rows], self._mu_t[rows], self._free[rows] = mu_h, mu_t, free
-        self._all_free &= self._free
+        scenarios = draw_scenarios(options.get("scenario", self.single_env.scenario_arg),
+                                   [self._rngs[i] for i in rows], self.geometry)
+        task_step.reset(self.state, self.params, rows, scenarios)
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        e = self.single_env
-        a = np.clip(actions, -1.0, 1.0)
-        new_delta = np.clip(self._delta + a[:, 0] * e.max_delta_step, 0.0, 1.0)
-        self._d_delta = np.where(active, new_delta - self._delta, self._d_delta)
-        self._delta = np.where(active, new_delta, self._delta)
-        k = np.where(active, np.minimum(self._k + 1, self._last), self._k)
-        offset = np.where((k == self._last)[:, None], 0.0, a[:, 1:] * e.j_bar)
-        self._offset = np.where(active[:, None], offset, self._offset)
-        self._k = k
-        self._evaluate(self._idx)
+        task_step.step(self.state, self.params, actions, active)
 
     def _observe(self) -> np.ndarray:
-        g, e = self.geometry, self.single_env
-        nxt = np.minimum(self._k + 1, self._last)
-        strokes = 2 * (self._lengths - g.l_min) / (g.l_max - g.l_min) - 1
-        obs = np.concatenate([self._u[self._k][:, None], self._nominal[self._idx, self._k] / POSE_SCALE,
-                              self._nominal[self._idx, nxt] / POSE_SCALE, self._delta[:, None], strokes,
-                              self._mu_h[:, None], self._mu_t[:, None], self._offset / e.j_bar], axis=1)
-        return np.clip(obs, -10.0, 10.0).astype(np.float32)
+        return self.state.obs.copy()
 
     def _reward(self) -> np.ndarray:
-        g, e = self.geometry, self.single_env
-        thr = 2 * g.singularity_threshold
-        close = np.maximum(0.0, thr - self._mu_h) / thr + np.maximum(0.0, thr - self._mu_t) / thr
-        out = np.sum((self._lengths < g.l_min) | (self._lengths > g.l_max), axis=1)
-        return (-e.w_offset * np.sqrt((self._offset ** 2).sum(axis=1)) / e.j_bar
-                - e.w_delta * np.abs(self._d_delta) / e.max_delta_step - e.w_singular * close - e.w_limit * out)
+        return self.state.reward.copy()
 
     def _terminated(self) -> np.ndarray:
-        return self._k >= self._last
+        return self.state.terminated.copy()
 
     def _infos(self) -> dict[str, Any]:
-        return self._for_every_robot(is_success=self._terminated() & self._all_free, free=self._free.copy())
+        s = self.state
+        return self._for_every_robot(is_success=s.terminated & s.all_free, free=s.free.copy())
 
     def _load_single(self, i: int) -> None:
-        e = self.single_env
-        e._pose, e._delta = self._pose[i].copy(), float(self._delta[i])
+        one, s = self.single_env.state, self.state
+        one.pose[0], one.delta[0] = s.pose[i], s.delta[i]

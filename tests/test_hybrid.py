@@ -154,45 +154,73 @@ def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
 
 
 def _by_definition(poses, deltas, g=hybrid.DEFAULT_GEOMETRY):
-    """Lengths, measures and eq 14 from the transforms and the matrices of eq 11 directly (an SVD for
-    the measures): the formulation that the component-wise and scalar paths must agree with."""
-    _, t_a, t_t = hybrid.split(poses, deltas, g)
-    lengths = np.concatenate([hybrid.hexapod_lengths(t_a, g), hybrid.tripod_lengths(t_t, g)], axis=1)
+    """Lengths, measures and eq 14 from 4x4 transforms and eq 11's matrices built here in plain numpy
+    (an SVD for the measures): an independent formulation that the kernels must agree with."""
+    share = 1.0 - deltas
+    t_e = hybrid.pose_matrix(hybrid.home_pose(g) + poses)
+    roll, pitch = share * poses[:, 3], share * poses[:, 4]
+    yaw = np.arctan2(np.sin(pitch) * np.sin(roll), np.cos(pitch) + np.cos(roll))  # the parasitic yaw
+    r_t = hybrid.euler_matrix(roll, pitch, yaw)
+    e = np.einsum("nij,kj->nki", r_t, g.tripod_top)  # spherical joints about E's centre, A's frame
+    rhs = -np.einsum("ki,nki->nk", g.tripod_axes, e)  # each leg in its plane: t_j . (p + R q_j) = 0
+    xy = np.linalg.lstsq(g.tripod_axes[:, :2], rhs.T, rcond=None)[0].T
+    t_t = hybrid.pose_matrix(np.column_stack([xy, g.tripod_home_height + share * poses[:, 2], roll, pitch, yaw]))
+    t_a = t_e @ np.linalg.inv(t_t)
+
+    def stage(t, joints, bases, radius):
+        a = np.einsum("nij,kj->nki", t[:, :3, :3], joints)
+        legs = a + t[:, None, :3, 3] - bases
+        length = np.linalg.norm(legs, axis=2)
+        s = legs / length[..., None]
+        return length, np.concatenate([s, np.cross(a, s) / radius], axis=2)  # rows [s, a x s / r]
+
+    len_h, rows_h = stage(t_a, g.platform_joints, g.base_joints, g.platform_radius)
+    len_t, rows_t = stage(t_t, g.tripod_top, g.tripod_base, g.r_te)
+    axes = np.broadcast_to(g.tripod_axes, e.shape)
+    rows_t = np.concatenate([rows_t, np.concatenate([axes, np.cross(e, axes) / g.r_te], axis=2)], axis=1)
+    lengths = np.concatenate([len_h, len_t], axis=1)
     home_h, home_t = hybrid._home_sigmas(g)
-    mu_h = np.linalg.svd(hybrid.hexapod_matrix(t_a, g), compute_uv=False)[:, -1] / home_h
-    mu_t = np.linalg.svd(hybrid.tripod_matrix(t_t, g), compute_uv=False)[:, -1] / home_t
+    mu_h = np.linalg.svd(rows_h, compute_uv=False)[:, -1] / home_h
+    mu_t = np.linalg.svd(rows_t, compute_uv=False)[:, -1] / home_t
     within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
     free = within & (mu_h > g.singularity_threshold) & (mu_t > g.singularity_threshold)
-    return lengths, mu_h, mu_t, within, free
+    return lengths, mu_h, mu_t, within, free, t_a, t_t
 
 
-def test_the_step_paths_equal_the_definition():
-    """solve_rows (the vector env's step, chunked), solve (which uses it) and solve_one (the single
-    env's step, Python floats) against the matrix form of eqs 11-14 computed independently."""
+def test_the_kernels_equal_the_definition():
+    """solve_rows (the env's step), solve, split, the stage functions and one
+    pose at a time (the single env's N = 1) against eqs 3, 11-14 computed
+    independently in matrix form."""
     rng = np.random.default_rng(0)
     poses = rng.uniform(-1, 1, (300, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
     deltas = rng.uniform(0, 1, 300)
-    lengths, mu_h, mu_t, within, free = _by_definition(poses, deltas)
+    lengths, mu_h, mu_t, within, free, t_a, t_t = _by_definition(poses, deltas)
     assert 0 < free.sum() < 300 and 0 < within.sum() < 300  # both outcomes are exercised
-    got = hybrid.solve_rows(poses, deltas, chunk=128)
+    got = hybrid.solve_rows(poses, deltas)
     for ours, theirs in zip(got, (lengths, mu_h, mu_t, within, free), strict=True):
         np.testing.assert_allclose(ours, theirs, atol=1e-12)
-    np.testing.assert_allclose(hybrid.solve(poses, deltas).lengths, lengths, atol=1e-12)
-    np.testing.assert_allclose(hybrid.leg_lengths_rows(poses, deltas, chunk=100), lengths, atol=1e-12)
-    for k in range(0, 300, 3):
-        one = hybrid.solve_one(poses[k], deltas[k])
-        np.testing.assert_allclose(one[0], lengths[k], atol=1e-12)
-        assert one[1] == pytest.approx(mu_h[k], abs=1e-12) and one[2] == pytest.approx(mu_t[k], abs=1e-12)
-        assert one[3] == within[k] and one[4] == free[k]
+    state = hybrid.solve(poses, deltas)
+    np.testing.assert_allclose(state.lengths, lengths, atol=1e-12)
+    np.testing.assert_allclose(state.t_a, t_a, atol=1e-12)
+    np.testing.assert_allclose(state.t_t, t_t, atol=1e-12)
+    np.testing.assert_allclose(hybrid.split(poses, deltas)[1], t_a, atol=1e-12)
+    np.testing.assert_allclose(hybrid.leg_lengths_rows(poses, deltas), lengths, atol=1e-12)
+    np.testing.assert_allclose(hybrid.hexapod_lengths(t_a), lengths[:, :6], atol=1e-12)
+    np.testing.assert_allclose(hybrid.tripod_lengths(t_t), lengths[:, 6:], atol=1e-12)
+    for k in range(0, 300, 7):  # one robot through the same kernel equals the batch, bit for bit
+        one = hybrid.solve_rows(poses[k:k + 1], deltas[k:k + 1])
+        for ours, batch in zip(one, got, strict=True):
+            np.testing.assert_array_equal(ours[0], batch[k])
 
 
 def test_the_measures_are_the_smallest_singular_values():
-    # _sigma_min goes through the eigenvalues of M^T M; an SVD is the definition
+    # the kernel goes through the eigenvalues of M^T M; an SVD is the definition
     rng = np.random.default_rng(1)
     poses = rng.uniform(-1, 1, (200, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
     t_e, t_a, t_t = hybrid.split(poses, rng.uniform(0, 1, 200))
     for m in (hybrid.hexapod_matrix(t_a), hybrid.tripod_matrix(t_t)):
-        np.testing.assert_allclose(hybrid._sigma_min(m), np.linalg.svd(m, compute_uv=False)[:, -1], atol=1e-13)
+        ours = np.array([hybrid._sigma_min(np.ascontiguousarray(x.T)) for x in m])
+        np.testing.assert_allclose(ours, np.linalg.svd(m, compute_uv=False)[:, -1], atol=1e-13)
 
 
 def test_random_scenarios_in_a_batch_equal_one_at_a_time():

@@ -34,6 +34,14 @@ design notes, documented in :class:`HybridGeometry`.
 Angles are XYZ fixed (roll about x, then pitch about y, then yaw about z:
 ``R = Rz(yaw) Ry(pitch) Rx(roll)``). SI units throughout (the paper's mm are
 converted at the edge).
+
+The equations are written once, as kernels compiled by numba: the stage
+split (:func:`_stages`), the tripod's parasitic motion (:func:`_tripod_stage`)
+and the legs with their rows of eq 11's matrices (:func:`_legs`). Every array
+function here (``solve``, ``solve_rows``, ``split``, ``hexapod_matrix``, ...)
+loops them over N, and the env's step calls the same loop, so one robot and
+4096 run the same code. The smallest singular values come from LAPACK's
+symmetric eigensolver on M^T M, as numpy's ``eigvalsh`` computes them.
 """
 
 from __future__ import annotations
@@ -43,13 +51,14 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 from paragym.units import DEG
 
 __all__ = [
     "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
-    "hexapod_matrix", "is_singularity_free", "within_limits", "pose_matrix", "solve", "split", "tripod_forward",
-    "tripod_lengths", "tripod_pose",
+    "hexapod_matrix", "is_singularity_free", "k_solve", "kernel_consts", "pose_matrix", "solve", "split",
+    "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
 ]
 
 
@@ -137,50 +146,250 @@ def _pose_of(t: np.ndarray) -> np.ndarray:
     return np.concatenate([t[..., :3, 3], matrix_euler(t[..., :3, :3])], axis=-1)
 
 
-def _apply(t: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Points (K, 3) through transforms (N, 4, 4): (N, K, 3)."""
-    return np.einsum("nij,kj->nki", t[:, :3, :3], points) + t[:, None, :3, 3]
+# --- the equations, once: numba kernels ---------------------------------------------------
 
 
-# --- tripod -------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy")
+def _euler(r, p, y, out):
+    """R = Rz(y) Ry(p) Rx(r) into ``out`` (3, 3)."""
+    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    out[0, 0], out[0, 1], out[0, 2] = cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr
+    out[1, 0], out[1, 1], out[1, 2] = sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr
+    out[2, 0], out[2, 1], out[2, 2] = -sp, cp * sr, cp * cr
+
+
+@njit(cache=True, error_model="numpy")
+def _tripod_stage(z, roll, pitch, top, axes, pinv_t, rt, pt):
+    """The tripod's rotation R_T (into ``rt``) and origin p_T (into ``pt``), A's
+    frame, from its inputs. Summing the three plane constraints
+    ``t_j . (p + R q_j) = 0`` removes p (the t_j sum to zero) and, for joints
+    120 deg apart, leaves ``R_10 = R_01``: the parasitic yaw
+    ``tan(yaw) = sin(pitch) sin(roll) / (cos(pitch) + cos(roll))``; the
+    parasitic x, y then follow from the (linear, consistent) constraints
+    through the pseudo-inverse of the axes' xy (``pinv_t``, (3, 2))."""
+    yaw = math.atan2(math.sin(pitch) * math.sin(roll), math.cos(pitch) + math.cos(roll))
+    _euler(roll, pitch, yaw, rt)
+    rhs = np.empty(3)
+    for j in range(3):
+        e0 = rt[0, 0] * top[j, 0] + rt[0, 1] * top[j, 1] + rt[0, 2] * top[j, 2]
+        e1 = rt[1, 0] * top[j, 0] + rt[1, 1] * top[j, 1] + rt[1, 2] * top[j, 2]
+        e2 = rt[2, 0] * top[j, 0] + rt[2, 1] * top[j, 1] + rt[2, 2] * top[j, 2]
+        rhs[j] = -(axes[j, 0] * e0 + axes[j, 1] * e1 + axes[j, 2] * e2)
+    for c in range(2):
+        pt[c] = rhs[0] * pinv_t[0, c] + rhs[1] * pinv_t[1, c] + rhs[2] * pinv_t[2, c]
+    pt[2] = z
+    return yaw
+
+
+@njit(cache=True, error_model="numpy")
+def _stages(pose, delta, top, axes, pinv_t, home, tripod_home, re, rt, pt, ra, pa):
+    """The split of eqs 3, 19-20 for E's displacement ``pose`` (6,) at split
+    ``delta``: the tripod takes (1 - delta) of z, roll, pitch (R_T, p_T in
+    ``rt``, ``pt``); the hexapod the rest, T_A = T_E T_T^-1 (R_A = R_E R_T^T in
+    ``ra``, p_A in ``pa``), so that E's pose is met exactly. ``re``: R_E."""
+    _euler(pose[3], pose[4], pose[5], re)
+    share = 1.0 - delta
+    _tripod_stage(tripod_home + share * pose[2], share * pose[3], share * pose[4], top, axes, pinv_t, rt, pt)
+    for i in range(3):
+        for j in range(3):
+            ra[i, j] = re[i, 0] * rt[j, 0] + re[i, 1] * rt[j, 1] + re[i, 2] * rt[j, 2]
+    for i in range(3):
+        pa[i] = home[i] + pose[i] - (ra[i, 0] * pt[0] + ra[i, 1] * pt[1] + ra[i, 2] * pt[2])
+
+
+@njit(cache=True, error_model="numpy")
+def _legs(r, pos, joints, bases, inv_scale, lengths, rows, first):
+    """Legs from ``joints`` (K, 3) on a frame at (R ``r``, ``pos``) to fixed
+    ``bases`` (K, 3) (eqs 1, 4): their lengths into ``lengths[first:first+K]``
+    and the rows [s, (R q) x s * inv_scale] of eq 11's matrix (transposed; s
+    the unit leg) into ``rows[first:first+K]``."""
+    for i in range(joints.shape[0]):
+        a0 = r[0, 0] * joints[i, 0] + r[0, 1] * joints[i, 1] + r[0, 2] * joints[i, 2]
+        a1 = r[1, 0] * joints[i, 0] + r[1, 1] * joints[i, 1] + r[1, 2] * joints[i, 2]
+        a2 = r[2, 0] * joints[i, 0] + r[2, 1] * joints[i, 1] + r[2, 2] * joints[i, 2]
+        l0, l1, l2 = a0 + pos[0] - bases[i, 0], a1 + pos[1] - bases[i, 1], a2 + pos[2] - bases[i, 2]
+        n = math.sqrt(l0 * l0 + l1 * l1 + l2 * l2)
+        s0, s1, s2 = l0 / n, l1 / n, l2 / n
+        lengths[first + i] = n
+        rows[first + i, 0], rows[first + i, 1], rows[first + i, 2] = s0, s1, s2
+        rows[first + i, 3] = (a1 * s2 - a2 * s1) * inv_scale
+        rows[first + i, 4] = (a2 * s0 - a0 * s2) * inv_scale
+        rows[first + i, 5] = (a0 * s1 - a1 * s0) * inv_scale
+
+
+@njit(cache=True, error_model="numpy")
+def _constraints(rt, top, axes, inv_e, rows):
+    """The tripod's constraint wrenches (forces through the spherical joints
+    along the revolute axes t_j) as rows [t_j, e_j x t_j * inv_e] 3-5 of ``rows``."""
+    for j in range(3):
+        e0 = rt[0, 0] * top[j, 0] + rt[0, 1] * top[j, 1] + rt[0, 2] * top[j, 2]
+        e1 = rt[1, 0] * top[j, 0] + rt[1, 1] * top[j, 1] + rt[1, 2] * top[j, 2]
+        e2 = rt[2, 0] * top[j, 0] + rt[2, 1] * top[j, 1] + rt[2, 2] * top[j, 2]
+        t0, t1, t2 = axes[j, 0], axes[j, 1], axes[j, 2]
+        rows[3 + j, 0], rows[3 + j, 1], rows[3 + j, 2] = t0, t1, t2
+        rows[3 + j, 3], rows[3 + j, 4], rows[3 + j, 5] = ((e1 * t2 - e2 * t1) * inv_e, (e2 * t0 - e0 * t2) * inv_e,
+                                                          (e0 * t1 - e1 * t0) * inv_e)
+
+
+@njit(cache=True, error_model="numpy")
+def _sigma_min(rows):
+    """The smallest singular value of a 6x6 matrix: the square root of the
+    smallest eigenvalue of M^T M (LAPACK's symmetric eigensolver)."""
+    gram = np.empty((6, 6))
+    for a in range(6):
+        for b in range(6):
+            acc = 0.0
+            for r in range(6):
+                acc += rows[r, a] * rows[r, b]
+            gram[a, b] = acc
+    return math.sqrt(max(np.linalg.eigvalsh(gram)[0], 0.0))
+
+
+@njit(cache=True, error_model="numpy")
+def k_solve(pose, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, measures, lengths, work):
+    """One pose (6,) of E at split ``delta``: the nine leg lengths into
+    ``lengths`` (9,) and, if ``measures``, the two singularity measures
+    (sigma_min over its home value ``sc[3]``, ``sc[4]``), returned (else 0).
+    ``work``: (5, 6, 6) scratch; afterwards R_A is work[0, :3, :3], p_A
+    work[0, 3, :3], R_T work[1, :3, :3], p_T work[1, 3, :3]. ``sc``: tripod home
+    height, 1 / platform radius, 1 / r_te, the home sigmas."""
+    ra, pa, rt, pt, re = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], work[1, 3, :3], work[2, :3, :3]
+    h, t = work[3], work[4]
+    _stages(pose, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
+    _legs(ra, pa, plat, base, sc[1], lengths, h, 0)
+    _legs(rt, pt, top, tri_base, sc[2], lengths[6:], t, 0)
+    if not measures:
+        return 0.0, 0.0
+    _constraints(rt, top, axes, sc[2], t)
+    return _sigma_min(h) / sc[3], _sigma_min(t) / sc[4]
+
+
+@njit(cache=True, error_model="numpy")
+def _solve_all(p, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, measures, lengths, mu_h, mu_t,
+               ra_out, pa_out, rt_out, pt_out):
+    """:func:`k_solve` for every pose p[i] at split delta[i]; the stages'
+    rotations and origins into the ``*_out`` arrays when they have N rows."""
+    work = np.empty((5, 6, 6))
+    keep = ra_out.shape[0] == p.shape[0]
+    for i in range(p.shape[0]):
+        mu_h[i], mu_t[i] = k_solve(p[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home, sc, measures,
+                                   lengths[i], work)
+        if keep:
+            ra_out[i], pa_out[i], rt_out[i], pt_out[i] = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], \
+                work[1, 3, :3]
+
+
+@njit(cache=True, error_model="numpy")
+def _stage_all(r, pos, joints, bases, inv_scale, constraint_top, constraint_axes, lengths, mats):
+    """Legs of one stage for transforms (R ``r[i]``, ``pos[i]``): lengths (N, K)
+    and eq 11's matrices transposed (N, 6, 6) (rows of constraints too when
+    ``constraint_top`` has rows: the tripod)."""
+    for i in range(r.shape[0]):
+        _legs(r[i], pos[i], joints, bases, inv_scale, lengths[i], mats[i], 0)
+        if constraint_top.shape[0]:
+            _constraints(r[i], constraint_top, constraint_axes, inv_scale, mats[i])
+
+
+@njit(cache=True, error_model="numpy")
+def _tripod_all(z, roll, pitch, top, axes, pinv_t, out):
+    rt, pt = np.empty((3, 3)), np.empty(3)
+    for i in range(z.shape[0]):
+        yaw = _tripod_stage(z[i], roll[i], pitch[i], top, axes, pinv_t, rt, pt)
+        out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = pt[0], pt[1], z[i], roll[i], pitch[i], yaw
 
 
 @lru_cache(maxsize=8)
-def _tripod_consts(g: HybridGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    return g.tripod_top, g.tripod_axes, g.tripod_base
+def kernel_consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
+    """The geometry as the kernels take it (read-only): B_i, A_i, q_j, t_j,
+    the tripod's revolute joints, pinv of the axes' xy, E's home pose, and
+    [tripod home height, 1 / platform radius, 1 / r_te, home sigma_min of
+    the hexapod, of the tripod]."""
+    arrays = [np.ascontiguousarray(a, float) for a in (g.base_joints, g.platform_joints, g.tripod_top,
+                                                       g.tripod_axes, g.tripod_base,
+                                                       np.linalg.pinv(g.tripod_axes[:, :2]).T, home_pose(g))]
+    raw = np.array([g.tripod_home_height, 1.0 / g.platform_radius, 1.0 / g.r_te, 1.0, 1.0])
+    mu_h, mu_t = np.empty(1), np.empty(1)
+    none = np.empty((0, 3, 3))
+    _solve_all(np.zeros((1, 6)), np.full(1, 0.5), *arrays, raw, True, np.empty((1, 9)), mu_h, mu_t,
+               none, none[:, 0], none, none[:, 0])  # home: p = 0, any split
+    sc = np.array([*raw[:3], mu_h[0], mu_t[0]])
+    for a in (*arrays, sc):
+        a.setflags(write=False)
+    return (*arrays, sc)
 
 
-@lru_cache(maxsize=8)
-def _consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
-    """Per-geometry constant arrays: B_i, A_i, pinv of the revolute axes' xy,
-    the constraint wrench columns' force part."""
-    return g.base_joints, g.platform_joints, np.linalg.pinv(g.tripod_axes[:, :2]).T, home_pose(g)
+def _home_sigmas(g: HybridGeometry) -> tuple[float, float]:
+    """sigma_min of the hexapod's and the tripod's matrices at home."""
+    sc = kernel_consts(g)[-1]
+    return float(sc[3]), float(sc[4])
+
+
+def _run(p: np.ndarray, delta: np.ndarray, g: HybridGeometry, measures: bool, keep: bool) -> tuple[np.ndarray, ...]:
+    p = np.ascontiguousarray(np.atleast_2d(p), float)
+    n = len(p)
+    d = np.ascontiguousarray(np.broadcast_to(np.asarray(delta, float), (n,)))
+    lengths, mu_h, mu_t = np.empty((n, 9)), np.empty(n), np.empty(n)
+    m = n if keep else 0
+    ra, pa, rt, pt = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3, 3)), np.empty((m, 3))
+    _solve_all(p, d, *kernel_consts(g), measures, lengths, mu_h, mu_t, ra, pa, rt, pt)
+    return lengths, mu_h, mu_t, ra, pa, rt, pt
+
+
+def _transform(r: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    t = np.zeros((len(r), 4, 4))
+    t[:, :3, :3], t[:, :3, 3], t[:, 3, 3] = r, pos, 1.0
+    return t
 
 
 def tripod_pose(z: np.ndarray, roll: np.ndarray, pitch: np.ndarray,
                 geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """The tripod's full pose (N, 6) in A's frame from its three inputs.
+    """The tripod's full pose (N, 6) in A's frame from its three inputs, with
+    its parasitic x, y and yaw (:func:`_tripod_stage`)."""
+    _, _, top, axes, _, pinv_t, _, _ = kernel_consts(geometry)
+    z, roll, pitch = (np.ascontiguousarray(v, float) for v in
+                      np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, float)) for v in (z, roll, pitch))))
+    out = np.empty((len(z), 6))
+    _tripod_all(z, roll, pitch, top, axes, pinv_t, out)
+    return out
 
-    Summing the three plane constraints ``t_j . (p + R q_j) = 0`` removes p
-    (the t_j sum to zero) and, for joints 120 deg apart, leaves ``R_10 = R_01``;
-    with ``R = Rz(yaw) Ry(pitch) Rx(roll)`` that is the parasitic yaw
-    ``tan(yaw) = sin(pitch) sin(roll) / (cos(pitch) + cos(roll))``. The
-    parasitic x and y then follow from the (linear, consistent) constraints.
-    """
-    g = geometry
-    q, t, _ = _tripod_consts(g)
-    z, roll, pitch = np.broadcast_arrays(*(np.atleast_1d(np.asarray(v, float)) for v in (z, roll, pitch)))
-    yaw = np.arctan2(np.sin(pitch) * np.sin(roll), np.cos(pitch) + np.cos(roll))
-    rq = np.einsum("nij,kj->nki", euler_matrix(roll, pitch, yaw), q)  # (N, 3, 3)
-    rhs = -np.einsum("ki,nki->nk", t, rq)  # t_j . p = rhs_j
-    xy = rhs @ _consts(g)[2]
-    return np.column_stack([xy, z, roll, pitch, yaw])
+
+def _stage(t: np.ndarray, geometry: HybridGeometry, tripod: bool) -> tuple[np.ndarray, np.ndarray]:
+    base, plat, top, axes, tri_base, _, _, sc = kernel_consts(geometry)
+    t = np.atleast_3d(t).reshape(-1, 4, 4)
+    r, pos = np.ascontiguousarray(t[:, :3, :3]), np.ascontiguousarray(t[:, :3, 3])
+    k = 3 if tripod else 6
+    lengths, mats = np.empty((len(t), k)), np.empty((len(t), 6, 6))
+    if tripod:
+        _stage_all(r, pos, top, tri_base, sc[2], top, axes, lengths, mats)
+    else:
+        _stage_all(r, pos, plat, base, sc[1], np.empty((0, 3)), np.empty((0, 3)), lengths, mats)
+    return lengths, mats.transpose(0, 2, 1)
 
 
 def tripod_lengths(t_t: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
     """Tripod leg lengths (N, 3) for tripod transforms T_T (N, 4, 4) (eq 4)."""
-    q, _, base = _tripod_consts(geometry)
-    return np.linalg.norm(_apply(t_t, q) - base, axis=2)
+    return _stage(t_t, geometry, True)[0]
+
+
+def tripod_matrix(t_t: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The tripod's 6x6 wrench matrix (N, 6, 6), in A's frame: three actuation
+    wrenches (unit forces along the legs through the spherical joints) and
+    three constraint wrenches (unit forces through the spherical joints along
+    the revolute axes), moments about E's centre divided by r_te."""
+    return _stage(t_t, geometry, True)[1]
+
+
+def hexapod_lengths(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """Hexapod leg lengths (N, 6) for platform transforms T_A (N, 4, 4) (eq 1)."""
+    return _stage(t_a, geometry, False)[0]
+
+
+def hexapod_matrix(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """H(X) (N, 6, 6) of eq 11: columns [s_i ; a_i x s_i / r] with s_i the
+    unit leg vectors and a_i = R A_i the joints about A's centre (moments
+    divided by the platform radius, so the matrix is dimensionless). Its
+    transpose maps the platform twist (v, r omega) to the leg rates."""
+    return _stage(t_a, geometry, False)[1]
 
 
 def tripod_forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
@@ -201,28 +410,6 @@ def tripod_forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOME
         x = x - np.linalg.solve(jac, r[..., None])[..., 0]
     return x
 
-
-# --- hexapod ---------------------------------------------------------------------------
-
-
-def hexapod_lengths(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """Hexapod leg lengths (N, 6) for platform transforms T_A (N, 4, 4) (eq 1)."""
-    base, plat = _consts(geometry)[:2]
-    return np.linalg.norm(_apply(t_a, plat) - base, axis=2)
-
-
-def hexapod_matrix(t_a: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """H(X) (N, 6, 6) of eq 11: columns [s_i ; a_i x s_i / r] with s_i the
-    unit leg vectors and a_i = R A_i the joints about A's centre (moments
-    divided by the platform radius, so the matrix is dimensionless). Its
-    transpose maps the platform twist (v, r omega) to the leg rates."""
-    g = geometry
-    base, plat = _consts(g)[:2]
-    a = t_a[:, None, :3, :3] @ plat[None, :, :, None]
-    a = a[..., 0]
-    legs = a + t_a[:, None, :3, 3] - base
-    s = legs / np.linalg.norm(legs, axis=2, keepdims=True)
-    return np.concatenate([s, np.cross(a, s) / g.platform_radius], axis=2).transpose(0, 2, 1)
 
 
 def hexapod_forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
@@ -256,20 +443,6 @@ def _rotvec(v: np.ndarray) -> np.ndarray:
     return np.eye(3) + np.sin(safe) / safe * k + (1 - np.cos(safe)) / safe ** 2 * (k @ k)
 
 
-def tripod_matrix(t_t: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """The tripod's 6x6 wrench matrix (N, 6, 6), in A's frame: three actuation
-    wrenches (unit forces along the legs through the spherical joints) and
-    three constraint wrenches (unit forces through the spherical joints along
-    the revolute axes), moments about E's centre divided by r_te."""
-    q, t, base = _tripod_consts(geometry)
-    e = np.einsum("nij,kj->nki", t_t[:, :3, :3], q)  # joints about E's centre
-    legs = e + t_t[:, None, :3, 3] - base
-    s = legs / np.linalg.norm(legs, axis=2, keepdims=True)
-    tt = np.broadcast_to(t, s.shape)
-    cols = np.concatenate([np.concatenate([s, np.cross(e, s) / geometry.r_te], axis=2),
-                           np.concatenate([tt, np.cross(e, tt) / geometry.r_te], axis=2)], axis=1)
-    return cols.transpose(0, 2, 1)
-
 
 # --- the whole robot ---------------------------------------------------------------------
 
@@ -295,22 +468,6 @@ class HybridState:
     free: np.ndarray
 
 
-def _sigma_min(m: np.ndarray) -> np.ndarray:
-    """The smallest singular value of each square matrix (..., n, n): the
-    square root of the smallest eigenvalue of M^T M (LAPACK's symmetric
-    eigensolver, about twice as fast as an SVD for a batch of 6x6 matrices;
-    it agrees with the SVD to ~eps * sigma_max^2 / sigma_min, 1e-14 here)."""
-    gram = np.swapaxes(m, -1, -2) @ m
-    return np.sqrt(np.maximum(np.linalg.eigvalsh(gram)[..., 0], 0.0))
-
-
-@lru_cache(maxsize=8)
-def _home_sigmas(g: HybridGeometry) -> tuple[float, float]:
-    t_a = pose_matrix(np.array([0, 0, g.hexapod_home_height, 0, 0, 0.0]))
-    t_t = pose_matrix(tripod_pose(g.tripod_home_height, 0.0, 0.0, g))
-    return float(_sigma_min(hexapod_matrix(t_a, g))[0]), float(_sigma_min(tripod_matrix(t_t, g))[0])
-
-
 def home_pose(geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
     """E's pose at home (6,): the stages stacked at their home heights."""
     return np.array([0.0, 0.0, geometry.hexapod_home_height + geometry.tripod_home_height, 0.0, 0.0, 0.0])
@@ -333,16 +490,10 @@ def check_pose(p: np.ndarray, name: str = "pose") -> np.ndarray:
 def split(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY
           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """T_E, T_A, T_T (N, 4, 4) for displacements ``p`` (N, 6) of E from home and
-    splits ``delta`` (N,) (module docstring; eqs 3, 19-20)."""
-    g = geometry
-    t_e = pose_matrix(_consts(g)[3] + p)
-    share = 1.0 - delta
-    t_t = pose_matrix(tripod_pose(g.tripod_home_height + share * p[:, 2], share * p[:, 3], share * p[:, 4], g))
-    inv = np.zeros_like(t_t)  # rigid inverse: [R^T, -R^T p]
-    inv[:, :3, :3] = np.swapaxes(t_t[:, :3, :3], 1, 2)
-    inv[:, :3, 3] = -np.einsum("nji,nj->ni", t_t[:, :3, :3], t_t[:, :3, 3])
-    inv[:, 3, 3] = 1.0
-    return t_e, t_e @ inv, t_t
+    splits ``delta`` (N,) (module docstring; eqs 3, 19-20; :func:`_stages`)."""
+    p = np.atleast_2d(p)
+    _, _, _, ra, pa, rt, pt = _run(p, delta, geometry, False, True)
+    return pose_matrix(home_pose(geometry) + p), _transform(ra, pa), _transform(rt, pt)
 
 
 def solve(p: np.ndarray, delta: np.ndarray | float = 0.5, geometry: HybridGeometry = DEFAULT_GEOMETRY,
@@ -355,8 +506,33 @@ def solve(p: np.ndarray, delta: np.ndarray | float = 0.5, geometry: HybridGeomet
     d = np.broadcast_to(np.asarray(delta, float), (len(p),))
     if validate and (not np.all(np.isfinite(d)) or np.any((d < 0) | (d > 1))):
         raise ValueError(f"delta must lie in [0, 1]; got {delta!r}")
-    t_e, t_a, t_t = split(p, d, g)
-    return HybridState(t_e, t_a, t_t, *solve_rows(p, d, g))  # lengths, measures and eq 14: one batched path
+    lengths, mu_h, mu_t, ra, pa, rt, pt = _run(p, d, g, True, True)
+    within, free = _verdict(lengths, mu_h, mu_t, g)
+    return HybridState(pose_matrix(home_pose(g) + p), _transform(ra, pa), _transform(rt, pt), lengths, mu_h, mu_t,
+                       within, free)
+
+
+def _verdict(lengths: np.ndarray, mu_h: np.ndarray, mu_t: np.ndarray, g: HybridGeometry
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """Eq 13 (all nine legs within limits) and eq 14 (and both measures at
+    least the threshold)."""
+    within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
+    return within, within & (mu_h >= g.singularity_threshold) & (mu_t >= g.singularity_threshold)
+
+
+def solve_rows(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`solve` without the transforms, for poses (N, 6) and splits (N,)
+    (no validation): the nine lengths (N, 9), both singularity measures (N,),
+    within limits and free (eq 14) (N,)."""
+    lengths, mu_h, mu_t, *_ = _run(p, delta, geometry, True, False)
+    return (lengths, mu_h, mu_t, *_verdict(lengths, mu_h, mu_t, geometry))
+
+
+def leg_lengths_rows(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
+    """The nine actuator lengths (N, 9) (m; eqs 1, 4) for displacements ``p``
+    (N, 6) of E at splits ``delta`` (N,): :func:`solve`'s lengths alone."""
+    return _run(p, delta, geometry, False, False)[0]
 
 
 def within_limits(p: np.ndarray, delta: np.ndarray | float = 0.5,
@@ -386,186 +562,3 @@ def forward(lengths: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
     inputs = tripod_forward(lengths[:, 6:], g, guess_t)
     t_t = pose_matrix(tripod_pose(inputs[:, 0], inputs[:, 1], inputs[:, 2], g))
     return _pose_of(pose_matrix(pose_a) @ t_t) - home_pose(g)
-
-
-# --- one pose in Python floats: the environment's per-step path -------------------------
-
-
-@lru_cache(maxsize=8)
-def _consts_one(g: HybridGeometry) -> tuple:
-    base, plat, pinv_t, home = _consts(g)
-    return (base.tolist(), plat.tolist(), pinv_t.tolist(), home.tolist(), g.tripod_top.tolist(),
-            g.tripod_axes.tolist(), g.tripod_base.tolist(), _home_sigmas(g))
-
-
-def _euler_one(r: float, p: float, y: float) -> list[list[float]]:
-    cr, sr, cp, sp, cy, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-    return [[cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-            [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-            [-sp, cp * sr, cp * cr]]
-
-
-def _mv(m: list[list[float]], v: list[float]) -> list[float]:
-    return [m[0][0] * v[0] + m[0][1] * v[1] + m[0][2] * v[2], m[1][0] * v[0] + m[1][1] * v[1] + m[1][2] * v[2],
-            m[2][0] * v[0] + m[2][1] * v[1] + m[2][2] * v[2]]
-
-
-def _cross(a: list[float], b: list[float]) -> list[float]:
-    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-
-
-def solve_one(p: list[float] | np.ndarray, delta: float, geometry: HybridGeometry = DEFAULT_GEOMETRY
-              ) -> tuple[list[float], float, float, bool, bool]:
-    """:func:`solve` for one pose, in Python floats (no validation): the nine
-    lengths (m), the two singularity measures, within limits, free (eq 14).
-
-    The same equations; at N = 1 numpy's per-call overhead makes the batched
-    function cost ~400 us, this ~60 us plus the two 6x6 eigenvalue problems. A test keeps
-    the two equal to 1e-12.
-    """
-    g = geometry
-    base, plat, pinv_t, home, top, axes, tri_base, (h0, t0) = _consts_one(g)
-    x, y, z, roll, pitch, yaw = (float(v) for v in p)
-    pe = [home[0] + x, home[1] + y, home[2] + z]
-    re = _euler_one(roll, pitch, yaw)
-    share = 1.0 - float(delta)
-    rt_, pt_ = share * roll, share * pitch
-    yt = math.atan2(math.sin(pt_) * math.sin(rt_), math.cos(pt_) + math.cos(rt_))
-    rt = _euler_one(rt_, pt_, yt)
-    e = [_mv(rt, q) for q in top]  # tripod joints about E's centre, A's frame
-    rhs = [-(axes[j][0] * e[j][0] + axes[j][1] * e[j][1] + axes[j][2] * e[j][2]) for j in range(3)]
-    ptr = [sum(rhs[j] * pinv_t[j][0] for j in range(3)), sum(rhs[j] * pinv_t[j][1] for j in range(3)),
-           g.tripod_home_height + share * z]
-    ra = [[a[0] * b[0] + a[1] * b[1] + a[2] * b[2] for b in rt] for a in re]  # R_E R_T^T
-    rp = _mv(ra, ptr)
-    pa = [pe[0] - rp[0], pe[1] - rp[1], pe[2] - rp[2]]
-    lengths, h_cols, t_cols = [], [], []
-    inv_r = 1.0 / g.platform_radius
-    for i in range(6):
-        a = _mv(ra, plat[i])
-        leg = [a[0] + pa[0] - base[i][0], a[1] + pa[1] - base[i][1], a[2] + pa[2] - base[i][2]]
-        n = math.sqrt(leg[0] ** 2 + leg[1] ** 2 + leg[2] ** 2)
-        s = [leg[0] / n, leg[1] / n, leg[2] / n]
-        m = _cross(a, s)
-        lengths.append(n)
-        h_cols.append(s + [m[0] * inv_r, m[1] * inv_r, m[2] * inv_r])
-    inv_e = 1.0 / g.r_te
-    for j in range(3):
-        leg = [e[j][0] + ptr[0] - tri_base[j][0], e[j][1] + ptr[1] - tri_base[j][1], e[j][2] + ptr[2] - tri_base[j][2]]
-        n = math.sqrt(leg[0] ** 2 + leg[1] ** 2 + leg[2] ** 2)
-        s = [leg[0] / n, leg[1] / n, leg[2] / n]
-        m = _cross(e[j], s)
-        lengths.append(n)
-        t_cols.append(s + [m[0] * inv_e, m[1] * inv_e, m[2] * inv_e])
-    for j in range(3):
-        m = _cross(e[j], axes[j])
-        t_cols.append(list(axes[j]) + [m[0] * inv_e, m[1] * inv_e, m[2] * inv_e])
-    sig = _sigma_min(np.array([h_cols, t_cols]))  # transposes: the same singular values
-    mu_h, mu_t = float(sig[0]) / h0, float(sig[1]) / t0
-    within = all(g.l_min <= v <= g.l_max for v in lengths)
-    free = within and mu_h >= g.singularity_threshold and mu_t >= g.singularity_threshold
-    return lengths, mu_h, mu_t, within, free
-
-
-# --- many poses, component-major: the vector environment's and the scenario screens' path ------
-
-
-def _euler_rows(r: np.ndarray, p: np.ndarray, y: np.ndarray) -> tuple[tuple[np.ndarray, ...], ...]:
-    """R = Rz(yaw) Ry(pitch) Rx(roll) as nine (N,) arrays, rows of tuples."""
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    spr, spc = sp * sr, sp * cr
-    return ((cy * cp, cy * spr - sy * cr, cy * spc + sy * sr),
-            (sy * cp, sy * spr + cy * cr, sy * spc - cy * sr),
-            (-sp, cp * sr, cp * cr))
-
-
-def _stages_rows(p: np.ndarray, delta: np.ndarray, g: HybridGeometry) -> tuple:
-    """The split of eqs 19-20 for poses (N, 6) and splits (N,), component-major:
-    R_A (3x3 of (N,)), p_A (3 of (N,)), the tripod's joints about E's centre
-    e_j (3x3 of (N,), A's frame) and its origin p_T (3 of (N,))."""
-    base, plat, pinv_t, home = _consts(g)
-    top, axes, _ = _tripod_consts(g)
-    x, y, z, roll, pitch, yaw = np.ascontiguousarray(p.T)
-    re = _euler_rows(roll, pitch, yaw)
-    share = 1.0 - delta
-    rt_, pt_ = share * roll, share * pitch
-    rt = _euler_rows(rt_, pt_, np.arctan2(np.sin(pt_) * np.sin(rt_), np.cos(pt_) + np.cos(rt_)))
-    e = [[rt[i][0] * q[0] + rt[i][1] * q[1] for i in range(3)] for q in top]  # q_j has z = 0
-    rhs = [-(axes[j][0] * e[j][0] + axes[j][1] * e[j][1]) for j in range(3)]  # t_j has z = 0
-    p_t = [rhs[0] * pinv_t[0, 0] + rhs[1] * pinv_t[1, 0] + rhs[2] * pinv_t[2, 0],
-           rhs[0] * pinv_t[0, 1] + rhs[1] * pinv_t[1, 1] + rhs[2] * pinv_t[2, 1],
-           g.tripod_home_height + share * z]
-    ra = [[re[i][0] * rt[j][0] + re[i][1] * rt[j][1] + re[i][2] * rt[j][2] for j in range(3)] for i in range(3)]
-    pe = (home[0] + x, home[1] + y, home[2] + z)
-    p_a = [pe[i] - (ra[i][0] * p_t[0] + ra[i][1] * p_t[1] + ra[i][2] * p_t[2]) for i in range(3)]
-    return ra, p_a, e, p_t
-
-
-def _legs_rows(ra: list, p_a: list, e: list, p_t: list, g: HybridGeometry) -> tuple[list, list, list]:
-    """Leg vectors (9 legs x 3 components of (N,)), their lengths (9 of (N,))
-    and the hexapod's joints about A's centre a_i (6 x 3 of (N,))."""
-    base, plat = _consts(g)[:2]
-    tri_base = _tripod_consts(g)[2]
-    a = [[ra[i][0] * q[0] + ra[i][1] * q[1] for i in range(3)] for q in plat]  # A_i has z = 0
-    legs = [[a[k][i] + p_a[i] - base[k, i] for i in range(3)] for k in range(6)]
-    legs += [[e[j][i] + p_t[i] - tri_base[j, i] for i in range(3)] for j in range(3)]
-    lengths = [np.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) for v in legs]
-    return legs, lengths, a
-
-
-def leg_lengths_rows(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY,
-                     chunk: int = 8192) -> np.ndarray:
-    """The nine actuator lengths (N, 9) (m; eqs 1, 4) for displacements
-    ``p`` (N, 6) of E at splits ``delta`` (N,): :func:`solve`'s lengths,
-    written per component and computed ``chunk`` poses at a time (arrays
-    that stay in the cache), several times faster for large N."""
-    out = np.empty((len(p), 9))
-    for lo in range(0, len(p), chunk):
-        ra, p_a, e, p_t = _stages_rows(p[lo:lo + chunk], delta[lo:lo + chunk], geometry)
-        out[lo:lo + chunk] = np.stack(_legs_rows(ra, p_a, e, p_t, geometry)[1], axis=1)
-    return out
-
-
-def _wrench_rows(legs: list, lengths: list, a: list, e: list, g: HybridGeometry) -> np.ndarray:
-    """Both stages' 6x6 matrices for N poses, stacked (2N, 6, 6): the
-    hexapod's H^T (rows [s_i, a_i x s_i / r]) then the tripod's wrench
-    matrix transposed (rows [s_j, e_j x s_j / r_te], then [t_j, e_j x t_j / r_te]);
-    a matrix and its transpose have the same singular values."""
-    axes = _tripod_consts(g)[1]
-    rows = []
-    for k, scale, arm in [(k, 1.0 / g.platform_radius, a[k]) for k in range(6)] + \
-            [(6 + j, 1.0 / g.r_te, e[j]) for j in range(3)]:
-        s = [c / lengths[k] for c in legs[k]]
-        rows += s + [(arm[1] * s[2] - arm[2] * s[1]) * scale, (arm[2] * s[0] - arm[0] * s[2]) * scale,
-                     (arm[0] * s[1] - arm[1] * s[0]) * scale]
-    n = len(lengths[0])
-    zero = np.zeros(n)
-    for j in range(3):  # constraint wrenches: t_j has z = 0
-        t = axes[j]
-        s = [np.full(n, t[0]), np.full(n, t[1]), zero]
-        arm, scale = e[j], 1.0 / g.r_te
-        rows += s + [(-arm[2] * t[1]) * scale, (arm[2] * t[0]) * scale, (arm[0] * t[1] - arm[1] * t[0]) * scale]
-    out = np.stack(rows, axis=-1).reshape(n, 2, 6, 6)
-    return out.transpose(1, 0, 2, 3).reshape(2 * n, 6, 6)
-
-
-def solve_rows(p: np.ndarray, delta: np.ndarray, geometry: HybridGeometry = DEFAULT_GEOMETRY, chunk: int = 8192
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`solve` without the transforms, for poses (N, 6) and splits (N,)
-    (no validation): the nine lengths (N, 9), both singularity measures (N,),
-    within limits and free (eq 14) (N,). The same equations per component,
-    ``chunk`` poses at a time; the vector env's step and the scenario checks."""
-    g = geometry
-    h0, t0 = _home_sigmas(g)
-    n = len(p)
-    lengths, mu_h, mu_t = np.empty((n, 9)), np.empty(n), np.empty(n)
-    for lo in range(0, n, chunk):
-        ra, p_a, e, p_t = _stages_rows(p[lo:lo + chunk], delta[lo:lo + chunk], g)
-        legs, lens, a = _legs_rows(ra, p_a, e, p_t, g)
-        lengths[lo:lo + chunk] = np.stack(lens, axis=1)
-        sig = _sigma_min(_wrench_rows(legs, lens, a, e, g))
-        m = len(lens[0])
-        mu_h[lo:lo + chunk], mu_t[lo:lo + chunk] = sig[:m] / h0, sig[m:] / t0
-    within = np.all((lengths >= g.l_min) & (lengths <= g.l_max), axis=1)
-    free = within & (mu_h >= g.singularity_threshold) & (mu_t >= g.singularity_threshold)
-    return lengths, mu_h, mu_t, within, free

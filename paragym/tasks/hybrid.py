@@ -18,7 +18,7 @@ from paragym.trajectories import nominal_path
 from paragym.units import MM
 
 __all__ = ["SCENARIOS", "HybridScenario", "hybrid_paper_scenario", "hybrid_random_scenario", "hybrid_random_scenarios",
-           "nominal_rows", "resolve_hybrid"]
+           "draw_scenarios", "nominal_rows", "resolve_hybrid"]
 
 SCENARIOS = ("paper", "random")
 
@@ -191,3 +191,14 @@ def resolve_hybrid(choice: Any) -> str | HybridScenario:
     """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
     "paper", "random", or a :class:`HybridScenario` that can run."""
     return resolve_scenario(choice, SCENARIOS, HybridScenario, _validate)
+
+
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
+                   geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> list[HybridScenario]:
+    """One episode's scenario per generator (single env, vector env and CLI
+    alike): the paper's, random pairs drawn from the generators, or the
+    custom one once :func:`resolve_hybrid` accepts it."""
+    choice = resolve_hybrid(choice)
+    if choice == "random":
+        return hybrid_random_scenarios(rngs, geometry)
+    return [hybrid_paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)

@@ -1,0 +1,174 @@
+"""The hybrid task's transition, written once over N robots (paper 002).
+
+The state of N robots is a dataclass of arrays (:class:`HybridTaskState`);
+:func:`reset` starts the chosen rows on their scenarios' nominal paths and
+:func:`step` moves the active rows one sample on. Both end in one numba
+kernel that solves the robot with the mechanism's own kernel
+(:func:`paragym.mechanisms.hybrid.k_solve`) and writes the observation and
+the reward, so that the single env (N = 1) and the native vector env run the
+same code (:mod:`paragym.envs.hybrid` are shells over this module).
+
+One step, for a robot at sample k of its nominal path (eq 17, u from 0 to 1
+in steps of tau) with split Delta and offset o:
+
+* Delta += a_0 * max_delta_step, clipped to [0, 1] (eqs 19-20);
+* k += 1; o = a_1..3 * j_bar (m; zero at the last sample, which must be P1);
+* the pose nominal[k] + (o, 0, 0, 0) is solved: nine legs, the two
+  singularity measures, eq 13 (limits) and eq 14 (free).
+
+Reward: -w_offset |o| / j_bar - w_delta |dDelta| / max_delta_step
+- w_singular * sum of max(0, 2 thr - mu) / (2 thr) over both stages
+- w_limit * (legs outside their limits). Terminated at u = 1.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from paragym.mechanisms import hybrid
+from paragym.tasks.hybrid import HybridScenario, nominal_rows
+from paragym.trajectories import nominal_path
+
+__all__ = ["OBS_SIZE", "POSE_SCALE", "HybridParams", "HybridTaskState", "reset", "step"]
+
+POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
+OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
+
+
+@dataclass(frozen=True)
+class HybridParams:
+    """The env's arguments that shape the transition (see the env's docstring)."""
+
+    max_delta_step: float = 0.05
+    j_bar: float = 0.02
+    w_offset: float = 0.1
+    w_delta: float = 0.05
+    w_singular: float = 1.0
+    w_limit: float = 1.0
+    geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
+    tau: float = 0.01
+
+    def kernel_args(self) -> tuple:
+        g = self.geometry
+        weights = np.array([self.max_delta_step, self.j_bar, self.w_offset, self.w_delta, self.w_singular,
+                            self.w_limit, g.l_min, g.l_max, g.singularity_threshold])
+        return (*hybrid.kernel_consts(g), weights, POSE_SCALE)
+
+
+@dataclass
+class HybridTaskState:
+    """N robots: where they are on their nominal paths (``u`` (K,) is shared:
+    every path has the same samples), the split, the offset, what the last
+    solve found, and the observation and reward of their last step."""
+
+    u: np.ndarray
+    nominal: np.ndarray
+    k: np.ndarray
+    delta: np.ndarray
+    d_delta: np.ndarray
+    offset: np.ndarray
+    all_free: np.ndarray
+    pose: np.ndarray
+    lengths: np.ndarray
+    mu_h: np.ndarray
+    mu_t: np.ndarray
+    within: np.ndarray
+    free: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    scenarios: list[HybridScenario | None] = field(default_factory=list)
+
+    @classmethod
+    def empty(cls, n: int, tau: float) -> HybridTaskState:
+        u = nominal_path(np.zeros(6), np.zeros(6), tau)[0]
+        return cls(u=u, nominal=np.zeros((n, len(u), 6)), k=np.zeros(n, np.int64), delta=np.full(n, 0.5),
+                   d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
+                   lengths=np.zeros((n, 9)), mu_h=np.zeros(n), mu_t=np.zeros(n), within=np.zeros(n, bool),
+                   free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32),
+                   reward=np.zeros(n), scenarios=[None] * n)
+
+
+def reset(state: HybridTaskState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
+    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.hybrid.resolve_hybrid`)
+    at u = 0, Delta = 0.5, no offset; then solve them."""
+    for i, scenario in zip(rows, scenarios, strict=True):
+        state.scenarios[i] = scenario
+    p0 = np.array([sc.p0 for sc in scenarios])
+    p1 = np.array([sc.p1 for sc in scenarios])
+    state.nominal[rows] = nominal_rows(p0, p1, params.tau)
+    state.k[rows], state.delta[rows], state.d_delta[rows] = 0, 0.5, 0.0
+    state.offset[rows], state.all_free[rows] = 0.0, True
+    mask = np.zeros(len(state.k), bool)
+    mask[rows] = True
+    _advance(state, params, np.zeros((len(state.k), 4)), mask, False)
+
+
+def step(state: HybridTaskState, params: HybridParams, actions: np.ndarray, active: np.ndarray) -> None:
+    """Move the ``active`` robots (N,) one sample on with ``actions`` (N, 4)
+    inside the Box (the env clips), and solve them."""
+    _advance(state, params, actions, active, True)
+
+
+def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
+             move: bool) -> None:
+    s = state
+    _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
+                    s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward,
+                    np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args())
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free,
+                    terminated, obs, reward, actions, rows, move,
+                    base, plat, top, axes, tri_base, pinv_t, home, sc, w, scale):
+    """The transition of every robot with ``rows[i]`` (module docstring).
+    ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
+    L_min, L_max, singularity threshold."""
+    last = len(u) - 1
+    work = np.empty((5, 6, 6))
+    for i in range(len(k)):
+        if not rows[i]:
+            continue
+        if move and k[i] < last:
+            new = min(1.0, max(0.0, delta[i] + actions[i, 0] * w[0]))
+            d_delta[i] = new - delta[i]
+            delta[i] = new
+            k[i] += 1
+            for c in range(3):
+                offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w[1]
+        for c in range(6):
+            pose[i, c] = nominal[i, k[i], c] + (offset[i, c] if c < 3 else 0.0)
+        mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home, sc,
+                                          True, lengths[i], work)
+        out = 0
+        for c in range(9):
+            if lengths[i, c] < w[6] or lengths[i, c] > w[7]:
+                out += 1
+        within[i] = out == 0
+        free[i] = within[i] and mu_h[i] >= w[8] and mu_t[i] >= w[8]
+        all_free[i] = all_free[i] and free[i]
+        terminated[i] = k[i] >= last
+        thr = 2 * w[8]
+        close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr
+        norm = math.sqrt(offset[i, 0] * offset[i, 0] + offset[i, 1] * offset[i, 1] + offset[i, 2] * offset[i, 2])
+        reward[i] = -w[2] * norm / w[1] - w[3] * abs(d_delta[i]) / w[0] - w[4] * close - w[5] * out
+        # observation: u, the nominal pose now and next, Delta, the strokes, both measures, the offset
+        nxt = min(k[i] + 1, last)
+        row = np.empty(OBS_SIZE)
+        row[0] = u[k[i]]
+        for c in range(6):
+            row[1 + c] = nominal[i, k[i], c] / scale[c]
+            row[7 + c] = nominal[i, nxt, c] / scale[c]
+        row[13] = delta[i]
+        for c in range(9):
+            row[14 + c] = 2 * (lengths[i, c] - w[6]) / (w[7] - w[6]) - 1
+        row[23], row[24] = mu_h[i], mu_t[i]
+        for c in range(3):
+            row[25 + c] = offset[i, c] / w[1]
+        for c in range(OBS_SIZE):
+            obs[i, c] = min(10.0, max(-10.0, row[c]))
