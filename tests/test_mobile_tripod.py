@@ -94,7 +94,7 @@ def test_float_eta_equals_the_batched_forward_kinematics():
     for _ in range(30):
         moved = units[0] + np.column_stack([rng.normal(0, 0.05, (3, 2)), np.zeros(3)])
         expected, _, _ = mt.forward(moved, eta0=eta)
-        np.testing.assert_allclose(mt.eta_one(moved, eta[0]), expected[0], atol=1e-11)
+        np.testing.assert_allclose(mt.eta(moved, eta[0])[0][0], expected[0], atol=1e-11)
 
 
 def test_terrain_gradient_matches_finite_differences():
@@ -117,18 +117,21 @@ def test_units_the_legs_cannot_reach_give_the_least_squares_reading():
     eta0, units = _start(mt.DEFAULT_GEOMETRY, math.radians(40.0))
     far = units.copy()
     far[0, :2] += 0.6 * (units[0, :2] - units[:, :2].mean(axis=0))  # unit 0 well outward
-    one = mt.eta_one(far, eta0)
-    rows = mt.eta_rows(np.stack([units, far]), np.stack([eta0, eta0]))
-    np.testing.assert_allclose(rows[1], one, atol=1e-12)
+    rows, converged = mt.eta(np.stack([units, far]), np.stack([eta0, eta0]))
+    one, alone = mt.eta(far, eta0)
+    assert converged[0] and not converged[1] and not alone[0]
+    np.testing.assert_array_equal(rows[1], one[0])  # one robot through the kernel equals the batch
+    one = one[0]
     np.testing.assert_allclose(rows[0], eta0, atol=1e-9)  # the reachable row is untouched
-    target = np.array(mt.distances_one(far))
+    target = mt.distances(far)[0]
 
     def cost(eta: np.ndarray) -> float:
-        return float(np.sum((np.array(mt.encoder_distances_one(eta)) - target) ** 2))
+        return float(np.sum((mt.distances(mt.plate_frame_units(eta))[0] - target) ** 2))
 
     assert cost(one) > 1e-6  # really out of reach
     assert cost(one) < cost(eta0)  # closer than the guess it started from
     # given the iterations, the solver reaches the minimum: no nearby eta does better
-    best = mt._eta_least_squares(target[None], eta0[None], mt.DEFAULT_GEOMETRY, iterations=300)[0]
+    best = np.empty(3)
+    mt._eta_least_squares(*target, eta0, mt.kernel_consts(mt.DEFAULT_GEOMETRY), 300, best)
     for step in np.eye(3) * 1e-4:
         assert cost(best) <= cost(best + step) + 1e-15 and cost(best) <= cost(best - step) + 1e-15

@@ -10,24 +10,50 @@ forward kinematics (:mod:`paragym.mechanisms.mobile_tripod`); the encoders
 add uniform noise of +-``encoder_noise``. Sampled at ``rate`` (20 Hz). The
 drive's random numbers (the encoder noise of every sample, the slip of
 every step) are drawn when it starts, in a fixed order, so that a drive
-depends only on its generator's state (and the vector env, which draws the
-same arrays per robot, reproduces it exactly). The
-terrain is flat or bumpy (a sum of Gaussian bumps and holes); PyBullet draws
-it as a heightfield with the robot (:class:`TripodScene`).
+depends only on its generator's state. The terrain is flat or bumpy (a sum
+of Gaussian bumps and holes); PyBullet draws it as a heightfield with the
+robot (:class:`paragym.sim.tripod_model.TripodScene`).
+
+The physics of one sample is written once, as a numba kernel over one robot
+of a :class:`DriveState` of N drives (:func:`k_drive_step`); the task's step
+(:mod:`paragym.tasks.mobile_tripod_step`) calls it for every robot, and
+:class:`TripodDrive` is one drive (N = 1) for the planners and the CLI.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from functools import cached_property, lru_cache
+from dataclasses import dataclass, field
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from paragym.mechanisms import mobile_tripod as mt
 
-__all__ = ["Terrain", "TripodDrive"]
+__all__ = ["DriveState", "Terrain", "TripodDrive", "k_drive_step", "k_terrain"]
+
+
+@njit(cache=True, error_model="numpy")
+def k_terrain(x, y, bumps, count):
+    """Ground height z(x, y) and its gradient: the sum of ``count`` Gaussian
+    bumps (x, y, height, 2 radius^2) of ``bumps`` (B, 4), added in order."""
+    h, gx, gy = 0.0, 0.0, 0.0
+    for b in range(count):
+        dx, dy = x - bumps[b, 0], y - bumps[b, 1]
+        each = math.exp(-((dx * dx + dy * dy) / bumps[b, 3])) * bumps[b, 2]
+        h += each
+        c = -2.0 * each / bumps[b, 3]
+        gx += c * dx
+        gy += c * dy
+    return h, gx, gy
+
+
+@njit(cache=True, error_model="numpy")
+def _terrain_all(xy, bumps, out):
+    for i in range(xy.shape[0]):
+        out[i, 0], out[i, 1], out[i, 2] = k_terrain(xy[i, 0], xy[i, 1], bumps, bumps.shape[0])
 
 
 @dataclass(frozen=True)
@@ -36,36 +62,23 @@ class Terrain:
 
     bumps: tuple[tuple[float, float, float, float], ...] = ()  # (x, y, height, radius)
 
-    @cached_property
-    def _arrays(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    @property
+    def kernel_bumps(self) -> np.ndarray:
+        """The bumps as :func:`k_terrain` takes them (B, 4): x, y, height, 2 radius^2."""
         b = np.array(self.bumps, float).reshape(-1, 4)
-        return b[:, :2], b[:, 2], 2 * b[:, 3] ** 2
-
-    def height(self, xy: np.ndarray) -> np.ndarray:
-        xy = np.asarray(xy, float)
-        if not self.bumps:
-            return np.zeros(xy.shape[:-1])
-        centres, heights, width = self._arrays
-        d2 = np.sum((xy[..., None, :] - centres) ** 2, axis=-1)
-        return np.sum(heights * np.exp(-d2 / width), axis=-1)
+        return np.column_stack([b[:, :3], 2 * b[:, 3] ** 2])
 
     def height_and_gradient(self, xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """z (N,) and its gradient (N, 2) at points (N, 2), in one pass."""
+        """z (...) and its gradient (..., 2) at points (..., 2) (:func:`k_terrain`)."""
         xy = np.asarray(xy, float)
-        if not self.bumps:
-            return np.zeros(xy.shape[:-1]), np.zeros(xy.shape)
-        centres, heights, width = self._arrays
-        rel = xy[..., None, :] - centres
-        each = heights * np.exp(-np.sum(rel * rel, axis=-1) / width)
-        return each.sum(axis=-1), np.sum((-2.0 * each / width)[..., None] * rel, axis=-2)
+        flat = np.ascontiguousarray(xy.reshape(-1, 2))
+        out = np.empty((len(flat), 3))
+        _terrain_all(flat, self.kernel_bumps, out)
+        return out[:, 0].reshape(xy.shape[:-1]), out[:, 1:].reshape(xy.shape)
 
-    def slope(self, xy: np.ndarray, direction: np.ndarray) -> np.ndarray:
-        """dz/ds along unit horizontal directions (N, 2) at points (N, 2)."""
-        if not self.bumps:
-            return np.zeros(np.shape(xy)[:-1])
-        h = 1e-4
-        both = self.height(np.stack([xy + h * direction, xy - h * direction]))
-        return (both[0] - both[1]) / (2 * h)
+    def height(self, xy: np.ndarray) -> np.ndarray:
+        """z (...) at points (..., 2)."""
+        return self.height_and_gradient(xy)[0]
 
 
 @lru_cache(maxsize=16)
@@ -81,41 +94,176 @@ def _start(geometry: mt.TripodGeometry, eta0: float) -> tuple[np.ndarray, np.nda
     return eta[0], units[0]
 
 
+@dataclass
+class DriveState:
+    """N drives: the units' true and odometric positions (N, 3, 3), the
+    terrain's gradient under the true units (N, 3, 2), the true eta (N, 3),
+    time and sample, each drive's command and disturbances, and its random
+    numbers (``noise`` (N, S, 3) per sample, ``slip_angle``, ``slip_speed``
+    (N, S, 3) per step; S as long as the longest drive)."""
+
+    true: np.ndarray
+    odometry: np.ndarray
+    gradient: np.ndarray
+    eta: np.ndarray
+    t: np.ndarray
+    k: np.ndarray
+    steps: np.ndarray
+    speed: np.ndarray
+    heading: np.ndarray
+    heading_error: np.ndarray
+    push: np.ndarray
+    bumps: np.ndarray
+    bump_count: np.ndarray
+    noise: np.ndarray
+    slip_angle: np.ndarray
+    slip_speed: np.ndarray
+    dt: float = 0.05
+    scenarios: list[Any] = field(default_factory=list)
+
+    @classmethod
+    def empty(cls, n: int, rate: float = 20.0) -> DriveState:
+        z = np.zeros
+        return cls(true=z((n, 3, 3)), odometry=z((n, 3, 3)), gradient=z((n, 3, 2)), eta=z((n, 3)), t=z(n),
+                   k=z(n, np.int64), steps=z(n, np.int64), speed=z(n), heading=z(n), heading_error=z((n, 3)),
+                   push=np.full((n, 3), np.nan), bumps=z((n, 0, 4)), bump_count=z(n, np.int64),
+                   noise=z((n, 1, 3)), slip_angle=z((n, 1, 3)), slip_speed=z((n, 1, 3)), dt=1.0 / rate,
+                   scenarios=[None] * n)
+
+    def _room(self, samples: int, bumps: int) -> None:
+        """Grow the random-number and bump arrays to hold ``samples`` samples and ``bumps`` bumps."""
+        extra = samples - self.noise.shape[1]
+        if extra > 0:
+            self.noise, self.slip_angle, self.slip_speed = (np.pad(a, ((0, 0), (0, extra), (0, 0))) for a in
+                                                            (self.noise, self.slip_angle, self.slip_speed))
+        extra = bumps - self.bumps.shape[1]
+        if extra > 0:
+            self.bumps = np.pad(self.bumps, ((0, 0), (0, extra), (0, 0)), constant_values=1.0)
+
+    def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
+              encoder_noise: float, eta0: float = math.radians(40.0)) -> None:
+        """Start drive ``i`` on ``scenario`` (a checked
+        :class:`paragym.tasks.mobile_tripod.DriveScenario`) at rest, the legs
+        at ``eta0``, drawing its random numbers from ``rng``: the encoder noise
+        of every sample, then (with slip) the slip angles and speeds of every step."""
+        steps = int(round(scenario.duration / self.dt))
+        bumps = scenario.terrain.kernel_bumps
+        self._room(steps + 1, len(bumps))
+        self.scenarios[i] = scenario
+        self.steps[i], self.k[i], self.t[i] = steps, 0, 0.0
+        self.speed[i], self.heading[i], self.heading_error[i] = scenario.speed, scenario.heading, \
+            scenario.heading_error
+        self.push[i] = scenario.push if scenario.push is not None else (np.nan, np.nan, np.nan)
+        self.bumps[i], self.bump_count[i] = 1.0, len(bumps)
+        self.bumps[i, :len(bumps)] = bumps
+        eta, units = _start(geometry, float(eta0))
+        self.true[i] = units
+        self.true[i, :, 2], self.gradient[i] = scenario.terrain.height_and_gradient(units[:, :2])
+        self.odometry[i] = self.true[i]
+        self.noise[i] = 0.0
+        self.noise[i, :steps + 1] = rng.uniform(-encoder_noise, encoder_noise, (steps + 1, 3))
+        self.slip_angle[i], self.slip_speed[i] = 0.0, 0.0
+        if scenario.slip > 0:
+            self.slip_angle[i, :steps] = rng.uniform(0, 2 * np.pi, (steps, 3))
+            self.slip_speed[i, :steps] = rng.uniform(0, scenario.slip, (steps, 3))
+        self.eta[i], _ = mt.eta(self.true[i], eta, geometry)  # the branch continuous with the legs at eta0
+
+    def kernel_args(self) -> tuple[Any, ...]:
+        """The arrays :func:`k_drive_step` takes, in its order."""
+        return (self.true, self.odometry, self.gradient, self.eta, self.t, self.k, self.speed, self.heading,
+                self.heading_error, self.push, self.bumps, self.bump_count, self.slip_angle, self.slip_speed,
+                self.dt)
+
+
+@njit(cache=True, error_model="numpy")
+def k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
+                 bump_count, slip_angle, slip_speed, dt):
+    """Advance drive ``i`` one sample; returns the odometric increment (the
+    same for all three units: the commanded way along the commanded heading).
+
+    Each unit rolls ``speed dt`` along its true heading (heading + its
+    error); on a slope the wheel rolls along the ground, so the horizontal way
+    is ``speed dt / sqrt(1 + slope^2)``; slip adds its velocity; a push moves
+    the pushed unit toward the robot's centre; then the terrain sets the
+    heights and the gradient, and eta follows (:func:`mt.k_eta`, from the last
+    eta so that the branch stays continuous)."""
+    way = speed[i] * dt
+    ox, oy = way * math.cos(heading[i]), way * math.sin(heading[i])
+    kk = k[i]
+    mx, my = np.empty(3), np.empty(3)
+    for u in range(3):
+        c, s = math.cos(heading[i] + heading_error[i, u]), math.sin(heading[i] + heading_error[i, u])
+        slope = gradient[i, u, 0] * c + gradient[i, u, 1] * s
+        scale = way / math.sqrt(1.0 + slope * slope)
+        v = slip_speed[i, kk, u] * dt
+        mx[u] = scale * c + v * math.cos(slip_angle[i, kk, u])
+        my[u] = scale * s + v * math.sin(slip_angle[i, kk, u])
+    if t[i] < push[i, 1] <= t[i] + dt:  # (NaN: no push)
+        unit, depth = int(push[i, 0]), push[i, 2]
+        ix = (true[i, 0, 0] + true[i, 1, 0] + true[i, 2, 0]) / 3.0 - true[i, unit, 0]
+        iy = (true[i, 0, 1] + true[i, 1, 1] + true[i, 2, 1]) / 3.0 - true[i, unit, 1]
+        norm = math.sqrt(ix * ix + iy * iy)
+        mx[unit] += depth * ix / norm
+        my[unit] += depth * iy / norm
+    for u in range(3):
+        true[i, u, 0] += mx[u]
+        true[i, u, 1] += my[u]
+        odometry[i, u, 0] += ox
+        odometry[i, u, 1] += oy
+    if bump_count[i]:
+        for u in range(3):
+            true[i, u, 2], gradient[i, u, 0], gradient[i, u, 1] = k_terrain(true[i, u, 0], true[i, u, 1], bumps[i],
+                                                                            bump_count[i])
+            odometry[i, u, 2] = k_terrain(odometry[i, u, 0], odometry[i, u, 1], bumps[i], bump_count[i])[0]
+    t[i] += dt
+    k[i] += 1
+    mt.k_eta(true[i], eta[i], geo, mt.NEWTON_ITERATIONS, 1e-13, eta[i])
+    return ox, oy
+
+
+@njit(cache=True, error_model="numpy")
+def _step_one(geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count,
+              slip_angle, slip_speed, dt):
+    return k_drive_step(0, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
+                        bump_count, slip_angle, slip_speed, dt)
+
+
 class TripodDrive:
-    """Steps the true units, the odometry and the encoders of one drive.
+    """One drive (the N = 1 case of :class:`DriveState`), for the planners,
+    the CLI and the tests: ``step()`` advances a sample and returns the
+    odometric increments (3, 2) of the units.
 
     Args:
-        scenario: the drive and its disturbances.
-        rng: for the encoder noise and the slip.
-        geometry: the tripod.
-        eta0: the legs' initial angle (rad), equal for the three.
+        scenario: a :class:`paragym.tasks.mobile_tripod.DriveScenario`.
+        rng: the generator of the drive's random numbers.
+        geometry: the tripod's legs and plate.
+        eta0: the legs' angle at rest (rad).
         encoder_noise: half-width of the uniform encoder noise (rad; paper: 1 deg).
-        rate: sampling rate (Hz; paper: 20).
+        rate: samples per second.
     """
 
     def __init__(self, scenario: Any, rng: np.random.Generator,
                  geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY, eta0: float = math.radians(40.0),
                  encoder_noise: float = math.radians(1.0), rate: float = 20.0) -> None:
         self.scenario, self.rng, self.geometry = scenario, rng, geometry
-        self.encoder_noise, self.dt = encoder_noise, 1.0 / rate
-        eta, units = _start(geometry, float(eta0))
-        self.eta = eta.copy()
-        self.true = units.copy()
-        self.true[:, 2], gradient = scenario.terrain.height_and_gradient(self.true[:, :2])
-        self._gradient = gradient
-        self.odometry = self.true.copy()
-        self.t = 0.0
-        self.steps = int(round(scenario.duration * rate))
-        self.k = 0
-        # the whole drive's random numbers, in this order: encoder noise per sample, slip per step
-        self.noise = rng.uniform(-encoder_noise, encoder_noise, (self.steps + 1, 3))
-        if scenario.slip > 0:
-            self.slip_angle = rng.uniform(0, 2 * np.pi, (self.steps, 3))
-            self.slip_speed = rng.uniform(0, scenario.slip, (self.steps, 3))
-        self._pose()
+        self.encoder_noise = encoder_noise
+        self.state = DriveState.empty(1, rate)
+        self.state.start(0, scenario, rng, geometry, encoder_noise, eta0)
+        self._geo = mt.kernel_consts(geometry)
 
-    def _pose(self) -> None:
-        self.eta = mt.eta_one(self.true, self.eta, self.geometry)  # the branch continuous with the last sample
+    dt = property(lambda self: self.state.dt)
+    steps = property(lambda self: int(self.state.steps[0]))
+    k = property(lambda self: int(self.state.k[0]))
+    t = property(lambda self: float(self.state.t[0]))
+    true = property(lambda self: self.state.true[0], doc="The units' true positions (3, 3), m.")
+    odometry = property(lambda self: self.state.odometry[0], doc="The units' odometric positions (3, 3), m.")
+    eta = property(lambda self: self.state.eta[0], doc="The true encoder angles (3,), rad.")
+    noise = property(lambda self: self.state.noise[0, :self.steps + 1])
+
+    @property
+    def encoders(self) -> np.ndarray:
+        """The measured eta (3,) of the current sample: the true angles plus uniform noise."""
+        return self.state.eta[0] + self.state.noise[0, self.state.k[0]]
 
     @property
     def rotation(self) -> np.ndarray:
@@ -127,40 +275,7 @@ class TripodDrive:
         """The plate's true centre (3,)."""
         return mt.forward(self.true[None], eta0=self.eta, geometry=self.geometry)[2][0]
 
-    @property
-    def encoders(self) -> np.ndarray:
-        """The measured eta (3,) of the current sample: the true angles plus uniform noise."""
-        return self.eta + self.noise[self.k]
-
     def step(self) -> np.ndarray:
-        """Advance one sample; returns the odometric increments (3, 2) of the units."""
-        sc, dt = self.scenario, self.dt
-        way = sc.speed * dt
-        ox, oy = way * math.cos(sc.heading), way * math.sin(sc.heading)
-        odo = np.array([[ox, oy], [ox, oy], [ox, oy]])
-        # on a slope the wheel rolls along the ground: less horizontal way than it counts
-        grad = self._gradient.tolist()
-        move = []
-        for i, err in enumerate(sc.heading_error):  # three units, in floats (cheaper than numpy at this size)
-            c, s = math.cos(sc.heading + err), math.sin(sc.heading + err)
-            slope = grad[i][0] * c + grad[i][1] * s
-            scale = way / math.sqrt(1.0 + slope * slope)
-            move.append([scale * c, scale * s])
-        move = np.array(move)
-        if sc.slip > 0:
-            a = self.slip_angle[self.k]
-            move += (self.slip_speed[self.k] * dt)[:, None] * np.stack([np.cos(a), np.sin(a)], 1)
-        if sc.push is not None and self.t < sc.push[1] <= self.t + dt:
-            unit, _, depth = sc.push
-            inward = self.true[:, :2].mean(axis=0) - self.true[unit, :2]  # toward the robot's centre
-            move[unit] += depth * inward / np.linalg.norm(inward)
-        self.true[:, :2] += move
-        self.odometry[:, :2] += odo
-        if sc.terrain.bumps:
-            heights, gradient = sc.terrain.height_and_gradient(np.concatenate([self.true[:, :2],
-                                                                               self.odometry[:, :2]]))
-            self.true[:, 2], self.odometry[:, 2], self._gradient = heights[:3], heights[3:], gradient[:3]
-        self.t += dt
-        self.k += 1
-        self._pose()
-        return odo
+        """Advance one sample (:func:`k_drive_step`); returns the odometric increments (3, 2) of the units."""
+        ox, oy = _step_one(self._geo, *self.state.kernel_args())
+        return np.array([[ox, oy], [ox, oy], [ox, oy]])
