@@ -130,7 +130,8 @@ def test_a_large_max_joint_step_is_checked_along_the_motion():
         plain.reset(seed=0)
         a = rng.uniform(-1, 1, 3)
         _, _, _, _, info = env.step(a)
-        end = np.clip(plain._alpha + a * plain.max_joint_step, plain._lo, plain._hi)
+        g = plain.geometry
+        end = np.clip(plain.state.alpha[0] + a * plain.max_joint_step, g.alpha_min, g.alpha_max)
         plain.scene.set_configuration(end)
         clear_at_end = plain.scene.clearance()[0] > 0
         if info["collision"] and clear_at_end:

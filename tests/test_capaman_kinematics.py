@@ -45,14 +45,21 @@ def test_home_pose():
     np.testing.assert_allclose(pose.sliders[0], 0.0, atol=1e-15)
 
 
-def test_single_configuration_path_equals_batched():
+def test_one_configuration_through_the_kernel_equals_the_batch():
+    """The scene poses one configuration with the kernel the batch loops: the
+    same numbers, and the tip is H - L_tool R z of the pose's rotation."""
     rng = np.random.default_rng(3)
     alpha = rng.uniform(G.alpha_min, G.alpha_max, (300, 3))
     pose = capaman.forward(alpha)
-    for a, h, q in zip(alpha, pose.position, pose.quaternion, strict=True):
-        h1, q1 = capaman.forward_one(a)
-        np.testing.assert_allclose(h1, h, atol=1e-12)
-        np.testing.assert_allclose(q1, q, atol=1e-12)
+    consts = capaman.kernel_consts(G)
+    for a, h, q, tip in zip(alpha, pose.position, pose.quaternion, pose.tip, strict=True):
+        out = capaman.k_forward(*a, consts)
+        assert out[-1]
+        np.testing.assert_array_equal(out[:3], h)
+        np.testing.assert_array_equal(out[3:7], q)
+        np.testing.assert_array_equal(out[8:11], tip)
+    np.testing.assert_allclose(capaman.tool_tip(pose), pose.position - G.tool_length * pose.rotation[:, :, 2],
+                               atol=1e-15)
 
 
 def test_jacobian_matches_finite_differences():

@@ -112,7 +112,7 @@ def test_collision_terminates_with_the_penalty():
     env.reset(seed=0)
     target = paper_scenario().alpha[1]
     for _ in range(200):  # head straight for T.P.2: through the obstacle
-        alpha = env.unwrapped._alpha
+        alpha = env.unwrapped.state.alpha[0]
         obs, r, term, trunc, info = env.step(np.clip((target - alpha) / np.radians(2), -1, 1))
         if term:
             break
@@ -125,7 +125,7 @@ def test_actions_hold_at_the_joint_stops():
     env.reset(seed=0)
     for _ in range(60):
         env.step(np.ones(3, np.float32))
-    alpha = env.unwrapped._alpha
+    alpha = env.unwrapped.state.alpha[0]
     assert np.all(alpha <= capaman.DEFAULT_GEOMETRY.alpha_max + 1e-12)
 
 
@@ -192,7 +192,7 @@ def test_dynamic_fidelity_passes_the_checker_and_tours_the_paper_scenario():
     ep = run_episode(env, RrtGaPolicy(env.unwrapped.max_joint_step), seed=0)
     assert ep.success and not any(i["collision"] for i in ep.infos)
     # the motors lag their commands: the measured joint path is not the commanded one
-    commanded = env.unwrapped._command
+    commanded = env.unwrapped.state.command[0]
     assert np.abs(ep.infos[-1]["alpha"] - commanded).max() < np.radians(2)
     a = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)
     b = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)

@@ -45,6 +45,7 @@ from functools import lru_cache
 from types import SimpleNamespace
 
 import numpy as np
+from numba import njit
 
 from paragym.units import DEG
 
@@ -60,7 +61,8 @@ __all__ = [
     "matrix_to_quat",
     "quat_multiply",
     "quat_to_matrix",
-    "forward_one",
+    "k_forward",
+    "kernel_consts",
     "part_shapes",
     "part_frames",
     "swept_part_boxes",
@@ -160,6 +162,7 @@ class CaPaManPose:
     quaternion: np.ndarray
     yaw: np.ndarray
     geometry: CaPaManGeometry = DEFAULT_GEOMETRY
+    tip: np.ndarray | None = None  # the tool tip H - L_tool R z (N, 3)
 
     @property
     def ball_joints(self) -> np.ndarray:
@@ -222,9 +225,78 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     ], axis=-1).reshape(q.shape[:-1] + (3, 3))
 
 
+@lru_cache(maxsize=32)
+def kernel_consts(g: CaPaManGeometry) -> np.ndarray:
+    """The geometry as :func:`k_forward` takes it (read-only): a, h, r_p,
+    c_off, L_tool, then per leg k (rows 5 + 8 k ..): tilt map (2), u_xy (2),
+    cos theta_k, sin theta_k, cos beta_k, sin beta_k."""
+    k = _consts(g)
+    legs = np.column_stack([k.tilt_map, k.u_xy, k.cos_t, k.sin_t, k.cos_b, k.sin_b])
+    out = np.concatenate([[g.a, g.h, g.r_p, float(k.c_off), g.tool_length], legs.ravel()])
+    out.setflags(write=False)
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def k_forward(a1, a2, a3, c):
+    """Closed-form direct kinematics of one configuration (equations (M1)-(M2)
+    of the module doc): the plate centre H (hx, hy, hz), its orientation as
+    an (x, y, z, w) quaternion, the yaw psi (the branch continuous with home,
+    cos psi > 0 side), the tool tip H - L_tool R z, and whether the
+    configuration is assemblable (a real yaw exists)."""
+    a, h, r_p, c_off, length = c[0], c[1], c[2], c[3], c[4]
+    z1, z2, z3 = a * math.sin(a1) + h, a * math.sin(a2) + h, a * math.sin(a3) + h
+    cs = (c_off + a * math.cos(a1), c_off + a * math.cos(a2), c_off + a * math.cos(a3))
+    csum = 3 * c_off + a * (math.cos(a1) + math.cos(a2) + math.cos(a3))
+    # heights: H_z + r_p (cos th_k n_x + sin th_k n_y) = z_k with n = R^T z (least squares)
+    nx = z1 * c[5] + z2 * c[13] + z3 * c[21]
+    ny = z1 * c[6] + z2 * c[14] + z3 * c[22]
+    nz = math.sqrt(1.0 - nx * nx - ny * ny)
+    # R0, the rotation about a horizontal axis with R0 n = z (Rodrigues, written out)
+    f = 1.0 / (1.0 + nz)
+    r00, r01, r11 = 1.0 - f * nx * nx, -f * nx * ny, 1.0 - f * ny * ny
+    coef_c, coef_s = np.empty(3), np.empty(3)  # in-plane: u_k . H + r_p u_k . Rz(psi) R0 e_k = c_k
+    for j in range(3):
+        ct, st, cb, sb = c[9 + 8 * j], c[10 + 8 * j], c[11 + 8 * j], c[12 + 8 * j]
+        qx, qy = r00 * ct + r01 * st, r01 * ct + r11 * st
+        coef_c[j] = qx * cb + qy * sb
+        coef_s[j] = qx * sb - qy * cb
+    big_a = r_p * (coef_c[0] + coef_c[1] + coef_c[2])
+    big_b = r_p * (coef_s[0] + coef_s[1] + coef_s[2])
+    ratio = csum / math.hypot(big_a, big_b)
+    if not abs(ratio) <= 1.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, False
+    # two roots base -/+ spread; the one with the larger cos(psi) is the home branch
+    base, spread = math.atan2(big_b, big_a), math.acos(ratio)
+    psi = base - spread if math.cos(base - spread) >= math.cos(base + spread) else base + spread
+    if abs(psi) > math.pi:
+        psi = math.atan2(math.sin(psi), math.cos(psi))
+    cp, sp = math.cos(psi), math.sin(psi)
+    hx = hy = 0.0  # sum_k u_k u_k^T = 3/2 I in the plane and sum_k resid_k = 0: exact solution
+    for j in range(3):
+        r = cs[j] - r_p * (coef_c[j] * cp + coef_s[j] * sp)
+        hx += r * c[7 + 8 * j]
+        hy += r * c[8 + 8 * j]
+    hz = (z1 + z2 + z3) / 3.0
+    # orientation Rz(psi) R0: yaw (0, 0, sz, cz) times the tilt (ny, -nx, 0) / (2 ch), ch = sqrt((1 + nz) / 2)
+    ch = math.sqrt(0.5 * (1.0 + nz))
+    tx, ty = ny / (2 * ch), -nx / (2 * ch)
+    sz, cz = math.sin(psi / 2), math.cos(psi / 2)
+    x, y, z, w = cz * tx - sz * ty, cz * ty + sz * tx, sz * ch, cz * ch
+    return (hx, hy, hz, x, y, z, w, psi, hx - length * 2 * (x * z + y * w), hy - length * 2 * (y * z - x * w),
+            hz - length * (1 - 2 * (x * x + y * y)), True)
+
+
+@njit(cache=True, error_model="numpy")
+def _forward_all(alpha, c, position, quat, yaw, tip, ok):
+    for i in range(alpha.shape[0]):
+        (position[i, 0], position[i, 1], position[i, 2], quat[i, 0], quat[i, 1], quat[i, 2], quat[i, 3], yaw[i],
+         tip[i, 0], tip[i, 1], tip[i, 2], ok[i]) = k_forward(alpha[i, 0], alpha[i, 1], alpha[i, 2], c)
+
+
 def forward(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
             validate: bool = True) -> CaPaManPose:
-    """Closed-form direct kinematics: crank angles -> plate pose.
+    """Closed-form direct kinematics: crank angles -> plate pose (:func:`k_forward`).
 
     Args:
         alpha: crank angles alpha_1..3 in rad, shape (3,) or (N, 3).
@@ -233,55 +305,25 @@ def forward(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
             inputs already checked).
 
     Returns:
-        CaPaManPose with batch size N. Equations (M1)-(M2) of the module doc;
-        the yaw branch continuous with the home pose (cos psi > 0 side).
+        CaPaManPose with batch size N. Raises ValueError where no real plate
+        yaw exists (the configuration is not assemblable).
     """
     g = geometry
-    k = _consts(g)
     al = check_joint_angles(alpha, g) if validate else np.atleast_2d(np.asarray(alpha, float))
-    zk = g.a * np.sin(al) + g.h  # heights of the ball joints (N, 3)
-    ck = k.c_off + g.a * np.cos(al)  # u_k . H_k (N, 3)
-
-    # Heights: H_z + r_p (cos th_k n_x + sin th_k n_y) = z_k with n = R^T z.
-    hz = zk.sum(axis=1) / 3.0
-    nxy = zk @ k.tilt_map
-    nx, ny = nxy[:, :1], nxy[:, 1:]  # (N, 1) columns
-    nz = np.sqrt(1.0 - nx * nx - ny * ny)
-    # R0, the rotation about a horizontal axis with R0 n = z (Rodrigues, written
-    # out): its upper-left block is [[1 - f nx^2, -f nx ny], [-f nx ny, 1 - f ny^2]].
-    f = 1.0 / (1.0 + nz)
-    r01 = -f * nx * ny
-    qx = (1.0 - f * nx * nx) * k.cos_t + r01 * k.sin_t  # x of q_k = R0 e_k, (N, 3)
-    qy = r01 * k.cos_t + (1.0 - f * ny * ny) * k.sin_t
-
-    # In-plane: u_k . H + r_p u_k . Rz(psi) q_k = c_k.
-    coef_c = qx * k.cos_b + qy * k.sin_b  # multiplies cos psi
-    coef_s = qx * k.sin_b - qy * k.cos_b  # multiplies sin psi
-    big_a = g.r_p * coef_c.sum(axis=1)
-    big_b = g.r_p * coef_s.sum(axis=1)
-    ratio = ck.sum(axis=1) / np.hypot(big_a, big_b)
-    if not (np.abs(ratio) <= 1.0).all():
+    al = np.ascontiguousarray(al, float)
+    n = len(al)
+    position, quat, yaw, tip, ok = np.empty((n, 3)), np.empty((n, 4)), np.empty(n), np.empty((n, 3)), \
+        np.empty(n, bool)
+    _forward_all(al, kernel_consts(g), position, quat, yaw, tip, ok)
+    if not ok.all():
         raise ValueError("alpha gives no real plate yaw: the configuration is not assemblable")
-    # Two roots base -/+ spread; the one with the larger cos(psi) is the home branch.
-    base = np.arctan2(big_b, big_a)
-    spread = np.arccos(ratio)
-    psi = np.where(np.cos(base - spread) >= np.cos(base + spread), base - spread, base + spread)
-    psi = np.arctan2(np.sin(psi), np.cos(psi))[:, None]
-    resid = ck - g.r_p * (coef_c * np.cos(psi) + coef_s * np.sin(psi))
-    # sum_k u_k u_k^T = 3/2 I in the plane and sum_k resid_k = 0: exact solution.
-    position = np.concatenate([resid @ k.u_xy, hz[:, None]], axis=1)
-    # Orientation Rz(psi) R0 as a quaternion: yaw (0, 0, sz, cz) times the tilt
-    # (ny, -nx, 0)/(2 ch), ch = cos(tilt/2) = sqrt((1 + nz)/2).
-    ch = np.sqrt(0.5 * (1.0 + nz))
-    tx, ty = ny / (2 * ch), -nx / (2 * ch)
-    sz, cz = np.sin(psi / 2), np.cos(psi / 2)
-    quat = np.concatenate([cz * tx - sz * ty, cz * ty + sz * tx, sz * ch, cz * ch], axis=1)
-    return CaPaManPose(position, quat_to_matrix(quat), quat, psi[:, 0], g)
+    return CaPaManPose(position, quat_to_matrix(quat), quat, yaw, g, tip)
 
 
 def tool_tip(pose: CaPaManPose, geometry: CaPaManGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
-    """World position of the tool tip, shape (N, 3): H - L_tool * (R z)."""
-    return pose.position - geometry.tool_length * pose.rotation[:, :, 2]
+    """World position of the tool tip, shape (N, 3): H - L_tool * (R z), as
+    :func:`k_forward` computed it with the pose's geometry."""
+    return pose.tip
 
 
 def inverse(position: np.ndarray, rotation: np.ndarray,
@@ -553,61 +595,3 @@ def swept_part_boxes(geometry: CaPaManGeometry = DEFAULT_GEOMETRY, samples_per_a
     step = np.max([np.abs(np.diff(b.reshape(cube), axis=ax)).max(axis=(0, 1, 2, 4))
                    for b in (lo_s, hi_s) for ax in range(3)], axis=0)
     return lo_s.min(axis=0) - step[:, None], hi_s.max(axis=0) + step[:, None]
-
-
-# --- one configuration in Python floats: the kinematic simulation's per-step path ------
-
-
-def forward_one(alpha: tuple[float, float, float] | np.ndarray,
-                geometry: CaPaManGeometry = DEFAULT_GEOMETRY
-                ) -> tuple[tuple[float, float, float], tuple[float, float, float, float]]:
-    """:func:`forward` for one configuration (no validation): (H, quaternion xyzw).
-
-    The same equations in plain Python floats. At N = 1 numpy's per-call
-    overhead makes the batched function cost ~120 us; this costs ~10 us, which
-    is what lets a single environment step thousands of times per second.
-    A test keeps the two equal to 1e-12.
-    """
-    g = geometry
-    k = _consts_one(g)
-    a1, a2, a3 = float(alpha[0]), float(alpha[1]), float(alpha[2])
-    z1, z2, z3 = g.a * math.sin(a1) + g.h, g.a * math.sin(a2) + g.h, g.a * math.sin(a3) + g.h
-    csum = 3 * k.c_off + g.a * (math.cos(a1) + math.cos(a2) + math.cos(a3))
-    c = (k.c_off + g.a * math.cos(a1), k.c_off + g.a * math.cos(a2), k.c_off + g.a * math.cos(a3))
-    tm = k.tilt_map
-    nx = z1 * tm[0][0] + z2 * tm[1][0] + z3 * tm[2][0]
-    ny = z1 * tm[0][1] + z2 * tm[1][1] + z3 * tm[2][1]
-    nz = math.sqrt(1.0 - nx * nx - ny * ny)
-    f = 1.0 / (1.0 + nz)
-    r00, r01, r11 = 1.0 - f * nx * nx, -f * nx * ny, 1.0 - f * ny * ny
-    coef_c, coef_s = [], []
-    for ct, st, cb, sb in k.leg_trig:
-        qx, qy = r00 * ct + r01 * st, r01 * ct + r11 * st
-        coef_c.append(qx * cb + qy * sb)
-        coef_s.append(qx * sb - qy * cb)
-    big_a, big_b = g.r_p * sum(coef_c), g.r_p * sum(coef_s)
-    ratio = csum / math.hypot(big_a, big_b)
-    if abs(ratio) > 1.0:
-        raise ValueError("alpha gives no real plate yaw: the configuration is not assemblable")
-    base, spread = math.atan2(big_b, big_a), math.acos(ratio)
-    psi = base - spread if math.cos(base - spread) >= math.cos(base + spread) else base + spread
-    cp, sp = math.cos(psi), math.sin(psi)
-    hx = hy = 0.0
-    for j in range(3):
-        r = c[j] - g.r_p * (coef_c[j] * cp + coef_s[j] * sp)
-        hx += r * k.u_xy[j][0]
-        hy += r * k.u_xy[j][1]
-    ch = math.sqrt(0.5 * (1.0 + nz))
-    tx, ty = ny / (2 * ch), -nx / (2 * ch)
-    sz, cz = math.sin(psi / 2), math.cos(psi / 2)
-    return (hx, hy, (z1 + z2 + z3) / 3.0), (cz * tx - sz * ty, cz * ty + sz * tx, sz * ch, cz * ch)
-
-
-@lru_cache(maxsize=32)
-def _consts_one(g: CaPaManGeometry) -> SimpleNamespace:
-    """The constants of :func:`_consts` as Python floats and lists."""
-    k = _consts(g)
-    return SimpleNamespace(
-        c_off=float(k.c_off), tilt_map=k.tilt_map.tolist(), u_xy=k.u_xy.tolist(),
-        leg_trig=list(zip(k.cos_t.tolist(), k.sin_t.tolist(), k.cos_b.tolist(), k.sin_b.tolist(), strict=True)),
-    )

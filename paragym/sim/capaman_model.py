@@ -102,6 +102,7 @@ class CaPaManScene:
         self.obstacles: tuple[Obstacle, ...] = ()
         self.alpha = g.alpha_home.copy()
         self.tip = np.zeros(3)
+        self._kinematics = capaman.kernel_consts(g)
         self.set_configuration(self.alpha)
 
     def set_obstacles(self, obstacles: Sequence[Obstacle]) -> None:
@@ -132,14 +133,13 @@ class CaPaManScene:
         """Place every part for crank angles ``alpha`` (rad, trusted: the caller
         validated them); returns the tool tip (m)."""
         a1, a2, a3 = (float(a) for a in alpha)
-        (hx, hy, hz), quat = capaman.forward_one((a1, a2, a3), self.geometry)
-        values = [[-a1], [-a1], [a1], [-a2], [-a2], [a2], [-a3], [-a3], [a3], [hx], [hy], [hz], quat]
+        hx, hy, hz, x, y, z, w, _, tx, ty, tz, ok = capaman.k_forward(a1, a2, a3, self._kinematics)
+        if not ok:
+            raise ValueError("alpha gives no real plate yaw: the configuration is not assemblable")
+        values = [[-a1], [-a1], [a1], [-a2], [-a2], [a2], [-a3], [-a3], [a3], [hx], [hy], [hz], [x, y, z, w]]
         self.sim.set_joints(self.ROBOT, self._joints, values)
-        x, y, z, w = quat
-        length = self.geometry.tool_length
         self.alpha = np.array((a1, a2, a3))
-        self.tip = np.array((hx - length * 2 * (x * z + y * w), hy - length * 2 * (y * z - x * w),
-                             hz - length * (1 - 2 * (x * x + y * y))))
+        self.tip = np.array((tx, ty, tz))
         return self.tip
 
     def part_frame(self, part: str) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,323 @@
+"""The CaPaMan task's transition, written once over N robots (paper 000).
+
+The state of N robots is a dataclass of arrays (:class:`CaPaManTaskState`);
+:func:`reset` puts the chosen rows at T.P.1 of their scenarios and
+:func:`step` moves the active rows. Where the parts are and how far they
+are from the obstacles is the *world*'s answer, one of three:
+
+* :class:`GridWorld` (N robots): the closed-form kinematics and paper 000's
+  occupancy grid Psi at the cluster points of eq 2 (numpy, all robots at once);
+* :class:`SceneWorld` (one robot): PyBullet's exact signed distance in the
+  kinematic scene;
+* :class:`DynamicWorld` (one robot): the closed chain under PyBullet's
+  dynamics; the motors chase the command for a control period and the
+  encoders say where the cranks got.
+
+The single env (N = 1, any world) and the native vector env (N robots, the
+grid) run this same transition; the arithmetic around the world's answers
+(the command, the path, progress, reaching, the observation and the reward)
+is one numba kernel per half-step.
+
+One step, for a robot at crank angles alpha with command c and current
+target T.P. (the tour T.C.1 -> 2 -> 3 -> 1):
+
+* c = clip(c + a * max_joint_step, 45 deg, 135 deg) (a joint stop);
+* kinematic worlds: the motion from alpha to c is checked every
+  ``SWEEP_STEP`` (2 deg per crank); at the first sub-step that collides, c
+  stops there; alpha = c. Dynamic world: alpha = where the motors got;
+* reward (after paper 000's fitness, eqs 3-5): -w_length |d alpha| +
+  w_progress (joint distance to the target before - after) - beta [clearance
+  < delta] + reach_bonus [target reached] - collision_penalty [collision].
+  Terminated on collision or when the tour is complete.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
+from typing import Protocol
+
+import numpy as np
+from numba import njit
+
+from paragym.mechanisms import capaman
+from paragym.sim import occupancy
+from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.obstacles import ENCODING_SIZE
+from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
+from paragym.units import DEG
+
+__all__ = ["OBS_SIZE", "SWEEP_STEP", "CaPaManParams", "CaPaManTaskState", "DynamicWorld", "GridWorld", "SceneWorld",
+           "World", "reset", "step"]
+
+#: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
+#: the 17 parts moves more than 4.7 mm (measured over the joint space, tested), under the 5 mm cell of the
+#: occupancy grid, so checking the end of each such step checks the motion at the grid's resolution
+SWEEP_STEP = 2 * DEG
+_TOUR = np.asarray(TOUR, np.int64)
+OBS_SIZE = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 1
+
+
+@dataclass(frozen=True)
+class CaPaManParams:
+    """The env's arguments that shape the transition (see the env's docstring)."""
+
+    max_joint_step: float = 2 * DEG
+    reach_tolerance: float = 1 * DEG
+    delta: float = 0.01
+    beta: float = 0.1
+    w_length: float = 1.0
+    w_progress: float = 2.0
+    reach_bonus: float = 1.0
+    collision_penalty: float = 5.0
+    clearance_cap: float = 0.05
+    geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
+
+    @property
+    def substeps(self) -> int:
+        """Sub-steps of one step's motion, each checked for collision (1 at the default max_joint_step)."""
+        return max(1, math.ceil(self.max_joint_step / SWEEP_STEP - 1e-9))
+
+    @cached_property
+    def kernel_args(self) -> np.ndarray:
+        """The numbers :func:`_finish_kernel` and :func:`_command` take (made once)."""
+        g = self.geometry
+        return np.array([self.max_joint_step, self.reach_tolerance, self.delta, self.beta, self.w_length,
+                         self.w_progress, self.reach_bonus, self.collision_penalty, self.clearance_cap,
+                         g.alpha_min, g.alpha_max])
+
+
+@dataclass
+class CaPaManTaskState:
+    """N robots: task points T.P. and task configurations T.C. (N, 3, 3), the
+    obstacles' encoding, crank angles, command and tool tip (N, 3), the tour's
+    progress, path length, last step's length and progress, the clearance
+    (m) and its nearest part, and the observation and reward of the last step."""
+
+    tp: np.ndarray
+    tc: np.ndarray
+    code: np.ndarray
+    alpha: np.ndarray
+    command: np.ndarray
+    tip: np.ndarray
+    reached: np.ndarray
+    path_length: np.ndarray
+    step_length: np.ndarray
+    progress: np.ndarray
+    just_reached: np.ndarray
+    clearance: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    near: list[str | None] = field(default_factory=list)
+    scenarios: list[CaPaManScenario | None] = field(default_factory=list)
+
+    @classmethod
+    def empty(cls, n: int) -> CaPaManTaskState:
+        z = np.zeros
+        return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
+                   command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
+                   progress=z(n), just_reached=z(n, bool), clearance=z(n), terminated=z(n, bool),
+                   obs=z((n, OBS_SIZE), np.float32), reward=z(n), near=[None] * n, scenarios=[None] * n)
+
+    @property
+    def target(self) -> np.ndarray:
+        """The index of each robot's current target T.P. (N,)."""
+        return _TOUR[np.minimum(self.reached, len(TOUR) - 1)]
+
+
+class World(Protocol):
+    """Where the parts are and how far they are from the obstacles."""
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None: ...
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        """Clearance (M,), tool tip (M, 3) and nearest part of robots ``rows`` at crank angles ``alpha`` (M, 3)."""
+        ...
+
+
+@lru_cache(maxsize=4)
+def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
+    return occupancy.cluster_points(geometry, spacing=0.01)
+
+
+class GridWorld:
+    """Paper 000's own test for N robots: the occupancy grid Psi of each
+    robot's obstacles as signed distances, read at the cluster points of eq 2
+    (10 mm apart) placed by the closed-form kinematics."""
+
+    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float) -> None:
+        self.geometry, self.grids, self.clusters = geometry, occupancy.DistanceGrids(n, cap=cap), _clusters(geometry)
+        self.part_names = [p.name for p in capaman.part_shapes(geometry)]
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        self.grids.set(int(i), scenario.obstacles)
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        pose = capaman.forward(alpha, self.geometry, validate=False)
+        clearance, part = occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
+        return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
+
+
+class SceneWorld:
+    """One robot in the kinematic PyBullet scene: its exact signed distance."""
+
+    def __init__(self, scene: CaPaManScene) -> None:
+        self.scene = scene
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        self.scene.set_obstacles(scenario.obstacles)
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        tip = self.scene.set_configuration(alpha[0])
+        clearance, near = self.scene.clearance()
+        return np.array([clearance]), tip[None], [near]
+
+
+class DynamicWorld(SceneWorld):
+    """One robot under PyBullet's dynamics: the motors chase the command for
+    ``control_period`` s; the obstacles are rigid bodies."""
+
+    def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
+        super().__init__(scene)
+        self.control_period = control_period
+        self._moved = False
+
+    def move(self, command: np.ndarray) -> np.ndarray:
+        """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
+        self.scene.drive(command[0], self.control_period)
+        self._moved = True
+        return self.scene.alpha[None]
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        if not self._moved:  # a reset: pose the chain; after a move the dynamics has posed it
+            return super().place(rows, alpha)
+        self._moved = False
+        clearance, near = self.scene.clearance()
+        return np.array([clearance]), self.scene.tip[None], [near]
+
+
+def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,
+          scenarios: list[CaPaManScenario]) -> None:
+    """Start ``rows`` at T.P.1 of their (checked) ``scenarios``."""
+    g = params.geometry
+    for i, scenario in zip(rows, scenarios, strict=True):
+        state.scenarios[i] = scenario
+        world.set_obstacles(i, scenario)
+        state.tp[i] = scenario.alpha
+        state.tc[i] = np.array(scenario.task_configs) if scenario.task_configs else \
+            capaman.forward(scenario.alpha, g).tip
+        state.code[i] = 0.0
+        for k, o in enumerate(scenario.obstacles):
+            state.code[i, k * ENCODING_SIZE:(k + 1) * ENCODING_SIZE] = o.encode()
+    state.alpha[rows] = state.tp[rows, 0]
+    state.command[rows] = state.alpha[rows]
+    state.reached[rows] = 0
+    state.path_length[rows], state.step_length[rows], state.progress[rows] = 0.0, 0.0, 0.0
+    state.just_reached[rows] = False
+    _place(state, world, rows, state.alpha[rows])
+    mask = np.zeros(len(state.alpha), bool)
+    mask[rows] = True
+    _finish(state, params, mask, state.alpha, False)
+
+
+def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: np.ndarray,
+         active: np.ndarray) -> None:
+    """Move the ``active`` robots (N,) with ``actions`` (N, 3) inside the Box (the env clips)."""
+    every = bool(active.all())
+    rows = np.arange(len(active)) if every else np.flatnonzero(active)
+    old = state.alpha.copy()
+    command = _command(state.command, np.ascontiguousarray(actions, np.float64), params.kernel_args)
+    if isinstance(world, DynamicWorld):
+        new = world.move(command[rows])
+    else:
+        n = params.substeps
+        moving = rows
+        for k in range(1, n):  # the motion checked on the way, SWEEP_STEP apart
+            on_the_way = old[moving] + (command[moving] - old[moving]) * (k / n)
+            clearance, _, _ = world.place(moving, on_the_way)
+            hit = clearance <= 0.0
+            command[moving[hit]] = on_the_way[hit]  # the mechanism stops where a sub-step first collides
+            moving = moving[~hit]
+            if not moving.size:
+                break
+        new = command if every else command[rows]
+    if every:
+        state.command[:], state.alpha[:] = command, new
+    else:
+        state.command[rows], state.alpha[rows] = command[rows], new
+    _place(state, world, rows, new)
+    _finish(state, params, active, old, True)
+
+
+def _place(state: CaPaManTaskState, world: World, rows: np.ndarray, alpha: np.ndarray) -> None:
+    clearance, tip, near = world.place(rows, alpha)
+    state.clearance[rows], state.tip[rows] = clearance, tip
+    for i, part in zip(rows.tolist(), near, strict=True):
+        state.near[i] = part
+
+
+def _finish(state: CaPaManTaskState, params: CaPaManParams, rows: np.ndarray, old: np.ndarray, move: bool) -> None:
+    s = state
+    _finish_kernel(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.path_length, s.step_length, s.progress,
+                   s.just_reached, s.clearance, s.terminated, s.obs, s.reward, old, rows, move, params.kernel_args,
+                   _TOUR)
+
+
+@njit(cache=True, error_model="numpy")
+def _command(command, actions, p):
+    """The new commands (N, 3): c + a * max_joint_step, inside the joint range."""
+    out = np.empty_like(command)
+    for i in range(command.shape[0]):
+        for c in range(3):
+            out[i, c] = min(p[10], max(p[9], command[i, c] + actions[i, c] * p[0]))
+    return out
+
+
+@njit(cache=True, error_model="numpy")
+def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance,
+                   terminated, obs, reward, old, rows, move, p, tour):
+    """After the world has placed the robots of ``rows``: the step's length and
+    progress toward the target, reaching, the reward, the end and the observation.
+    ``p``: max_joint_step, reach_tolerance, delta, beta, w_length, w_progress,
+    reach_bonus, collision_penalty, clearance_cap, alpha_min, alpha_max."""
+    n_tour = len(tour)
+    mid, half = (p[10] + p[9]) / 2, (p[10] - p[9]) / 2
+    for i in range(alpha.shape[0]):
+        if not rows[i]:
+            continue
+        collision = clearance[i] <= 0.0
+        if move:
+            t = tour[min(reached[i], n_tour - 1)]
+            d0, d1, d2 = alpha[i, 0] - old[i, 0], alpha[i, 1] - old[i, 1], alpha[i, 2] - old[i, 2]
+            step_length[i] = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            path_length[i] += step_length[i]
+            b0, b1, b2 = tp[i, t, 0] - old[i, 0], tp[i, t, 1] - old[i, 1], tp[i, t, 2] - old[i, 2]
+            a0, a1, a2 = tp[i, t, 0] - alpha[i, 0], tp[i, t, 1] - alpha[i, 1], tp[i, t, 2] - alpha[i, 2]
+            after = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+            progress[i] = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2) - after
+            just_reached[i] = after <= p[1] and not collision
+            if just_reached[i]:
+                reached[i] += 1
+        r = -p[4] * step_length[i] + p[5] * progress[i]
+        if clearance[i] < p[2]:
+            r -= p[3]
+        if just_reached[i]:
+            r += p[6]
+        if collision:
+            r -= p[7]
+        reward[i] = r
+        terminated[i] = collision or reached[i] >= n_tour
+        # observation: cranks, tip, target T.P. and T.C., obstacles, clearance, progress
+        t = tour[min(reached[i], n_tour - 1)]
+        for c in range(3):
+            obs[i, c] = min(1.0, max(-1.0, (alpha[i, c] - mid) / half))
+            obs[i, 3 + c] = tip[i, c]
+            obs[i, 6 + c] = (tp[i, t, c] - mid) / half
+            obs[i, 9 + c] = tc[i, t, c]
+        for c in range(code.shape[1]):
+            obs[i, 12 + c] = code[i, c]
+        obs[i, 12 + code.shape[1]] = max(clearance[i], -p[8])
+        obs[i, 13 + code.shape[1]] = reached[i] / n_tour
