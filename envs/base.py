@@ -15,6 +15,9 @@ import numpy as np
 
 __all__ = ["ParagymEnv", "check_action", "check_options", "check_seed"]
 
+_FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
+_ONE = np.ones(1, bool)
+
 
 def check_seed(seed: Any, name: str = "seed") -> int | None:
     """``seed`` if it is None or a non-negative integer (numpy's seeds), else a
@@ -103,7 +106,11 @@ class ParagymEnv(gym.Env):
 
     Hooks: ``_reset_task(options) -> info``, ``_apply_action(action)``,
     ``_observe() -> obs``, ``_reward() -> float``, ``_terminated() -> bool``,
-    ``_info() -> dict``, ``_render_rgb() -> array``, ``_close()``.
+    ``_info() -> dict``, ``_render_rgb() -> array``, ``_close()``. Every
+    paragym env is the N = 1 case of its task's transition
+    (``paragym.tasks.*_step``): the defaults of the first four read
+    ``self.state`` and call the task's ``_start`` and ``_transition``, which
+    one mixin per task gives the single env and the vector env alike.
     """
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 25}
@@ -144,31 +151,60 @@ class ParagymEnv(gym.Env):
     def _check_action(self, action: np.ndarray) -> np.ndarray:
         return check_action(action, self.action_space)
 
-    # --- hooks ---------------------------------------------------------------------
+    # --- hooks: the defaults serve an env that is a shell over a task's transition ----------
+    #: the task's state of one robot (N = 1) and the transition's parameters (paragym.tasks.*_step)
+    state: Any = None
+    params: Any = None
+
     def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        raise NotImplementedError
+        scenarios = self._start(_FIRST, [self.np_random], options)
+        info = self._info()
+        info["scenario"] = scenarios[0]
+        return info
 
     def _apply_action(self, action: np.ndarray) -> None:
-        raise NotImplementedError
+        if self._ended():
+            raise RuntimeError("the episode has ended: call reset()")
+        self._transition(action[None], _ONE)
+
+    def _ended(self) -> bool:
+        """Whether a step now would run past the episode's end (then it raises)."""
+        return bool(self.state.terminated[0])
+
+    @property
+    def scenario(self) -> Any:
+        """The episode's scenario (``info["scenario"]`` of the last reset)."""
+        return self.state.scenarios[0]
 
     def _observe(self) -> np.ndarray:
-        raise NotImplementedError
+        return self.state.obs[0].copy()
 
     def _reward(self) -> float:
-        raise NotImplementedError
+        return float(self.state.reward[0])
 
     def _terminated(self) -> bool:
-        raise NotImplementedError
+        return bool(self.state.terminated[0])
 
     def _info(self) -> dict[str, Any]:
+        raise NotImplementedError
+
+    # --- a task's hooks, shared by its single env and its vector env (a mixin defines them) -----
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        """Draw and check the scenarios of robots ``rows`` (one generator
+        each), start them, and return the scenarios."""
+        raise NotImplementedError
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        """Step the ``active`` robots of ``self.state`` with ``actions`` (N, ...)."""
         raise NotImplementedError
 
     def _render_rgb(self) -> np.ndarray:
         raise NotImplementedError
 
     def _show(self) -> None:
-        """Update the GUI in ``render_mode="human"``; a scene that PyBullet
-        keeps up to date itself needs nothing (the default)."""
+        """Update the GUI in ``render_mode="human"``: pose the scene by drawing
+        it (an env whose scene PyBullet keeps up to date needs nothing)."""
+        self._render_rgb()
 
     # --- a PyBullet scene built on the first render, for envs whose step needs none ----
     _render_scene: Any = None
@@ -187,4 +223,4 @@ class ParagymEnv(gym.Env):
             self._render_scene = None
 
     def _close(self) -> None:
-        raise NotImplementedError
+        self._close_render_scene()

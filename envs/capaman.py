@@ -34,10 +34,28 @@ from paragym.units import DEG
 
 __all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
 
-_ONE = np.ones(1, bool)
+class _CaPaManTask:
+    """The task's hooks, the same for the single env (N = 1) and the vector env."""
+
+    state: CaPaManTaskState
+    params: CaPaManParams
+    world: Any
+
+    def new_state(self, n: int) -> CaPaManTaskState:
+        return CaPaManTaskState.empty(n)
+
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        choice = resolve_capaman(options.get("scenario", self.scenario_arg))
+        checker = self._checker()
+        scenarios = [draw_scenario(choice, rng, checker, _clusters(self.geometry)) for rng in rngs]
+        task_step.reset(self.state, self.params, self.world, rows, scenarios)
+        return scenarios
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        task_step.step(self.state, self.params, self.world, actions, active)
 
 
-class CaPaManCollisionFreeEnv(ParagymEnv):
+class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
     """Move the CaPaMan's tool through T.C.1 -> T.C.2 -> T.C.3 -> T.C.1 with no
     part of the manipulator touching an obstacle.
 
@@ -166,22 +184,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
             self.scene = CaPaManDynamicScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
             self.world = DynamicWorld(self.scene, self.control_period)
         self._scenario_scene: CaPaManScene | None = None
-        self.state = CaPaManTaskState.empty(1)
-
-    @property
-    def scenario(self) -> CaPaManScenario | None:
-        """The episode's obstacles and task."""
-        return self.state.scenarios[0]
-
-    # --- hooks ---------------------------------------------------------------------------
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        scenario = draw_scenario(options.get("scenario", self.scenario_arg), self.np_random, self._checker(),
-                                 _clusters(self.geometry))
-        self.scene.set_obstacles(scenario.obstacles)
-        task_step.reset(self.state, self.params, self.world, np.zeros(1, np.int64), [scenario])
-        info = self._info()
-        info["scenario"] = scenario
-        return info
+        self.state = self.new_state(1)
 
     def _checker(self) -> CaPaManScene:
         """The kinematic scene that generates and checks scenarios (the env's
@@ -191,18 +194,6 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
         if self._scenario_scene is None:
             self._scenario_scene = CaPaManScene(self.geometry, clearance_cap=self.scene.clearance_cap)
         return self._scenario_scene
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        task_step.step(self.state, self.params, self.world, action[None], _ONE)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs[0].copy()
-
-    def _reward(self) -> float:
-        return float(self.state.reward[0])
-
-    def _terminated(self) -> bool:
-        return bool(self.state.terminated[0])
 
     def _info(self) -> dict[str, Any]:
         s = self.state
@@ -219,6 +210,12 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
             "tool_tip": s.tip[0].copy(),
         }
 
+    def _ended(self) -> bool:
+        return False  # stepping on after the end is the caller's business, as in the released env
+
+    def _show(self) -> None:
+        """PyBullet keeps the GUI's scene posed (the grid check does not pose it: render does)."""
+
     def _render_rgb(self) -> np.ndarray:
         if self.collision == "grid":  # the scene is not posed by the steps
             self.scene.set_configuration(self.state.alpha[0])
@@ -230,7 +227,7 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
             self._scenario_scene.close()
 
 
-class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
+class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`CaPaManCollisionFreeEnv` with
     ``collision="grid"`` stepped together: the same transition
     (:mod:`paragym.tasks.capaman_step`) over N robots, with paper 000's grid
@@ -239,36 +236,19 @@ class CaPaManCollisionFreeVectorEnv(ParagymVectorEnv):
     PyBullet scene, robot by robot, at reset. Keyword arguments are the
     single env's (``collision`` is "grid"; ``fidelity`` is "kinematic")."""
 
+    single_class = CaPaManCollisionFreeEnv
+
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
                  **kwargs: Any) -> None:
         if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
             raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
                              "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
         kwargs.update(collision="grid", fidelity="kinematic")
-        super().__init__(num_envs, CaPaManCollisionFreeEnv(**kwargs), max_episode_steps, render_index)
-        e = self.single_env
-        self.geometry, self.params = e.geometry, e.params
-        self.world = GridWorld(self.num_envs, e.geometry, e.params.clearance_cap)
-        self.state = CaPaManTaskState.empty(self.num_envs)
+        super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
+        self.world = GridWorld(self.num_envs, self.geometry, self.params.clearance_cap)
 
-    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        e = self.single_env
-        choice = resolve_capaman(options.get("scenario", e.scenario_arg))
-        checker = e._checker()
-        scenarios = [draw_scenario(choice, self._rngs[i], checker, _clusters(self.geometry)) for i in rows]
-        task_step.reset(self.state, self.params, self.world, rows, scenarios)
-
-    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, self.world, actions, active)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs.copy()
-
-    def _reward(self) -> np.ndarray:
-        return self.state.reward.copy()
-
-    def _terminated(self) -> np.ndarray:
-        return self.state.terminated.copy()
+    def _checker(self) -> CaPaManScene:
+        return self.single_env._checker()
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

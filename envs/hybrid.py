@@ -29,10 +29,25 @@ from paragym.tasks.hybrid_step import OBS_SIZE, HybridParams, HybridTaskState
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
-_ONE = np.ones(1, bool)
+class _HybridTask:
+    """The task's hooks, the same for the single env (N = 1) and the vector env."""
+
+    state: HybridTaskState
+    params: HybridParams
+
+    def new_state(self, n: int) -> HybridTaskState:
+        return HybridTaskState.empty(n, self.params.tau)
+
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), rngs, self.geometry)
+        task_step.reset(self.state, self.params, rows, scenarios)
+        return scenarios
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        task_step.step(self.state, self.params, actions, active)
 
 
-class HybridSingularityFreeEnv(ParagymEnv):
+class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
     """Move a hexapod + tripod's end-effector along a polynomial path without
     singular poses or leg-limit violations.
 
@@ -103,33 +118,7 @@ class HybridSingularityFreeEnv(ParagymEnv):
                                    float(w_singular), float(w_limit), geometry, self.tau)
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
-        self.state = HybridTaskState.empty(1, self.tau)
-
-    @property
-    def scenario(self) -> HybridScenario | None:
-        """The episode's start and goal."""
-        return self.state.scenarios[0]
-
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), [self.np_random], self.geometry)
-        task_step.reset(self.state, self.params, np.zeros(1, np.int64), scenarios)
-        info = self._info()
-        info["scenario"] = scenarios[0]
-        return info
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        if self.state.terminated[0]:
-            raise RuntimeError("the episode has ended: call reset()")
-        task_step.step(self.state, self.params, action[None], _ONE)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs[0].copy()
-
-    def _reward(self) -> float:
-        return float(self.state.reward[0])
-
-    def _terminated(self) -> bool:
-        return bool(self.state.terminated[0])
+        self.state = self.new_state(1)
 
     def _info(self) -> dict[str, Any]:
         s = self.state
@@ -147,40 +136,13 @@ class HybridSingularityFreeEnv(ParagymEnv):
         return self._drawn(lambda gui: HybridScene(self.geometry, gui=gui),
                            lambda scene: scene.set_state(solved.t_a[0], solved.t_e[0]))
 
-    def _show(self) -> None:
-        self._render_rgb()  # the scene is posed when drawn
 
-    def _close(self) -> None:
-        self._close_render_scene()
-
-
-class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
+class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
     the same transition (:mod:`paragym.tasks.hybrid_step`) over N robots.
     Keyword arguments are the single env's."""
 
-    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 **kwargs: Any) -> None:
-        super().__init__(num_envs, HybridSingularityFreeEnv(**kwargs), max_episode_steps, render_index)
-        self.geometry, self.params = self.single_env.geometry, self.single_env.params
-        self.state = HybridTaskState.empty(self.num_envs, self.params.tau)
-
-    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        scenarios = draw_scenarios(options.get("scenario", self.single_env.scenario_arg),
-                                   [self._rngs[i] for i in rows], self.geometry)
-        task_step.reset(self.state, self.params, rows, scenarios)
-
-    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs.copy()
-
-    def _reward(self) -> np.ndarray:
-        return self.state.reward.copy()
-
-    def _terminated(self) -> np.ndarray:
-        return self.state.terminated.copy()
+    single_class = HybridSingularityFreeEnv
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

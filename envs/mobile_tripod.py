@@ -23,10 +23,26 @@ from paragym.tasks.mobile_tripod_step import OBS_SIZE, TripodParams, TripodTaskS
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
-_ONE = np.ones(1, bool)
+class _TripodTask:
+    """The task's hooks, the same for the single env (N = 1) and the vector env."""
+
+    state: TripodTaskState
+    params: TripodParams
+
+    def new_state(self, n: int) -> TripodTaskState:
+        return TripodTaskState.empty(n)
+
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        choice = resolve_drive(options.get("scenario", self.scenario_arg))
+        scenarios = [draw_drive(choice, rng) for rng in rngs]
+        task_step.reset(self.state, self.params, rows, scenarios, rngs)
+        return scenarios
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        task_step.step(self.state, self.params, actions, active)
 
 
-class MobileTripodOdometryEnv(ParagymEnv):
+class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     """Keep track of where a mobile parallel robot's three drive units really are.
 
     ## Description
@@ -89,33 +105,7 @@ class MobileTripodOdometryEnv(ParagymEnv):
         self.params = TripodParams(float(encoder_noise), float(max_correction), geometry)
         self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
         self.observation_space = spaces.Box(-100.0, 100.0, (OBS_SIZE,), np.float32)
-        self.state = TripodTaskState.empty(1)
-
-    @property
-    def scenario(self) -> DriveScenario | None:
-        """The episode's drive."""
-        return self.state.scenarios[0]
-
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        scenario = draw_drive(options.get("scenario", self.scenario_arg), self.np_random)
-        task_step.reset(self.state, self.params, np.zeros(1, np.int64), [scenario], [self.np_random])
-        info = self._info()
-        info["scenario"] = scenario
-        return info
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        if self.state.terminated[0]:
-            raise RuntimeError("the episode has ended: call reset()")
-        task_step.step(self.state, self.params, action[None], _ONE)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs[0].copy()
-
-    def _reward(self) -> float:
-        return float(self.state.reward[0])
-
-    def _terminated(self) -> bool:
-        return bool(self.state.terminated[0])
+        self.state = self.new_state(1)
 
     def _detected_fault(self) -> tuple[int, str] | None:
         """The paper's reading of eq 4 against eq 5 for the current estimate:
@@ -146,41 +136,13 @@ class MobileTripodOdometryEnv(ParagymEnv):
         return self._drawn(lambda gui: TripodScene(self.scenario.terrain, gui=gui),
                            lambda scene: scene.set_state(d.true[0], centre[0], rotation[0], self.geometry))
 
-    def _show(self) -> None:
-        self._render_rgb()
 
-    def _close(self) -> None:
-        self._close_render_scene()
-
-
-class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
+class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`MobileTripodOdometryEnv` stepped together:
     the same transition (:mod:`paragym.tasks.mobile_tripod_step`) over N
     robots. Keyword arguments are the single env's."""
 
-    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 **kwargs: Any) -> None:
-        super().__init__(num_envs, MobileTripodOdometryEnv(**kwargs), max_episode_steps, render_index)
-        self.geometry, self.params = self.single_env.geometry, self.single_env.params
-        self.state = TripodTaskState.empty(self.num_envs)
-
-    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        choice = resolve_drive(options.get("scenario", self.single_env.scenario_arg))
-        rngs = [self._rngs[i] for i in rows]
-        scenarios = [draw_drive(choice, rng) for rng in rngs]
-        task_step.reset(self.state, self.params, rows, scenarios, rngs)
-
-    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs.copy()
-
-    def _reward(self) -> np.ndarray:
-        return self.state.reward.copy()
-
-    def _terminated(self) -> np.ndarray:
-        return self.state.terminated.copy()
+    single_class = MobileTripodOdometryEnv
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

@@ -22,10 +22,25 @@ from paragym.tasks.orthoglide_step import KAPPA_LIMIT, OBS_SIZE, OrthoglideParam
 __all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
            "orthoglide_random_tasks"]
 
-_ONE = np.ones(1, bool)
+class _OrthoglideTask:
+    """The task's hooks, the same for the single env (N = 1) and the vector env."""
+
+    state: OrthoglideState
+    params: OrthoglideParams
+
+    def new_state(self, n: int) -> OrthoglideState:
+        return OrthoglideState.empty(n)
+
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        tasks = draw_tasks(options.get("scenario", self.scenario_arg), rngs, self.geometry)
+        task_step.reset(self.state, self.params, rows, tasks)
+        return tasks
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        task_step.step(self.state, self.params, actions, active)
 
 
-class Orthoglide2PRRKappaEnv(ParagymEnv):
+class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
     """Track a path with the 2-dof Orthoglide assisted by a translating table,
     keeping the condition number of J low.
 
@@ -94,33 +109,15 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         dim = 1 if action_mode == "null_space" else 3
         self.action_space = spaces.Box(-1.0, 1.0, (dim,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
-        self.state = OrthoglideState.empty(1)
+        self.state = self.new_state(1)
 
     @property
     def task(self) -> Any:
         """The episode's path (:class:`paragym.tasks.orthoglide.Task`)."""
-        return self.state.tasks[0]
+        return self.state.scenarios[0]
 
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        tasks = draw_tasks(options.get("scenario", self.scenario_arg), [self.np_random], self.geometry)
-        task_step.reset(self.state, self.params, np.zeros(1, np.int64), tasks)
-        info = self._info()
-        info["scenario"] = tasks[0]
-        return info
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        if self.state.k[0] >= self.state.last[0]:
-            raise RuntimeError("the episode has ended: call reset()")
-        task_step.step(self.state, self.params, action[None], _ONE)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs[0].copy()
-
-    def _reward(self) -> float:
-        return float(self.state.reward[0])
-
-    def _terminated(self) -> bool:
-        return bool(self.state.terminated[0])
+    def _ended(self) -> bool:
+        return bool(self.state.k[0] >= self.state.last[0])
 
     def _info(self) -> dict[str, Any]:
         s = self.state
@@ -134,40 +131,13 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
         return self._drawn(lambda gui: OrthoglideScene(self.geometry, gui=gui),
                            lambda scene: scene.set_state(self.state.rho[0].copy(), self.task.points))
 
-    def _show(self) -> None:
-        self._render_rgb()  # the scene is posed when drawn
 
-    def _close(self) -> None:
-        self._close_render_scene()
-
-
-class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
+class Orthoglide2PRRKappaVectorEnv(_OrthoglideTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`Orthoglide2PRRKappaEnv` stepped together:
     the same transition (:mod:`paragym.tasks.orthoglide_step`) over N robots.
     Keyword arguments are the single env's."""
 
-    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 **kwargs: Any) -> None:
-        super().__init__(num_envs, Orthoglide2PRRKappaEnv(**kwargs), max_episode_steps, render_index)
-        self.geometry, self.params = self.single_env.geometry, self.single_env.params
-        self.state = OrthoglideState.empty(self.num_envs)
-
-    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        tasks = draw_tasks(options.get("scenario", self.single_env.scenario_arg), [self._rngs[i] for i in rows],
-                           self.geometry)
-        task_step.reset(self.state, self.params, rows, tasks)
-
-    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs.copy()
-
-    def _reward(self) -> np.ndarray:
-        return self.state.reward.copy()
-
-    def _terminated(self) -> np.ndarray:
-        return self.state.terminated.copy()
+    single_class = Orthoglide2PRRKappaEnv
 
     def _infos(self) -> dict[str, Any]:
         s = self.state
@@ -177,5 +147,5 @@ class Orthoglide2PRRKappaVectorEnv(ParagymVectorEnv):
         one, s = self.single_env.state, self.state
         m = s.last[i] + 1
         one._room(m)
-        one.rho[0], one.k[0], one.last[0], one.tasks[0] = s.rho[i], s.k[i], s.last[i], s.tasks[i]
+        one.rho[0], one.k[0], one.last[0], one.scenarios[0] = s.rho[i], s.k[i], s.last[i], s.scenarios[i]
         one.path[0, :m] = s.path[i, :m]

@@ -14,12 +14,13 @@ after a robot's episode ends resets that robot (its action is ignored; its
 reward is 0 and its termination and truncation flags are False). The time
 limit of the registration (``max_episode_steps``) truncates as ``TimeLimit``.
 
-A step is array operations on all robots. A reset draws each resetting
-robot's random numbers from its own generator (a short loop: the draws must
-stay per robot to match the single env); the tests that accept or reject a
-drawn scenario then run for all of them at once where the task allows
-(Orthoglide, hybrid). The tripod builds each robot's drive and the CaPaMan
-its PyBullet-checked scenario and distance grid one robot at a time.
+The single env and the vector env of a task are shells over one
+transition, written once over N robots (``paragym.tasks.*_step``): the
+single env is its N = 1 case, so the numbers agree because the code is the
+same. A reset draws each resetting robot's random numbers from its own
+generator (the draws stay per robot to match the single env); the tests
+that accept or reject a drawn scenario then run for all of them at once
+where the task allows (Orthoglide, hybrid).
 PyBullet stays the renderer: ``render()`` draws robot ``render_index`` in the
 single env's scene.
 """
@@ -45,19 +46,25 @@ class ParagymVectorEnv(VectorEnv):
     ``_apply(actions, active)`` (``active``: the boolean mask of robots that step),
     ``_observe() -> (N, obs)``, ``_reward() -> (N,)``, ``_terminated() -> (N,)``,
     ``_infos() -> dict of (N,) arrays``, ``_load_single(i)`` (put robot i's state
-    into ``self.single_env`` for rendering).
+    into ``self.single_env`` for rendering). The defaults of the first five
+    read ``self.state`` (the task's state of N robots, ``paragym.tasks.*_step``)
+    and call the task's ``_start`` and ``_transition``, the same methods the
+    single env calls (one mixin per task gives both).
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
 
-    def __init__(self, num_envs: int, single_env: Any, max_episode_steps: int | None = None,
-                 render_index: int = 0) -> None:
+    #: the task's single env, whose keyword arguments this env takes
+    single_class: type
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
         if not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer; got {num_envs!r}")
         if not 0 <= render_index < num_envs:
             raise ValueError(f"render_index must lie in [0, {num_envs - 1}]; got {render_index!r}")
         self.num_envs = int(num_envs)
-        self.single_env = single_env
+        self.single_env = single_env = self.single_class(**kwargs)
         self.render_mode = single_env.render_mode
         self.render_index = int(render_index)
         self.single_observation_space = single_env.observation_space
@@ -66,6 +73,9 @@ class ParagymVectorEnv(VectorEnv):
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.max_episode_steps = max_episode_steps
         self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        self.params, self.scenario_arg = single_env.params, single_env.scenario_arg
+        self.geometry = single_env.geometry
+        self.state = single_env.new_state(self.num_envs)
         self._elapsed = np.zeros(self.num_envs, np.int64)
         self._autoreset = np.zeros(self.num_envs, bool)
         self._started = False
@@ -160,21 +170,21 @@ class ParagymVectorEnv(VectorEnv):
     def _check_actions(self, actions: np.ndarray) -> np.ndarray:
         return check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
 
-    # --- hooks --------------------------------------------------------------------------
+    # --- hooks: the defaults serve a vector env over a task's transition -------------------
     def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        raise NotImplementedError
+        self._start(rows, [self._rngs[i] for i in rows], options)
 
     def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        raise NotImplementedError
+        self._transition(actions, active)
 
     def _observe(self) -> np.ndarray:
-        raise NotImplementedError
+        return self.state.obs.copy()
 
     def _reward(self) -> np.ndarray:
-        raise NotImplementedError
+        return self.state.reward.copy()
 
     def _terminated(self) -> np.ndarray:
-        raise NotImplementedError
+        return self.state.terminated.copy()
 
     def _infos(self) -> dict[str, Any]:
         return {}

@@ -82,7 +82,7 @@ class OrthoglideState:
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
-    tasks: list[Task | None] = field(default_factory=list)
+    scenarios: list[Task | None] = field(default_factory=list)
 
     @classmethod
     def empty(cls, n: int, points: int = 2) -> OrthoglideState:
@@ -91,7 +91,7 @@ class OrthoglideState:
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
                    n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
                    terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
-                   tasks=[None] * n)
+                   scenarios=[None] * n)
 
     def _room(self, points: int) -> None:
         """Grow the path arrays to hold ``points`` points."""
@@ -115,7 +115,7 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, ta
         state.path[i, :m, :2], state.path[i, :m, 2:] = task.points, task.velocities
         state.dt[i, :m - 1] = np.diff(task.t)
         state.last[i] = m - 1
-        state.tasks[i] = task
+        state.scenarios[i] = task
     rho, _ = og.inverse(r1, first, params.geometry)
     state.rho[rows], state.k[rows], state.failed[rows] = rho, 0, False
     mask = np.zeros(len(state.k), bool)
