@@ -116,3 +116,9 @@ def test_the_checks_see_a_lazy_upward_import(tmp_path):
     src.write_text("def f():\n    from paragym.envs.capaman import CaPaManCollisionFreeEnv\n")
     assert "paragym.envs.capaman" in _imports(src)
     assert _layer("paragym.envs.capaman")[0] > _layer("paragym.mechanisms.capaman")[0]
+
+
+def test_only_the_sim_wrapper_calls_pybullet():
+    """Every PyBullet call goes through paragym.sim.client (bodies by name)."""
+    bad = [m for m, path in MODULES.items() if m != "paragym.sim.client" and "pybullet" in _imports(path)]
+    assert not bad, bad

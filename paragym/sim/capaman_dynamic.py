@@ -20,7 +20,6 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 
 import numpy as np
-import pybullet as pb
 
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_model import capaman_links
@@ -105,63 +104,45 @@ class CaPaManDynamicScene:
         self.sim.on_rebuild(self._set_up_physics)
         self.set_configuration(g.alpha_home)
 
-    @property
-    def body(self) -> int:
-        """The mechanism's PyBullet body id now (it changes when the world is rebuilt)."""
-        return self.sim.body(self.ROBOT)
-
     def _set_up_physics(self) -> None:
         """Gravity, the engine's parameters, the passive joints, no self-collision and the six loop
         closures (run again whenever the world is rebuilt)."""
-        g, d, c = self.geometry, self.dynamics, self.sim.client
-        pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
-        pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
-                                     physicsClientId=c)
-        no_collision = pb.getNumJoints(self.body, physicsClientId=c)
-        for i in range(-1, no_collision):  # the parts of one mechanism do not collide with each other
-            for j in range(i + 1, no_collision):
-                pb.setCollisionFilterPair(self.body, self.body, i, j, 0, physicsClientId=c)
-        passive = self.cranks_b + self.couplers + self.sliders + self.float_joints
-        pb.setJointMotorControlArray(self.body, passive, pb.VELOCITY_CONTROL, forces=[0.0] * len(passive),
-                                     physicsClientId=c)
-        pb.setJointMotorControlMultiDof(self.body, self.plate, pb.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
-                                        force=[0.0, 0.0, 0.0], physicsClientId=c)
+        g, d, sim, name = self.geometry, self.dynamics, self.sim, self.ROBOT
+        sim.set_physics(d.gravity, d.time_step, d.solver_iterations)
+        sim.no_self_collision(name)  # the parts of one mechanism do not collide with each other
+        sim.passive(name, self.cranks_b + self.couplers + self.sliders + self.float_joints, [self.plate])
         for k in range(3):  # loop closures: parallelogram, then ball joint (frames at the links' COMs)
-            pb.createConstraint(self.body, self.cranks_b[k], self.body, self.couplers[k], pb.JOINT_POINT2POINT,
-                                [0, 0, 0], [0, 0, g.a / 2], [0, 0, g.c / 2], physicsClientId=c)
-            pb.createConstraint(self.body, self.sliders[k], self.body, self.plate, pb.JOINT_POINT2POINT,
-                                [0, 0, 0], [0, 0, 0], list(g.plate_points[k]), physicsClientId=c)
+            sim.ball_joint(name, self.cranks_b[k], [0, 0, g.a / 2], self.couplers[k], [0, 0, g.c / 2])
+            sim.ball_joint(name, self.sliders[k], [0, 0, 0], self.plate, list(g.plate_points[k]))
 
     def reset(self, alpha: np.ndarray) -> None:
         """Put every joint where the analytic model has it at ``alpha`` (rad), at rest."""
-        g, c = self.geometry, self.sim.client
+        g = self.geometry
         al = capaman.check_joint_angles(alpha, g)
         pose = capaman.forward(al, g)
         for k in range(3):
             a = float(al[0, k])
             for joint, value in ((self.motors[k], -a), (self.cranks_b[k], -a), (self.couplers[k], a),
                                  (self.sliders[k], float(pose.sliders[0, k]))):
-                pb.resetJointState(self.body, joint, value, 0.0, physicsClientId=c)
+                self.sim.reset_joint(self.ROBOT, joint, value)
         for joint, value in zip(self.float_joints, pose.position[0], strict=True):
-            pb.resetJointState(self.body, joint, float(value), 0.0, physicsClientId=c)
-        pb.resetJointStateMultiDof(self.body, self.plate, list(pose.quaternion[0]), [0.0, 0.0, 0.0],
-                                   physicsClientId=c)
+            self.sim.reset_joint(self.ROBOT, joint, float(value))
+        self.sim.reset_joint(self.ROBOT, self.plate, pose.quaternion[0])
 
     def closure_error(self) -> float:
         """Largest gap (m) of the six loop closures now."""
-        g, c = self.geometry, self.sim.client
-        frame = lambda link: pb.getLinkState(self.body, link, computeForwardKinematics=True,  # noqa: E731
-                                             physicsClientId=c)
-        p_pos, p_orn = frame(self.plate)[4:6]
-        rot = np.array(pb.getMatrixFromQuaternion(p_orn)).reshape(3, 3)
+        g = self.geometry
+        frame = lambda link: self.sim.link_frame(self.ROBOT, link)  # noqa: E731
+        p_pos, p_orn = frame(self.plate)
+        rot = capaman.quat_to_matrix(p_orn)
         worst = 0.0
         for k in range(3):
-            ball = np.array(p_pos) + rot @ g.plate_points[k]
-            worst = max(worst, float(np.linalg.norm(np.array(frame(self.sliders[k])[4]) - ball)))
-            b_pos, b_orn = frame(self.cranks_b[k])[4:6]
-            c_pos, c_orn = frame(self.couplers[k])[4:6]
-            tip_b = np.array(b_pos) + np.array(pb.getMatrixFromQuaternion(b_orn)).reshape(3, 3)[:, 2] * g.a
-            end_c = np.array(c_pos) + np.array(pb.getMatrixFromQuaternion(c_orn)).reshape(3, 3)[:, 2] * g.c
+            ball = p_pos + rot @ g.plate_points[k]
+            worst = max(worst, float(np.linalg.norm(frame(self.sliders[k])[0] - ball)))
+            b_pos, b_orn = frame(self.cranks_b[k])
+            c_pos, c_orn = frame(self.couplers[k])
+            tip_b = b_pos + capaman.quat_to_matrix(b_orn)[:, 2] * g.a
+            end_c = c_pos + capaman.quat_to_matrix(c_orn)[:, 2] * g.c
             worst = max(worst, float(np.linalg.norm(tip_b - end_c)))
         return worst
 
@@ -169,7 +150,7 @@ class CaPaManDynamicScene:
         """Drive the cranks along ``trajectory`` (targets alpha(t), alpha_dot(t)
         every step), then hold the last targets for ``settle`` s; record the
         plate's motion at every step."""
-        d, c = self.dynamics, self.sim.client
+        d, sim = self.dynamics, self.sim
         self.reset(trajectory.position(np.array([0.0]))[0])
         n = int(round((trajectory.duration + settle) / d.time_step)) + 1
         t = np.arange(n) * d.time_step
@@ -177,18 +158,13 @@ class CaPaManDynamicScene:
         pos, orn = np.empty((n, 3)), np.empty((n, 4))
         vel, omega, alpha = np.empty((n, 3)), np.empty((n, 3)), np.empty((n, 3))
         closure = 0.0
-        forces = [d.motor_torque] * 3
-        kp, kd = [d.position_gain] * 3, [d.velocity_gain] * 3
         for i in range(n):  # the physics is sequential: one step after the other
             if i:
-                pb.setJointMotorControlArray(self.body, self.motors, pb.POSITION_CONTROL,
-                                             targetPositions=list(-target[i]), targetVelocities=list(-target_rate[i]),
-                                             forces=forces, positionGains=kp, velocityGains=kd, physicsClientId=c)
-                pb.stepSimulation(physicsClientId=c)
-            state = pb.getLinkState(self.body, self.plate, computeLinkVelocity=True, computeForwardKinematics=True,
-                                    physicsClientId=c)
-            pos[i], orn[i], vel[i], omega[i] = state[4], state[5], state[6], state[7]
-            alpha[i] = [-s[0] for s in pb.getJointStates(self.body, self.motors, physicsClientId=c)]
+                sim.drive(self.ROBOT, self.motors, -target[i], -target_rate[i], d.motor_torque, d.position_gain,
+                          d.velocity_gain)
+                sim.step()
+            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(self.ROBOT, self.plate, velocity=True)
+            alpha[i] = self.alpha
             if i % 100 == 0:
                 closure = max(closure, self.closure_error())
         acc = np.gradient(vel, d.time_step, axis=0)
@@ -217,32 +193,27 @@ class CaPaManDynamicScene:
     def drive(self, target: np.ndarray, duration: float) -> np.ndarray:
         """Move the motors' targets linearly from the last target to ``target``
         (rad) over ``duration`` s of simulated time; returns the tool tip."""
-        d, c = self.dynamics, self.sim.client
+        d = self.dynamics
         steps = max(1, int(round(duration / d.time_step)))
         start = self._target
         rate = (np.asarray(target, float) - start) / (steps * d.time_step)
         for i in range(1, steps + 1):
             goal = start + (target - start) * (i / steps)
-            pb.setJointMotorControlArray(self.body, self.motors, pb.POSITION_CONTROL, targetPositions=list(-goal),
-                                         targetVelocities=list(-rate), forces=[d.motor_torque] * 3,
-                                         positionGains=[d.position_gain] * 3, velocityGains=[d.velocity_gain] * 3,
-                                         physicsClientId=c)
-            pb.stepSimulation(physicsClientId=c)
+            self.sim.drive(self.ROBOT, self.motors, -goal, -rate, d.motor_torque, d.position_gain, d.velocity_gain)
+            self.sim.step()
         self._target = np.asarray(target, float).copy()
         return self.tip
 
     @property
     def alpha(self) -> np.ndarray:
         """The crank angles now (rad), as the motors' encoders read them."""
-        return np.array([-s[0] for s in pb.getJointStates(self.body, self.motors, physicsClientId=self.sim.client)])
+        return -self.sim.joint_positions(self.ROBOT, self.motors)
 
     @property
     def tip(self) -> np.ndarray:
         """The tool tip now (m), from the plate's simulated pose."""
-        pos, orn = pb.getLinkState(self.body, self.plate, computeForwardKinematics=True,
-                                   physicsClientId=self.sim.client)[4:6]
-        rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
-        return np.array(pos) - self.geometry.tool_length * rot[:, 2]
+        pos, orn = self.sim.link_frame(self.ROBOT, self.plate)
+        return pos - self.geometry.tool_length * capaman.quat_to_matrix(orn)[:, 2]
 
     def clearance(self) -> tuple[float, str | None]:
         """Signed distance (m) from the whole mechanism to the nearest obstacle, capped."""

@@ -160,6 +160,36 @@ class PyBulletSim:
             linkInertialFrameOrientations=[_IDENTITY] * n, linkParentIndices=[0] * n,
             linkJointTypes=[pb.JOINT_FIXED] * n, linkJointAxis=[(0, 0, 1)] * n, physicsClientId=self._client)
 
+    def add_visual(self, name: str, shape: PartShape | Obstacle, rgba: Sequence[float],
+                   position: Sequence[float] = (0.0, 0.0, 0.0),
+                   quaternion: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> None:
+        """Add a body named ``name`` that is only drawn (no collision, no
+        mass), at ``position`` (m) turned by the xyzw ``quaternion``."""
+        self._check_new(name)
+        self._recipe[name] = (self.add_visual, (name, shape, rgba, position, quaternion))
+        self._bodies[name] = pb.createMultiBody(0.0, -1, self._shape(shape, rgba)[1], basePosition=list(position),
+                                                baseOrientation=list(quaternion), physicsClientId=self._client)
+
+    def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Sequence[float],
+                        rgba: Sequence[float]) -> None:
+        """Add ground named ``name``: ``heights`` (rows along y, columns along
+        x; m) on a grid of ``cell`` (m), its centre at ``position``."""
+        self._check_new(name)
+        self._recipe[name] = (self.add_heightfield, (name, heights, cell, position, rgba))
+        c = self._client
+        ny, nx = heights.shape
+        shape = pb.createCollisionShape(pb.GEOM_HEIGHTFIELD, meshScale=[cell, cell, 1.0],
+                                        heightfieldData=heights.ravel().tolist(), numHeightfieldRows=nx,
+                                        numHeightfieldColumns=ny, physicsClientId=c)
+        body = pb.createMultiBody(0, shape, basePosition=list(position), physicsClientId=c)
+        pb.changeVisualShape(body, -1, rgbaColor=list(rgba), physicsClientId=c)
+        self._bodies[name] = body
+
+    def place(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        """Move body ``name``'s base to ``position`` (m), turned by the xyzw ``quaternion``."""
+        pb.resetBasePositionAndOrientation(self._bodies[name], list(position), list(quaternion),
+                                           physicsClientId=self._client)
+
     def add_tree_body(self, name: str, links: Sequence[LinkSpec]) -> None:
         """Add a multibody whose base (no shape) sits at the world origin and
         whose ``links`` form a tree; a link is addressed by its name, its parent
@@ -199,25 +229,86 @@ class PyBulletSim:
         revolute/prismatic, an xyzw quaternion for spherical)."""
         pb.resetJointStatesMultiDof(self._bodies[name], joints, values, physicsClientId=self._client)
 
-    @property
-    def client(self) -> int:
-        """The PyBullet client id, for builders in :mod:`paragym.sim` that need
-        calls this wrapper does not cover (dynamics, constraints)."""
-        return self._client
-
     def body(self, name: str) -> int:
-        """PyBullet id of body ``name`` (for builders in :mod:`paragym.sim`)."""
+        """PyBullet id of body ``name`` now (it changes when the world is rebuilt)."""
         return self._bodies[name]
 
     def link_index(self, name: str, link: str) -> int:
         """PyBullet link index of ``link`` in body ``name``."""
         return self._links[name][link]
 
-    def link_frame(self, name: str, link: str) -> tuple[np.ndarray, np.ndarray]:
-        """World position (m) and xyzw quaternion of a link's frame."""
-        state = pb.getLinkState(self._bodies[name], self._links[name][link], computeForwardKinematics=True,
+    def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
+        """World position (m) and xyzw quaternion of a link's frame (the link by name or index)."""
+        return self.link_motion(name, link)[:2]
+
+    def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
+        """A link's frame: world position (m), xyzw quaternion and, with
+        ``velocity``, its linear (m/s) and angular (rad/s) velocity."""
+        index = self._links[name][link] if isinstance(link, str) else link
+        state = pb.getLinkState(self._bodies[name], index, computeLinkVelocity=velocity, computeForwardKinematics=True,
                                 physicsClientId=self._client)
-        return np.array(state[4]), np.array(state[5])
+        return tuple(np.array(v) for v in state[4:8 if velocity else 6])
+
+    # --- dynamics -------------------------------------------------------------------------
+    def set_physics(self, gravity: float, time_step: float, solver_iterations: int) -> None:
+        """Gravity (m/s^2, along -z), the fixed time step (s) and the constraint solver's iterations."""
+        pb.setGravity(0, 0, -gravity, physicsClientId=self._client)
+        pb.setPhysicsEngineParameter(fixedTimeStep=time_step, numSolverIterations=solver_iterations,
+                                     physicsClientId=self._client)
+
+    def no_self_collision(self, name: str) -> None:
+        """The parts of body ``name`` do not collide with each other."""
+        body, c = self._bodies[name], self._client
+        n = pb.getNumJoints(body, physicsClientId=c)
+        for i in range(-1, n):
+            for j in range(i + 1, n):
+                pb.setCollisionFilterPair(body, body, i, j, 0, physicsClientId=c)
+
+    def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
+        """Make joints free (no motor): PyBullet's default velocity motors off,
+        for 1-dof ``joints`` and ``spherical`` ones."""
+        body, c = self._bodies[name], self._client
+        pb.setJointMotorControlArray(body, list(joints), pb.VELOCITY_CONTROL, forces=[0.0] * len(joints),
+                                     physicsClientId=c)
+        for joint in spherical:
+            pb.setJointMotorControlMultiDof(body, joint, pb.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
+                                            force=[0.0, 0.0, 0.0], physicsClientId=c)
+
+    def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int,
+                   pivot_b: Sequence[float]) -> None:
+        """Close a loop of body ``name``: a ball joint (point-to-point
+        constraint) between a point of ``link_a`` and a point of ``link_b``
+        (each in its link's centre-of-mass frame, m)."""
+        body = self._bodies[name]
+        pb.createConstraint(body, link_a, body, link_b, pb.JOINT_POINT2POINT, [0, 0, 0], list(pivot_a),
+                            list(pivot_b), physicsClientId=self._client)
+
+    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+        """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint), at rest."""
+        body, c = self._bodies[name], self._client
+        if isinstance(value, int | float | np.floating):
+            pb.resetJointState(body, joint, float(value), 0.0, physicsClientId=c)
+        else:
+            pb.resetJointStateMultiDof(body, joint, list(value), [0.0, 0.0, 0.0], physicsClientId=c)
+
+    def drive(self, name: str, joints: Sequence[int], targets: Sequence[float], rates: Sequence[float],
+              force: float, position_gain: float, velocity_gain: float) -> None:
+        """Force-limited PD motors on ``joints``: chase ``targets`` at ``rates``
+        (each motor at most ``force``, N or N m), from the next step on."""
+        n = len(joints)
+        pb.setJointMotorControlArray(self._bodies[name], list(joints), pb.POSITION_CONTROL,
+                                     targetPositions=list(targets), targetVelocities=list(rates), forces=[force] * n,
+                                     positionGains=[position_gain] * n, velocityGains=[velocity_gain] * n,
+                                     physicsClientId=self._client)
+
+    def step(self) -> None:
+        """One step of the physics."""
+        pb.stepSimulation(physicsClientId=self._client)
+
+    def joint_positions(self, name: str, joints: Sequence[int]) -> np.ndarray:
+        """The positions of 1-dof joints now (rad or m)."""
+        return np.array([s[0] for s in pb.getJointStates(self._bodies[name], list(joints),
+                                                         physicsClientId=self._client)])
 
     def on_rebuild(self, setup: Any) -> None:
         """Run ``setup()`` now and again whenever :meth:`remove` rebuilds the

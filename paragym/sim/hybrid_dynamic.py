@@ -18,7 +18,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import pybullet as pb
 from scipy.interpolate import PchipInterpolator
 
 from paragym.mechanisms import capaman, hybrid
@@ -82,10 +81,7 @@ class HybridDynamicScene:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or HybridDynamics()
         self.sim = PyBulletSim()
-        c = self.sim.client
-        pb.setGravity(0, 0, -d.gravity, physicsClientId=c)
-        pb.setPhysicsEngineParameter(fixedTimeStep=d.time_step, numSolverIterations=d.solver_iterations,
-                                     physicsClientId=c)
+        self.sim.set_physics(d.gravity, d.time_step, d.solver_iterations)
         home = hybrid.solve(np.zeros(6), 0.5, g)
         t_a, t_t = home.t_a[0], home.t_t[0]
         rod = PartShape("rod", "cylinder", radius=0.008, length=0.05)
@@ -123,7 +119,6 @@ class HybridDynamicScene:
                       LinkSpec(f"t{j}_p", f"t{j}_r", "prismatic", axis=(0, 0, 1), shape=rod,
                                shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.6, 0.2, 0.2, 1))]
         self.sim.add_tree_body(self.ROBOT, links)
-        self.body = self.sim.body(self.ROBOT)
         idx = lambda name: self.sim.link_index(self.ROBOT, name)  # noqa: E731
         self.a_float = [idx("a_x"), idx("a_y"), idx("a_z")]
         self.e_float = [idx("e_x"), idx("e_y"), idx("e_z")]
@@ -132,38 +127,28 @@ class HybridDynamicScene:
         self.hex_v = [idx(f"h{i}_v") for i in range(6)]
         self.tri_r = [idx(f"t{j}_r") for j in range(3)]
         self.actuators = [idx(f"h{i}_p") for i in range(6)] + [idx(f"t{j}_p") for j in range(3)]
-        n = pb.getNumJoints(self.body, physicsClientId=c)
-        for i in range(-1, n):
-            for k in range(i + 1, n):
-                pb.setCollisionFilterPair(self.body, self.body, i, k, 0, physicsClientId=c)
-        passive = self.a_float + self.e_float + self.hex_u + self.hex_v + self.tri_r
-        pb.setJointMotorControlArray(self.body, passive, pb.VELOCITY_CONTROL, forces=[0.0] * len(passive),
-                                     physicsClientId=c)
-        for sph in (self.a_link, self.e_link):
-            pb.setJointMotorControlMultiDof(self.body, sph, pb.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
-                                            force=[0.0, 0.0, 0.0], physicsClientId=c)
+        sim, name = self.sim, self.ROBOT
+        sim.no_self_collision(name)
+        sim.passive(name, self.a_float + self.e_float + self.hex_u + self.hex_v + self.tri_r,
+                    [self.a_link, self.e_link])
         for i in range(6):  # ball joints: leg tip (the prismatic link's origin, COM offset -0.025) to A_i
-            pb.createConstraint(self.body, self.actuators[i], self.body, self.a_link, pb.JOINT_POINT2POINT,
-                                [0, 0, 0], [0, 0, 0.025], list(g.platform_joints[i]), physicsClientId=c)
+            sim.ball_joint(name, self.actuators[i], [0, 0, 0.025], self.a_link, list(g.platform_joints[i]))
         for j in range(3):
-            pb.createConstraint(self.body, self.actuators[6 + j], self.body, self.e_link, pb.JOINT_POINT2POINT,
-                                [0, 0, 0], [0, 0, 0.025], list(g.tripod_top[j]), physicsClientId=c)
+            sim.ball_joint(name, self.actuators[6 + j], [0, 0, 0.025], self.e_link, list(g.tripod_top[j]))
         self.reset(np.zeros(6), 0.5)
 
     def reset(self, p: np.ndarray, delta: float) -> None:
         """Every joint where the kinematics has it for E displacement ``p`` at split ``delta``, at rest."""
-        g, c = self.geometry, self.sim.client
+        g = self.geometry
         st = hybrid.solve(p, delta, g)
         t_a, t_t = st.t_a[0], st.t_t[0]
-        set_ = lambda j, v: pb.resetJointState(self.body, j, float(v), 0.0, physicsClientId=c)  # noqa: E731
+        set_ = lambda j, v: self.sim.reset_joint(self.ROBOT, j, float(v))  # noqa: E731
         for j, v in zip(self.a_float, t_a[:3, 3], strict=True):
             set_(j, v)
-        pb.resetJointStateMultiDof(self.body, self.a_link, list(capaman.matrix_to_quat(t_a[:3, :3])), [0, 0, 0],
-                                   physicsClientId=c)
+        self.sim.reset_joint(self.ROBOT, self.a_link, capaman.matrix_to_quat(t_a[:3, :3]))
         for j, v in zip(self.e_float, t_t[:3, 3], strict=True):
             set_(j, v)
-        pb.resetJointStateMultiDof(self.body, self.e_link, list(capaman.matrix_to_quat(t_t[:3, :3])), [0, 0, 0],
-                                   physicsClientId=c)
+        self.sim.reset_joint(self.ROBOT, self.e_link, capaman.matrix_to_quat(t_t[:3, :3]))
         a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
         for i in range(6):
             d = a_world[i] - g.base_joints[i]
@@ -180,17 +165,15 @@ class HybridDynamicScene:
 
     def closure_error(self) -> float:
         """Largest ball-joint gap (m) now."""
-        g, c = self.geometry, self.sim.client
-        state = lambda link: pb.getLinkState(self.body, link, computeForwardKinematics=True,  # noqa: E731
-                                             physicsClientId=c)
+        g = self.geometry
+        frame = lambda link: self.sim.link_frame(self.ROBOT, link)  # noqa: E731
         worst = 0.0
         for platform, joints, legs in ((self.a_link, g.platform_joints, self.actuators[:6]),
                                        (self.e_link, g.tripod_top, self.actuators[6:])):
-            pos, orn = state(platform)[4:6]
-            rot = np.array(pb.getMatrixFromQuaternion(orn)).reshape(3, 3)
+            pos, orn = frame(platform)
+            rot = capaman.quat_to_matrix(orn)
             for leg, joint in zip(legs, joints, strict=True):
-                tip = np.array(state(leg)[4])
-                worst = max(worst, float(np.linalg.norm(tip - (np.array(pos) + rot @ joint))))
+                worst = max(worst, float(np.linalg.norm(frame(leg)[0] - (pos + rot @ joint))))
         return worst
 
     def execute(self, u: np.ndarray, strokes: np.ndarray, p0: np.ndarray, delta0: float, duration: float,
@@ -198,7 +181,7 @@ class HybridDynamicScene:
         """Drive the nine actuators through ``strokes`` (K, 9) given at path
         parameters ``u`` (K,), with u = t / duration, then hold ``settle`` s;
         record E's motion at every step."""
-        d, c = self.dynamics, self.sim.client
+        d, sim = self.dynamics, self.sim
         self.reset(p0, delta0)
         spline = PchipInterpolator(u * duration, strokes)
         rate = spline.derivative()
@@ -209,19 +192,14 @@ class HybridDynamicScene:
         pos, orn, vel, omega = (np.empty((n, 3)), np.empty((n, 4)), np.empty((n, 3)), np.empty((n, 3)))
         a_pos, measured = np.empty((n, 3)), np.empty((n, 9))
         closure = 0.0
-        forces = [d.motor_force] * 9
         for i in range(n):  # the physics is sequential
             if i:
-                pb.setJointMotorControlArray(self.body, self.actuators, pb.POSITION_CONTROL,
-                                             targetPositions=list(target[i]), targetVelocities=list(target_rate[i]),
-                                             forces=forces, positionGains=[d.position_gain] * 9,
-                                             velocityGains=[d.velocity_gain] * 9, physicsClientId=c)
-                pb.stepSimulation(physicsClientId=c)
-            s = pb.getLinkState(self.body, self.e_link, computeLinkVelocity=True, computeForwardKinematics=True,
-                                physicsClientId=c)
-            pos[i], orn[i], vel[i], omega[i] = s[4], s[5], s[6], s[7]
-            a_pos[i] = pb.getLinkState(self.body, self.a_link, computeForwardKinematics=True, physicsClientId=c)[4]
-            measured[i] = [j[0] for j in pb.getJointStates(self.body, self.actuators, physicsClientId=c)]
+                sim.drive(self.ROBOT, self.actuators, target[i], target_rate[i], d.motor_force, d.position_gain,
+                          d.velocity_gain)
+                sim.step()
+            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(self.ROBOT, self.e_link, velocity=True)
+            a_pos[i] = sim.link_frame(self.ROBOT, self.a_link)[0]
+            measured[i] = sim.joint_positions(self.ROBOT, self.actuators)
             if i % 200 == 0:
                 closure = max(closure, self.closure_error())
         return HybridRun(t, pos, capaman.quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),

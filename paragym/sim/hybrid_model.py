@@ -8,7 +8,6 @@ rods between their joints. In kinematic fidelity the poses come from
 from __future__ import annotations
 
 import numpy as np
-import pybullet as pb
 
 from paragym.mechanisms import capaman, hybrid
 from paragym.mechanisms.capaman import PartShape
@@ -38,37 +37,32 @@ class HybridScene:
         g = self.geometry = geometry
         self.sim = PyBulletSim(gui=gui)
         self.sim.add_static("base", Cylinder((0.0, 0.0, -0.005), g.base_radius + 0.02, 0.01), (0.5, 0.5, 0.5, 1))
-        c = self.sim.client
-        make = lambda shape, rgba: pb.createMultiBody(  # noqa: E731
-            0.0, -1, self.sim._shape(shape, rgba)[1], physicsClientId=c)
-        self.plate_a = make(PartShape("A", "cylinder", radius=g.platform_radius + 0.015, length=0.01),
+        self.sim.add_visual("A", PartShape("A", "cylinder", radius=g.platform_radius + 0.015, length=0.01),
                             (0.2, 0.45, 0.8, 1))
-        self.plate_e = make(PartShape("E", "cylinder", radius=g.r_te + 0.015, length=0.01), (0.85, 0.7, 0.2, 1))
-        self.legs: list[int] = []
+        self.sim.add_visual("E", PartShape("E", "cylinder", radius=g.r_te + 0.015, length=0.01), (0.85, 0.7, 0.2, 1))
+        self.legs: list[str] = []
 
     def set_state(self, t_a: np.ndarray, t_e: np.ndarray) -> None:
         """Place platforms and legs for transforms T_A, T_E (4, 4), base frame;
         each leg is a rod from joint to joint."""
-        g, c = self.geometry, self.sim.client
-        for body, t in ((self.plate_a, t_a), (self.plate_e, t_e)):
-            q = capaman.matrix_to_quat(t[:3, :3])
-            pb.resetBasePositionAndOrientation(body, list(t[:3, 3]), list(q), physicsClientId=c)
+        g = self.geometry
+        for name, t in (("A", t_a), ("E", t_e)):
+            self.sim.place(name, t[:3, 3], capaman.matrix_to_quat(t[:3, :3]))
         a = t_a[:3, :3] @ g.platform_joints.T + t_a[:3, 3:4]
         ends = [(g.base_joints[i], a[:, i]) for i in range(6)]
         ta = t_a[:3, :3] @ g.tripod_base.T + t_a[:3, 3:4]
         te = t_e[:3, :3] @ g.tripod_top.T + t_e[:3, 3:4]
         ends += [(ta[:, j], te[:, j]) for j in range(3)]
-        for body in self.legs:  # a leg's length changes: its rod is rebuilt (rendering only)
-            pb.removeBody(body, physicsClientId=c)
+        for name in self.legs:  # a leg's length changes: its rod is rebuilt (rendering only)
+            self.sim.remove(name)
         self.legs = []
         for i, (p, q) in enumerate(ends):
             d = q - p
             length = float(np.linalg.norm(d))
             rgba = (0.3, 0.3, 0.3, 1) if i < 6 else (0.6, 0.2, 0.2, 1)
-            vis = pb.createVisualShape(pb.GEOM_CYLINDER, radius=_LEG_RADIUS, length=length, rgbaColor=rgba,
-                                       physicsClientId=c)
-            self.legs.append(pb.createMultiBody(0.0, -1, vis, basePosition=list((p + q) / 2),
-                                                baseOrientation=list(_z_to(d / length)), physicsClientId=c))
+            self.sim.add_visual(f"leg{i}", Cylinder((0.0, 0.0, 0.0), _LEG_RADIUS, length), rgba, (p + q) / 2,
+                                _z_to(d / length))
+            self.legs.append(f"leg{i}")
 
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """RGB image (uint8, (height, width, 3))."""

@@ -5,7 +5,6 @@ the scene is what ``render`` draws)."""
 from __future__ import annotations
 
 import numpy as np
-import pybullet as pb
 
 from paragym.mechanisms import orthoglide as og
 from paragym.sim.client import PyBulletSim
@@ -24,20 +23,19 @@ class OrthoglideScene:
                             (0.4, 0.4, 0.4, 1))
         self.sim.add_static("guide_y", Box((-0.03, g.slider3_origin + 0.75, -0.01), (0.01, 0.85, 0.01)),
                             (0.4, 0.4, 0.4, 1))
-        self._bodies: list[int] = []
+        self._bodies: list[str] = []
 
     def _box(self, centre: np.ndarray, half: tuple[float, float, float], yaw: float, rgba: tuple) -> None:
-        c = self.sim.client
-        vis = pb.createVisualShape(pb.GEOM_BOX, halfExtents=list(half), rgbaColor=rgba, physicsClientId=c)
-        q = pb.getQuaternionFromEuler([0, 0, yaw])
-        self._bodies.append(pb.createMultiBody(0.0, -1, vis, basePosition=list(centre), baseOrientation=q,
-                                               physicsClientId=c))
+        name = f"part{len(self._bodies)}"
+        self.sim.add_visual(name, Box((0.0, 0.0, 0.0), half), rgba, centre,
+                            (0.0, 0.0, float(np.sin(yaw / 2)), float(np.cos(yaw / 2))))
+        self._bodies.append(name)
 
     def set_state(self, rho: np.ndarray, path: np.ndarray) -> None:
         """Draw the mechanism at rho (3,) and the path (K, 2, table frame)."""
-        g, c = self.geometry, self.sim.client
-        for body in self._bodies:
-            pb.removeBody(body, physicsClientId=c)
+        g = self.geometry
+        for name in self._bodies:
+            self.sim.remove(name)
         self._bodies = []
         d = g.direction
         origin = np.asarray(g.table_origin) + rho[0] * d
