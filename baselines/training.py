@@ -203,36 +203,86 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     (SB3 callbacks) run beside paragym's own. ``vectorized`` trains on the
     env's native vector env (:func:`paragym.baselines.sb3_vec.as_sb3_vecenv`)
     instead of one env per copy; ``n_envs`` overrides the yml's number of
-    copies (robots)."""
+    copies (robots).
+
+    The steps, as rl-baselines3-zoo's ExperimentManager takes them: read the
+    config (:func:`_read_config`), check what is on disk
+    (:func:`_finished_run`), make the envs (:func:`_make_envs`), build or
+    resume the model (:func:`_build_model`), learn (:func:`_learn`), save
+    (:func:`_save_run`)."""
     import torch
 
     env_id, algo = check_env_id(env_id), check_algo(algo)
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
-    hp = {**load_hyperparams(algo, env_id), **(hyperparams or {})}
+    hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
+    files = run_files(env_id, algo, seed, _writable_models_dir(models_dir))
+    done = _finished_run(files, algo, total, force)
+    if done is not None:
+        return done
+    torch.set_num_threads(int(threads))
+    env, eval_env = _make_envs(env_id, hp, int(seed), vectorized, files, force)
+    model, curve, resumed_from = _build_model(algo, hp, env, int(seed), verbose, files, force)
+    own = _make_callbacks(hp, eval_env, int(hp["n_envs"]), files.checkpoints, curve, algo in ("sac", "td3"))
+    learned, seconds = _learn(model, algo, int(hp["n_envs"]), total - resumed_from, resumed_from == 0,
+                              own + list(callbacks or []), progress_bar)
+    env.close()
+    eval_env.close()
+    meta = {
+        "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
+        "num_timesteps": int(model.num_timesteps),
+        "vectorized": bool(vectorized),
+        "hyperparams": hp, "train_seconds": seconds, "steps_per_second": learned / seconds if seconds else None,
+        "parameters": _count_parameters(model),
+        "versions": _versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
+        "curve": curve,
+    }
+    _save_run(files, model, meta, f"{algo.upper()} seed {seed} on {env_name(env_id)}: {total:,} steps, "
+                                   f"{seconds / 60:.1f} min")
+    return TrainResult(files, model, meta, resumed_from=resumed_from)
+
+
+def _read_config(env_id: str, algo: str, timesteps: int | None, overrides: dict[str, Any] | None,
+                 n_envs: int | None) -> tuple[dict[str, Any], int]:
+    """The run's hyperparameters (the yml's, with ``overrides`` and ``n_envs``) and its total timesteps."""
+    hp = {**load_hyperparams(algo, env_id), **(overrides or {})}
     total = int(hp["n_timesteps"] if timesteps is None else timesteps)
     if total <= 0:
         raise ValueError(f"timesteps must be positive; got {timesteps!r}")
-
-    if Path(models_dir).resolve() == shipped_models_dir().resolve():
-        raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "
-                         f"(the default is {USER_MODELS})")
-    files = run_files(env_id, algo, seed, models_dir)
-    cls = _algorithm(algo)
-    if files.model.exists() and not force:
-        meta = json.loads(files.meta.read_text()) if files.meta.exists() else {}
-        if meta.get("timesteps") == total:
-            return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
-        raise ValueError(f"{files.model} is already trained ({meta.get('timesteps', 'an unknown number of')} steps); "
-                         f"--force retrains it over that file, or choose another --models folder or --seed")
-    torch.set_num_threads(int(threads))
-
     if n_envs is not None:
         if not isinstance(n_envs, int) or n_envs < 1:
             raise ValueError(f"n_envs must be a positive integer; got {n_envs!r}")
         hp["n_envs"] = n_envs
-    n_envs = int(hp["n_envs"])
-    env_kwargs = dict(hp.get("env_kwargs") or {})
+    hp["n_envs"] = int(hp["n_envs"])
+    return hp, total
+
+
+def _writable_models_dir(models_dir: str | Path) -> str | Path:
+    """``models_dir``, unless it is the shipped models' folder (read-only)."""
+    if Path(models_dir).resolve() == shipped_models_dir().resolve():
+        raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "
+                         f"(the default is {USER_MODELS})")
+    return models_dir
+
+
+def _finished_run(files: RunFiles, algo: str, total: int, force: bool) -> TrainResult | None:
+    """A finished run of the same timesteps, as it is (``skipped``); None to
+    train. A finished run of other timesteps is refused unless ``force``."""
+    if not files.model.exists() or force:
+        return None
+    meta = json.loads(files.meta.read_text()) if files.meta.exists() else {}
+    if meta.get("timesteps") == total:
+        return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
+    raise ValueError(f"{files.model} is already trained ({meta.get('timesteps', 'an unknown number of')} steps); "
+                     f"--force retrains it over that file, or choose another --models folder or --seed")
+
+
+def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, files: RunFiles,
+               force: bool) -> tuple[Any, Any]:
+    """The training env (``n_envs`` copies, or the native vector env) and the
+    evaluation env (one robot, wrapped as the training env is), with reward
+    normalisation for learning only when the yml asks for it."""
+    n_envs, env_kwargs = hp["n_envs"], dict(hp.get("env_kwargs") or {})
     if vectorized:
         from stable_baselines3.common.vec_env import VecMonitor
 
@@ -241,12 +291,12 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
         if env_id not in paragym.VECTOR_ENTRY_POINTS:
             raise ValueError(f"{env_id} has no native vector env yet; train without --vectorized")
         env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, n_envs, **env_kwargs))
-        env.seed(int(seed))
+        env.seed(seed)
         # evaluated on one robot of the native env, wrapped as the training env is (SB3 syncs the two wrapper chains)
         eval_env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, 1, **env_kwargs))
         eval_env.seed(EVAL_SEED)
     else:
-        env = _make_vec(env_id, n_envs, int(seed), hp.get("vec_env", "dummy"), env_kwargs)
+        env = _make_vec(env_id, n_envs, seed, hp.get("vec_env", "dummy"), env_kwargs)
         eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
     if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
         from stable_baselines3.common.vec_env import VecNormalize
@@ -256,67 +306,66 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
                VecNormalize(env, norm_obs=False, norm_reward=True, gamma=float(hp.get("gamma", 0.99))))
         # the same wrapper, inert, on the evaluation env (EvalCallback syncs the two): raw returns
         eval_env = VecNormalize(eval_env, training=False, norm_obs=False, norm_reward=False)
+    return env, eval_env
+
+
+def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: int, files: RunFiles,
+                 force: bool) -> tuple[Any, dict[str, list], int]:
+    """The model (resumed from its checkpoint, with its replay buffer and its
+    curve so far, unless ``force``), the curve and the timesteps it resumed from."""
+    curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_mean_return", "eval_std_return",
+                                              "eval_success_rate", "train_timesteps", "train_return")}
+    cls, latest = _algorithm(algo), files.checkpoints / "latest.zip"
+    if latest.exists() and (files.checkpoints / "curve.json").exists() and not force:
+        model = cls.load(latest, env=env, device="cpu")
+        if algo in ("sac", "td3") and (files.checkpoints / "replay_buffer.pkl").exists():
+            model.load_replay_buffer(files.checkpoints / "replay_buffer.pkl")
+        saved = json.loads((files.checkpoints / "curve.json").read_text())
+        for key in curve:
+            curve[key] = list(saved.get(key, []))
+        return model, curve, int(model.num_timesteps)
     kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
-    off_policy = algo in ("sac", "td3")
     if algo == "td3":
         from stable_baselines3.common.noise import NormalActionNoise
 
         dim = env.action_space.shape[0]
         kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("action_noise_std", 0.1)) * np.ones(dim))
+    return cls(hp["policy"], env, seed=seed, device="cpu", verbose=verbose, **kwargs), curve, 0
 
-    curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_mean_return", "eval_std_return",
-                                              "eval_success_rate", "train_timesteps", "train_return")}
-    resumed_from = 0
-    latest = files.checkpoints / "latest.zip"
-    if latest.exists() and (files.checkpoints / "curve.json").exists() and not force:
-        model = cls.load(latest, env=env, device="cpu")
-        if off_policy and (files.checkpoints / "replay_buffer.pkl").exists():
-            model.load_replay_buffer(files.checkpoints / "replay_buffer.pkl")
-        saved = json.loads((files.checkpoints / "curve.json").read_text())
-        resumed_from = int(model.num_timesteps)
-        for key in curve:
-            curve[key] = list(saved.get(key, []))
-    else:
-        model = cls(hp["policy"], env, seed=int(seed), device="cpu", verbose=verbose, **kwargs)
 
-    callbacks = _make_callbacks(hp, eval_env, n_envs, files.checkpoints, curve, off_policy) + list(callbacks or [])
+def _learn(model: Any, algo: str, n_envs: int, remaining: int, fresh: bool, callbacks: list[Any],
+           progress_bar: bool) -> tuple[int, float]:
+    """Learn the ``remaining`` timesteps (PPO in whole rollouts of n_steps x
+    n_envs: what it will do); returns the timesteps asked for and the seconds."""
     import warnings
 
     # the evaluation env is plain on purpose (raw returns, one robot); SB3 warns when the types differ
     warnings.filterwarnings("ignore", message="Training and eval env are not of the same type")
-    t0 = time.perf_counter()
-    remaining = max(0, total - resumed_from)
-    if algo == "ppo":  # PPO learns in whole rollouts of n_steps x n_envs: ask for what it will do
+    remaining = max(0, remaining)
+    if algo == "ppo":
         rollout = int(model.n_steps) * n_envs
         remaining = -(-remaining // rollout) * rollout
+    t0 = time.perf_counter()
     if remaining:
-        model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=resumed_from == 0)
-    seconds = time.perf_counter() - t0
-    env.close()
-    eval_env.close()
+        model.learn(remaining, callback=callbacks, progress_bar=progress_bar, reset_num_timesteps=fresh)
+    return remaining, time.perf_counter() - t0
+
+
+def _save_run(files: RunFiles, model: Any, meta: dict[str, Any], title: str) -> None:
+    """The model, its JSON (with the model's size) and its curve's picture;
+    the checkpoints go."""
+    from paragym.plots import plot_training_curve
 
     files.model.parent.mkdir(parents=True, exist_ok=True)
     model.save(files.model)
-    meta = {
-        "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
-        "num_timesteps": int(model.num_timesteps),
-        "vectorized": bool(vectorized),
-        "hyperparams": hp, "train_seconds": seconds, "steps_per_second": remaining / seconds if seconds else None,
-        "parameters": _count_parameters(model), "model_bytes": files.model.stat().st_size,
-        "versions": _versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
-        "curve": curve,
-    }
+    meta["model_bytes"] = files.model.stat().st_size
     _write_atomic(files.meta, json.dumps(meta, indent=1))
-    from paragym.plots import plot_training_curve
-
-    plot_training_curve(curve, files.curve_png, f"{algo.upper()} seed {seed} on {env_name(env_id)}: "
-                        f"{total:,} steps, {seconds / 60:.1f} min")
+    plot_training_curve(meta["curve"], files.curve_png, title)
     for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl"):
         (files.checkpoints / name).unlink(missing_ok=True)
     for folder in (files.checkpoints, files.checkpoints.parent):
         if folder.exists() and not any(folder.iterdir()):
             folder.rmdir()
-    return TrainResult(files, model, meta, resumed_from=resumed_from)
 
 
 def _versions() -> dict[str, str]:

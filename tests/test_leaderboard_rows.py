@@ -1,0 +1,57 @@
+"""The leaderboard's rows do not change when its code is reorganised (issue 16, item 5).
+
+``tests/data/leaderboard_rows.json`` holds the rows of a small run (every env,
+every reference planner, the floors and one shipped model of each algorithm,
+evaluation seed 0 x 2 episodes), recorded before ``run_leaderboard`` and
+``train`` were split into named steps. The same run must give the same rows:
+returns, lengths, successes and every metric, to 1e-9.
+``python tests/test_leaderboard_rows.py --record`` rewrites the recording.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
+from paragym.baselines.store import ResultStore
+
+FILE = Path(__file__).with_name("data") / "leaderboard_rows.json"
+POLICIES = ["zero", "random", "ppo-seed0", "sac-seed0", "rrt-ga", "grid-dijkstra", "polynomial-detour",
+            "fixed-table-a", "gradient-c", "encoder-correction", "ukf-fusion"]
+
+
+def rows(folder: Path) -> list[dict]:
+    db = folder / "rows.sqlite"
+    run_leaderboard(db=db, suite=EvalSuite("rows", (0,), 2), policies=POLICIES, out=None, validate=False,
+                    progress=False, echo=lambda s: None, executor="workers", workers=2)
+    with ResultStore(db) as store:
+        out = [{"env": r.env, "policy": r.policy, "seed": r.seed, "episode": r.episode, "return": r.episode_return,
+                "length": r.length, "success": bool(r.success), "metrics": r.metrics} for r in store.rows()]
+    return sorted(out, key=lambda r: (r["env"], r["policy"], r["seed"], r["episode"]))
+
+
+def test_the_rows_are_the_recorded_ones(tmp_path):
+    want = json.loads(FILE.read_text())
+    got = rows(tmp_path)
+    assert [(r["env"], r["policy"], r["seed"], r["episode"]) for r in got] == \
+        [(r["env"], r["policy"], r["seed"], r["episode"]) for r in want]
+    for g, w in zip(got, want, strict=True):
+        where = f"{g['env']} {g['policy']} episode {g['episode']}"
+        assert (g["length"], g["success"]) == (w["length"], w["success"]), where
+        np.testing.assert_allclose(g["return"], w["return"], rtol=1e-9, atol=1e-9, err_msg=where)
+        assert sorted(g["metrics"]) == sorted(w["metrics"]), where
+        for key in w["metrics"]:
+            np.testing.assert_allclose(g["metrics"][key], w["metrics"][key], rtol=1e-9, atol=1e-9,
+                                       err_msg=f"{where}: {key}")
+
+
+if __name__ == "__main__" and "--record" in sys.argv:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        FILE.write_text(json.dumps(rows(Path(tmp)), indent=1))
+    print(f"wrote {FILE}")
