@@ -626,7 +626,7 @@ def _select(env_ids: list[str] | None, policy_names: list[str] | None,
     return chosen
 
 
-def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite = FULL,
+def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite = FULL, *,
                     env_ids: list[str] | None = None, policies: list[str] | None = None,
                     models_dir: str | Path | None = None, executor: str = "local", workers: int = 1,
                     ray_address: str | None = None, out: str | Path | None = "results",
@@ -640,66 +640,109 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     always take part; ``models_dir`` adds your own (``user-...``). An
     episode is taken from ``db`` only when its stored row has the policy's
     current producer (model hash, planner parameters); the others are run
-    again, and ``echo`` says so."""
+    again, and ``echo`` says so.
+
+    The steps: choose the policies (:func:`_select`), plan the missing
+    episodes (:func:`_plan`), run them with the executor (:func:`_execute`),
+    validate the reference plans (:func:`_validate_references`), summarise
+    (:func:`_summaries`) and write the reports (:func:`_write_reports`)."""
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; known: {', '.join(EXECUTORS)}")
     if not isinstance(workers, int) or workers < 1:
         raise ValueError(f"workers must be a positive integer; got {workers!r}")
     models = Path(models_dir) if models_dir is not None else None
     chosen = _select(env_ids, policies, models)
-    partial = _partial_label(env_ids, policies)
-    if out is not None:  # a filtered run writes apart, so that it cannot be taken for the full table
-        out = Path(out) / f"partial-{partial}" if partial else Path(out)
-        _check_writable(out)
-        if markdown_path is not None:
-            _check_writable(Path(markdown_path).parent)
+    out = _report_folder(out, markdown_path, env_ids, policies)
     producers = {(env, name): spec.producer() for env, specs in chosen.items() for name, spec in specs.items()}
     t0 = time.perf_counter()
     with ResultStore(db) as store:
-        done = store.done_keys()
-        jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
-                if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
-        _say_what_is_rerun(jobs, done, store.version, producers, echo)
-        total = sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+        jobs, total = _plan(store, chosen, suite, producers, echo)
         echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
              f"{store.path}; running {len(jobs)} with the {executor} executor")
-        run = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}[executor]
-        stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
-        from tqdm.auto import tqdm
-
-        saved = 0
-        try:
-            with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
-                for row in stream:
-                    store.add(row)
-                    saved += 1
-                    bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
-                    bar.update()
-                    if on_row is not None:
-                        on_row(row)
-        except KeyboardInterrupt:
-            stream.close()  # stops the workers now
-            raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
+        _execute(store, jobs, executor, workers, ray_address, models, progress, on_row)
         if validate:
-            for env, (name, check) in VALIDATED.items():
-                producer = producers.get((env, name))
-                if env in chosen and name in chosen[env] and store.validation(env, name, producer) is None:
-                    echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
-                    passed, summary = check(0)
-                    store.set_validation(env, name, passed, summary, producer)
-        keys = set(suite.keys())
-        rows = [r for r in store.rows()
-                if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
-        all_summaries = summarise(rows, store)
-        for env, ss in all_summaries.items():
-            for s in ss:
-                s.description = chosen[env][s.policy].description
+            _validate_references(store, chosen, producers, echo)
+        all_summaries = _summaries(store, chosen, suite, producers)
         files = _write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
     seconds = time.perf_counter() - t0
     for env, ss in all_summaries.items():
         echo(f"\n{env}\n{terminal_table(ss)}")
     return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds)
+
+
+def _report_folder(out: str | Path | None, markdown_path: str | Path | None, env_ids: list[str] | None,
+                   policies: list[str] | None) -> Path | None:
+    """Where the reports go, checked writable before any episode runs: a
+    filtered run writes apart (``partial-<filter>``), so that it cannot be
+    taken for the full table."""
+    if out is None:
+        return None
+    partial = _partial_label(env_ids, policies)
+    folder = Path(out) / f"partial-{partial}" if partial else Path(out)
+    _check_writable(folder)
+    if markdown_path is not None:
+        _check_writable(Path(markdown_path).parent)
+    return folder
+
+
+def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+          producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> tuple[list[Job], int]:
+    """The episodes ``store`` lacks for the current producers (saying which
+    stored ones are run again), and how many episodes the suite has."""
+    done = store.done_keys()
+    jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
+            if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
+    _say_what_is_rerun(jobs, done, store.version, producers, echo)
+    return jobs, sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+
+
+def _execute(store: ResultStore, jobs: list[Job], executor: str, workers: int, ray_address: str | None,
+             models: Path | None, progress: bool, on_row: Callable[[EpisodeRow], None] | None) -> None:
+    """Run ``jobs`` with the executor, storing each row as it comes (Ctrl-C
+    keeps what is stored and stops the workers)."""
+    from tqdm.auto import tqdm
+
+    run = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}[executor]
+    stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
+    saved = 0
+    try:
+        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
+            for row in stream:
+                store.add(row)
+                saved += 1
+                bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
+                bar.update()
+                if on_row is not None:
+                    on_row(row)
+    except KeyboardInterrupt:
+        stream.close()  # stops the workers now
+        raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
+
+
+def _validate_references(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]],
+                         producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> None:
+    """The KF validation of each validated reference plan that takes part and
+    has none stored for its producer (dynamic fidelity)."""
+    for env, (name, check) in VALIDATED.items():
+        producer = producers.get((env, name))
+        if env in chosen and name in chosen[env] and store.validation(env, name, producer) is None:
+            echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
+            passed, summary = check(0)
+            store.set_validation(env, name, passed, summary, producer)
+
+
+def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+               producers: dict[tuple[str, str], str]) -> dict[str, list[Summary]]:
+    """The table of each env from the stored rows of the suite's episodes and
+    the current producers, with each policy's description."""
+    keys = set(suite.keys())
+    rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
+    all_summaries = summarise(rows, store)
+    for env, ss in all_summaries.items():
+        for s in ss:
+            s.description = chosen[env][s.policy].description
+    return all_summaries
 
 
 def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producers: dict[tuple[str, str], str],

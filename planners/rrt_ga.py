@@ -242,6 +242,55 @@ class JointSpaceModel:
         return np.array([self.memo[k] for k in keys])
 
 
+class _Forest:
+    """N pairs of trees in the joint space (tree 0 grows from the start, tree
+    1 from the goal), stored as arrays: nodes (N, 2, cap, 3), each node's
+    parent, each tree's size, and where each pair's trees met (-1: not yet)."""
+
+    def __init__(self, n: int, cap: int, start: np.ndarray, goal: np.ndarray) -> None:
+        self.nodes = np.zeros((n, 2, cap, 3))
+        self.parent = np.full((n, 2, cap), -1)
+        self.nodes[:, 0, 0], self.nodes[:, 1, 0] = start, goal
+        self.count = np.ones((n, 2), int)
+        self.meet = np.full((n, 2), -1)
+
+    def join_straight(self, goal: np.ndarray) -> None:
+        """Every pair met at once: the goal is tree 0's child of the start."""
+        self.nodes[:, 0, 1] = goal
+        self.parent[:, 0, 1] = 0
+        self.count[:, 0] = 2
+        self.meet[:] = (1, 0)
+
+    def nearest(self, pairs: np.ndarray, tree: int, q: np.ndarray) -> np.ndarray:
+        """The node of ``tree`` nearest each point ``q`` (M, 3), for pairs (M,)."""
+        size = int(self.count[pairs, tree].max())
+        diff = self.nodes[pairs, tree, :size] - q[:, None]
+        d = np.einsum("aki,aki->ak", diff, diff)  # squared distances to every node
+        d[np.arange(size)[None] >= self.count[pairs, tree, None]] = np.inf
+        return d.argmin(axis=1)
+
+    def add(self, pairs: np.ndarray, tree: int, q: np.ndarray, par: np.ndarray) -> np.ndarray:
+        """Add nodes ``q`` (M, 3) with parents ``par`` to ``tree`` of ``pairs``; returns their slots."""
+        slot = self.count[pairs, tree]
+        self.nodes[pairs, tree, slot] = q
+        self.parent[pairs, tree, slot] = par
+        self.count[pairs, tree] += 1
+        return slot
+
+    def _chain(self, i: int, tree: int) -> list[int]:
+        out = [int(self.meet[i, tree])]
+        while out[-1] > 0:
+            out.append(int(self.parent[i, tree, out[-1]]))
+        return out
+
+    def path(self, i: int, goal: np.ndarray) -> np.ndarray:
+        """Pair ``i``'s path from the start to the goal (K, 3), through the meeting point."""
+        points = np.vstack([self.nodes[i, 0, self._chain(i, 0)[::-1]], self.nodes[i, 1, self._chain(i, 1)[1:]]])
+        if self.meet[i, 1] == 0 and not np.array_equal(points[-1], goal):  # tree 0 reached the goal itself
+            points = np.vstack([points, goal])
+        return points
+
+
 class RrtGaPlanner:
     """Paper 000's RRT + GA planner for ``CaPaManCollisionFree-v0`` scenarios.
 
@@ -339,92 +388,64 @@ class RrtGaPlanner:
     def _rrt_leg(self, start: np.ndarray, goal: np.ndarray, checker: JointSpaceModel,
                  rng: np.random.Generator, deadline: float, leg: int) -> np.ndarray:
         """N bidirectional RRTs (Kuffner and LaValle's RRT-Connect) from
-        ``start`` to ``goal``, grown in lockstep: each iteration one tree of
-        every pair extends toward a uniform sample (as far as is free, at
-        most ``rrt_step``) and the other tree tries to connect to the new node
-        in one straight, checked move; the trees swap roles every iteration.
-        Returns the N paths shortcut and resampled to ``LEG_INTERVALS[leg]``
-        intervals, without the goal: (N, intervals, 3). Growth stops once
-        ``rrt_quorum`` of the pairs have met; the others take the path of one
-        that has (the GA's mutations then tell them apart)."""
-        s, g = self.settings, self.geometry
-        n, cap = s.population, s.rrt_iterations + 2
-        nodes = np.zeros((n, 2, cap, 3))  # tree 0 grows from the start, tree 1 from the goal
-        parent = np.full((n, 2, cap), -1)
-        nodes[:, 0, 0], nodes[:, 1, 0] = start, goal
-        count = np.ones((n, 2), int)
-        meet = np.full((n, 2), -1)  # the node where the trees met, in each tree
-        rows = np.arange(n)
+        ``start`` to ``goal``, grown in lockstep (:meth:`_grow`) until
+        ``rrt_quorum`` of the pairs have met or the time is up. Returns the N
+        paths shortcut and resampled to ``LEG_INTERVALS[leg]`` intervals,
+        without the goal: (N, intervals, 3); the pairs that have not met take
+        the path of one that has (the GA's mutations then tell them apart)."""
+        s = self.settings
+        n = s.population
+        forest = _Forest(n, s.rrt_iterations + 2, start, goal)
         if checker.evaluate(start[None], goal[None])[0]:  # straight line is free
-            nodes[:, 0, 1] = goal
-            parent[:, 0, 1] = 0
-            count[:, 0] = 2
-            meet[:] = (1, 0)
-
-        def nearest(pairs: np.ndarray, tree: int, q: np.ndarray) -> np.ndarray:
-            size = int(count[pairs, tree].max())
-            diff = nodes[pairs, tree, :size] - q[:, None]
-            d = np.einsum("aki,aki->ak", diff, diff)  # squared distances to every node
-            d[np.arange(size)[None] >= count[pairs, tree, None]] = np.inf
-            return d.argmin(axis=1)
-
-        def add(pairs: np.ndarray, tree: int, q: np.ndarray, par: np.ndarray) -> np.ndarray:
-            slot = count[pairs, tree]
-            nodes[pairs, tree, slot] = q
-            parent[pairs, tree, slot] = par
-            count[pairs, tree] += 1
-            return slot
-
+            forest.join_straight(goal)
         quorum = max(1, int(np.ceil(s.rrt_quorum * n)))
         for it in range(s.rrt_iterations):
-            active = rows[meet[:, 0] < 0]
+            active = np.flatnonzero(forest.meet[:, 0] < 0)
             if n - len(active) >= quorum or time.perf_counter() > deadline:
                 break
-            a, b = it % 2, 1 - it % 2
-            target = rng.uniform(g.alpha_min, g.alpha_max, (len(active), 3))
-            near = nearest(active, a, target)
-            base = nodes[active, a, near]
-            step = target - base
-            dist = np.linalg.norm(step, axis=1, keepdims=True)
-            new = base + step * np.minimum(1.0, s.rrt_step / np.maximum(dist, 1e-12))
-            new = base + checker.reach(base, new)[:, None] * (new - base)  # extend as far as is free
-            ok = np.linalg.norm(new - base, axis=1) > 0.5 * s.check_step
-            grow, new = active[ok], new[ok]
-            if len(grow) == 0:
-                continue
-            slot_a = add(grow, a, new, near[ok])
-            # connect: the other tree's nearest node straight to the new one, as far as is free
-            near_b = nearest(grow, b, new)
-            base_b = nodes[grow, b, near_b]
-            frac = checker.reach(base_b, new)
-            moved = np.linalg.norm(new - base_b, axis=1) * frac > 0.5 * s.check_step
-            slot_b = np.full(len(grow), -1)
-            if moved.any():
-                q = base_b[moved] + frac[moved, None] * (new[moved] - base_b[moved])
-                slot_b[moved] = add(grow[moved], b, q, near_b[moved])
-            joined = frac >= 1.0
-            slot_b = np.where(joined & ~moved, near_b, slot_b)  # already within a sample of the new node
-            done = grow[joined]
-            meet[done, a], meet[done, b] = slot_a[joined], slot_b[joined]
-        found = np.flatnonzero(meet[:, 0] >= 0)
+            self._grow(forest, active, it % 2, checker, rng)
+        found = np.flatnonzero(forest.meet[:, 0] >= 0)
         if len(found) == 0:
             raise PlanningError(f"RRT found no path from T.P.{leg + 1} to T.P.{(leg + 1) % 3 + 1} in "
                                 f"{s.rrt_iterations} iterations (or the time budget)")
-
-        def chain(i: int, tree: int) -> list[int]:
-            out = [int(meet[i, tree])]
-            while out[-1] > 0:
-                out.append(int(parent[i, tree, out[-1]]))
-            return out
-
         out = np.empty((n, LEG_INTERVALS[leg], 3))
         for row in range(n):  # each pair's path, shortcut and resampled
-            i = found[row % len(found)] if meet[row, 0] < 0 else row
-            points = np.vstack([nodes[i, 0, chain(i, 0)[::-1]], nodes[i, 1, chain(i, 1)[1:]]])
-            if meet[i, 1] == 0 and not np.array_equal(points[-1], goal):  # tree 0 reached the goal itself
-                points = np.vstack([points, goal])
-            out[row] = self._resample(self._shortcut(points, checker), LEG_INTERVALS[leg])[:-1]
+            i = found[row % len(found)] if forest.meet[row, 0] < 0 else row
+            out[row] = self._resample(self._shortcut(forest.path(i, goal), checker), LEG_INTERVALS[leg])[:-1]
         return out
+
+    def _grow(self, forest: _Forest, active: np.ndarray, a: int, checker: JointSpaceModel,
+              rng: np.random.Generator) -> None:
+        """One iteration of RRT-Connect for the ``active`` pairs: tree ``a``
+        extends toward a uniform sample (as far as is free, at most
+        ``rrt_step``), then the other tree tries to connect to the new node in
+        one straight, checked move; pairs whose trees join are marked met."""
+        s, g, b = self.settings, self.geometry, 1 - a
+        target = rng.uniform(g.alpha_min, g.alpha_max, (len(active), 3))
+        near = forest.nearest(active, a, target)
+        base = forest.nodes[active, a, near]
+        step = target - base
+        dist = np.linalg.norm(step, axis=1, keepdims=True)
+        new = base + step * np.minimum(1.0, s.rrt_step / np.maximum(dist, 1e-12))
+        new = base + checker.reach(base, new)[:, None] * (new - base)  # extend as far as is free
+        ok = np.linalg.norm(new - base, axis=1) > 0.5 * s.check_step
+        grow, new = active[ok], new[ok]
+        if len(grow) == 0:
+            return
+        slot_a = forest.add(grow, a, new, near[ok])
+        # connect: the other tree's nearest node straight to the new one, as far as is free
+        near_b = forest.nearest(grow, b, new)
+        base_b = forest.nodes[grow, b, near_b]
+        frac = checker.reach(base_b, new)
+        moved = np.linalg.norm(new - base_b, axis=1) * frac > 0.5 * s.check_step
+        slot_b = np.full(len(grow), -1)
+        if moved.any():
+            q = base_b[moved] + frac[moved, None] * (new[moved] - base_b[moved])
+            slot_b[moved] = forest.add(grow[moved], b, q, near_b[moved])
+        joined = frac >= 1.0
+        slot_b = np.where(joined & ~moved, near_b, slot_b)  # already within a sample of the new node
+        done = grow[joined]
+        forest.meet[done, a], forest.meet[done, b] = slot_a[joined], slot_b[joined]
 
     @staticmethod
     def _shortcut(points: np.ndarray, checker: JointSpaceModel) -> np.ndarray:
