@@ -34,6 +34,7 @@ from paragym.units import DEG
 
 __all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
 
+
 class _CaPaManTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 

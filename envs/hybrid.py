@@ -29,6 +29,7 @@ from paragym.tasks.hybrid_step import OBS_SIZE, HybridParams, HybridTaskState
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
+
 class _HybridTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 

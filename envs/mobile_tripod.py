@@ -23,6 +23,7 @@ from paragym.tasks.mobile_tripod_step import OBS_SIZE, TripodParams, TripodTaskS
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
+
 class _TripodTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 

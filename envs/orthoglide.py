@@ -22,6 +22,7 @@ from paragym.tasks.orthoglide_step import KAPPA_LIMIT, OBS_SIZE, OrthoglideParam
 __all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
            "orthoglide_random_tasks"]
 
+
 class _OrthoglideTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 
