@@ -132,6 +132,34 @@ def _jacobian(a0, a1, a2, b0, b1, b2, jac):
 
 
 @njit(cache=True, error_model="numpy")
+def _solve3(a, b):
+    """x with a x = b for a 3x3 system: LU with partial pivoting (as LAPACK's
+    dgesv factors), written out so that the kernel needs no LAPACK (it
+    compiles in a fraction of the time). ``a`` is overwritten."""
+    x = b.copy()
+    for k in range(2):
+        p = k
+        for i in range(k + 1, 3):
+            if abs(a[i, k]) > abs(a[p, k]):
+                p = i
+        if p != k:
+            for j in range(3):
+                a[k, j], a[p, j] = a[p, j], a[k, j]
+            x[k], x[p] = x[p], x[k]
+        r = 1.0 / a[k, k]
+        for i in range(k + 1, 3):
+            a[i, k] *= r
+            for j in range(k + 1, 3):
+                a[i, j] -= a[i, k] * a[k, j]
+    x[1] -= a[1, 0] * x[0]
+    x[2] -= a[2, 0] * x[0] + a[2, 1] * x[1]
+    x[2] /= a[2, 2]
+    x[1] = (x[1] - a[1, 2] * x[2]) / a[1, 1]
+    x[0] = (x[0] - a[0, 1] * x[1] - a[0, 2] * x[2]) / a[0, 0]
+    return x
+
+
+@njit(cache=True, error_model="numpy")
 def _eta_least_squares(t0, t1, t2, eta, c, iterations, out):
     """The eta whose eq-4 distances come closest to (t0, t1, t2) in least
     squares, by Levenberg's method from ``eta`` (3,), into ``out``: what the
@@ -163,7 +191,7 @@ def _eta_least_squares(t0, t1, t2, eta, c, iterations, out):
         size = (system[0, 0] + system[1, 1] + system[2, 2]) / 3.0 + 1e-12
         for i in range(3):
             system[i, i] += lam * size
-        step = -np.linalg.solve(system, grad)
+        step = -_solve3(system, grad)
         l0, l1, l2, a0, a1, a2, b0, b1, b2 = _lengths(e[0] + step[0], e[1] + step[1], e[2] + step[2], c)
         new_res[0], new_res[1], new_res[2] = l0 - t0, l1 - t1, l2 - t2
         new_cost = new_res[0] * new_res[0] + new_res[1] * new_res[1] + new_res[2] * new_res[2]
