@@ -90,7 +90,9 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
       with a ValueError or TypeError naming them; every episode that ran
       before runs the same (tested against recorded rollouts). Since paragym
       0.3.0 the native vector env runs every drive the single env runs (it
-      refused drives of more than 8 terrain bumps, or longer than its first).
+      refused drives of more than 8 terrain bumps, or longer than its first),
+      and a custom drive of more than 10 million samples is refused at reset
+      with a ValueError naming it (it could not run: it failed allocating).
     """
 
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,

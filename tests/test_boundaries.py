@@ -79,7 +79,7 @@ BAD = {
              DriveScenario("unit 5", push=(5, 3.0, 0.02)), DriveScenario("late", push=(0, 1e6, 0.02)),
              DriveScenario("two", heading_error=(0.1, 0.2)), DriveScenario("slip", slip=-1.0),
              DriveScenario("flat", terrain=Terrain(((0.0, 0.0, 0.1, 0.0),))),
-             DriveScenario("text", speed="fast")],
+             DriveScenario("text", speed="fast"), DriveScenario("endless", speed=1e-9)],
     "paragym/CaPaManCollisionFree-v0": [None, 5, "moon"],
 }
 

@@ -17,6 +17,8 @@ from paragym.tasks.base import resolve_scenario
 
 __all__ = ["SCENARIOS", "DriveScenario", "draw_drive", "drive_scenario", "resolve_drive", "validate_drive_scenario"]
 
+#: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
+MAX_SAMPLES = 10_000_000
 #: the paper's named drives (section 4) and seeded random mixtures
 SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
 
@@ -49,7 +51,7 @@ class DriveScenario:
 def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt: float = 0.05) -> DriveScenario:
     """Refuse (ValueError/TypeError naming the field) a drive that could not be
     simulated: non-finite or non-positive speed or distance, a drive shorter
-    than one sample, heading errors that are not three finite angles within
+    than one sample or longer than :data:`MAX_SAMPLES`, heading errors that are not three finite angles within
     +-90 deg, a push on a unit other than 0, 1, 2 or at a time outside the
     drive, a negative or non-finite slip, terrain bumps that are not
     (x, y, height, radius) with a radius of at least 1 mm (a thinner one
@@ -70,6 +72,9 @@ def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt:
         raise ValueError(f"{name}.distance must be > 0 m; got {scenario.distance!r}")
     if scenario.distance / scenario.speed < dt:
         raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, less than one sample ({dt} s)")
+    if scenario.distance / scenario.speed / dt > MAX_SAMPLES:
+        raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, more than {MAX_SAMPLES:,} samples "
+                         f"at {1 / dt:g} Hz: a drive that long cannot be simulated")
     real(scenario.heading, "heading")
     errors = np.asarray(scenario.heading_error, dtype=object)
     if errors.shape != (3,):
