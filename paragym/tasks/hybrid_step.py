@@ -131,6 +131,7 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
     L_min, L_max, singularity threshold."""
     last = len(u) - 1
     work = np.empty((5, 6, 6))
+    row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
     for i in range(len(k)):
         if not rows[i]:
             continue
@@ -159,7 +160,6 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
         reward[i] = -w[2] * norm / w[1] - w[3] * abs(d_delta[i]) / w[0] - w[4] * close - w[5] * out
         # observation: u, the nominal pose now and next, Delta, the strokes, both measures, the offset
         nxt = min(k[i] + 1, last)
-        row = np.empty(OBS_SIZE)
         row[0] = u[k[i]]
         for c in range(6):
             row[1 + c] = nominal[i, k[i], c] / scale[c]

@@ -103,6 +103,7 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
                     move, max_correction, steps, noise, geo, true, odometry, gradient, eta, t, k, speed, heading,
                     heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
     """The transition of every robot with ``rows[i]`` (module docstring)."""
+    row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
     for i in range(len(k)):
         if not rows[i]:
             continue
@@ -126,7 +127,6 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
         reward[i] = -10.0 * (unit_error[i] + plate_error[i])
         terminated[i] = k[i] >= steps[i]
         # observation: odometric units (/ 10 m), measured eta, the command, the estimate's xy (/ 10 m)
-        row = np.empty(OBS_SIZE)
         for u in range(3):
             for c in range(3):
                 row[3 * u + c] = odometry[i, u, c] / POS_SCALE
