@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from numba import njit
@@ -52,7 +53,9 @@ class HybridParams:
     geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
     tau: float = 0.01
 
+    @cached_property
     def kernel_args(self) -> tuple:
+        """The numbers the kernel takes (made once: a step must not rebuild them)."""
         g = self.geometry
         weights = np.array([self.max_delta_step, self.j_bar, self.w_offset, self.w_delta, self.w_singular,
                             self.w_limit, g.l_min, g.l_max, g.singularity_threshold])
@@ -119,7 +122,7 @@ def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, 
     s = state
     _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
                     s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward,
-                    np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args())
+                    np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")

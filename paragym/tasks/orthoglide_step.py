@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -51,8 +52,9 @@ class OrthoglideParams:
     limit_penalty: float = 10.0
     geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY
 
-    @property
+    @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
+        """The numbers the kernel takes (made once: a step must not rebuild them)."""
         g = self.geometry
         return (og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode, self.max_null_rate,
                 self.max_joint_rate, self.w_track, self.limit_penalty)
