@@ -118,6 +118,12 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
         ("final_unit_error_cm", "final unit error [cm]", ".2f"), ("max_unit_error_cm", "max unit error [cm]", ".2f")]),
 }
 
+#: a later version of a task ranks and measures its episodes as the first does (same scenarios and metrics)
+LATER_VERSIONS = {"paragym/CaPaManCollisionFree-v1": "paragym/CaPaManCollisionFree-v0",
+                  "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0"}
+for _new, _old in LATER_VERSIONS.items():
+    METRICS[_new] = METRICS[_old]
+
 #: env id -> (metric that ranks after the success rate, +1 if higher is better, -1 if lower); the return
 #: breaks the remaining ties. The paper's method is optimal for this ranking, and is ranked first (tested),
 #: in three envs: the hybrid (every pose singularity-free within the limits, no detour it does not need),
@@ -142,6 +148,8 @@ REFERENCE_SUCCESS: dict[str, tuple[str, float]] = {
     "paragym/Orthoglide2PRRKappa-v0": ("gradient-c", 0.95),
     "paragym/MobileTripodOdometry-v0": ("encoder-correction", 0.7),
 }
+for _new, _old in LATER_VERSIONS.items():
+    PRIMARY[_new], REFERENCE_SUCCESS[_new] = PRIMARY[_old], REFERENCE_SUCCESS[_old]
 
 
 # --- one episode (runs in whatever process the executor chooses) ------------------------------------------------
@@ -584,6 +592,7 @@ VALIDATED: dict[str, tuple[str, Callable[[int], tuple[bool, dict[str, Any]]]]] =
     "paragym/CaPaManCollisionFree-v0": ("rrt-ga", _validate_capaman),
     "paragym/HybridSingularityFree-v0": ("polynomial-detour", _validate_hybrid),
 }
+VALIDATED["paragym/CaPaManCollisionFree-v1"] = VALIDATED["paragym/CaPaManCollisionFree-v0"]  # the same plan
 
 
 # --- the run ----------------------------------------------------------------------------------------------------

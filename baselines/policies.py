@@ -338,6 +338,18 @@ class _Estimator:
 
 
 _encoder_correction = _Estimator("EncoderCorrection")
+
+
+def _encoder_trust(env: gym.Env, seed: int) -> Any:
+    from paragym.planners.encoder_correction import EncoderTrustPolicy
+
+    return EncoderTrustPolicy()
+
+
+def _encoder_trust_params() -> dict[str, Any]:
+    from paragym.planners.encoder_correction import EncoderTrustPolicy
+
+    return {"policy": init_defaults(EncoderTrustPolicy)}
 _ukf_fusion = _Estimator("FusionEstimator")
 
 def _rrt_ga_params() -> dict[str, Any]:
@@ -399,6 +411,18 @@ _BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], 
      "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper",
      _estimator_params("FusionEstimator")),
     ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
+     "= odometry only: no correction (paper 004's uncorrected estimate)", None),
+    # v1 of the CaPaMan keeps v0's action, so its planners run unchanged
+    ("paragym/CaPaManCollisionFree-v1", "rrt-ga", _rrt_ga, "reference",
+     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step", _rrt_ga_params),
+    ("paragym/CaPaManCollisionFree-v1", "grid-dijkstra", _grid_path, "other",
+     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term", _grid_path_params),
+    ("paragym/CaPaManCollisionFree-v1", "zero", _zero, "floor", "stand still at T.P.1", None),
+    # v1 of the tripod acts through trust in the paper's correction: the reference is its test of the faulty unit
+    ("paragym/MobileTripodOdometry-v1", "encoder-correction", _encoder_trust, "reference",
+     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
+     _encoder_trust_params),
+    ("paragym/MobileTripodOdometry-v1", "zero", _zero, "floor",
      "= odometry only: no correction (paper 004's uncorrected estimate)", None),
 )
 

@@ -1,7 +1,9 @@
 """Train Stable-Baselines3 agents on the paragym envs (``paragym train``).
 
-Hyper-parameters come from ``hyperparams/<algo>.yml`` keyed by env id, as in
-rl-baselines3-zoo. A run writes, under ``<models_dir>/<env name>/``
+Hyper-parameters come from ``hyperparams/<algo>.yml`` keyed by env id, in
+rl-baselines3-zoo's format (``python -m rl_zoo3.train ... -conf
+hyperparams/ppo.yml`` reads the same files), and paragym's own keys from
+``hyperparams/paragym.yml``. A run writes, under ``<models_dir>/<env name>/``
 (default ``runs/models``; never the shipped models, which are read-only
 package data):
 
@@ -51,9 +53,11 @@ __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", 
 ALGOS = ("ppo", "sac", "td3")
 #: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
 EVAL_SEED = 10_000
-#: keys of the yml files that paragym consumes; all others go to the SB3 algorithm
+#: keys that paragym consumes (rl-zoo's and paragym.yml's); all others go to the SB3 algorithm
 PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes",
-                "action_noise_std", "checkpoint_freq", "normalize_reward")
+                "noise_type", "noise_std", "checkpoint_freq", "normalize")
+#: paragym.yml's keys, which rl-zoo does not know
+OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq")
 
 
 def check_algo(algo: str) -> str:
@@ -63,15 +67,45 @@ def check_algo(algo: str) -> str:
     return algo.lower()
 
 
+def _table(name: str) -> dict[str, Any]:
+    return yaml.safe_load(resources.files("paragym.baselines").joinpath("hyperparams", name).read_text())
+
+
 def load_hyperparams(algo: str, env_id: str) -> dict[str, Any]:
-    """The hyper-parameters of ``algo`` for ``env_id`` from the packaged
-    ``hyperparams/<algo>.yml`` (a copy; the caller may change it)."""
+    """The hyper-parameters of ``algo`` for ``env_id``: rl-zoo's from the
+    packaged ``hyperparams/<algo>.yml`` and paragym's own from
+    ``hyperparams/paragym.yml`` (a copy; the caller may change it)."""
     algo, env_id = check_algo(algo), check_env_id(env_id)
-    text = resources.files("paragym.baselines").joinpath("hyperparams", f"{algo}.yml").read_text()
-    table = yaml.safe_load(text)
+    table = _table(f"{algo}.yml")
     if env_id not in table:
         raise ValueError(f"hyperparams/{algo}.yml has no entry for {env_id}")
-    return dict(table[env_id])
+    own = (_table("paragym.yml").get(algo) or {}).get(env_id) or {}
+    clash = sorted(set(own) & set(table[env_id]))
+    if clash or set(own) - set(OWN_KEYS):
+        raise ValueError(f"hyperparams/paragym.yml: {algo} {env_id} may hold only {', '.join(OWN_KEYS)}")
+    return {"vec_env": "dummy", **dict(table[env_id]), **own}
+
+
+def reward_normalization(hp: dict[str, Any]) -> dict[str, Any] | None:
+    """rl-zoo's ``normalize`` entry as VecNormalize's keyword arguments (None:
+    no normalisation). rl-zoo writes it as a Python literal in a string, which
+    is read here with :func:`ast.literal_eval` (never evaluated). paragym
+    scales only the rewards: a normalised observation would make a saved
+    policy depend on the statistics, so ``norm_obs`` must be False."""
+    import ast
+
+    value = hp.get("normalize", False)
+    if isinstance(value, str):
+        try:
+            value = ast.literal_eval(value)
+        except (ValueError, SyntaxError) as exc:
+            raise ValueError(f"normalize must be a bool or a dict literal; got {value!r}") from exc
+    if value is False or value is None:
+        return None
+    kwargs = {"norm_obs": True, "norm_reward": True} if value is True else dict(value)
+    if not isinstance(value, bool | dict) or kwargs.get("norm_obs", True):
+        raise ValueError(f"normalize must leave the observations alone (norm_obs: False); got {hp['normalize']!r}")
+    return kwargs
 
 
 def env_name(env_id: str) -> str:
@@ -123,7 +157,7 @@ def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dic
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
     if vec_env not in ("dummy", "subproc"):
-        raise ValueError(f"vec_env must be 'dummy' or 'subproc'; got {vec_env!r}")
+        raise ValueError(f"vec_env must be 'dummy', 'subproc' or 'native'; got {vec_env!r}")
     cls = SubprocVecEnv if vec_env == "subproc" and n_envs > 1 else DummyVecEnv
     return make_vec_env(env_id, n_envs=n_envs, seed=seed, vec_env_cls=cls, env_kwargs=env_kwargs)
 
@@ -202,8 +236,8 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     ``force``; an interrupted one resumes from its checkpoint. ``hyperparams`` override the yml's entries; ``callbacks``
     (SB3 callbacks) run beside paragym's own. ``vectorized`` trains on the
     env's native vector env (:func:`paragym.baselines.sb3_vec.as_sb3_vecenv`)
-    instead of one env per copy; ``n_envs`` overrides the yml's number of
-    copies (robots).
+    instead of one env per copy (also when paragym.yml says ``vec_env:
+    native``); ``n_envs`` overrides the yml's number of copies (robots).
 
     The steps, as rl-baselines3-zoo's ExperimentManager takes them: read the
     config (:func:`_read_config`), check what is on disk
@@ -216,6 +250,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
     hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
+    vectorized = bool(vectorized) or hp.get("vec_env") == "native"
     files = run_files(env_id, algo, seed, _writable_models_dir(models_dir))
     done = _finished_run(files, algo, total, force)
     if done is not None:
@@ -298,12 +333,13 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
     else:
         env = _make_vec(env_id, n_envs, seed, hp.get("vec_env", "dummy"), env_kwargs)
         eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
-    if hp.get("normalize_reward"):  # scale the rewards for learning only: the policy sees raw observations
+    normalize = reward_normalization(hp)
+    if normalize is not None:  # scale the rewards for learning only: the policy sees raw observations
         from stable_baselines3.common.vec_env import VecNormalize
 
         stats = files.checkpoints / "vecnormalize.pkl"
         env = (VecNormalize.load(str(stats), env) if stats.exists() and not force else
-               VecNormalize(env, norm_obs=False, norm_reward=True, gamma=float(hp.get("gamma", 0.99))))
+               VecNormalize(env, **{"gamma": float(hp.get("gamma", 0.99)), **normalize}))
         # the same wrapper, inert, on the evaluation env (EvalCallback syncs the two): raw returns
         eval_env = VecNormalize(eval_env, training=False, norm_obs=False, norm_reward=False)
     return env, eval_env
@@ -325,11 +361,13 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
             curve[key] = list(saved.get(key, []))
         return model, curve, int(model.num_timesteps)
     kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
-    if algo == "td3":
+    if "noise_type" in hp or algo == "td3":  # rl-zoo's keys; only its Gaussian noise here
         from stable_baselines3.common.noise import NormalActionNoise
 
+        if hp.get("noise_type", "normal") != "normal":
+            raise ValueError(f"noise_type must be 'normal'; got {hp['noise_type']!r}")
         dim = env.action_space.shape[0]
-        kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("action_noise_std", 0.1)) * np.ones(dim))
+        kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("noise_std", 0.1)) * np.ones(dim))
     return cls(hp["policy"], env, seed=seed, device="cpu", verbose=verbose, **kwargs), curve, 0
 
 

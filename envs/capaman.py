@@ -21,7 +21,6 @@ from paragym.sim.capaman_model import CaPaManScene
 from paragym.tasks import capaman_step as task_step
 from paragym.tasks.capaman import TOUR, CaPaManScenario, draw_scenario, resolve_capaman
 from paragym.tasks.capaman_step import (
-    OBS_SIZE,
     SWEEP_STEP,
     CaPaManParams,
     CaPaManTaskState,
@@ -32,7 +31,8 @@ from paragym.tasks.capaman_step import (
 )
 from paragym.units import DEG
 
-__all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeVectorEnv"]
+__all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeV1Env", "CaPaManCollisionFreeV1VectorEnv",
+           "CaPaManCollisionFreeVectorEnv"]
 
 
 class _CaPaManTask:
@@ -43,17 +43,27 @@ class _CaPaManTask:
     world: Any
 
     def new_state(self, n: int) -> CaPaManTaskState:
-        return CaPaManTaskState.empty(n)
+        return CaPaManTaskState.empty(n, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         choice = resolve_capaman(options.get("scenario", self.scenario_arg))
         checker = self._checker()
         scenarios = [draw_scenario(choice, rng, checker, _clusters(self.geometry)) for rng in rngs]
-        task_step.reset(self.state, self.params, self.world, rows, scenarios)
+        task_step.reset(self.state, self.params, self.world, rows, scenarios, self._probe())
         return scenarios
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, self.world, actions, active)
+        task_step.step(self.state, self.params, self.world, actions, active, self._probe())
+
+    def _probe(self) -> Any:
+        """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
+        if self.params.version == 0:
+            return None
+        if isinstance(self.world, DynamicWorld):
+            if getattr(self, "_probe_world", None) is None:
+                self._probe_world = SceneWorld(self._checker())
+            return self._probe_world
+        return self.world
 
 
 class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
@@ -141,15 +151,30 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
       unchanged, bit for bit (tested against recorded rollouts). Since
       paragym 0.3.0 a scenario argument of the wrong type is a TypeError (it
       was a ValueError), as in every paragym env; no episode changes.
+    * v1 (paragym 0.4.0): :class:`CaPaManCollisionFreeV1Env`, a new
+      observation, reward and reach tolerance; v0 is unchanged.
     """
+
+    version = 0
+    #: v1's defaults that differ from v0's
+    _defaults: dict[str, float] = {}
 
     def __init__(self, scenario: str | CaPaManScenario = "random", fidelity: str = "kinematic",
                  render_mode: str | None = None, max_joint_step: float = 2 * DEG,
-                 reach_tolerance: float = 1 * DEG, delta: float = 0.01, beta: float = 0.1,
+                 reach_tolerance: float | None = None, delta: float = 0.01, beta: float = 0.1,
                  w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
-                 collision_penalty: float = 5.0, clearance_cap: float = 0.05, control_period: float = 0.02,
-                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, collision: str = "pybullet") -> None:
+                 collision_penalty: float | None = None, clearance_cap: float = 0.05, control_period: float = 0.02,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, collision: str = "pybullet",
+                 time_penalty: float | None = None) -> None:
         super().__init__(render_mode)
+        defaults = {"reach_tolerance": 1 * DEG, "collision_penalty": 5.0, "time_penalty": 0.0, **self._defaults}
+        reach_tolerance = defaults["reach_tolerance"] if reach_tolerance is None else reach_tolerance
+        collision_penalty = defaults["collision_penalty"] if collision_penalty is None else collision_penalty
+        time_penalty = defaults["time_penalty"] if time_penalty is None else time_penalty
+        if self.version == 0 and time_penalty != 0.0:
+            raise ValueError("time_penalty is a v1 argument: use paragym/CaPaManCollisionFree-v1")
+        if not (np.isfinite(time_penalty) and time_penalty >= 0):
+            raise ValueError(f"time_penalty must be >= 0; got {time_penalty!r}")
         if fidelity not in ("kinematic", "dynamic"):
             raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
         if collision not in ("pybullet", "grid"):
@@ -173,11 +198,12 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
         self.w_length, self.w_progress = float(w_length), float(w_progress)
         self.reach_bonus, self.collision_penalty = float(reach_bonus), float(collision_penalty)
         self.action_space = spaces.Box(-1.0, 1.0, (3,), np.float32)
-        self.observation_space = spaces.Box(-1.0, 1.0, (OBS_SIZE,), np.float32)
         self.control_period = float(control_period)
+        self.time_penalty = float(time_penalty)
         self.params = CaPaManParams(self.max_joint_step, self.reach_tolerance, self.delta, self.beta, self.w_length,
                                     self.w_progress, self.reach_bonus, self.collision_penalty, float(clearance_cap),
-                                    geometry)
+                                    geometry, self.version, self.time_penalty)
+        self.observation_space = spaces.Box(-1.0, 1.0, (self.params.obs_size,), np.float32)
         if fidelity == "kinematic":
             self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
             self.world = GridWorld(1, geometry, clearance_cap) if collision == "grid" else SceneWorld(self.scene)
@@ -228,6 +254,60 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
             self._scenario_scene.close()
 
 
+class CaPaManCollisionFreeV1Env(CaPaManCollisionFreeEnv):
+    """``paragym/CaPaManCollisionFree-v1``: v0's mechanism, scenarios, motion,
+    collision test and episode end, with an observation, a reward and a reach
+    tolerance under which learning beats standing still.
+
+    ## Why v1
+    In v0, PPO on 4 M steps never completed a tour (0 % on 30 scenarios)
+    and every shipped agent scored below standing still (return 0): a
+    one-line controller that steers the cranks straight to the target
+    succeeds on about half the scenarios but collides on the other half
+    (-5), so its median return is below 0 and learning is pulled toward
+    timidity. The clearance was one number, with no direction in joint
+    space to move away from an obstacle, and the reach tolerance (1 deg of
+    joint-space norm, half an action's step) is hard to meet with a
+    stochastic policy. The ablation behind v1 is in ``baselines/ABLATION.md``.
+
+    ## Observation Space
+    ``Box(-1, 1, (41,), float32)``:
+
+    ==========  ==========================================================
+    0-2         crank angles, normalised to [-1, 1] over 45-135 deg
+    3-5         current target T.P. minus the cranks (/ 45 deg)
+    6-8         the next target T.P. minus the cranks (/ 45 deg)
+    9-11        current target T.C. minus the tool tip (x 5 /m)
+    12-35       three obstacles x [present, is_box, centre minus tool tip (3), half sizes (3)] (x 5 /m)
+    36          clearance / ``clearance_cap`` (signed)
+    37-39       look-ahead: the clearance's change if crank k alone moved 3 deg further, / cap
+                (:data:`paragym.tasks.capaman_step.LOOKAHEAD`; 0 away from obstacles)
+    40          progress: T.C.s reached / 3
+    ==========  ==========================================================
+
+    ## Rewards
+    v0's terms plus ``-time_penalty`` (0.01) per step; ``collision_penalty``
+    is 4, the whole time budget of 400 steps, so that ending an episode by a
+    collision never pays, and standing still (-4) scores below any attempt
+    that makes progress.
+
+    ## Starting State, Episode End, Action Space
+    As v0. ``reach_tolerance`` is 3 deg (joint-space norm): one and a half
+    action steps.
+
+    ## Arguments
+    As v0, plus ``time_penalty``. In dynamic fidelity the look-ahead is
+    computed in the kinematic scene at the encoders' angles.
+
+    ## Version History
+    * v1 (paragym 0.4.0): the observation, reward and reach tolerance above;
+      the motion, the collision test, the scenarios and the end are v0's.
+    """
+
+    version = 1
+    _defaults = {"reach_tolerance": 3 * DEG, "collision_penalty": 4.0, "time_penalty": 0.01}
+
+
 class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`CaPaManCollisionFreeEnv` with
     ``collision="grid"`` stepped together: the same transition
@@ -261,3 +341,9 @@ class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
         e = self.single_env
         e.scene.set_obstacles(self.state.scenarios[i].obstacles)
         e.state.alpha[0] = self.state.alpha[i]
+
+
+class CaPaManCollisionFreeV1VectorEnv(CaPaManCollisionFreeVectorEnv):
+    """``num_envs`` copies of :class:`CaPaManCollisionFreeV1Env` stepped together on the grid."""
+
+    single_class = CaPaManCollisionFreeV1Env

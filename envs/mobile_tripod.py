@@ -19,9 +19,10 @@ from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.tasks import mobile_tripod_step as task_step
 from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenario, resolve_drive
-from paragym.tasks.mobile_tripod_step import OBS_SIZE, TripodParams, TripodTaskState
+from paragym.tasks.mobile_tripod_step import TripodParams, TripodTaskState
 
-__all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryVectorEnv", "drive_scenario"]
+__all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripodOdometryV1VectorEnv",
+           "MobileTripodOdometryVectorEnv", "drive_scenario"]
 
 
 class _TripodTask:
@@ -31,7 +32,7 @@ class _TripodTask:
     params: TripodParams
 
     def new_state(self, n: int) -> TripodTaskState:
-        return TripodTaskState.empty(n)
+        return TripodTaskState.empty(n, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         choice = resolve_drive(options.get("scenario", self.scenario_arg))
@@ -93,7 +94,11 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
       refused drives of more than 8 terrain bumps, or longer than its first),
       and a custom drive of more than 10 million samples is refused at reset
       with a ValueError naming it (it could not run: it failed allocating).
+    * v1 (paragym 0.4.0): :class:`MobileTripodOdometryV1Env`, a new action and
+      observation; v0 is unchanged.
     """
+
+    version = 0
 
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
@@ -105,9 +110,9 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
             raise ValueError(f"encoder_noise must be >= 0 rad; got {encoder_noise!r}")
         self.scenario_arg, self.geometry = scenario, geometry
         self.encoder_noise, self.max_correction, self.success_error = encoder_noise, max_correction, success_error
-        self.params = TripodParams(float(encoder_noise), float(max_correction), geometry)
-        self.action_space = spaces.Box(-1.0, 1.0, (6,), np.float32)
-        self.observation_space = spaces.Box(-100.0, 100.0, (OBS_SIZE,), np.float32)
+        self.params = TripodParams(float(encoder_noise), float(max_correction), geometry, self.version)
+        self.action_space = spaces.Box(-1.0, 1.0, (self.params.action_size,), np.float32)
+        self.observation_space = spaces.Box(-100.0, 100.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
 
     def _detected_fault(self) -> tuple[int, str] | None:
@@ -126,10 +131,13 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
 
     def _info(self) -> dict[str, Any]:
         s, d = self.state, self.state.drive
-        return {"true_units": d.true[0].copy(), "estimate": s.estimate[0].copy(), "odometry": d.odometry[0].copy(),
+        info = {"true_units": d.true[0].copy(), "estimate": s.estimate[0].copy(), "odometry": d.odometry[0].copy(),
                 "eta": s.eta[0].copy(), "unit_error": float(s.unit_error[0]), "plate_error": float(s.plate_error[0]),
                 "detected_fault": self._detected_fault(), "t": float(d.t[0]),
                 "is_success": bool(s.terminated[0] and s.unit_error[0] < self.success_error)}
+        if self.version == 1:  # the smoothed encoder distances that v1's correction steers to
+            info["encoder_distances"] = s.smoothed[0].copy()
+        return info
 
     def _render_rgb(self) -> np.ndarray:
         from paragym.sim.tripod_model import TripodScene
@@ -138,6 +146,51 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
         _, rotation, centre = mt.forward(d.true[:1], eta0=d.eta[0], geometry=self.geometry)
         return self._drawn(lambda gui: TripodScene(self.scenario.terrain, gui=gui),
                            lambda scene: scene.set_state(d.true[0], centre[0], rotation[0], self.geometry))
+
+
+class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
+    """``paragym/MobileTripodOdometry-v1``: v0's drives, reward and end, with
+    an action and an observation under which learning beats odometry.
+
+    ## Why v1
+    In v0 the action is a correction added to the estimate, so every
+    correction stays in it for the rest of the drive: exploration noise and
+    any bias of a learned policy integrate, and in the directions the
+    encoders cannot see (a rigid shift or turn of all three units) nothing
+    pulls them back. v0's best learned agent ended 58.9 cm off, against
+    12.1 cm for odometry alone and 3.0 cm for the paper's correction. The
+    observation also gave absolute world coordinates, leaving the policy to
+    compute the inter-unit distances itself. The ablation behind v1 is in
+    ``baselines/ABLATION.md``.
+
+    ## Action Space
+    ``Box(-1, 1, (3,))``: for each unit u, the fraction ``clip(a_u, 0, 1)``
+    of the way its estimate moves, before the drive advances, toward where
+    the paper's correction puts it (section 3: on the circles about the other
+    two estimated units whose radii are the encoder distances of eq 4,
+    exponentially smoothed with factor 0.1 per sample, as the reference
+    smooths them; :func:`paragym.mechanisms.mobile_tripod.k_relocate`).
+    Then all three move by the odometric increment. Zero or negative: odometry
+    alone. What is learned is the paper's hard part: which unit is faulty,
+    when, and how far to trust the noisy encoders.
+
+    ## Observation Space
+    ``Box(-100, 100, (16,))``, in the robot's frame (x along the commanded
+    heading): the estimate's inter-unit distances minus the smoothed encoder
+    distances (3, / 5 cm), the same for the odometry (3, / 5 cm), each unit's
+    estimate minus its odometry (6, / 10 cm), the drive's progress t /
+    duration (1), the measured eta (3, rad).
+
+    ## Rewards, Starting State, Episode End, Arguments
+    As v0 (``max_correction`` is not used). ``info["encoder_distances"]``
+    holds the smoothed encoder distances (m).
+
+    ## Version History
+    * v1 (paragym 0.4.0): the action and the observation above; the drives,
+      the reward, the success and the episode's end are v0's.
+    """
+
+    version = 1
 
 
 class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
@@ -156,3 +209,9 @@ class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
         one, s = self.single_env.state, self.state
         one.drive.scenarios[0] = s.drive.scenarios[i]
         one.drive.true[0], one.drive.eta[0] = s.drive.true[i], s.drive.eta[i]
+
+
+class MobileTripodOdometryV1VectorEnv(MobileTripodOdometryVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryV1Env` stepped together."""
+
+    single_class = MobileTripodOdometryV1Env

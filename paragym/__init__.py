@@ -17,6 +17,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.capaman:CaPaManCollisionFreeEnv", 400,
         "CaPaMan 3-DOF: tour T.C.1->2->3->1 around obstacles, whole manipulator collision-free (paper 000)",
     ),
+    "paragym/CaPaManCollisionFree-v1": (
+        "paragym.envs.capaman:CaPaManCollisionFreeV1Env", 400,
+        "CaPaMan v1: the v0 tour with goal-relative observations, a clearance look-ahead and a time penalty",
+    ),
     "paragym/HybridSingularityFree-v0": (
         "paragym.envs.hybrid:HybridSingularityFreeEnv", 100,
         "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations (paper 002)",
@@ -29,14 +33,20 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.mobile_tripod:MobileTripodOdometryEnv", 700,
         "mobile tripod: estimate the three drive units under slip from odometry and leg encoders (paper 004)",
     ),
+    "paragym/MobileTripodOdometry-v1": (
+        "paragym.envs.mobile_tripod:MobileTripodOdometryV1Env", 700,
+        "mobile tripod v1: per unit, how far to trust the encoders' correction of the odometry (paper 004)",
+    ),
 }
 
 #: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
 VECTOR_ENTRY_POINTS: dict[str, str] = {
     "paragym/CaPaManCollisionFree-v0": "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv",
+    "paragym/CaPaManCollisionFree-v1": "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv",
     "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
     "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",
+    "paragym/MobileTripodOdometry-v1": "paragym.envs.mobile_tripod:MobileTripodOdometryV1VectorEnv",
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

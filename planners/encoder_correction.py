@@ -26,7 +26,20 @@ import numpy as np
 
 from paragym.mechanisms import mobile_tripod as mt
 
-__all__ = ["EncoderCorrection", "EstimatorPolicy", "FusionEstimator", "OdometryEstimator"]
+__all__ = ["EncoderCorrection", "EncoderTrustPolicy", "EstimatorPolicy", "FusionEstimator", "OdometryEstimator",
+           "faulty_unit"]
+
+
+def faulty_unit(estimate: np.ndarray, target: np.ndarray, threshold: float) -> int | None:
+    """The paper's single-fault test (section 3): the unit whose two distances
+    in ``estimate`` (3, 3) disagree with the encoder distances ``target`` (3,)
+    by more than ``threshold`` (m) while the one opposite it agrees; None when
+    no unit is singled out."""
+    diff = np.abs(mt.distances(estimate[None])[0] - target)
+    order = np.argsort(diff)
+    if diff[order[1]] > threshold and diff[order[0]] < threshold:
+        return int(order[0])
+    return None
 
 
 class OdometryEstimator:
@@ -62,12 +75,9 @@ class EncoderCorrection(OdometryEstimator):
         self._target = measured if self._target is None else \
             self._target + self.smoothing * (measured - self._target)
         target = self._target
-        diff = mt.distances(self.estimate[None])[0] - target
         self.detected = None
-        order = np.argsort(np.abs(diff))
-        # one faulty unit: its opposite distance agrees, the two it touches do not
-        if np.abs(diff[order[1]]) > self.threshold and np.abs(diff[order[0]]) < self.threshold:
-            faulty = int(order[0])
+        faulty = faulty_unit(self.estimate, target, self.threshold)
+        if faulty is not None:
             self.estimate = mt.relocate(self.estimate, faulty, target)
             # eta is measured down from the plate: a unit moved inward stands its leg up (eta grows), one
             # moved outward lays it down — the paper's reading of the sign, for this convention of eta
@@ -144,3 +154,26 @@ class EstimatorPolicy:
             self.estimator.update(increments, info["eta"], odometry[:, 2])
         wanted = self.estimator.estimate[:, :2] - np.asarray(info["estimate"])[:, :2]
         return np.clip(wanted.ravel() / self.max_correction, -1, 1).astype(np.float32)
+
+
+class EncoderTrustPolicy:
+    """The paper's correction as a ``MobileTripodOdometry-v1`` policy: the
+    env keeps the estimate and the smoothed encoder distances (the same
+    smoothing as :class:`EncoderCorrection`), and moves a unit toward the
+    circle intersection as far as the action trusts it. This policy trusts
+    fully the unit that the paper's single-fault test singles out
+    (:func:`faulty_unit`) and no other; the env then moves it
+    ``trust_rate`` (0.2) of the way per sample rather than at once."""
+
+    def __init__(self, threshold: float = 0.01) -> None:
+        self.threshold = threshold
+
+    def reset(self, obs: np.ndarray, info: dict) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict) -> np.ndarray:
+        action = np.zeros(3, np.float32)
+        faulty = faulty_unit(np.asarray(info["estimate"]), np.asarray(info["encoder_distances"]), self.threshold)
+        if faulty is not None:
+            action[faulty] = 1.0
+        return action

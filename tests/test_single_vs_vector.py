@@ -109,27 +109,29 @@ def test_hybrid(p0, p1, seed, data):
        slip=st.floats(0.0, 0.02),
        bumps=st.lists(st.tuples(st.floats(-2, 2), st.floats(-2, 2), st.floats(-0.1, 0.1), st.floats(0.05, 1.0)),
                       max_size=10),
-       seed=st.integers(0, 2 ** 16), data=st.data())
-def test_mobile_tripod(speed, distance, heading, error, unit, push, slip, bumps, seed, data):
+       seed=st.integers(0, 2 ** 16), version=st.sampled_from(["v0", "v1"]), data=st.data())
+def test_mobile_tripod(speed, distance, heading, error, unit, push, slip, bumps, seed, version, data):
     errors = [0.0, 0.0, 0.0]
     errors[unit] = error
     if push is not None:
         push = (push[0], push[1] * distance / speed, push[2])
     scenario = DriveScenario("d", speed=speed, distance=distance, heading=heading, heading_error=tuple(errors),
                              push=push, slip=slip, terrain=Terrain(tuple(bumps)))
-    _same_run("paragym/MobileTripodOdometry-v0", scenario, data.draw(_actions(6, 80)), seed)
+    _same_run(f"paragym/MobileTripodOdometry-{version}", scenario,
+              data.draw(_actions(6 if version == "v0" else 3, 80)), seed)
 
 
-@settings(max_examples=6, **SETTINGS)
+@settings(max_examples=10, **SETTINGS)
 @given(alpha=st.lists(st.floats(0.8, 2.35), min_size=9, max_size=9),
        obstacle=st.tuples(st.floats(-0.04, 0.04), st.floats(-0.04, 0.04), st.floats(0.005, 0.02), st.booleans()),
-       seed=st.integers(0, 2 ** 16), data=st.data())
-def test_capaman(alpha, obstacle, seed, data):
+       seed=st.integers(0, 2 ** 16), version=st.sampled_from(["v0", "v1"]), data=st.data())
+def test_capaman(alpha, obstacle, seed, version, data):
     x, y, size, round_ = obstacle
     shape = Cylinder((x, y, 0.04), size, 0.08) if round_ else Box((x, y, 0.04), (size, size, 0.04))
     points = tuple(tuple(alpha[3 * i:3 * i + 3]) for i in range(3))  # T.P.1..3 in the joint range
     scenario = CaPaManScenario("mine", (shape,), points)
-    _same_run("paragym/CaPaManCollisionFree-v0", scenario, data.draw(_actions(3, 40)), seed, collision="grid")
+    _same_run(f"paragym/CaPaManCollisionFree-{version}", scenario, data.draw(_actions(3, 40)), seed,
+              collision="grid")
 
 
 @pytest.mark.parametrize("mode", ["sync", "vector_entry_point"])

@@ -69,7 +69,7 @@ class _Interrupt(BaseCallback):
 
 
 def test_an_interrupted_run_resumes_from_its_checkpoint(tmp_path):
-    hp = {**TINY["ppo"], "normalize_reward": True}  # the reward scaler's statistics are checkpointed too
+    hp = {**TINY["ppo"], "normalize": "{'norm_obs': False, 'norm_reward': True}"}  # its statistics are checkpointed too
     with pytest.raises(KeyboardInterrupt):
         train(HYBRID, "ppo", seed=2, timesteps=768, models_dir=tmp_path, progress_bar=False, hyperparams=hp,
               callbacks=[_Interrupt(400)])
@@ -111,7 +111,7 @@ def test_vectorized_training_runs_for_every_env_with_its_yml(tmp_path, env_id, r
         warnings.simplefilter("error", UserWarning)
         res = train(env_id, "ppo", seed=0, timesteps=100, models_dir=tmp_path, progress_bar=False,
                     hyperparams=small, vectorized=True, n_envs=4)
-    assert res.meta["hyperparams"].get("normalize_reward") == load_hyperparams("ppo", env_id).get("normalize_reward")
+    assert res.meta["hyperparams"].get("normalize") == load_hyperparams("ppo", env_id).get("normalize")
     assert res.meta["num_timesteps"] == res.model.num_timesteps == 128  # whole rollouts of 4 x 32, said as such
     assert res.meta["curve"]["eval_timesteps"]
     assert res.files.curve_png.stat().st_size > 5_000

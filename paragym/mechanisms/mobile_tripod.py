@@ -80,14 +80,14 @@ def kernel_consts(g: TripodGeometry) -> np.ndarray:
 
 
 @njit(cache=True, error_model="numpy")
-def _unit(e, i, c):
+def k_unit(e, i, c):
     """D_i in the plate frame (eqs 1-3) at encoder angle e: (x, y, z)."""
     q = c[6] + c[7] * math.cos(e)
     return q * c[i], q * c[3 + i], -c[7] * math.sin(e)
 
 
 @njit(cache=True, error_model="numpy")
-def _pair_distances(units):
+def k_distances(units):
     """Eqs 4, 5: l_i = |D_(i-1) - D_(i+1)| for units (3, 3): (l_0, l_1, l_2)."""
     (u0x, u0y, u0z), (u1x, u1y, u1z), (u2x, u2y, u2z) = units[0], units[1], units[2]
     return (math.sqrt((u2x - u1x) ** 2 + (u2y - u1y) ** 2 + (u2z - u1z) ** 2),
@@ -215,7 +215,7 @@ def k_eta(units, eta0, c, iterations, tol, out):
     iteration first checking the residual against ``tol``; when no exact eta
     exists (not converged in ``iterations``), the least-squares reading
     (:func:`_eta_least_squares`, 30 iterations). Returns whether Newton converged."""
-    t0, t1, t2 = _pair_distances(units)
+    t0, t1, t2 = k_distances(units)
     e0, e1, e2 = eta0[0], eta0[1], eta0[2]
     for _ in range(iterations):
         l0, l1, l2, j02, j10, j21, j01, j12, j20 = _lengths(e0, e1, e2, c)
@@ -242,13 +242,13 @@ def _eta_all(units, eta0, c, iterations, tol, out, converged):
 def _units_all(eta, c, out):
     for n in range(eta.shape[0]):
         for i in range(3):
-            out[n, i, 0], out[n, i, 1], out[n, i, 2] = _unit(eta[n, i], i, c)
+            out[n, i, 0], out[n, i, 1], out[n, i, 2] = k_unit(eta[n, i], i, c)
 
 
 @njit(cache=True, error_model="numpy")
 def _distances_all(units, out):
     for n in range(units.shape[0]):
-        out[n, 0], out[n, 1], out[n, 2] = _pair_distances(units[n])
+        out[n, 0], out[n, 1], out[n, 2] = k_distances(units[n])
 
 
 def plate_frame_units(eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY) -> np.ndarray:
@@ -338,24 +338,37 @@ def inverse(rotation: np.ndarray, centre: np.ndarray, geometry: TripodGeometry =
     return eta, units
 
 
-def relocate(units: np.ndarray, faulty: int, target: np.ndarray) -> np.ndarray:
-    """The paper's correction (section 3): unit ``faulty`` (0-based) moved to
-    the intersection of the circles, in the ground plane, about the other two
-    units with radii the encoder distances ``target`` (eq 4's l, (3,)); of the
-    two intersections the one nearer its odometric position. Units (3, 3)."""
+@njit(cache=True, error_model="numpy")
+def k_relocate(units, faulty, target):
+    """The paper's correction (section 3) for one unit: where unit ``faulty``
+    must stand, in the ground plane, for its distances to the other two units
+    of ``units`` (3, 3) to be the encoder distances ``target`` (eq 4's l, (3,)):
+    the intersection of the circles about them, of the two the one nearer its
+    current position. Returns (x, y)."""
     k = faulty
-    i, j = (k - 1) % 3, (k + 1) % 3
+    i, j = (k + 2) % 3, (k + 1) % 3
     ri, rj = target[j], target[i]  # |D_k - D_i| is l_j (the distance opposite unit j), and vice versa
-    pi_, pj = units[i, :2], units[j, :2]
-    d = float(np.linalg.norm(pj - pi_))
+    px, py, qx, qy = units[i, 0], units[i, 1], units[j, 0], units[j, 1]
+    d = math.hypot(qx - px, qy - py)
     ri = math.sqrt(max(ri * ri - (units[k, 2] - units[i, 2]) ** 2, 0.0))
     rj = math.sqrt(max(rj * rj - (units[k, 2] - units[j, 2]) ** 2, 0.0))
     along = (ri * ri - rj * rj + d * d) / (2 * d)
     h = math.sqrt(max(ri * ri - along * along, 0.0))
-    base = pi_ + along * (pj - pi_) / d
-    perp = np.array([-(pj - pi_)[1], (pj - pi_)[0]]) / d
-    candidates = [base + h * perp, base - h * perp]
-    best = min(candidates, key=lambda c: float(np.linalg.norm(c - units[k, :2])))
-    out = units.copy()
-    out[k, :2] = best
+    bx, by = px + along * (qx - px) / d, py + along * (qy - py) / d
+    nx, ny = -(qy - py) / d, (qx - px) / d
+    ax, ay = bx + h * nx, by + h * ny
+    cx, cy = bx - h * nx, by - h * ny
+    if math.hypot(cx - units[k, 0], cy - units[k, 1]) < math.hypot(ax - units[k, 0], ay - units[k, 1]):
+        return cx, cy
+    return ax, ay
+
+
+def relocate(units: np.ndarray, faulty: int, target: np.ndarray) -> np.ndarray:
+    """The paper's correction (section 3): unit ``faulty`` (0-based) moved to
+    the intersection of the circles, in the ground plane, about the other two
+    units with radii the encoder distances ``target`` (eq 4's l, (3,)); of the
+    two intersections the one nearer its odometric position
+    (:func:`k_relocate`). Units (3, 3)."""
+    out = np.array(units, float)
+    out[faulty, :2] = k_relocate(np.ascontiguousarray(out), int(faulty), np.ascontiguousarray(target, float))
     return out

@@ -29,6 +29,17 @@ target T.P. (the tour T.C.1 -> 2 -> 3 -> 1):
   w_progress (joint distance to the target before - after) - beta [clearance
   < delta] + reach_bonus [target reached] - collision_penalty [collision].
   Terminated on collision or when the tour is complete.
+
+Version 1 (``CaPaManParams.version == 1``) keeps the motion, the collision
+test and the episode's end, and changes what the agent sees and earns
+(:data:`OBS_SIZE_V1`): goal-relative coordinates, the obstacles relative to
+the tool tip, and a look-ahead of the clearance: how the clearance would
+change if each crank alone moved ``LOOKAHEAD`` further (computed only near
+an obstacle, where the clearance is under its cap; elsewhere it is 0, as the
+capped clearance's change is). The reward adds ``-time_penalty`` per step,
+so that standing still for the 400 steps (-4 by default) scores below any
+attempt that makes progress, and ``collision_penalty`` defaults to that
+whole budget, so that ending an episode by a collision never pays.
 """
 
 from __future__ import annotations
@@ -49,7 +60,8 @@ from paragym.sim.obstacles import ENCODING_SIZE
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
 from paragym.units import DEG
 
-__all__ = ["OBS_SIZE", "SWEEP_STEP", "CaPaManParams", "CaPaManTaskState", "DynamicWorld", "GridWorld", "SceneWorld",
+__all__ = ["LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "SWEEP_STEP",
+           "CaPaManParams", "CaPaManTaskState", "DynamicWorld", "GridWorld", "SceneWorld",
            "World", "reset", "step"]
 
 #: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
@@ -58,6 +70,15 @@ __all__ = ["OBS_SIZE", "SWEEP_STEP", "CaPaManParams", "CaPaManTaskState", "Dynam
 SWEEP_STEP = 2 * DEG
 _TOUR = np.asarray(TOUR, np.int64)
 OBS_SIZE = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 1
+#: v1: cranks (3), current and next target T.P. minus the cranks (3 + 3), tip minus target T.C. (3, x5 /m),
+#: obstacles relative to the tip (3 x 8, lengths x5 /m), clearance / cap (1), its look-ahead change / cap (3),
+#: progress (1)
+OBS_SIZE_V1 = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 3 + 1
+#: v1: the crank motion (rad) of the clearance look-ahead: 3 deg moves a point of the parts up to 7 mm,
+#: more than a cell of the 5 mm occupancy grid, so the grid's look-ahead is not lost to its quantisation
+LOOKAHEAD = 3 * DEG
+#: v1: lengths in the observation are multiplied by this (1/m): +-20 cm fill the Box
+LENGTH_SCALE = 5.0
 
 
 @dataclass(frozen=True)
@@ -74,6 +95,12 @@ class CaPaManParams:
     collision_penalty: float = 5.0
     clearance_cap: float = 0.05
     geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
+    version: int = 0
+    time_penalty: float = 0.0
+
+    @property
+    def obs_size(self) -> int:
+        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
 
     @property
     def substeps(self) -> int:
@@ -86,7 +113,7 @@ class CaPaManParams:
         g = self.geometry
         return np.array([self.max_joint_step, self.reach_tolerance, self.delta, self.beta, self.w_length,
                          self.w_progress, self.reach_bonus, self.collision_penalty, self.clearance_cap,
-                         g.alpha_min, g.alpha_max])
+                         g.alpha_min, g.alpha_max, self.time_penalty])
 
 
 @dataclass
@@ -94,7 +121,8 @@ class CaPaManTaskState:
     """N robots: task points T.P. and task configurations T.C. (N, 3, 3), the
     obstacles' encoding, crank angles, command and tool tip (N, 3), the tour's
     progress, path length, last step's length and progress, the clearance
-    (m) and its nearest part, and the observation and reward of the last step."""
+    (m) and its nearest part, the clearance's look-ahead (N, 3; v1), and the
+    observation and reward of the last step."""
 
     tp: np.ndarray
     tc: np.ndarray
@@ -108,6 +136,7 @@ class CaPaManTaskState:
     progress: np.ndarray
     just_reached: np.ndarray
     clearance: np.ndarray
+    lookahead: np.ndarray
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
@@ -115,12 +144,13 @@ class CaPaManTaskState:
     scenarios: list[CaPaManScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int) -> CaPaManTaskState:
+    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> CaPaManTaskState:
         z = np.zeros
         return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
-                   progress=z(n), just_reached=z(n, bool), clearance=z(n), terminated=z(n, bool),
-                   obs=z((n, OBS_SIZE), np.float32), reward=z(n), near=[None] * n, scenarios=[None] * n)
+                   progress=z(n), just_reached=z(n, bool), clearance=z(n), lookahead=z((n, 3)),
+                   terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n), near=[None] * n,
+                   scenarios=[None] * n)
 
     @property
     def target(self) -> np.ndarray:
@@ -200,12 +230,15 @@ class DynamicWorld(SceneWorld):
 
 
 def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,
-          scenarios: list[CaPaManScenario]) -> None:
-    """Start ``rows`` at T.P.1 of their (checked) ``scenarios``."""
+          scenarios: list[CaPaManScenario], probe: World | None = None) -> None:
+    """Start ``rows`` at T.P.1 of their (checked) ``scenarios``. ``probe``:
+    the kinematic world of v1's look-ahead when ``world`` is the dynamics."""
     g = params.geometry
     for i, scenario in zip(rows, scenarios, strict=True):
         state.scenarios[i] = scenario
         world.set_obstacles(i, scenario)
+        if probe is not None and probe is not world:
+            probe.set_obstacles(i, scenario)
         state.tp[i] = scenario.alpha
         state.tc[i] = np.array(scenario.task_configs) if scenario.task_configs else \
             capaman.forward(scenario.alpha, g).tip
@@ -218,14 +251,16 @@ def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np
     state.path_length[rows], state.step_length[rows], state.progress[rows] = 0.0, 0.0, 0.0
     state.just_reached[rows] = False
     _place(state, world, rows, state.alpha[rows])
+    _look_ahead(state, params, world if probe is None else probe, rows)
     mask = np.zeros(len(state.alpha), bool)
     mask[rows] = True
     _finish(state, params, mask, state.alpha, False)
 
 
 def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: np.ndarray,
-         active: np.ndarray) -> None:
-    """Move the ``active`` robots (N,) with ``actions`` (N, 3) inside the Box (the env clips)."""
+         active: np.ndarray, probe: World | None = None) -> None:
+    """Move the ``active`` robots (N,) with ``actions`` (N, 3) inside the Box
+    (the env clips). ``probe``: as in :func:`reset`."""
     every = bool(active.all())
     rows = np.arange(len(active)) if every else np.flatnonzero(active)
     old = state.alpha.copy()
@@ -249,7 +284,29 @@ def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: 
     else:
         state.command[rows], state.alpha[rows] = command[rows], new
     _place(state, world, rows, new)
+    _look_ahead(state, params, world if probe is None else probe, rows)
     _finish(state, params, active, old, True)
+
+
+def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray) -> None:
+    """v1: the change of each robot's clearance if one crank alone moved
+    :data:`LOOKAHEAD` further (inside the joint range), for the robots whose
+    clearance is under the cap (elsewhere 0). A kinematic PyBullet scene is
+    posed back where the robot is."""
+    if params.version == 0:
+        return
+    state.lookahead[rows] = 0.0
+    near = rows[state.clearance[rows] < params.clearance_cap]
+    if not near.size:
+        return
+    g = params.geometry
+    for k in range(3):
+        probe = state.alpha[near].copy()
+        probe[:, k] = np.minimum(probe[:, k] + LOOKAHEAD, g.alpha_max)
+        clearance, _, _ = world.place(near, probe)
+        state.lookahead[near, k] = np.minimum(clearance, params.clearance_cap) - state.clearance[near]
+    if isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
+        world.place(near, state.alpha[near])
 
 
 def _place(state: CaPaManTaskState, world: World, rows: np.ndarray, alpha: np.ndarray) -> None:
@@ -264,6 +321,9 @@ def _finish(state: CaPaManTaskState, params: CaPaManParams, rows: np.ndarray, ol
     _finish_kernel(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.path_length, s.step_length, s.progress,
                    s.just_reached, s.clearance, s.terminated, s.obs, s.reward, old, rows, move, params.kernel_args,
                    _TOUR)
+    if params.version == 1:
+        _observe_v1(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.clearance, s.lookahead, s.obs, rows,
+                    params.kernel_args, _TOUR)
 
 
 @njit(cache=True, error_model="numpy")
@@ -282,7 +342,7 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
     """After the world has placed the robots of ``rows``: the step's length and
     progress toward the target, reaching, the reward, the end and the observation.
     ``p``: max_joint_step, reach_tolerance, delta, beta, w_length, w_progress,
-    reach_bonus, collision_penalty, clearance_cap, alpha_min, alpha_max."""
+    reach_bonus, collision_penalty, clearance_cap, alpha_min, alpha_max, time_penalty."""
     n_tour = len(tour)
     mid, half = (p[10] + p[9]) / 2, (p[10] - p[9]) / 2
     for i in range(alpha.shape[0]):
@@ -302,6 +362,8 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
             if just_reached[i]:
                 reached[i] += 1
         r = -p[4] * step_length[i] + p[5] * progress[i]
+        if move:
+            r -= p[11]
         if clearance[i] < p[2]:
             r -= p[3]
         if just_reached[i]:
@@ -321,3 +383,34 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
             obs[i, 12 + c] = code[i, c]
         obs[i, 12 + code.shape[1]] = max(clearance[i], -p[8])
         obs[i, 13 + code.shape[1]] = reached[i] / n_tour
+
+
+@njit(cache=True, error_model="numpy")
+def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, rows, p, tour):
+    """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
+    n_tour = len(tour)
+    mid, half, cap = (p[10] + p[9]) / 2, (p[10] - p[9]) / 2, p[8]
+    m = code.shape[1] // 8
+    for i in range(alpha.shape[0]):
+        if not rows[i]:
+            continue
+        t = tour[min(reached[i], n_tour - 1)]
+        t_next = tour[min(reached[i] + 1, n_tour - 1)]
+        for c in range(3):
+            obs[i, c] = min(1.0, max(-1.0, (alpha[i, c] - mid) / half))
+            obs[i, 3 + c] = min(1.0, max(-1.0, (tp[i, t, c] - alpha[i, c]) / half))
+            obs[i, 6 + c] = min(1.0, max(-1.0, (tp[i, t_next, c] - alpha[i, c]) / half))
+            obs[i, 9 + c] = min(1.0, max(-1.0, (tc[i, t, c] - tip[i, c]) * LENGTH_SCALE))
+        for k in range(m):
+            b = 12 + 8 * k
+            present = code[i, 8 * k]
+            obs[i, b], obs[i, b + 1] = present, code[i, 8 * k + 1]
+            for c in range(3):
+                rel = (code[i, 8 * k + 2 + c] - tip[i, c]) * LENGTH_SCALE if present > 0 else 0.0
+                obs[i, b + 2 + c] = min(1.0, max(-1.0, rel))
+                obs[i, b + 5 + c] = min(1.0, max(-1.0, code[i, 8 * k + 5 + c] * LENGTH_SCALE))
+        b = 12 + 8 * m
+        obs[i, b] = min(1.0, max(-1.0, clearance[i] / cap))
+        for c in range(3):
+            obs[i, b + 1 + c] = min(1.0, max(-1.0, lookahead[i, c] / cap))
+        obs[i, b + 4] = reached[i] / n_tour

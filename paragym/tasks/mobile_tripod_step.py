@@ -14,6 +14,18 @@ increment plus the agent's correction (action times ``max_correction``), its
 height from the terrain; the encoders read the true eta plus noise. Reward:
 -10 (mean unit error + plate centre error), m, the estimate's horizontal unit
 positions against the true ones. Terminated at the drive's end.
+
+Version 1 (``TripodParams.version == 1``) changes what the agent does and
+sees; the drive, the reward and the end are v0's. Before the drive advances,
+each unit u of the estimate moves the fraction ``trust_rate * clip(a_u, 0, 1)``
+of the way
+to where the paper's correction would put it (section 3,
+:func:`paragym.mechanisms.mobile_tripod.k_relocate`: on the circles about the
+other two units with the encoder distances of eq 4, exponentially smoothed
+with ``smoothing`` per sample as the reference smooths them); then the whole
+estimate moves by the odometric increment. A zero or negative action is
+odometry alone, and a correction is never accumulated by the action itself.
+The observation is in the robot's frame (:data:`OBS_SIZE_V1`).
 """
 
 from __future__ import annotations
@@ -28,10 +40,17 @@ from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks.mobile_tripod import DriveScenario
 
-__all__ = ["OBS_SIZE", "POS_SCALE", "TripodParams", "TripodTaskState", "reset", "step"]
+__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE",
+           "TripodParams", "TripodTaskState", "reset", "step"]
 
 OBS_SIZE = 9 + 3 + 3 + 6
 POS_SCALE = 10.0  # m per observation unit
+#: v1: the residuals of the estimate's and the odometry's inter-unit distances against the smoothed encoder
+#: distances (3 + 3, / RESIDUAL_SCALE), each unit's estimate minus its odometry in the robot's frame (6, /
+#: OFFSET_SCALE), the drive's progress t / duration (1), the measured eta (3, rad)
+OBS_SIZE_V1 = 3 + 3 + 6 + 1 + 3
+RESIDUAL_SCALE = 0.05  # m per observation unit
+OFFSET_SCALE = 0.1  # m per observation unit
 
 
 @dataclass(frozen=True)
@@ -41,18 +60,31 @@ class TripodParams:
     encoder_noise: float = math.radians(1.0)
     max_correction: float = 0.05
     geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY
+    version: int = 0
+    smoothing: float = 0.1
+    trust_rate: float = 0.2
+
+    @property
+    def obs_size(self) -> int:
+        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
+
+    @property
+    def action_size(self) -> int:
+        return 6 if self.version == 0 else 3
 
 
 @dataclass
 class TripodTaskState:
     """N robots: their drives, the agent's estimates of the units (N, 3, 3),
-    the encoders' readings now and at the last sample (N, 3), the errors,
-    and the observation and reward of their last step."""
+    the encoders' readings now and at the last sample (N, 3), the smoothed
+    encoder distances (N, 3; v1), the errors, and the observation and reward
+    of their last step."""
 
     drive: DriveState
     estimate: np.ndarray
     eta: np.ndarray
     last_eta: np.ndarray
+    smoothed: np.ndarray
     unit_error: np.ndarray
     plate_error: np.ndarray
     terminated: np.ndarray
@@ -60,10 +92,11 @@ class TripodTaskState:
     reward: np.ndarray
 
     @classmethod
-    def empty(cls, n: int) -> TripodTaskState:
+    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> TripodTaskState:
         return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
-                   last_eta=np.zeros((n, 3)), unit_error=np.zeros(n), plate_error=np.zeros(n),
-                   terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n))
+                   last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
+                   plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
+                   reward=np.zeros(n))
 
     @property
     def scenarios(self) -> list[DriveScenario | None]:
@@ -80,22 +113,42 @@ def reset(state: TripodTaskState, params: TripodParams, rows: np.ndarray, scenar
         state.estimate[i] = state.drive.odometry[i]
     mask = np.zeros(len(state.estimate), bool)
     mask[rows] = True
-    _advance(state, params, np.zeros((len(state.estimate), 6)), mask, False)
+    state.smoothed[rows] = np.nan  # v1: the first reading starts the average
+    _advance(state, params, np.zeros((len(state.estimate), params.action_size)), mask, False)
     state.last_eta[rows] = state.eta[rows]
 
 
 def step(state: TripodTaskState, params: TripodParams, actions: np.ndarray, active: np.ndarray) -> None:
-    """Advance the ``active`` robots (N,) one sample with corrections
-    ``actions`` (N, 6) inside the Box (the env clips)."""
+    """Advance the ``active`` robots (N,) one sample with ``actions`` inside
+    the Box (the env clips): corrections (N, 6) in v0, trust in the paper's
+    correction per unit (N, 3) in v1."""
     _advance(state, params, actions, active, True)
 
 
 def _advance(state: TripodTaskState, params: TripodParams, actions: np.ndarray, rows: np.ndarray,
              move: bool) -> None:
     s, d = state, state.drive
+    if params.version == 1:
+        _advance_v1_kernel(s.estimate, s.eta, s.last_eta, s.smoothed, s.unit_error, s.plate_error, s.terminated,
+                           s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, params.smoothing,
+                           params.trust_rate,
+                           d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
+        return
     _advance_kernel(s.estimate, s.eta, s.last_eta, s.unit_error, s.plate_error, s.terminated, s.obs, s.reward,
                     np.ascontiguousarray(actions, np.float64), rows, move, params.max_correction, d.steps, d.noise,
                     mt.kernel_consts(params.geometry), *d.kernel_args())
+
+
+@njit(cache=True, error_model="numpy")
+def _score(i, estimate, true, unit_error, plate_error, reward):
+    """Robot ``i``'s errors (m) and reward: -10 (mean unit error + plate centre error)."""
+    dx0, dy0 = estimate[i, 0, 0] - true[i, 0, 0], estimate[i, 0, 1] - true[i, 0, 1]
+    dx1, dy1 = estimate[i, 1, 0] - true[i, 1, 0], estimate[i, 1, 1] - true[i, 1, 1]
+    dx2, dy2 = estimate[i, 2, 0] - true[i, 2, 0], estimate[i, 2, 1] - true[i, 2, 1]
+    unit_error[i] = (math.sqrt(dx0 * dx0 + dy0 * dy0) + math.sqrt(dx1 * dx1 + dy1 * dy1)
+                     + math.sqrt(dx2 * dx2 + dy2 * dy2)) / 3.0
+    plate_error[i] = math.hypot((dx0 + dx1 + dx2) / 3.0, (dy0 + dy1 + dy2) / 3.0)  # the plate centre's error
+    reward[i] = -10.0 * (unit_error[i] + plate_error[i])
 
 
 @njit(cache=True, error_model="numpy")
@@ -118,13 +171,7 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
                 last_eta[i, u] = eta_read[i, u]
         for u in range(3):
             eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
-        dx0, dy0 = estimate[i, 0, 0] - true[i, 0, 0], estimate[i, 0, 1] - true[i, 0, 1]
-        dx1, dy1 = estimate[i, 1, 0] - true[i, 1, 0], estimate[i, 1, 1] - true[i, 1, 1]
-        dx2, dy2 = estimate[i, 2, 0] - true[i, 2, 0], estimate[i, 2, 1] - true[i, 2, 1]
-        unit_error[i] = (math.sqrt(dx0 * dx0 + dy0 * dy0) + math.sqrt(dx1 * dx1 + dy1 * dy1)
-                         + math.sqrt(dx2 * dx2 + dy2 * dy2)) / 3.0
-        plate_error[i] = math.hypot((dx0 + dx1 + dx2) / 3.0, (dy0 + dy1 + dy2) / 3.0)  # the plate centre's error
-        reward[i] = -10.0 * (unit_error[i] + plate_error[i])
+        _score(i, estimate, true, unit_error, plate_error, reward)
         terminated[i] = k[i] >= steps[i]
         # observation: odometric units (/ 10 m), measured eta, the command, the estimate's xy (/ 10 m)
         for u in range(3):
@@ -134,4 +181,53 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
             row[15 + 2 * u], row[16 + 2 * u] = estimate[i, u, 0] / POS_SCALE, estimate[i, u, 1] / POS_SCALE
         row[12], row[13], row[14] = speed[i], math.cos(heading[i]), math.sin(heading[i])
         for c in range(OBS_SIZE):
+            obs[i, c] = min(100.0, max(-100.0, row[c]))
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward,
+                       actions, rows, move, smoothing, trust_rate, steps, noise, geo, true, odometry, gradient, eta,
+                       t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
+    """Version 1's transition of every robot with ``rows[i]`` (module docstring)."""
+    row = np.empty(OBS_SIZE_V1)
+    plate = np.empty((3, 3))
+    for i in range(len(k)):
+        if not rows[i]:
+            continue
+        if move and k[i] < steps[i]:
+            for u in range(3):  # the agent's trust in the paper's correction, unit by unit, on what it saw
+                w = trust_rate * min(1.0, max(0.0, actions[i, u]))
+                if w > 0.0:
+                    x, y = mt.k_relocate(estimate[i], u, smoothed[i])
+                    estimate[i, u, 0] += w * (x - estimate[i, u, 0])
+                    estimate[i, u, 1] += w * (y - estimate[i, u, 1])
+            ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push,
+                                  bumps, bump_count, slip_angle, slip_speed, dt)
+            for u in range(3):
+                estimate[i, u, 0] += ox
+                estimate[i, u, 1] += oy
+                estimate[i, u, 2] = k_terrain(estimate[i, u, 0], estimate[i, u, 1], bumps[i], bump_count[i])[0]
+                last_eta[i, u] = eta_read[i, u]
+        for u in range(3):
+            eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
+            plate[u, 0], plate[u, 1], plate[u, 2] = mt.k_unit(eta_read[i, u], u, geo)
+        measured = mt.k_distances(plate)
+        for c in range(3):  # exponential smoothing of the encoder distances (the first reading starts it)
+            smoothed[i, c] = measured[c] if math.isnan(smoothed[i, c]) else \
+                smoothed[i, c] + smoothing * (measured[c] - smoothed[i, c])
+        _score(i, estimate, true, unit_error, plate_error, reward)
+        terminated[i] = k[i] >= steps[i]
+        # observation, in the robot's frame (x along the commanded heading)
+        own = mt.k_distances(estimate[i])
+        odo = mt.k_distances(odometry[i])
+        ch, sh = math.cos(heading[i]), math.sin(heading[i])
+        for c in range(3):
+            row[c] = (own[c] - smoothed[i, c]) / RESIDUAL_SCALE
+            row[3 + c] = (odo[c] - smoothed[i, c]) / RESIDUAL_SCALE
+            ex, ey = estimate[i, c, 0] - odometry[i, c, 0], estimate[i, c, 1] - odometry[i, c, 1]
+            row[6 + 2 * c] = (ch * ex + sh * ey) / OFFSET_SCALE
+            row[7 + 2 * c] = (-sh * ex + ch * ey) / OFFSET_SCALE
+            row[13 + c] = eta_read[i, c]
+        row[12] = k[i] / max(steps[i], 1)
+        for c in range(OBS_SIZE_V1):
             obs[i, c] = min(100.0, max(-100.0, row[c]))

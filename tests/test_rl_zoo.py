@@ -1,0 +1,37 @@
+"""rl-baselines3-zoo as a client: the shipped hyper-parameter files load in
+``rl_zoo3.train`` unchanged, and what it trains is a model paragym loads."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from importlib import resources
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("rl_zoo3")
+
+from paragym.baselines.training import load_model  # noqa: E402
+
+CASES = [  # (algo, env id, overrides that keep it to a few hundred steps)
+    ("ppo", "paragym/Orthoglide2PRRKappa-v0", ["n_envs:2", "n_steps:64", "batch_size:64", "n_epochs:1"]),
+    ("ppo", "paragym/CaPaManCollisionFree-v1", ["n_envs:2", "n_steps:64", "batch_size:64", "n_epochs:1"]),
+    ("sac", "paragym/MobileTripodOdometry-v0", ["learning_starts:100", "batch_size:32"]),
+    ("td3", "paragym/HybridSingularityFree-v0", ["learning_starts:100", "batch_size:32"]),
+]
+
+
+@pytest.mark.parametrize(("algo", "env_id", "overrides"), CASES, ids=[f"{a}-{e.split('/')[1]}" for a, e, _ in CASES])
+def test_rl_zoo_trains_from_the_shipped_file(tmp_path: Path, algo: str, env_id: str, overrides: list[str]) -> None:
+    conf = resources.files("paragym.baselines").joinpath("hyperparams", f"{algo}.yml")
+    cmd = [sys.executable, "-m", "rl_zoo3.train", "--algo", algo, "--env", env_id, "--gym-packages", "paragym",
+           "-conf", str(conf), "-n", "300", "--eval-freq", "-1", "-f", str(tmp_path), "--seed", "0",
+           "-params", *overrides]
+    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-3000:]
+    name = env_id.replace("/", "-")
+    model = tmp_path / algo / f"{name}_1" / f"{name}.zip"
+    assert model.is_file(), done.stdout[-2000:]
+    loaded = load_model(model, algo)  # paragym reads what rl-zoo wrote, without unpickling
+    assert loaded.num_timesteps >= 300
