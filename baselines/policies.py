@@ -220,12 +220,14 @@ def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[st
     folder = models_dir / env_name(env_id)
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
-        m = re.fullmatch(r"(ppo|sac|td3)_seed(\d+)", path.stem)
+        m = re.fullmatch(r"(ppo|sac|td3|bc)_seed(\d+)", path.stem)
         if m:
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)
             found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path), sha), "learned",
-                                     f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}, {origin}: {path}",
+                                     (f"behaviour cloning of the reference's demonstrations (a PPO policy), "
+                                      f"seed {m[2]}, {origin}: {path}" if m[1] == "bc" else
+                                      f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}, {origin}: {path}"),
                                      {"model_sha256": sha})
     return found
 

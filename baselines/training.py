@@ -51,6 +51,8 @@ from paragym.models import shipped_models_dir
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
 ALGOS = ("ppo", "sac", "td3")
+#: what :func:`load_model` loads: the RL algorithms and bc, behaviour cloning (a PPO policy; bc.py)
+LOADABLE = (*ALGOS, "bc")
 #: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
 EVAL_SEED = 10_000
 #: keys that paragym consumes (rl-zoo's and paragym.yml's); all others go to the SB3 algorithm
@@ -60,14 +62,17 @@ PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "
 OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq")
 
 
-def check_algo(algo: str) -> str:
-    """``algo`` lower-cased, or a ValueError naming the known algorithms."""
-    if not isinstance(algo, str) or algo.lower() not in ALGOS:
-        raise ValueError(f"unknown algorithm {algo!r}; known: {', '.join(ALGOS)}")
+def check_algo(algo: str, known: tuple[str, ...] = ALGOS) -> str:
+    """``algo`` lower-cased, or a ValueError naming the ``known`` algorithms."""
+    if isinstance(algo, str) and algo.lower() == "bc" and "bc" not in known:
+        raise ValueError("bc learns from demonstrations, not by interaction: paragym.baselines.bc.train_bc "
+                         "(paragym train ENV --algo bc)")
+    if not isinstance(algo, str) or algo.lower() not in known:
+        raise ValueError(f"unknown algorithm {algo!r}; known: {', '.join(known)}")
     return algo.lower()
 
 
-def _table(name: str) -> dict[str, Any]:
+def hyperparams_table(name: str) -> dict[str, Any]:
     return yaml.safe_load(resources.files("paragym.baselines").joinpath("hyperparams", name).read_text())
 
 
@@ -76,10 +81,10 @@ def load_hyperparams(algo: str, env_id: str) -> dict[str, Any]:
     packaged ``hyperparams/<algo>.yml`` and paragym's own from
     ``hyperparams/paragym.yml`` (a copy; the caller may change it)."""
     algo, env_id = check_algo(algo), check_env_id(env_id)
-    table = _table(f"{algo}.yml")
+    table = hyperparams_table(f"{algo}.yml")
     if env_id not in table:
         raise ValueError(f"hyperparams/{algo}.yml has no entry for {env_id}")
-    own = (_table("paragym.yml").get(algo) or {}).get(env_id) or {}
+    own = (hyperparams_table("paragym.yml").get(algo) or {}).get(env_id) or {}
     clash = sorted(set(own) & set(table[env_id]))
     if clash or set(own) - set(OWN_KEYS):
         raise ValueError(f"hyperparams/paragym.yml: {algo} {env_id} may hold only {', '.join(OWN_KEYS)}")
@@ -130,7 +135,7 @@ USER_MODELS = Path("runs") / "models"
 def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = USER_MODELS) -> RunFiles:
     """The files of a run under ``models_dir/<env name>/``."""
     folder = Path(models_dir) / env_name(env_id)
-    stem = f"{check_algo(algo)}_seed{int(seed)}"
+    stem = f"{check_algo(algo, LOADABLE)}_seed{int(seed)}"
     return RunFiles(folder / f"{stem}.zip", folder / f"{stem}.json", folder / f"{stem}.png",
                     folder / "checkpoints" / stem)
 
@@ -149,7 +154,7 @@ class TrainResult:
 def _algorithm(algo: str) -> type:
     from stable_baselines3 import PPO, SAC, TD3
 
-    return {"ppo": PPO, "sac": SAC, "td3": TD3}[algo]
+    return {"ppo": PPO, "sac": SAC, "td3": TD3, "bc": PPO}[algo]  # a cloned policy is a PPO policy
 
 
 def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dict[str, Any]) -> Any:
@@ -162,7 +167,7 @@ def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dic
     return make_vec_env(env_id, n_envs=n_envs, seed=seed, vec_env_cls=cls, env_kwargs=env_kwargs)
 
 
-def _write_atomic(path: Path, text: str) -> None:
+def write_atomic(path: Path, text: str) -> None:
     tmp = path.with_suffix(path.suffix + ".tmp")
     tmp.write_text(text)
     os.replace(tmp, path)
@@ -174,10 +179,14 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
     that records training episodes and writes the checkpoint."""
     from stable_baselines3.common.callbacks import BaseCallback, EvalCallback
 
+    done_before = curve["eval_seconds"][-1] if curve["eval_seconds"] else 0.0  # a resumed run's wall time so far
+    start = time.perf_counter()
+
     class RecordEvaluation(BaseCallback):
         def _on_step(self) -> bool:
             parent = self.parent
             curve["eval_timesteps"].append(int(self.num_timesteps))
+            curve["eval_seconds"].append(done_before + time.perf_counter() - start)  # wall-clock of learning
             last = np.asarray(parent.evaluations_results[-1], float)
             curve["eval_mean_return"].append(float(last.mean()))
             curve["eval_std_return"].append(float(last.std()))
@@ -209,7 +218,7 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
             venv = self.model.get_env()
             if hasattr(venv, "ret_rms"):  # VecNormalize: its running return statistics
                 venv.save(str(ckpt / "vecnormalize.pkl"))
-            _write_atomic(ckpt / "curve.json", json.dumps({"num_timesteps": int(self.num_timesteps), **curve}))
+            write_atomic(ckpt / "curve.json", json.dumps({"num_timesteps": int(self.num_timesteps), **curve}))
             self.last_saved = self.num_timesteps
 
     eval_cb = EvalCallback(eval_env, n_eval_episodes=int(hp["n_eval_episodes"]),
@@ -218,7 +227,7 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
     return [eval_cb, RecordAndCheckpoint(int(hp.get("checkpoint_freq", hp["eval_freq"])))]
 
 
-def _count_parameters(model: Any) -> dict[str, int]:
+def count_parameters(model: Any) -> dict[str, int]:
     """Parameters of the whole policy and, for SAC/TD3, of the actor alone."""
     modules = {"policy": model.policy, "actor": getattr(model, "actor", None)}
     return {name: int(sum(p.numel() for p in m.parameters())) for name, m in modules.items() if m is not None}
@@ -251,7 +260,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
     hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
     vectorized = bool(vectorized) or hp.get("vec_env") == "native"
-    files = run_files(env_id, algo, seed, _writable_models_dir(models_dir))
+    files = run_files(env_id, algo, seed, writable_models_dir(models_dir))
     done = _finished_run(files, algo, total, force)
     if done is not None:
         return done
@@ -268,8 +277,8 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
         "num_timesteps": int(model.num_timesteps),
         "vectorized": bool(vectorized),
         "hyperparams": hp, "train_seconds": seconds, "steps_per_second": learned / seconds if seconds else None,
-        "parameters": _count_parameters(model),
-        "versions": _versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
+        "parameters": count_parameters(model),
+        "versions": versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
         "curve": curve,
     }
     _save_run(files, model, meta, f"{algo.upper()} seed {seed} on {env_name(env_id)}: {total:,} steps, "
@@ -292,7 +301,7 @@ def _read_config(env_id: str, algo: str, timesteps: int | None, overrides: dict[
     return hp, total
 
 
-def _writable_models_dir(models_dir: str | Path) -> str | Path:
+def writable_models_dir(models_dir: str | Path) -> str | Path:
     """``models_dir``, unless it is the shipped models' folder (read-only)."""
     if Path(models_dir).resolve() == shipped_models_dir().resolve():
         raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "
@@ -349,7 +358,7 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
                  force: bool) -> tuple[Any, dict[str, list], int]:
     """The model (resumed from its checkpoint, with its replay buffer and its
     curve so far, unless ``force``), the curve and the timesteps it resumed from."""
-    curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_mean_return", "eval_std_return",
+    curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_seconds", "eval_mean_return", "eval_std_return",
                                               "eval_success_rate", "train_timesteps", "train_return")}
     cls, latest = _algorithm(algo), files.checkpoints / "latest.zip"
     if latest.exists() and (files.checkpoints / "curve.json").exists() and not force:
@@ -397,7 +406,7 @@ def _save_run(files: RunFiles, model: Any, meta: dict[str, Any], title: str) -> 
     files.model.parent.mkdir(parents=True, exist_ok=True)
     model.save(files.model)
     meta["model_bytes"] = files.model.stat().st_size
-    _write_atomic(files.meta, json.dumps(meta, indent=1))
+    write_atomic(files.meta, json.dumps(meta, indent=1))
     plot_training_curve(meta["curve"], files.curve_png, title)
     for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl"):
         (files.checkpoints / name).unlink(missing_ok=True)
@@ -406,7 +415,7 @@ def _save_run(files: RunFiles, model: Any, meta: dict[str, Any], title: str) -> 
             folder.rmdir()
 
 
-def _versions() -> dict[str, str]:
+def versions() -> dict[str, str]:
     import stable_baselines3
     import torch
 
@@ -425,7 +434,7 @@ def load_model(path: str | Path, algo: str | None = None) -> Any:
     path = Path(path)
     if not path.is_file():
         raise ValueError(f"no model file at {path}")
-    algo = check_algo(algo if algo is not None else path.stem.split("_", 1)[0])
+    algo = check_algo(algo if algo is not None else path.stem.split("_", 1)[0], LOADABLE)
     cls = _algorithm(algo)
     try:
         custom = safe_custom_objects(path, cls)

@@ -149,8 +149,9 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
 
 
 class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
-    """``paragym/MobileTripodOdometry-v1``: v0's drives, reward and end, with
-    an action and an observation under which learning beats odometry.
+    """``paragym/MobileTripodOdometry-v1``: v0's drives, success and end, with
+    an action, an observation and a reward under which learning beats
+    odometry.
 
     ## Why v1
     In v0 the action is a correction added to the estimate, so every
@@ -181,13 +182,21 @@ class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
     estimate minus its odometry (6, / 10 cm), the drive's progress t /
     duration (1), the measured eta (3, rad).
 
-    ## Rewards, Starting State, Episode End, Arguments
+    ## Rewards
+    v0's reward minus what odometry alone earns at the same sample:
+    ``-10 (unit error + plate error) + 10 (odometry's unit error + its plate
+    error)``. Odometry's error does not depend on the actions, so the best
+    policy is v0's; the drift that no estimator controls drops out of the
+    reward, and the zero action (odometry) earns 0. Its variance made v0 hard
+    to learn from (``baselines/ABLATION.md``).
+
+    ## Starting State, Episode End, Arguments
     As v0 (``max_correction`` is not used). ``info["encoder_distances"]``
     holds the smoothed encoder distances (m).
 
     ## Version History
-    * v1 (paragym 0.4.0): the action and the observation above; the drives,
-      the reward, the success and the episode's end are v0's.
+    * v1 (paragym 0.4.0): the action, the observation and the reward above;
+      the drives, the success and the episode's end are v0's.
     """
 
     version = 1

@@ -19,22 +19,10 @@ from paragym.rollout import Episode, run_episode
 __all__ = ["main"]
 
 
-def _capaman_best(env: gym.Env) -> Any:
-    from paragym.planners import RrtGaPolicy
-
-    return RrtGaPolicy(max_joint_step=env.unwrapped.max_joint_step)
-
-
 def _capaman_plot(ep: Episode, path: Path) -> Path:
     from paragym.plots import plot_capaman_episode
 
     return plot_capaman_episode(ep, path)
-
-
-def _hybrid_best(env: gym.Env) -> Any:
-    from paragym.planners.polynomial_detour import PolynomialDetourPolicy
-
-    return PolynomialDetourPolicy()
 
 
 def _hybrid_plot(ep: Episode, path: Path) -> Path:
@@ -43,22 +31,10 @@ def _hybrid_plot(ep: Episode, path: Path) -> Path:
     return plot_hybrid_episode(ep, path)
 
 
-def _orthoglide_best(env: gym.Env) -> Any:
-    from paragym.planners.nullspace_gradient import GradientPolicy
-
-    return GradientPolicy(geometry=env.unwrapped.geometry)
-
-
 def _orthoglide_plot(ep: Episode, path: Path) -> Path:
     from paragym.plots import plot_kappa_episode
 
     return plot_kappa_episode(ep, path)
-
-
-def _tripod_best(env: gym.Env) -> Any:
-    from paragym.planners.encoder_correction import EncoderCorrection, EstimatorPolicy
-
-    return EstimatorPolicy(EncoderCorrection, geometry=env.unwrapped.geometry)
 
 
 def _tripod_plot(ep: Episode, path: Path) -> Path:
@@ -73,14 +49,23 @@ def _tripod_plot(ep: Episode, path: Path) -> Path:
                                  f"{ep.infos[0]['scenario'].name}: final unit error {ep.infos[-1]['unit_error']:.3f} m")
 
 
-#: env id -> (best available policy factory, name, picture writer)
-DEMOS: dict[str, tuple[Callable[[gym.Env], Any], str, Callable[[Episode, Path], Path]]] = {
-    "paragym/CaPaManCollisionFree-v0": (_capaman_best, "RRT + GA (paper 000)", _capaman_plot),
-    "paragym/HybridSingularityFree-v0": (_hybrid_best, "polynomial + serial + detour (paper 002)", _hybrid_plot),
-    "paragym/Orthoglide2PRRKappa-v0": (_orthoglide_best, "null-space gradient of kappa (paper 003, case c)",
-                                       _orthoglide_plot),
-    "paragym/MobileTripodOdometry-v0": (_tripod_best, "redundant-encoder correction (paper 004)", _tripod_plot),
+#: env id -> (the name of the best available policy: the paper's method, picture writer)
+DEMOS: dict[str, tuple[str, Callable[[Episode, Path], Path]]] = {
+    "paragym/CaPaManCollisionFree-v0": ("RRT + GA (paper 000)", _capaman_plot),
+    "paragym/CaPaManCollisionFree-v1": ("RRT + GA (paper 000)", _capaman_plot),
+    "paragym/HybridSingularityFree-v0": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
+    "paragym/Orthoglide2PRRKappa-v0": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
+    "paragym/MobileTripodOdometry-v0": ("redundant-encoder correction (paper 004)", _tripod_plot),
+    "paragym/MobileTripodOdometry-v1": ("redundant-encoder correction (paper 004)", _tripod_plot),
 }
+
+
+def _reference(env: gym.Env, env_id: str, seed: int) -> Any:
+    """The env's reference policy (the paper's method), as the leaderboard runs it."""
+    from paragym.baselines.policies import policies_for
+
+    spec = next(s for s in policies_for(env_id).values() if s.kind == "reference")
+    return spec.factory(env, seed)
 
 
 def _plan_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
@@ -308,6 +293,8 @@ DEFAULT_SCENARIO: dict[str, str] = {
     "paragym/HybridSingularityFree-v0": "paper",
     "paragym/Orthoglide2PRRKappa-v0": "paper",
     "paragym/MobileTripodOdometry-v0": "push",  # paper 004's scenario 2 (the paper has three; no single "paper")
+    "paragym/CaPaManCollisionFree-v1": "paper",
+    "paragym/MobileTripodOdometry-v1": "push",
 }
 
 
@@ -324,12 +311,15 @@ PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/HybridSingularityFree-v0": _plan_hybrid,
     "paragym/Orthoglide2PRRKappa-v0": _plan_orthoglide,
     "paragym/MobileTripodOdometry-v0": _plan_tripod,
+    "paragym/CaPaManCollisionFree-v1": _plan_capaman,
+    "paragym/MobileTripodOdometry-v1": _plan_tripod,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate
 VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v0": _validate_capaman,
     "paragym/HybridSingularityFree-v0": _validate_hybrid,
+    "paragym/CaPaManCollisionFree-v1": _validate_capaman,
 }
 
 
@@ -370,8 +360,9 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
-    best, best_name, plot = DEMOS[env_id]
-    policy = {"best": lambda: best(env), "random": lambda: RandomPolicy(env.action_space, args.seed),
+    best_name, plot = DEMOS[env_id]
+    policy = {"best": lambda: _reference(env, env_id, args.seed),
+              "random": lambda: RandomPolicy(env.action_space, args.seed),
               "zero": lambda: ZeroPolicy(env.action_space)}[args.policy]()
     name = best_name if args.policy == "best" else args.policy
     print(f"{env_id}: {args.scenario} scenario, seed {args.seed}, policy {name}")
@@ -400,6 +391,16 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_train(args: argparse.Namespace) -> int:
     from paragym.baselines.training import train
 
+    if args.algo.lower() == "bc":  # behaviour cloning of the reference's demonstrations
+        from paragym.baselines.bc import train_bc
+
+        res = train_bc(args.env_id, seed=args.seed, models_dir=args.models, threads=args.threads, force=args.force)
+        meta = res.meta
+        print(f"BC seed {meta['seed']} on {meta['env_id']}: {meta['dataset_steps']:,} steps of "
+              f"{meta['dataset_episodes']} episodes ({meta['dataset_id']}), {meta['bc']['epochs']} epochs in "
+              f"{meta['train_seconds']:.0f} s; best held-out loss at epoch {meta['best_epoch']}")
+        print(f"wrote {res.files.model}, {res.files.meta.name}, {res.files.curve_png.name}")
+        return 0
     try:
         res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
                     progress_bar=not args.no_progress, threads=args.threads, force=args.force,
@@ -421,6 +422,27 @@ def _cmd_train(args: argparse.Namespace) -> int:
           f"{meta['train_seconds']:.0f} s{resumed}; {last}")
     print(f"wrote {res.files.model} ({meta['model_bytes'] / 1024:.0f} KiB, {meta['parameters']['policy']:,} "
           f"parameters), {res.files.meta.name}, {res.files.curve_png.name}")
+    return 0
+
+
+def _cmd_demos(args: argparse.Namespace) -> int:
+    from paragym.baselines.demos import record_demos
+
+    data = record_demos(args.env_id, args.episodes, policy=args.policy, dataset_id=args.dataset_id,
+                        force=args.force, progress=not args.no_progress)
+    meta = data.storage.metadata
+    print(f"{data.total_episodes} episodes, {data.total_steps:,} steps of {meta.get('algorithm_name')}")
+    print(f"wrote Minari dataset {meta['dataset_id']} (ref_min_score {meta['ref_min_score']:.3f}, ref_max_score "
+          f"{meta['ref_max_score']:.3f}); load it with minari.load_dataset({meta['dataset_id']!r})")
+    return 0
+
+
+def _cmd_report(args: argparse.Namespace) -> int:
+    from paragym.baselines.report import write_report
+
+    page = write_report(args.out, None if args.no_db else args.db, models_dirs=args.models,
+                        progress=not args.no_progress)
+    print(f"wrote {page} and its pictures in {page.parent}")
     return 0
 
 
@@ -482,7 +504,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("train", help="train a Stable-Baselines3 agent (needs the 'rl' extra); resumable")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
-    p.add_argument("--algo", default="ppo", help="ppo, sac or td3 (hyper-parameters: baselines/hyperparams/)")
+    p.add_argument("--algo", default="ppo", help="ppo, sac or td3 (hyper-parameters: baselines/hyperparams/), or bc: "
+                                                 "behaviour cloning of the dataset `paragym demos` records")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--timesteps", type=int, default=None, help="env steps (default: the yml's n_timesteps)")
     p.add_argument("--models", default="runs/models",
@@ -494,6 +517,25 @@ def build_parser() -> argparse.ArgumentParser:
                    help="train on the env's native vector env (N robots per numpy call)")
     p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
     p.set_defaults(func=_cmd_train)
+    p = sub.add_parser("demos", help="record a policy's episodes (default: the reference) as a Minari dataset "
+                                     "(needs the 'demos' extra)")
+    p.add_argument("env_id", help="e.g. MobileTripodOdometry-v1")
+    p.add_argument("--episodes", type=int, default=200, help="episodes to record (default %(default)s)")
+    p.add_argument("--policy", default=None, help="a leaderboard policy name (default: the env's reference)")
+    p.add_argument("--dataset-id", default=None, help="Minari's id (default paragym/<env>/<policy>-v0)")
+    p.add_argument("--force", action="store_true", help="replace a dataset paragym wrote before")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_demos)
+    p = sub.add_parser("report", help="learning curves with bootstrap CIs and rliable's aggregate scores, as PNG and "
+                                      "markdown (needs the 'report' extra)")
+    p.add_argument("--db", default="results/paragym.sqlite",
+                   help="the leaderboard's database (default: %(default)s)")
+    p.add_argument("--no-db", action="store_true", help="learning curves only")
+    p.add_argument("--models", action="append", default=[],
+                   help="a folder of your trained models to include beside the shipped ones (repeatable)")
+    p.add_argument("--out", default="report", help="folder for REPORT.md and its PNGs (default: %(default)s)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    p.set_defaults(func=_cmd_report)
     p = sub.add_parser("leaderboard", help="evaluate every env x every policy on fixed seeds; resumable; writes "
                                            "LEADERBOARD.md, a CSV and a PNG per env")
     p.add_argument("--quick", action="store_true",

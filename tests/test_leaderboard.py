@@ -18,7 +18,7 @@ SMALL = dict(suite=EvalSuite("test", (0, 1), 2), env_ids=[ORTHO, HYBRID], polici
              validate=False, progress=False, echo=lambda s: None)
 
 
-def _table(run) -> list[tuple]:
+def hyperparams_table(run) -> list[tuple]:
     """The leaderboard's numbers without the wall times."""
     return [(s.env, s.rank, s.policy, s.episodes, s.success_rate, s.return_mean, s.return_std, s.metrics)
             for ss in run.summaries.values() for s in ss]
@@ -47,12 +47,12 @@ def test_an_interrupted_run_resumes_to_the_same_table_without_duplicates(tmp_pat
     assert len(_rows(db)) == 3  # each episode was committed as it finished
     again = run_leaderboard(db=db, **kw)
     assert again.skipped_episodes == 3 and again.new_episodes == 13
-    assert _table(again) == _table(clean)
+    assert hyperparams_table(again) == hyperparams_table(clean)
     assert _rows(db) == _rows(tmp_path / "clean.sqlite")
     con = sqlite3.connect(db)
     assert con.execute("SELECT COUNT(*) FROM episodes").fetchone()[0] == 16
     third = run_leaderboard(db=db, **kw)  # nothing left to do
-    assert third.new_episodes == 0 and _table(third) == _table(clean)
+    assert third.new_episodes == 0 and hyperparams_table(third) == hyperparams_table(clean)
 
 
 def test_the_process_pool_and_ray_give_the_same_rows_as_the_local_executor(tmp_path):

@@ -16,7 +16,7 @@ height from the terrain; the encoders read the true eta plus noise. Reward:
 positions against the true ones. Terminated at the drive's end.
 
 Version 1 (``TripodParams.version == 1``) changes what the agent does and
-sees; the drive, the reward and the end are v0's. Before the drive advances,
+sees and earns; the drive and the end are v0's. Before the drive advances,
 each unit u of the estimate moves the fraction ``trust_rate * clip(a_u, 0, 1)``
 of the way
 to where the paper's correction would put it (section 3,
@@ -25,7 +25,10 @@ other two units with the encoder distances of eq 4, exponentially smoothed
 with ``smoothing`` per sample as the reference smooths them); then the whole
 estimate moves by the odometric increment. A zero or negative action is
 odometry alone, and a correction is never accumulated by the action itself.
-The observation is in the robot's frame (:data:`OBS_SIZE_V1`).
+The observation is in the robot's frame (:data:`OBS_SIZE_V1`). The reward
+is v0's minus what odometry alone would earn at the same sample: the
+drift that no estimator controls drops out of it, so the optimal policy is
+v0's and the zero action earns 0.
 """
 
 from __future__ import annotations
@@ -140,14 +143,20 @@ def _advance(state: TripodTaskState, params: TripodParams, actions: np.ndarray, 
 
 
 @njit(cache=True, error_model="numpy")
+def _errors(units, true):
+    """The mean horizontal unit error and the plate centre's error (m) of ``units`` (3, 3) against ``true``."""
+    dx0, dy0 = units[0, 0] - true[0, 0], units[0, 1] - true[0, 1]
+    dx1, dy1 = units[1, 0] - true[1, 0], units[1, 1] - true[1, 1]
+    dx2, dy2 = units[2, 0] - true[2, 0], units[2, 1] - true[2, 1]
+    unit = (math.sqrt(dx0 * dx0 + dy0 * dy0) + math.sqrt(dx1 * dx1 + dy1 * dy1)
+            + math.sqrt(dx2 * dx2 + dy2 * dy2)) / 3.0
+    return unit, math.hypot((dx0 + dx1 + dx2) / 3.0, (dy0 + dy1 + dy2) / 3.0)
+
+
+@njit(cache=True, error_model="numpy")
 def _score(i, estimate, true, unit_error, plate_error, reward):
     """Robot ``i``'s errors (m) and reward: -10 (mean unit error + plate centre error)."""
-    dx0, dy0 = estimate[i, 0, 0] - true[i, 0, 0], estimate[i, 0, 1] - true[i, 0, 1]
-    dx1, dy1 = estimate[i, 1, 0] - true[i, 1, 0], estimate[i, 1, 1] - true[i, 1, 1]
-    dx2, dy2 = estimate[i, 2, 0] - true[i, 2, 0], estimate[i, 2, 1] - true[i, 2, 1]
-    unit_error[i] = (math.sqrt(dx0 * dx0 + dy0 * dy0) + math.sqrt(dx1 * dx1 + dy1 * dy1)
-                     + math.sqrt(dx2 * dx2 + dy2 * dy2)) / 3.0
-    plate_error[i] = math.hypot((dx0 + dx1 + dx2) / 3.0, (dy0 + dy1 + dy2) / 3.0)  # the plate centre's error
+    unit_error[i], plate_error[i] = _errors(estimate[i], true[i])
     reward[i] = -10.0 * (unit_error[i] + plate_error[i])
 
 
@@ -216,6 +225,8 @@ def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate
             smoothed[i, c] = measured[c] if math.isnan(smoothed[i, c]) else \
                 smoothed[i, c] + smoothing * (measured[c] - smoothed[i, c])
         _score(i, estimate, true, unit_error, plate_error, reward)
+        odo_unit, odo_plate = _errors(odometry[i], true[i])
+        reward[i] += 10.0 * (odo_unit + odo_plate)  # v1: against odometry alone (the same optimum, less variance)
         terminated[i] = k[i] >= steps[i]
         # observation, in the robot's frame (x along the commanded heading)
         own = mt.k_distances(estimate[i])

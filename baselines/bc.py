@@ -1,0 +1,168 @@
+"""Behaviour cloning from the reference's demonstrations (``paragym train ENV --algo bc``).
+
+The ``imitation`` library pins gymnasium 0.29 and Stable-Baselines3 2.2,
+older than paragym's, so this is SB3 policy pretraining, written out: an SB3
+PPO ``MlpPolicy`` (the PPO baselines' network) fitted to the actions of a
+Minari dataset (:func:`paragym.baselines.demos.record_demos`) by maximum
+likelihood (the Gaussian's log-probability of the expert's action, clipped
+to the action space), with Adam over mini-batches. A tenth of the episodes
+is held out; the epoch with the lowest held-out loss is kept.
+
+The model is saved as a PPO file named ``bc_seed<N>.zip`` (it loads as any
+PPO model, without unpickling; a PPO run could start from it), with its JSON
+(the dataset, its size, the settings, the loss per epoch) and a picture of
+the loss curve, where ``paragym train`` writes. The leaderboard ranks it as
+the learned policy ``bc-seed<N>``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import paragym.baselines.training as training
+from paragym import check_env_id
+from paragym.baselines.demos import dataset_id_for, reference_name
+from paragym.baselines.training import USER_MODELS, TrainResult
+
+__all__ = ["BC_DEFAULTS", "fit_bc", "load_demonstrations", "train_bc"]
+
+#: the settings of a BC run (``paragym.yml``'s ``bc`` section overrides them per env)
+BC_DEFAULTS: dict[str, Any] = {"epochs": 60, "batch_size": 256, "learning_rate": 1e-3, "net_arch": [64, 64],
+                               "log_std_init": -1.0, "holdout": 0.1}
+
+
+def load_demonstrations(dataset_id: str, env_id: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any]:
+    """The observations (M, obs), actions (M, act) and episode index (M,) of
+    every step of the Minari dataset ``dataset_id``, and the dataset; a
+    ValueError says how to record a missing one."""
+    import minari
+
+    if dataset_id not in minari.list_local_datasets():
+        raise ValueError(f"no Minari dataset {dataset_id}: record it first with "
+                         f"`paragym demos {env_id} --episodes 200`")
+    data = minari.load_dataset(dataset_id)
+    obs, act, index = [], [], []
+    for k, ep in enumerate(data.iterate_episodes()):
+        obs.append(np.asarray(ep.observations)[:-1])
+        act.append(np.asarray(ep.actions))
+        index.append(np.full(len(ep.actions), k))
+    return np.concatenate(obs), np.concatenate(act), np.concatenate(index), data
+
+
+def fit_bc(env_id: str, dataset_id: str, seed: int, settings: dict[str, Any], threads: int = 1,
+           progress_bar: bool = False) -> tuple[Any, dict[str, Any]]:
+    """The cloned PPO model and its metadata (module docstring)."""
+    import gymnasium as gym
+    import torch
+    from stable_baselines3 import PPO
+
+    env_id = check_env_id(env_id)
+    hp = {**BC_DEFAULTS, **settings}
+    obs, act, index, data = load_demonstrations(dataset_id, env_id)
+    env = gym.make(env_id)
+    low, high = env.action_space.low, env.action_space.high
+    act = np.clip(act, low, high)
+    torch.manual_seed(seed)
+    torch.set_num_threads(int(threads))
+    model = PPO("MlpPolicy", env, seed=seed, device="cpu",
+                policy_kwargs={"net_arch": list(hp["net_arch"]), "log_std_init": float(hp["log_std_init"])})
+    env.close()
+    rng = np.random.default_rng(seed)
+    episodes = rng.permutation(int(index.max()) + 1)
+    held = set(episodes[:max(1, int(round(hp["holdout"] * len(episodes))))].tolist()) if len(episodes) > 1 else set()
+    test = np.isin(index, list(held))
+    x, y = torch.as_tensor(obs[~test], dtype=torch.float32), torch.as_tensor(act[~test], dtype=torch.float32)
+    xt, yt = torch.as_tensor(obs[test], dtype=torch.float32), torch.as_tensor(act[test], dtype=torch.float32)
+    policy = model.policy
+    optimiser = torch.optim.Adam(policy.parameters(), lr=float(hp["learning_rate"]))
+
+    def loss_of(xb: torch.Tensor, yb: torch.Tensor) -> torch.Tensor:
+        return -policy.get_distribution(xb).log_prob(yb).mean()
+
+    curve: dict[str, list[float]] = {"epoch": [], "train_loss": [], "holdout_loss": []}
+    best, best_state = np.inf, None
+    t0 = time.perf_counter()
+    batch = int(hp["batch_size"])
+    for epoch in range(int(hp["epochs"])):
+        policy.set_training_mode(True)
+        order = torch.as_tensor(rng.permutation(len(x)))
+        total = 0.0
+        for start in range(0, len(x), batch):
+            idx = order[start:start + batch]
+            loss = loss_of(x[idx], y[idx])
+            optimiser.zero_grad()
+            loss.backward()
+            optimiser.step()
+            total += float(loss.detach()) * len(idx)
+        policy.set_training_mode(False)
+        with torch.no_grad():
+            held_loss = float(loss_of(xt, yt)) if len(xt) else total / len(x)
+        curve["epoch"].append(epoch + 1)
+        curve["train_loss"].append(total / len(x))
+        curve["holdout_loss"].append(held_loss)
+        if held_loss < best:
+            best, best_state = held_loss, {k: v.clone() for k, v in policy.state_dict().items()}
+    if best_state is not None:
+        policy.load_state_dict(best_state)
+    seconds = time.perf_counter() - t0
+    meta = {"dataset_id": dataset_id, "dataset_episodes": int(data.total_episodes), "dataset_steps": int(len(obs)),
+            "holdout_episodes": sorted(int(e) for e in held), "bc": hp, "train_seconds": seconds,
+            "best_epoch": int(np.argmin(curve["holdout_loss"]) + 1), "curve": curve}
+    return model, meta
+
+
+def plot_bc_curve(curve: dict[str, list[float]], path: str | Path, title: str) -> Path:
+    """The loss per epoch, on the training and the held-out episodes."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(curve["epoch"], curve["train_loss"], label="training episodes")
+    ax.plot(curve["epoch"], curve["holdout_loss"], label="held-out episodes")
+    ax.set_xlabel("epoch")
+    ax.set_ylabel("negative log-likelihood of the expert's action (lower is better)")
+    ax.set_title(title, fontsize=9)
+    ax.legend()
+    fig.tight_layout()
+    path = Path(path)
+    fig.savefig(path, dpi=90)
+    plt.close(fig)
+    return path
+
+
+def train_bc(env_id: str, seed: int = 0, models_dir: str | Path = USER_MODELS, threads: int = 1, force: bool = False,
+             overrides: dict[str, Any] | None = None) -> TrainResult:
+    """Behaviour cloning (module docstring) of ``env_id``'s reference from its
+    Minari dataset (``dataset_id`` in ``overrides`` to use another), with the
+    settings of ``paragym.yml``'s ``bc`` section and ``overrides``, saved
+    where :func:`paragym.baselines.training.train` saves; an existing model
+    is replaced only with ``force``."""
+    env_id = check_env_id(env_id)
+    table = training.hyperparams_table("paragym.yml").get("bc") or {}
+    settings = {**(table.get(env_id) or {}), **(overrides or {})}
+    dataset_id = settings.pop("dataset_id", None) or dataset_id_for(env_id, reference_name(env_id))
+    files = training.run_files(env_id, "bc", seed, training.writable_models_dir(models_dir))
+    if files.model.exists() and not force:
+        raise ValueError(f"{files.model} exists; --force retrains it over that file, or choose another --models "
+                         f"folder or --seed")
+    model, meta = fit_bc(env_id, dataset_id, seed, settings, threads)
+    meta = {"env_id": env_id, "algo": "bc", "seed": seed, **meta, "versions": training.versions(),
+            "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
+            "parameters": training.count_parameters(model)}
+    files.model.parent.mkdir(parents=True, exist_ok=True)
+    model.save(files.model)
+    meta["model_bytes"] = files.model.stat().st_size
+    training.write_atomic(files.meta, json.dumps(meta, indent=1))
+    plot_bc_curve(meta["curve"], files.curve_png, f"BC seed {seed} on {training.env_name(env_id)} from {dataset_id} "
+
+                                                  f"({meta['dataset_episodes']} episodes)")
+    return TrainResult(files, model, meta)

@@ -1,0 +1,85 @@
+"""``paragym demos`` (Minari datasets of the reference) and behaviour cloning from them (issue 17)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+minari = pytest.importorskip("minari")
+pytest.importorskip("jax")  # Minari's DataCollector needs it (the 'demos' extra)
+
+from paragym.baselines.demos import AUTHOR, dataset_id_for, demo_seed, record_demos  # noqa: E402
+
+ENV = "paragym/MobileTripodOdometry-v1"
+
+
+@pytest.fixture
+def datasets(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    root = tmp_path / "minari"
+    monkeypatch.setenv("MINARI_DATASETS_PATH", str(root))
+    return root
+
+
+def test_demos_make_a_minari_dataset_that_reloads(datasets: Path):
+    data = record_demos(ENV, 2)
+    again = minari.load_dataset(dataset_id_for(ENV, "encoder-correction"))
+    assert again.total_episodes == 2 and again.spec.env_spec.id == ENV
+    meta = again.storage.metadata
+    assert meta["author"] in (AUTHOR, {AUTHOR}, [AUTHOR])
+    assert meta["ref_max_score"] > meta["ref_min_score"]  # the reference beats the random floor
+    episode = next(again.iterate_episodes())
+    assert episode.observations.shape == (607, 16) and episode.actions.shape == (606, 3)
+    # the recorded episode is the env's, step for step: replay its actions from the same seed
+    import gymnasium as gym
+
+    env = gym.make(ENV)
+    obs, _ = env.reset(seed=demo_seed(0))
+    np.testing.assert_allclose(obs, episode.observations[0], rtol=0, atol=0)
+    total = 0.0
+    for k, action in enumerate(episode.actions):
+        obs, reward, *_ = env.step(action)
+        total += reward
+        np.testing.assert_allclose(obs, episode.observations[k + 1], rtol=0, atol=0)
+    assert total == pytest.approx(float(episode.rewards.sum()))
+    assert data.total_steps == again.total_steps
+
+
+def test_demos_never_overwrite_without_force_nor_a_foreign_dataset(datasets: Path):
+    record_demos(ENV, 1)
+    with pytest.raises(ValueError, match="exists; --force"):
+        record_demos(ENV, 1)
+    assert record_demos(ENV, 2, force=True).total_episodes == 2
+    # a dataset written by someone else under paragym's id is not replaced
+    path = datasets / "paragym" / "MobileTripodOdometry-v1" / "encoder-correction-v0" / "data" / "metadata.json"
+    meta = json.loads(path.read_text())
+    meta["author"] = ["someone else"]
+    path.write_text(json.dumps(meta))
+    before = path.read_bytes()
+    with pytest.raises(ValueError, match="not written by paragym"):
+        record_demos(ENV, 1, force=True)
+    assert path.read_bytes() == before
+
+
+def test_bc_clones_the_dataset_and_ranks_as_a_learned_policy(datasets: Path, tmp_path: Path):
+    pytest.importorskip("stable_baselines3")
+    from paragym.baselines.bc import train_bc
+    from paragym.baselines.policies import policies_for
+    from paragym.baselines.training import load_model, train
+
+    with pytest.raises(ValueError, match="paragym demos"):
+        train_bc(ENV, models_dir=tmp_path / "m")
+    with pytest.raises(ValueError, match="demonstrations"):
+        train(ENV, "bc", models_dir=tmp_path / "m")
+    record_demos(ENV, 3)
+    res = train_bc(ENV, models_dir=tmp_path / "m", overrides={"epochs": 3})
+    assert res.files.model.name == "bc_seed0.zip" and res.files.curve_png.is_file()
+    assert res.meta["dataset_episodes"] == 3 and len(res.meta["curve"]["holdout_loss"]) == 3
+    model = load_model(res.files.model)
+    obs = np.zeros(16, np.float32)
+    assert model.predict(obs, deterministic=True)[0].shape == (3,)
+    assert "user-bc-seed0" in policies_for(ENV, tmp_path / "m")
+    with pytest.raises(ValueError, match="--force"):
+        train_bc(ENV, models_dir=tmp_path / "m")
