@@ -102,15 +102,24 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
 
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
-                 success_error: float = 0.05, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY) -> None:
+                 success_error: float = 0.05, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY,
+                 trust_rate: float | None = None, relative_reward: bool | None = None) -> None:
         super().__init__(render_mode)
+        if self.version == 0 and (trust_rate is not None or relative_reward is not None):
+            raise ValueError("trust_rate and relative_reward are v1 arguments: use paragym/MobileTripodOdometry-v1")
+        trust_rate = 0.2 if trust_rate is None else trust_rate
+        relative_reward = True if relative_reward is None else relative_reward
+        if not (np.isfinite(trust_rate) and 0 < trust_rate <= 1):
+            raise ValueError(f"trust_rate must be in (0, 1]; got {trust_rate!r}")
         if isinstance(scenario, str):  # a custom drive is checked at reset, as before
             resolve_drive(scenario)
         if not (np.isfinite(encoder_noise) and encoder_noise >= 0):
             raise ValueError(f"encoder_noise must be >= 0 rad; got {encoder_noise!r}")
         self.scenario_arg, self.geometry = scenario, geometry
         self.encoder_noise, self.max_correction, self.success_error = encoder_noise, max_correction, success_error
-        self.params = TripodParams(float(encoder_noise), float(max_correction), geometry, self.version)
+        self.trust_rate, self.relative_reward = float(trust_rate), bool(relative_reward)
+        self.params = TripodParams(float(encoder_noise), float(max_correction), geometry, self.version,
+                                   trust_rate=self.trust_rate, relative_reward=self.relative_reward)
         self.action_space = spaces.Box(-1.0, 1.0, (self.params.action_size,), np.float32)
         self.observation_space = spaces.Box(-100.0, 100.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
@@ -190,8 +199,13 @@ class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
     reward, and the zero action (odometry) earns 0. Its variance made v0 hard
     to learn from (``baselines/ABLATION.md``).
 
-    ## Starting State, Episode End, Arguments
-    As v0 (``max_correction`` is not used). ``info["encoder_distances"]``
+    ## Starting State, Episode End
+    As v0.
+
+    ## Arguments
+    As v0 (``max_correction`` is not used), and ``trust_rate`` (0.2: the
+    fraction of the way a fully trusted unit moves per sample) and
+    ``relative_reward`` (True; False gives v0's reward, for ablations). ``info["encoder_distances"]``
     holds the smoothed encoder distances (m).
 
     ## Version History

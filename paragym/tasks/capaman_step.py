@@ -300,11 +300,15 @@ def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, ro
     if not near.size:
         return
     g = params.geometry
+    probes = np.repeat(state.alpha[near][None], 3, axis=0)  # (3, M, 3): crank k moved in probes[k]
     for k in range(3):
-        probe = state.alpha[near].copy()
-        probe[:, k] = np.minimum(probe[:, k] + LOOKAHEAD, g.alpha_max)
-        clearance, _, _ = world.place(near, probe)
-        state.lookahead[near, k] = np.minimum(clearance, params.clearance_cap) - state.clearance[near]
+        probes[k, :, k] = np.minimum(probes[k, :, k] + LOOKAHEAD, g.alpha_max)
+    if isinstance(world, GridWorld):  # the grid answers all the probes of all the robots in one call
+        clearance, _, _ = world.place(np.tile(near, 3), probes.reshape(-1, 3))
+        ahead = clearance.reshape(3, -1).T
+    else:
+        ahead = np.stack([world.place(near, probes[k])[0] for k in range(3)], axis=1)
+    state.lookahead[near] = np.minimum(ahead, params.clearance_cap) - state.clearance[near, None]
     if isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
         world.place(near, state.alpha[near])
 

@@ -66,6 +66,7 @@ class TripodParams:
     version: int = 0
     smoothing: float = 0.1
     trust_rate: float = 0.2
+    relative_reward: bool = True
 
     @property
     def obs_size(self) -> int:
@@ -134,7 +135,7 @@ def _advance(state: TripodTaskState, params: TripodParams, actions: np.ndarray, 
     if params.version == 1:
         _advance_v1_kernel(s.estimate, s.eta, s.last_eta, s.smoothed, s.unit_error, s.plate_error, s.terminated,
                            s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, params.smoothing,
-                           params.trust_rate,
+                           params.trust_rate, params.relative_reward,
                            d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
         return
     _advance_kernel(s.estimate, s.eta, s.last_eta, s.unit_error, s.plate_error, s.terminated, s.obs, s.reward,
@@ -195,8 +196,9 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
 
 @njit(cache=True, error_model="numpy")
 def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward,
-                       actions, rows, move, smoothing, trust_rate, steps, noise, geo, true, odometry, gradient, eta,
-                       t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
+                       actions, rows, move, smoothing, trust_rate, relative, steps, noise, geo, true, odometry,
+                       gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle,
+                       slip_speed, dt):
     """Version 1's transition of every robot with ``rows[i]`` (module docstring)."""
     row = np.empty(OBS_SIZE_V1)
     plate = np.empty((3, 3))
@@ -225,8 +227,9 @@ def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate
             smoothed[i, c] = measured[c] if math.isnan(smoothed[i, c]) else \
                 smoothed[i, c] + smoothing * (measured[c] - smoothed[i, c])
         _score(i, estimate, true, unit_error, plate_error, reward)
-        odo_unit, odo_plate = _errors(odometry[i], true[i])
-        reward[i] += 10.0 * (odo_unit + odo_plate)  # v1: against odometry alone (the same optimum, less variance)
+        if relative:  # v1: against odometry alone (the same optimum, less variance)
+            odo_unit, odo_plate = _errors(odometry[i], true[i])
+            reward[i] += 10.0 * (odo_unit + odo_plate)
         terminated[i] = k[i] >= steps[i]
         # observation, in the robot's frame (x along the commanded heading)
         own = mt.k_distances(estimate[i])

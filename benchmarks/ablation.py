@@ -1,0 +1,121 @@
+"""The ablation behind the v1 envs (issue 17): each row a design change, trained and measured the same way.
+
+    python benchmarks/ablation.py --task tripod --steps 2000000 --out runs/ablation
+    python benchmarks/ablation.py --task capaman --steps 1500000 --out runs/ablation
+
+Every row trains PPO (Stable-Baselines3) on the native vector env of 64
+robots with the v1 hyper-parameters of ``baselines/hyperparams/ppo.yml``
+(only ``env_kwargs`` and the row's overrides change), for the same number of
+env steps and the same training seed, then evaluates the deterministic
+policy on the leaderboard's first evaluation seeds (reset seeds 100000 +
+k, random scenarios) in the single env of the row's settings. It prints
+one markdown row per design, with the row of each floor and reference, and
+writes them to ``<out>/ablation-<task>.md``; the numbers in
+``baselines/ABLATION.md`` come from it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import paragym  # noqa: F401
+from paragym.baselines.policies import get_policy
+from paragym.baselines.training import load_model, train
+from paragym.units import DEG
+
+#: task -> [(row label, env id, env kwargs, PPO overrides)]
+ROWS: dict[str, list[tuple[str, str, dict[str, Any], dict[str, Any]]]] = {
+    "tripod": [
+        ("v1 as released: trust per unit (rate 0.2), robot-frame obs, reward against odometry",
+         "paragym/MobileTripodOdometry-v1", {}, {}),
+        ("v1 with v0's reward (absolute error)", "paragym/MobileTripodOdometry-v1", {"relative_reward": False}, {}),
+        ("v1 with full trust per sample (rate 1)", "paragym/MobileTripodOdometry-v1", {"trust_rate": 1.0}, {}),
+        ("v0 (accumulated corrections, world-frame obs), same budget", "paragym/MobileTripodOdometry-v0", {},
+         {"normalize": "{'norm_obs': False, 'norm_reward': True}"}),
+    ],
+    "capaman": [
+        ("v1 as released: goal-relative obs + look-ahead, time penalty, 3 deg reach",
+         "paragym/CaPaManCollisionFree-v1", {}, {}),
+        ("v1 with v0's reward (no time penalty, collision -5)", "paragym/CaPaManCollisionFree-v1",
+         {"time_penalty": 0.0, "collision_penalty": 5.0}, {}),
+        ("v1 with v0's reach tolerance (1 deg)", "paragym/CaPaManCollisionFree-v1", {"reach_tolerance": 1 * DEG}, {}),
+        ("v0 (absolute obs, no look-ahead, v0 reward), same budget", "paragym/CaPaManCollisionFree-v0", {}, {}),
+    ],
+}
+#: the policies each task's table compares with (floors and reference)
+BESIDE = {"tripod": ("paragym/MobileTripodOdometry-v1", ["zero", "encoder-correction"]),
+          "capaman": ("paragym/CaPaManCollisionFree-v1", ["zero", "rrt-ga"])}
+V1_PPO = {"tripod": "paragym/MobileTripodOdometry-v1", "capaman": "paragym/CaPaManCollisionFree-v1"}
+
+
+def evaluate(env_id: str, kwargs: dict[str, Any], act: Any, episodes: int, reset: Any = None) -> dict[str, float]:
+    """Success, mean return and the task's metric over ``episodes`` seeded episodes."""
+    env = gym.make(env_id, **kwargs)
+    success, returns, metric = [], [], []
+    for k in range(episodes):
+        obs, info = env.reset(seed=100_000 + k)
+        if reset is not None:
+            reset(obs, info)
+        total, done = 0.0, False
+        while not done:
+            obs, reward, terminated, truncated, info = env.step(act(obs, info))
+            total += float(reward)
+            done = terminated or truncated
+        success.append(bool(info["is_success"]))
+        returns.append(total)
+        metric.append(info["unit_error"] * 100 if "unit_error" in info else float(info["collision"]))
+    env.close()
+    return {"success": float(np.mean(success)), "return": float(np.mean(returns)), "metric": float(np.mean(metric))}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--task", choices=sorted(ROWS), required=True)
+    parser.add_argument("--steps", type=int, default=2_000_000)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--episodes", type=int, default=30)
+    parser.add_argument("--rows", type=int, nargs="*", default=None, help="row indices to run (default all)")
+    parser.add_argument("--out", default="runs/ablation")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    metric = "final unit error [cm]" if args.task == "tripod" else "collisions"
+    lines = [f"| design | env steps | success | return | {metric} | train [s] |", "|---|---|---|---|---|---|"]
+    env_id, names = BESIDE[args.task]
+    for name in names:
+        spec = get_policy(env_id, name)
+        env = gym.make(env_id)
+        policy = spec.factory(env, 0)
+        r = evaluate(env_id, {}, policy.act, args.episodes, policy.reset)
+        lines.append(f"| `{name}` ({spec.kind}) | - | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | - |")
+        print(lines[-1], flush=True)
+    for index, (label, row_env, kwargs, overrides) in enumerate(ROWS[args.task]):
+        if args.rows is not None and index not in args.rows:
+            continue
+        from paragym.baselines.training import load_hyperparams
+
+        hp = {**load_hyperparams("ppo", V1_PPO[args.task]), **overrides, "env_kwargs": kwargs,
+              "eval_freq": 10 ** 12, "n_eval_episodes": 1}
+        t0 = time.perf_counter()
+        res = train(row_env, "ppo", seed=args.seed, timesteps=args.steps, models_dir=out / f"{args.task}-{index}",
+                    progress_bar=False, force=True, vectorized=True, hyperparams=hp)
+        seconds = time.perf_counter() - t0
+        model = load_model(res.files.model)
+        r = evaluate(row_env, kwargs, lambda obs, info, m=model: m.predict(obs, deterministic=True)[0],
+                     args.episodes)
+        lines.append(f"| {label} | {args.steps:,} | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | "
+                     f"{seconds:.0f} |")
+        print(lines[-1], flush=True)
+        (out / f"{args.task}-{index}.json").write_text(json.dumps({"label": label, **r, "seconds": seconds}))
+    (out / f"ablation-{args.task}.md").write_text("\n".join(lines) + "\n")
+
+
+if __name__ == "__main__":
+    main()
