@@ -220,7 +220,7 @@ def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[st
     folder = models_dir / env_name(env_id)
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
-        m = re.fullmatch(r"(ppo|sac|td3|bc)_seed(\d+)", path.stem)
+        m = re.fullmatch(r"(ppo|sac|td3|tqc|bc)_seed(\d+)", path.stem)
         if m:
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)

@@ -69,7 +69,7 @@ def _runs(models_dirs: list[Path]) -> dict[str, dict[str, list[dict[str, Any]]]]
             for path in sorted((folder / env_name(env_id)).glob("*_seed*.json")):
                 meta = json.loads(path.read_text())
                 curve = meta.get("curve") or {}
-                if meta.get("algo") in ("ppo", "sac", "td3") and curve.get("eval_timesteps"):
+                if meta.get("algo") in ("ppo", "sac", "td3", "tqc") and curve.get("eval_timesteps"):
                     found[env_id][meta["algo"]].append(meta)
     return found
 

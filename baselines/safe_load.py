@@ -23,6 +23,8 @@ What the replacements are:
 * schedules (``lr_schedule``, ``clip_range``, ...): the constant read from
   their readable form, or 0 (they only matter for further training);
 * ``train_freq`` (off-policy algorithms): one step (only training reads it);
+* ``target_entropy`` (TQC keeps it as a numpy scalar): minus the action's
+  dimension, the "auto" value (only training reads it);
 * anything else (the last observations, episode buffers, buffer classes):
   ``None``, which SB3 treats as unset.
 
@@ -131,6 +133,11 @@ def safe_custom_objects(path: str | Path, algorithm: type) -> dict[str, Any]:
             out[key] = _policy_kwargs(readable)
         elif key == "train_freq":  # a (frequency, unit) named tuple with no readable form; only training reads it
             out[key] = (1, "step")
+        elif key == "target_entropy":  # TQC keeps a numpy scalar; only training reads it: its "auto" value
+            action = data.get("action_space")
+            shape = _box({k: v for k, v in action.items() if k != ":serialized:"}, "action_space").shape \
+                if isinstance(action, dict) else (1,)
+            out[key] = -float(np.prod(shape))
         elif "Schedule" in readable.get(":type:", "") or key in SCHEDULES:
             out[key] = _schedule(readable)
         else:

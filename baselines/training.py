@@ -50,16 +50,16 @@ from paragym.models import shipped_models_dir
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
-ALGOS = ("ppo", "sac", "td3")
+ALGOS = ("ppo", "sac", "td3", "tqc")  # tqc: sb3-contrib's Truncated Quantile Critics
 #: what :func:`load_model` loads: the RL algorithms and bc, behaviour cloning (a PPO policy; bc.py)
 LOADABLE = (*ALGOS, "bc")
 #: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
 EVAL_SEED = 10_000
 #: keys that paragym consumes (rl-zoo's and paragym.yml's); all others go to the SB3 algorithm
-PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes",
+PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes", "init_from",
                 "noise_type", "noise_std", "checkpoint_freq", "normalize")
 #: paragym.yml's keys, which rl-zoo does not know
-OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq")
+OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq", "init_from")
 
 
 def check_algo(algo: str, known: tuple[str, ...] = ALGOS) -> str:
@@ -154,6 +154,10 @@ class TrainResult:
 def _algorithm(algo: str) -> type:
     from stable_baselines3 import PPO, SAC, TD3
 
+    if algo == "tqc":
+        from sb3_contrib import TQC
+
+        return TQC
     return {"ppo": PPO, "sac": SAC, "td3": TD3, "bc": PPO}[algo]  # a cloned policy is a PPO policy
 
 
@@ -267,7 +271,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     torch.set_num_threads(int(threads))
     env, eval_env = _make_envs(env_id, hp, int(seed), vectorized, files, force)
     model, curve, resumed_from = _build_model(algo, hp, env, int(seed), verbose, files, force)
-    own = _make_callbacks(hp, eval_env, int(hp["n_envs"]), files.checkpoints, curve, algo in ("sac", "td3"))
+    own = _make_callbacks(hp, eval_env, int(hp["n_envs"]), files.checkpoints, curve, algo != "ppo")
     learned, seconds = _learn(model, algo, int(hp["n_envs"]), total - resumed_from, resumed_from == 0,
                               own + list(callbacks or []), progress_bar)
     env.close()
@@ -363,7 +367,7 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
     cls, latest = _algorithm(algo), files.checkpoints / "latest.zip"
     if latest.exists() and (files.checkpoints / "curve.json").exists() and not force:
         model = cls.load(latest, env=env, device="cpu")
-        if algo in ("sac", "td3") and (files.checkpoints / "replay_buffer.pkl").exists():
+        if algo in ("sac", "td3", "tqc") and (files.checkpoints / "replay_buffer.pkl").exists():
             model.load_replay_buffer(files.checkpoints / "replay_buffer.pkl")
         saved = json.loads((files.checkpoints / "curve.json").read_text())
         for key in curve:
@@ -377,7 +381,30 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
             raise ValueError(f"noise_type must be 'normal'; got {hp['noise_type']!r}")
         dim = env.action_space.shape[0]
         kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("noise_std", 0.1)) * np.ones(dim))
-    return cls(hp["policy"], env, seed=seed, device="cpu", verbose=verbose, **kwargs), curve, 0
+    model = cls(hp["policy"], env, seed=seed, device="cpu", verbose=verbose, **kwargs)
+    if hp.get("init_from"):
+        _initialise_from(model, algo, hp["init_from"], files)
+    return model, curve, 0
+
+
+def _initialise_from(model: Any, algo: str, source: str, files: RunFiles) -> None:
+    """Start ``model``'s policy from a behaviour-cloned one (paragym.yml's
+    ``init_from: bc``): the ``bc_seed<N>.zip`` of this run's models folder if
+    there is one, else the shipped one; its weights but not its action noise
+    (log_std stays the yml's). PPO only: the cloned policy is a PPO policy."""
+    if source != "bc" or algo != "ppo":
+        raise ValueError(f"init_from must be 'bc' and the algorithm PPO; got {source!r} for {algo}")
+    seed = files.model.stem.rsplit("seed", 1)[1]
+    own = files.model.parent / f"bc_seed{seed}.zip"
+    shipped = shipped_models_dir() / files.model.parent.name / "bc_seed0.zip"
+    path = own if own.is_file() else shipped
+    if not path.is_file():
+        raise ValueError(f"init_from: bc needs a cloned policy ({own} or {shipped}): paragym train "
+                         f"{files.model.parent.name} --algo bc")
+    cloned = load_model(path, "bc").policy.state_dict()
+    state = model.policy.state_dict()
+    state.update({k: v for k, v in cloned.items() if k != "log_std"})
+    model.policy.load_state_dict(state)
 
 
 def _learn(model: Any, algo: str, n_envs: int, remaining: int, fresh: bool, callbacks: list[Any],

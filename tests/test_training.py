@@ -19,7 +19,8 @@ HYBRID = "paragym/HybridSingularityFree-v0"
 TINY = {"ppo": {"n_envs": 2, "n_steps": 64, "batch_size": 64, "n_epochs": 2, "eval_freq": 128, "n_eval_episodes": 1,
                 "checkpoint_freq": 128},
         "sac": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1},
-        "td3": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1}}
+        "td3": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1},
+        "tqc": {"learning_starts": 50, "batch_size": 32, "eval_freq": 200, "n_eval_episodes": 1}}
 
 
 @pytest.mark.parametrize("algo", ALGOS)
