@@ -11,7 +11,10 @@ mean return as ``ref_min_score``, the recorded policy's as ``ref_max_score``).
 
 The episodes' reset seeds are :func:`demo_seed` (``200_000 + k``), apart
 from the leaderboard's (``100_000 + ...``), so a policy cloned from the
-demonstrations is ranked on scenarios it has not seen.
+demonstrations is ranked on scenarios it has not seen. A scenario for which
+the policy's planner finds no plan (RRT + GA, in about 2 % of the CaPaMan's)
+is skipped, the next seed taken, and the skipped seeds named in the
+dataset's description.
 
 A dataset that exists is never overwritten without ``force``, and ``force``
 replaces only a dataset that paragym wrote (its ``author`` is ``paragym``).
@@ -54,12 +57,19 @@ def dataset_id_for(env_id: str, policy: str) -> str:
     return f"{check_env_id(env_id)}/{policy}-v0"
 
 
-def _rollout(env: gym.Env, spec: PolicySpec, episode: int) -> float:
-    """One seeded episode of ``spec`` on ``env`` (a DataCollector); its return."""
+def _rollout(env: gym.Env, spec: PolicySpec, episode: int) -> float | None:
+    """One seeded episode of ``spec`` on ``env`` (a DataCollector); its
+    return, or None when the policy's planner finds no plan for the scenario
+    (no step is taken, and Minari keeps no episode without steps)."""
+    from paragym.planners.base import PlanningError
+
     seed = demo_seed(episode)
     policy = spec.factory(env, seed)
     obs, info = env.reset(seed=seed)
-    policy.reset(obs, info)
+    try:
+        policy.reset(obs, info)
+    except PlanningError:
+        return None
     total, done = 0.0, False
     while not done:
         obs, reward, terminated, truncated, info = env.step(policy.act(obs, info))
@@ -71,7 +81,8 @@ def _rollout(env: gym.Env, spec: PolicySpec, episode: int) -> float:
 def _mean_return(env_id: str, spec: PolicySpec, episodes: int) -> float:
     env = gym.make(env_id)
     try:
-        return float(np.mean([_rollout(env, spec, k) for k in range(episodes)]))
+        returns = [_rollout(env, spec, k) for k in range(episodes)]
+        return float(np.mean([r for r in returns if r is not None]))
     finally:
         env.close()
 
@@ -111,13 +122,20 @@ def record_demos(env_id: str, episodes: int, policy: str | None = None, dataset_
         minari.delete_dataset(dataset_id)
     spec = specs[name]
     collector = minari.DataCollector(gym.make(env_id), record_infos=False)
-    returns = []
+    returns, skipped, k = [], [], 0
     bar, task = _progress(episodes, f"{name} on {env_id}", progress)
     try:
-        for k in range(episodes):
-            returns.append(_rollout(collector, spec, k))
-            if bar is not None:
-                bar.advance(task)
+        while len(returns) < episodes:  # seeds in order; a scenario the planner cannot solve is skipped
+            if len(skipped) > episodes:
+                raise ValueError(f"{name} found no plan for {len(skipped)} of the demonstration scenarios")
+            value = _rollout(collector, spec, k)
+            if value is None:
+                skipped.append(demo_seed(k))
+            else:
+                returns.append(value)
+                if bar is not None:
+                    bar.advance(task)
+            k += 1
         floor = _mean_return(env_id, specs["random"], min(episodes, 20))
         with warnings.catch_warnings():  # paragym has no e-mail address to give
             warnings.filterwarnings("ignore", message=".*author_email.*")
@@ -126,7 +144,9 @@ def record_demos(env_id: str, episodes: int, policy: str | None = None, dataset_
                 author=AUTHOR, code_permalink=f"https://pypi.org/project/paragym/{paragym.__version__}/",
                 ref_min_score=floor, ref_max_score=float(np.mean(returns)),
                 description=(f"{episodes} episodes of {name} ({spec.kind}) on {env_id}, reset seeds "
-                             f"{demo_seed(0)}-{demo_seed(episodes - 1)}; paragym {paragym.__version__}. "
+                             f"{demo_seed(0)}-{demo_seed(k - 1)}"
+                             + (f" but {skipped} (no plan found)" if skipped else "")
+                             + f"; paragym {paragym.__version__}. "
                              f"ref_min_score: the random policy's mean return over "
                              f"{min(episodes, 20)} of these seeds; ref_max_score: this policy's."),
                 requirements=[f"paragym=={paragym.__version__}"])

@@ -1,12 +1,12 @@
 """The ablation behind the v1 envs (issue 17): each row a design change, trained and measured the same way.
 
-    python benchmarks/ablation.py --task tripod --steps 2000000 --out runs/ablation
-    python benchmarks/ablation.py --task capaman --steps 1500000 --out runs/ablation
+    python benchmarks/ablation.py --task tripod --out runs/ablation [--rows 0 3]
+    python benchmarks/ablation.py --task capaman --out runs/ablation
 
 Every row trains PPO (Stable-Baselines3) on the native vector env of 64
 robots with the v1 hyper-parameters of ``baselines/hyperparams/ppo.yml``
-(only ``env_kwargs`` and the row's overrides change), for the same number of
-env steps and the same training seed, then evaluates the deterministic
+(only ``env_kwargs`` and the row's overrides change), for the row's env
+steps and the same training seed, then evaluates the deterministic
 policy on the leaderboard's first evaluation seeds (reset seeds 100000 +
 k, random scenarios) in the single env of the row's settings. It prints
 one markdown row per design, with the row of each floor and reference, and
@@ -30,23 +30,31 @@ from paragym.baselines.policies import get_policy
 from paragym.baselines.training import load_model, train
 from paragym.units import DEG
 
-#: task -> [(row label, env id, env kwargs, PPO overrides)]
-ROWS: dict[str, list[tuple[str, str, dict[str, Any], dict[str, Any]]]] = {
+#: task -> [(row label, env id, env kwargs, PPO overrides, env steps)], in the order they were tried
+ROWS: dict[str, list[tuple[str, str, dict[str, Any], dict[str, Any], int]]] = {
     "tripod": [
-        ("v1 as released: trust per unit (rate 0.2), robot-frame obs, reward against odometry",
-         "paragym/MobileTripodOdometry-v1", {}, {}),
-        ("v1 with v0's reward (absolute error)", "paragym/MobileTripodOdometry-v1", {"relative_reward": False}, {}),
-        ("v1 with full trust per sample (rate 1)", "paragym/MobileTripodOdometry-v1", {"trust_rate": 1.0}, {}),
-        ("v0 (accumulated corrections, world-frame obs), same budget", "paragym/MobileTripodOdometry-v0", {},
-         {"normalize": "{'norm_obs': False, 'norm_reward': True}"}),
+        ("v0 (accumulated corrections, world-frame obs), PPO", "paragym/MobileTripodOdometry-v0", {},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -3.0}}, 2_000_000),
+        ("v1 action and obs, trust 1 per sample, v0's reward", "paragym/MobileTripodOdometry-v1",
+         {"trust_rate": 1.0, "relative_reward": False}, {}, 1_000_000),
+        ("+ initial action std e^-1", "paragym/MobileTripodOdometry-v1", {"trust_rate": 1.0, "relative_reward": False},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        ("+ trust rate 0.2 per sample", "paragym/MobileTripodOdometry-v1", {"relative_reward": False},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        ("+ reward against odometry (v1 as released)", "paragym/MobileTripodOdometry-v1", {},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        ("+ gamma 0.999, lambda 0.98, std e^-2", "paragym/MobileTripodOdometry-v1", {},
+         {"gamma": 0.999, "gae_lambda": 0.98, "policy_kwargs": {"net_arch": [64, 64], "log_std_init": -2.0}},
+         3_000_000),
     ],
     "capaman": [
+        ("v0 (absolute obs, no look-ahead, v0 reward), PPO", "paragym/CaPaManCollisionFree-v0", {}, {}, 1_500_000),
         ("v1 as released: goal-relative obs + look-ahead, time penalty, 3 deg reach",
-         "paragym/CaPaManCollisionFree-v1", {}, {}),
+         "paragym/CaPaManCollisionFree-v1", {}, {}, 1_500_000),
         ("v1 with v0's reward (no time penalty, collision -5)", "paragym/CaPaManCollisionFree-v1",
-         {"time_penalty": 0.0, "collision_penalty": 5.0}, {}),
-        ("v1 with v0's reach tolerance (1 deg)", "paragym/CaPaManCollisionFree-v1", {"reach_tolerance": 1 * DEG}, {}),
-        ("v0 (absolute obs, no look-ahead, v0 reward), same budget", "paragym/CaPaManCollisionFree-v0", {}, {}),
+         {"time_penalty": 0.0, "collision_penalty": 5.0}, {}, 1_500_000),
+        ("v1 with v0's reach tolerance (1 deg)", "paragym/CaPaManCollisionFree-v1", {"reach_tolerance": 1 * DEG}, {},
+         1_500_000),
     ],
 }
 #: the policies each task's table compares with (floors and reference)
@@ -78,7 +86,7 @@ def evaluate(env_id: str, kwargs: dict[str, Any], act: Any, episodes: int, reset
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--task", choices=sorted(ROWS), required=True)
-    parser.add_argument("--steps", type=int, default=2_000_000)
+    parser.add_argument("--steps", type=int, default=None, help="env steps of every row (default: each row's own)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--episodes", type=int, default=30)
     parser.add_argument("--rows", type=int, nargs="*", default=None, help="row indices to run (default all)")
@@ -96,7 +104,7 @@ def main() -> None:
         r = evaluate(env_id, {}, policy.act, args.episodes, policy.reset)
         lines.append(f"| `{name}` ({spec.kind}) | - | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | - |")
         print(lines[-1], flush=True)
-    for index, (label, row_env, kwargs, overrides) in enumerate(ROWS[args.task]):
+    for index, (label, row_env, kwargs, overrides, steps) in enumerate(ROWS[args.task]):
         if args.rows is not None and index not in args.rows:
             continue
         from paragym.baselines.training import load_hyperparams
@@ -104,13 +112,14 @@ def main() -> None:
         hp = {**load_hyperparams("ppo", V1_PPO[args.task]), **overrides, "env_kwargs": kwargs,
               "eval_freq": 10 ** 12, "n_eval_episodes": 1}
         t0 = time.perf_counter()
-        res = train(row_env, "ppo", seed=args.seed, timesteps=args.steps, models_dir=out / f"{args.task}-{index}",
+        steps = args.steps or steps
+        res = train(row_env, "ppo", seed=args.seed, timesteps=steps, models_dir=out / f"{args.task}-{index}",
                     progress_bar=False, force=True, vectorized=True, hyperparams=hp)
         seconds = time.perf_counter() - t0
         model = load_model(res.files.model)
         r = evaluate(row_env, kwargs, lambda obs, info, m=model: m.predict(obs, deterministic=True)[0],
                      args.episodes)
-        lines.append(f"| {label} | {args.steps:,} | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | "
+        lines.append(f"| {label} | {steps:,} | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | "
                      f"{seconds:.0f} |")
         print(lines[-1], flush=True)
         (out / f"{args.task}-{index}.json").write_text(json.dumps({"label": label, **r, "seconds": seconds}))

@@ -83,3 +83,15 @@ def test_bc_clones_the_dataset_and_ranks_as_a_learned_policy(datasets: Path, tmp
     assert "user-bc-seed0" in policies_for(ENV, tmp_path / "m")
     with pytest.raises(ValueError, match="--force"):
         train_bc(ENV, models_dir=tmp_path / "m")
+
+
+def test_demos_skip_a_scenario_the_planner_cannot_solve(datasets: Path, monkeypatch: pytest.MonkeyPatch):
+    """RRT + GA finds no plan for the CaPaMan scenario of reset seed 100002
+    (one of the leaderboard's): starting the demonstrations there records
+    the next seed instead, and the description names the skipped one."""
+    import paragym.baselines.demos as demos
+
+    monkeypatch.setattr(demos, "DEMO_SEED", 100_002)
+    data = record_demos("paragym/CaPaManCollisionFree-v1", 1)
+    assert data.total_episodes == 1
+    assert "but [100002] (no plan found)" in data.storage.metadata["description"]
