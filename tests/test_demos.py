@@ -83,6 +83,17 @@ def test_bc_clones_the_dataset_and_ranks_as_a_learned_policy(datasets: Path, tmp
     assert "user-bc-seed0" in policies_for(ENV, tmp_path / "m")
     with pytest.raises(ValueError, match="--force"):
         train_bc(ENV, models_dir=tmp_path / "m")
+    # PPO with init_from: bc starts from the clone (learning rate 0: nothing moves it)
+    tiny = {"n_envs": 4, "n_steps": 16, "batch_size": 64, "n_epochs": 1, "learning_rate": 0.0, "eval_freq": 10 ** 9,
+            "n_eval_episodes": 1, "init_from": "bc"}
+    ppo = train(ENV, "ppo", models_dir=tmp_path / "m", timesteps=64, progress_bar=False, hyperparams=tiny).model
+    rng = np.random.default_rng(0)
+    obs = rng.normal(size=(20, 16)).astype(np.float32)
+    np.testing.assert_allclose(ppo.predict(obs, deterministic=True)[0], model.predict(obs, deterministic=True)[0],
+                               rtol=0, atol=1e-6)
+    fresh = train(ENV, "ppo", models_dir=tmp_path / "n", timesteps=64, progress_bar=False,
+                  hyperparams={**tiny, "init_from": None}).model
+    assert np.abs(fresh.predict(obs, deterministic=True)[0] - model.predict(obs, deterministic=True)[0]).max() > 1e-3
 
 
 def test_demos_skip_a_scenario_the_planner_cannot_solve(datasets: Path, monkeypatch: pytest.MonkeyPatch):
