@@ -103,8 +103,8 @@ def learning_curves(runs: list[dict[str, Any]], rng: np.random.Generator, points
 
 def normalized_scores(db: str | Path, env_ids: list[str] | None = None) -> tuple[dict[str, np.ndarray], list[str]]:
     """algo -> (runs, tasks) normalised scores from the leaderboard's rows
-    (module docstring), over the tasks where every algorithm has a run; and
-    those tasks."""
+    (module docstring), for the algorithms with a run on every task (the runs:
+    the seeds they have on all of them); and the tasks."""
     env_ids = env_ids or latest_versions()
     per_task: dict[str, dict[str, dict[int, float]]] = {}
     with ResultStore(db) as store:
@@ -129,13 +129,13 @@ def normalized_scores(db: str | Path, env_ids: list[str] | None = None) -> tuple
                 if kinds[name] == "learned" and algo and seed.isdigit() and not algo.startswith("user-"):
                     scores[algo][int(seed)] = (value - floor) / (ref - floor) if ref != floor else np.nan
             per_task[env_id] = scores
-    algos = sorted({a for s in per_task.values() for a in s})
-    tasks = [e for e in env_ids if e in per_task and all(per_task[e].get(a) for a in algos)]
+    tasks = [e for e in env_ids if e in per_task]
     out = {}
-    for algo in algos:
-        seeds = sorted(set.intersection(*(set(per_task[e][algo]) for e in tasks))) if tasks else []
-        if seeds:
-            out[algo] = np.array([[per_task[e][algo][s] for e in tasks] for s in seeds])
+    for algo in sorted({a for scores in per_task.values() for a in scores}):  # those with runs on every task
+        if tasks and all(per_task[e].get(algo) for e in tasks):
+            seeds = sorted(set.intersection(*(set(per_task[e][algo]) for e in tasks)))
+            if seeds:
+                out[algo] = np.array([[per_task[e][algo][s] for e in tasks] for s in seeds])
     return out, tasks
 
 
@@ -245,13 +245,14 @@ def _aggregate(db: str | Path, out: Path, rng: np.random.Generator) -> list[str]
     scores, tasks = normalized_scores(db)
     lines = ["## Across tasks (rliable)", ""]
     if not scores:
-        return lines + ["No learned agent is in the database on every task's latest version.", ""]
+        return lines + ["No learning algorithm has a run on every task's latest version in the database.", ""]
     state = np.random.RandomState(int(rng.integers(2 ** 31)))
     point, interval = rly.get_interval_estimates(scores, lambda x: np.array([metrics.aggregate_iqm(x)]),
                                                  reps=BOOTSTRAP_REPS, random_state=state)
     png = _plot_aggregate(point, interval, out / "aggregate-iqm.png")
     lines += [f"Tasks (the latest version of each): {', '.join(f'`{t}`' for t in tasks)}. Score per run: its mean "
-              f"return, normalised between the floor (0: the better of `zero` and `random`) and the reference (1).",
+              f"return, normalised between the floor (0: the better of `zero` and `random`) and the reference (1). "
+              f"An algorithm with runs on only some of these tasks is left out here (its curves are above).",
               "", "| algorithm | runs | IQM of the normalised score | 95 % CI (stratified bootstrap) |",
               "|---|---|---|---|"]
     for algo in sorted(point):
