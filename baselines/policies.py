@@ -414,19 +414,18 @@ _BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], 
      _estimator_params("FusionEstimator")),
     ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
      "= odometry only: no correction (paper 004's uncorrected estimate)", None),
-    # v1 of the CaPaMan keeps v0's action, so its planners run unchanged
-    ("paragym/CaPaManCollisionFree-v1", "rrt-ga", _rrt_ga, "reference",
-     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step", _rrt_ga_params),
-    ("paragym/CaPaManCollisionFree-v1", "grid-dijkstra", _grid_path, "other",
-     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term", _grid_path_params),
-    ("paragym/CaPaManCollisionFree-v1", "zero", _zero, "floor", "stand still at T.P.1", None),
     # v1 of the tripod acts through trust in the paper's correction: the reference is its test of the faulty unit
     ("paragym/MobileTripodOdometry-v1", "encoder-correction", _encoder_trust, "reference",
      "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
      _encoder_trust_params),
-    ("paragym/MobileTripodOdometry-v1", "zero", _zero, "floor",
-     "= odometry only: no correction (paper 004's uncorrected estimate)", None),
 )
+#: v1 id -> (v0 id, the v0 policies that play v1 unchanged: the CaPaMan's v1 keeps v0's action)
+_SAME_IN_V1 = {
+    "paragym/CaPaManCollisionFree-v1": ("paragym/CaPaManCollisionFree-v0", ("rrt-ga", "grid-dijkstra", "zero")),
+    "paragym/MobileTripodOdometry-v1": ("paragym/MobileTripodOdometry-v0", ("zero",)),
+}
+_BUILT_IN += tuple((new, *row[1:]) for new, (old, names) in _SAME_IN_V1.items()
+                   for row in _BUILT_IN if row[0] == old and row[1] in names)
 
 for _env_id, _name, _factory, _kind, _doc, _params in _BUILT_IN:
     register_policy(_env_id, _name, _factory, _kind, _doc, params=_params)
