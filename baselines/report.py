@@ -33,7 +33,8 @@ from paragym.baselines.store import ResultStore
 from paragym.baselines.training import env_name
 from paragym.models import shipped_models_dir
 
-__all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalized_scores", "write_report"]
+__all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalized_scores", "task_scores",
+           "write_report"]
 
 CONFIDENCE = 0.95
 BOOTSTRAP_REPS = 2000
@@ -105,6 +106,28 @@ def normalized_scores(db: str | Path, env_ids: list[str] | None = None) -> tuple
     """algo -> (runs, tasks) normalised scores from the leaderboard's rows
     (module docstring), for the algorithms with a run on every task (the runs:
     the seeds they have on all of them); and the tasks."""
+    per_task = task_scores(db, env_ids)
+    tasks = list(per_task)
+    out = {}
+    for algo in sorted({a for scores in per_task.values() for a in scores}):  # those with runs on every task
+        matrix = _matrix(per_task, algo, tasks)
+        if matrix is not None:
+            out[algo] = matrix
+    return out, tasks
+
+
+def _matrix(per_task: dict[str, dict[str, dict[int, float]]], algo: str, tasks: list[str]) -> np.ndarray | None:
+    """(runs, tasks) scores of ``algo``: the seeds it has on every one of ``tasks`` (None: none)."""
+    if not tasks or not all(per_task[e].get(algo) for e in tasks):
+        return None
+    seeds = sorted(set.intersection(*(set(per_task[e][algo]) for e in tasks)))
+    return np.array([[per_task[e][algo][s] for e in tasks] for s in seeds]) if seeds else None
+
+
+def task_scores(db: str | Path, env_ids: list[str] | None = None) -> dict[str, dict[str, dict[int, float]]]:
+    """env id -> algo -> seed -> normalised score (module docstring), for the
+    envs of ``env_ids`` (default: every task's latest version) that have a
+    reference and a floor in the database."""
     env_ids = env_ids or latest_versions()
     per_task: dict[str, dict[str, dict[int, float]]] = {}
     with ResultStore(db) as store:
@@ -129,14 +152,7 @@ def normalized_scores(db: str | Path, env_ids: list[str] | None = None) -> tuple
                 if kinds[name] == "learned" and algo and seed.isdigit() and not algo.startswith("user-"):
                     scores[algo][int(seed)] = (value - floor) / (ref - floor) if ref != floor else np.nan
             per_task[env_id] = scores
-    tasks = [e for e in env_ids if e in per_task]
-    out = {}
-    for algo in sorted({a for scores in per_task.values() for a in scores}):  # those with runs on every task
-        if tasks and all(per_task[e].get(algo) for e in tasks):
-            seeds = sorted(set.intersection(*(set(per_task[e][algo]) for e in tasks)))
-            if seeds:
-                out[algo] = np.array([[per_task[e][algo][s] for e in tasks] for s in seeds])
-    return out, tasks
+    return per_task
 
 
 def _plot_curves(env_id: str, curves: dict[str, dict[str, np.ndarray]], path: Path) -> Path:
@@ -244,9 +260,10 @@ def _aggregate(db: str | Path, out: Path, rng: np.random.Generator) -> list[str]
 
     scores, tasks = normalized_scores(db)
     lines = ["## Across tasks (rliable)", ""]
-    if not scores:
-        return lines + ["No learning algorithm has a run on every task's latest version in the database.", ""]
     state = np.random.RandomState(int(rng.integers(2 ** 31)))
+    if not scores:
+        return lines + ["No learning algorithm has a run on every task's latest version in the database.", "",
+                        *_improvement(db, state)]
     point, interval = rly.get_interval_estimates(scores, lambda x: np.array([metrics.aggregate_iqm(x)]),
                                                  reps=BOOTSTRAP_REPS, random_state=state)
     png = _plot_aggregate(point, interval, out / "aggregate-iqm.png")
@@ -259,17 +276,34 @@ def _aggregate(db: str | Path, out: Path, rng: np.random.Generator) -> list[str]
         lines.append(f"| {algo.upper()} | {len(scores[algo])} | {point[algo][0]:.3f} | "
                      f"[{interval[algo][0, 0]:.3f}, {interval[algo][1, 0]:.3f}] |")
     lines += ["", f"![aggregate]({png.name})", ""]
-    algos = sorted(scores)
-    if len(algos) > 1:
-        pairs = {f"{x},{y}": (scores[x], scores[y]) for x in algos for y in algos if x != y}
-        p_point, p_interval = rly.get_interval_estimates(
-            pairs, lambda a, b: np.array([metrics.probability_of_improvement(a, b)]), reps=BOOTSTRAP_REPS,
-            random_state=state)
-        lines += ["Probability of improvement P(X > Y) (rliable), with its 95 % CI:", "",
-                  "| X | Y | P(X > Y) | 95 % CI |", "|---|---|---|---|"]
-        for key in pairs:
-            x, y = key.split(",")
-            lines.append(f"| {x.upper()} | {y.upper()} | {p_point[key][0]:.2f} | "
-                         f"[{p_interval[key][0, 0]:.2f}, {p_interval[key][1, 0]:.2f}] |")
-        lines.append("")
-    return lines
+    return lines + _improvement(db, state)
+
+
+def _improvement(db: str | Path, state: np.random.RandomState) -> list[str]:
+    """rliable's probability of improvement of every algorithm over every
+    other, each pair on the tasks where both have runs."""
+    from rliable import library as rly
+    from rliable import metrics
+
+    per_task = task_scores(db)
+    algos = sorted({a for scores in per_task.values() for a in scores})
+    pairs, shared = {}, {}
+    for x in algos:
+        for y in algos:
+            tasks = [e for e in per_task if per_task[e].get(x) and per_task[e].get(y)]
+            mx, my = _matrix(per_task, x, tasks), _matrix(per_task, y, tasks)
+            if x != y and mx is not None and my is not None:
+                pairs[f"{x},{y}"], shared[f"{x},{y}"] = (mx, my), tasks
+    if not pairs:
+        return []
+    point, interval = rly.get_interval_estimates(
+        pairs, lambda a, b: np.array([metrics.probability_of_improvement(a, b)]), reps=BOOTSTRAP_REPS,
+        random_state=state)
+    lines = ["Probability of improvement P(X > Y) (rliable), with its 95 % CI, each pair on the tasks where both "
+             "have runs:", "", "| X | Y | tasks | P(X > Y) | 95 % CI |", "|---|---|---|---|---|"]
+    for key, tasks in shared.items():
+        x, y = key.split(",")
+        names = ", ".join(env_name(t) for t in tasks)
+        lines.append(f"| {x.upper()} | {y.upper()} | {names} | {point[key][0]:.2f} | "
+                     f"[{interval[key][0, 0]:.2f}, {interval[key][1, 0]:.2f}] |")
+    return lines + [""]
