@@ -43,14 +43,17 @@ class ParagymSB3VecEnv(VecEnv):
         self._actions = np.asarray(actions)
 
     def step_wait(self) -> VecEnvStepReturn:
-        obs, rewards, terminated, truncated, _ = self.venv.step(self._actions)
+        obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
         dones = terminated | truncated
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         if dones.any():
             rows, first = self.venv.reset_done()
+            success = info.get("is_success")
             for i in rows:
                 infos[i]["terminal_observation"] = obs[i].copy()
                 infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
+                if success is not None:  # what SB3's EvalCallback reads of a finished episode
+                    infos[i]["is_success"] = bool(success[i])
             obs = obs.copy()
             obs[rows] = first
         return obs, rewards.astype(np.float32), dones, infos

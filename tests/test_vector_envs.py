@@ -166,3 +166,20 @@ def test_the_grid_and_pybullet_disagree_by_at_most_two_cells():
     assert exact[grid <= 0].max() < 0.008  # a grid collision is within 1.6 cells of a real one
     assert np.all(grid[exact < -0.010] <= 0)  # a penetration deeper than the cluster spacing is never missed
     env.close()
+
+
+def test_the_sb3_adapter_reports_success_at_an_episode_end():
+    """SB3's EvalCallback reads info["is_success"] of a finished episode: the
+    adapter passes the native env's on (the training curves' success rate).
+    Odometry alone ends within 5 cm after the push (success) and 20 cm off
+    after the initial heading error (failure)."""
+    from paragym.baselines.sb3_vec import as_sb3_vecenv
+
+    for scenario, want in (("push", [True, True]), ("initial_heading", [False, False])):
+        venv = as_sb3_vecenv("paragym/MobileTripodOdometry-v1", 2, scenario=scenario)
+        venv.reset()
+        for _ in range(700):
+            _, _, dones, infos = venv.step(np.zeros((2, 3), np.float32))
+            if dones.any():
+                break
+        assert dones.all() and [i.get("is_success") for i in infos] == want, scenario
