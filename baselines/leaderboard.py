@@ -158,9 +158,15 @@ _ENVS: dict[str, gym.Env] = {}
 
 
 def _env(env_id: str) -> gym.Env:
-    """One env per id per process, kept: resets re-seed it completely."""
+    """One env per id per process, kept: resets re-seed it completely. The
+    leaderboard ranks v0 beside v1 on purpose, so Gymnasium's warning that a
+    newer version exists is not repeated for every worker."""
     if env_id not in _ENVS:
-        _ENVS[env_id] = gym.make(env_id)
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*is out of date.*")
+            _ENVS[env_id] = gym.make(env_id)
     return _ENVS[env_id]
 
 

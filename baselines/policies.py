@@ -225,11 +225,25 @@ def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[st
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)
             found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path), sha), "learned",
-                                     (f"behaviour cloning of the reference's demonstrations (a PPO policy), "
-                                      f"seed {m[2]}, {origin}: {path}" if m[1] == "bc" else
-                                      f"{m[1].upper()} (Stable-Baselines3), training seed {m[2]}, {origin}: {path}"),
+                                     f"{_what_trained(path, m[1])}, training seed {m[2]}, {origin}: {path}",
                                      {"model_sha256": sha})
     return found
+
+
+def _what_trained(path: Path, algo: str) -> str:
+    """How a model was made, from its JSON beside it (when there is one): the
+    dataset a clone learned from, the clone a PPO run started from."""
+    meta = path.with_suffix(".json")
+    try:
+        info = json.loads(meta.read_text()) if meta.is_file() else {}
+    except (OSError, ValueError):
+        info = {}
+    if algo == "bc":
+        return f"behaviour cloning of {info.get('dataset_id', 'a Minari dataset')} (a PPO policy)"
+    what = "TQC (sb3-contrib)" if algo == "tqc" else f"{algo.upper()} (Stable-Baselines3)"
+    if (info.get("hyperparams") or {}).get("init_from") == "bc":
+        what += " started from its seed's behaviour clone"
+    return what
 
 
 def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str, PolicySpec]:
