@@ -82,6 +82,8 @@ BAD = {
              DriveScenario("text", speed="fast"), DriveScenario("endless", speed=1e-9)],
     "paragym/CaPaManCollisionFree-v0": [None, 5, "moon"],
 }
+BAD["paragym/CaPaManCollisionFree-v1"] = BAD["paragym/CaPaManCollisionFree-v0"]
+BAD["paragym/MobileTripodOdometry-v1"] = BAD[TRIPOD]
 
 
 @pytest.mark.parametrize("env_id", IDS)
