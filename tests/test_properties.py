@@ -27,6 +27,8 @@ SCENARIOS = {
     "paragym/HybridSingularityFree-v0": ["random", "paper"],
     "paragym/Orthoglide2PRRKappa-v0": ["random", "paper"],
     "paragym/MobileTripodOdometry-v0": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
+    "paragym/CaPaManCollisionFree-v1": ["random", "paper"],
+    "paragym/MobileTripodOdometry-v1": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
 }
 FAST = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                        HealthCheck.function_scoped_fixture])
