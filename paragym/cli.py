@@ -451,15 +451,27 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
 
     from paragym.baselines.leaderboard import FULL, QUICK, run_leaderboard
 
+    asked = []
+
     def stop(signum: int, frame: Any) -> None:  # SIGTERM stops as Ctrl-C does: workers ended, rows kept
+        asked.append(signum)
         raise KeyboardInterrupt
 
+    def still_asked(row: Any) -> None:
+        """A stop whose KeyboardInterrupt got lost on the way still stops the run, at the next stored
+        episode: in a fresh clone (cold numba cache) a SIGINT during the first episodes once let the
+        run finish with exit code 0."""
+        if asked:
+            raise KeyboardInterrupt
+
     signal.signal(signal.SIGTERM, stop)
+    signal.signal(signal.SIGINT, stop)
 
     run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env, policies=args.policy,
                           models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
                           else args.executor, workers=args.workers, ray_address=args.ray_address, out=args.out,
-                          markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress)
+                          markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress,
+                          on_row=still_asked)
     print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; {run.seconds:.0f} s")
     print("wrote " + ", ".join(str(p) for p in run.files))
     return 0
