@@ -60,7 +60,7 @@ class _CaPaManTask:
         if self.params.version == 0:
             return None
         if isinstance(self.world, DynamicWorld):
-            if getattr(self, "_probe_world", None) is None:
+            if self._probe_world is None:
                 self._probe_world = SceneWorld(self._checker())
             return self._probe_world
         return self.world
@@ -211,6 +211,7 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
             self.scene = CaPaManDynamicScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
             self.world = DynamicWorld(self.scene, self.control_period)
         self._scenario_scene: CaPaManScene | None = None
+        self._probe_world: SceneWorld | None = None  # v1 in dynamic fidelity: the look-ahead's kinematic scene
         self.state = self.new_state(1)
 
     def _checker(self) -> CaPaManScene:
