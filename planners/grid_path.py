@@ -13,6 +13,9 @@ for scenarios.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 from scipy import ndimage
 from scipy.sparse import coo_matrix
@@ -25,7 +28,7 @@ from paragym.tasks.capaman import TOUR, CaPaManScenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG
 
-__all__ = ["GridPathPlanner", "GridPathPolicy", "PlanningError"]
+__all__ = ["GridField", "GridFieldPolicy", "GridPathPlanner", "GridPathPolicy", "PlanningError"]
 
 
 def _offsets() -> np.ndarray:
@@ -51,8 +54,9 @@ class GridPathPlanner:
         self.geometry = geometry
         self.clusters = occupancy.cluster_points(geometry, spacing)
 
-    def plan(self, scenario: CaPaManScenario) -> JointPath:
-        """The tour T.P.1 -> T.P.2 -> T.P.3 -> T.P.1 as a joint path."""
+    def field(self, scenario: CaPaManScenario) -> GridField:
+        """Dijkstra from each T.P. over the free cells of Theta: the shortest
+        free path from any cell to any T.P. (:class:`GridField`)."""
         grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles)
         theta, axis = occupancy.joint_matrix(grid, self.clusters, self.n, self.geometry)
         # Nodes are checked, edges are not: a free node next to a colliding one is
@@ -73,26 +77,62 @@ class GridPathPlanner:
             weights.append(np.full(keep.sum(), np.linalg.norm(off * (axis[1] - axis[0]))))
         graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
                            shape=(n ** 3, n ** 3)).tocsr()
-        tp = scenario.alpha
+        tp = np.asarray(scenario.alpha, float)
         free_idx = np.flatnonzero(free)
         # Each T.P. enters the grid at its nearest free cell.
         entry = free_idx[np.argmin(np.linalg.norm(axis[cells[free_idx]][None] - tp[:, None], axis=2), axis=1)]
         dist, pred = dijkstra(graph, directed=False, indices=entry, return_predecessors=True)
-        waypoints = [tp[0]]
+        return GridField(axis[cells], free_idx, entry, dist, pred, tp)
+
+    def plan(self, scenario: CaPaManScenario) -> JointPath:
+        """The tour T.P.1 -> T.P.2 -> T.P.3 -> T.P.1 as a joint path."""
+        f = self.field(scenario)
+        waypoints = [f.tp[0]]
         vias = [0]
         order = (0,) + TOUR
         for i, j in zip(order[:-1], order[1:], strict=True):
-            if not np.isfinite(dist[i, entry[j]]):
+            if not np.isfinite(f.dist[i, f.entry[j]]):
                 raise PlanningError(f"T.P.{i + 1} and T.P.{j + 1} are not connected in Theta at "
-                                    f"{np.degrees(axis[1] - axis[0]):.1f} deg resolution")
-            node, chain = entry[j], []
-            while node != entry[i]:  # walk the predecessor chain (path length, not grid size)
+                                    f"{np.degrees(f.points[1, 2] - f.points[0, 2]):.1f} deg resolution")
+            node, chain = f.entry[j], []
+            while node != f.entry[i]:  # walk the predecessor chain (path length, not grid size)
                 chain.append(node)
-                node = pred[i, node]
-            chain.append(entry[i])
-            waypoints += list(axis[cells[chain[::-1]]]) + [tp[j]]
+                node = f.pred[i, node]
+            chain.append(f.entry[i])
+            waypoints += list(f.points[chain[::-1]]) + [f.tp[j]]
             vias.append(len(waypoints) - 1)
         return JointPath(np.array(waypoints), tuple(vias))
+
+
+@dataclass(frozen=True)
+class GridField:
+    """Shortest free paths to each T.P. over the cells of Theta.
+
+    Attributes:
+        points: (n^3, 3) the cells' crank angles (rad).
+        free_idx: the cells that are free with a one-cell margin.
+        entry: (3,) each T.P.'s cell (its nearest free cell).
+        dist: (3, n^3) the free path's length from each T.P.'s cell (rad; inf: not connected).
+        pred: (3, n^3) the next cell toward T.P. j on that path (scipy's predecessors).
+        tp: (3, 3) the task points (rad).
+    """
+
+    points: np.ndarray
+    free_idx: np.ndarray
+    entry: np.ndarray
+    dist: np.ndarray
+    pred: np.ndarray
+    tp: np.ndarray
+
+    def next_waypoint(self, alpha: np.ndarray, target: int) -> np.ndarray:
+        """Where to steer from the cranks ``alpha`` (rad) toward T.P. ``target``:
+        the next cell on the shortest free path from the nearest free cell
+        connected to the target, or the T.P. itself from its own cell."""
+        reachable = self.free_idx[np.isfinite(self.dist[target, self.free_idx])]
+        node = reachable[np.argmin(np.linalg.norm(self.points[reachable] - alpha, axis=1))]
+        if node == self.entry[target]:
+            return self.tp[target]
+        return self.points[self.pred[target, node]]
 
 
 class GridPathPolicy(PathFollowingPolicy):
@@ -100,3 +140,33 @@ class GridPathPolicy(PathFollowingPolicy):
 
     def __init__(self, max_joint_step: float = 2 * DEG, planner: GridPathPlanner | None = None) -> None:
         super().__init__(planner or GridPathPlanner(), max_joint_step)
+
+
+class GridFieldPolicy:
+    """A feedback form of :class:`GridPathPlanner`: from wherever the cranks
+    are, the next cell of the shortest free path to the current target T.P.
+    (``info["target_index"]``), in steps of at most ``max_joint_step`` rad.
+
+    From the start of an episode it moves as :class:`GridPathPolicy` does,
+    up to where the cells are entered; unlike a path follower it answers in
+    any state, which is what an expert queried in states it did not visit
+    (DAgger, :mod:`paragym.baselines.dagger`) needs."""
+
+    def __init__(self, max_joint_step: float = 2 * DEG, planner: GridPathPlanner | None = None) -> None:
+        if not max_joint_step > 0:
+            raise ValueError(f"max_joint_step must be > 0 rad; got {max_joint_step}")
+        self.planner = planner or GridPathPlanner()
+        self.max_joint_step = max_joint_step
+        self.field: GridField | None = None
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.field = self.planner.field(info["scenario"])
+        if not np.all(np.isfinite(self.field.dist[:, self.field.entry])):
+            raise PlanningError("the T.P.s are not connected in Theta at the grid's resolution")
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        if self.field is None:
+            raise RuntimeError("call reset(obs, info) before act")
+        alpha = info["alpha"]
+        delta = self.field.next_waypoint(alpha, int(info["target_index"])) - alpha
+        return (delta / max(self.max_joint_step, np.max(np.abs(delta)))).astype(np.float32)
