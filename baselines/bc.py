@@ -31,7 +31,7 @@ from paragym import check_env_id
 from paragym.baselines.demos import dataset_id_for, reference_name
 from paragym.baselines.training import USER_MODELS, TrainResult
 
-__all__ = ["BC_DEFAULTS", "fit_bc", "load_demonstrations", "train_bc"]
+__all__ = ["BC_DEFAULTS", "fit_bc", "fit_policy", "load_demonstrations", "train_bc"]
 
 #: the settings of a BC run (``paragym.yml``'s ``bc`` section overrides them per env)
 BC_DEFAULTS: dict[str, Any] = {"epochs": 60, "batch_size": 256, "learning_rate": 1e-3, "net_arch": [64, 64],
@@ -78,44 +78,56 @@ def fit_bc(env_id: str, dataset_id: str, seed: int, settings: dict[str, Any], th
     episodes = rng.permutation(int(index.max()) + 1)
     held = set(episodes[:max(1, int(round(hp["holdout"] * len(episodes))))].tolist()) if len(episodes) > 1 else set()
     test = np.isin(index, list(held))
-    x, y = torch.as_tensor(obs[~test], dtype=torch.float32), torch.as_tensor(act[~test], dtype=torch.float32)
-    xt, yt = torch.as_tensor(obs[test], dtype=torch.float32), torch.as_tensor(act[test], dtype=torch.float32)
-    policy = model.policy
-    optimiser = torch.optim.Adam(policy.parameters(), lr=float(hp["learning_rate"]))
+    t0 = time.perf_counter()
+    curve = fit_policy(model.policy, obs[~test], act[~test], obs[test], act[test], hp, rng)
+    seconds = time.perf_counter() - t0
+    meta = {"dataset_id": dataset_id, "dataset_episodes": int(data.total_episodes), "dataset_steps": int(len(obs)),
+            "holdout_episodes": sorted(int(e) for e in held), "bc": hp, "train_seconds": seconds,
+            "best_epoch": int(np.argmin(curve["holdout_loss"]) + 1), "curve": curve}
+    return model, meta
+
+
+def fit_policy(policy: Any, x: np.ndarray, y: np.ndarray, x_held: np.ndarray, y_held: np.ndarray,
+               hp: dict[str, Any], rng: np.random.Generator, optimiser: Any = None) -> dict[str, list[float]]:
+    """Fit the SB3 ``policy`` to the actions ``y`` at observations ``x`` by
+    maximum likelihood (module docstring), ``hp["epochs"]`` passes of Adam
+    over mini-batches of ``hp["batch_size"]``; keep the weights of the epoch
+    with the lowest loss on the held-out pairs (on the training pairs if there
+    are none). Returns the loss per epoch."""
+    import torch
+
+    x_t, y_t = torch.as_tensor(x, dtype=torch.float32), torch.as_tensor(y, dtype=torch.float32)
+    xh, yh = torch.as_tensor(x_held, dtype=torch.float32), torch.as_tensor(y_held, dtype=torch.float32)
+    optimiser = optimiser or torch.optim.Adam(policy.parameters(), lr=float(hp["learning_rate"]))
 
     def loss_of(xb: torch.Tensor, yb: torch.Tensor) -> torch.Tensor:
         return -policy.get_distribution(xb).log_prob(yb).mean()
 
     curve: dict[str, list[float]] = {"epoch": [], "train_loss": [], "holdout_loss": []}
     best, best_state = np.inf, None
-    t0 = time.perf_counter()
     batch = int(hp["batch_size"])
     for epoch in range(int(hp["epochs"])):
         policy.set_training_mode(True)
-        order = torch.as_tensor(rng.permutation(len(x)))
+        order = torch.as_tensor(rng.permutation(len(x_t)))
         total = 0.0
-        for start in range(0, len(x), batch):
+        for start in range(0, len(x_t), batch):
             idx = order[start:start + batch]
-            loss = loss_of(x[idx], y[idx])
+            loss = loss_of(x_t[idx], y_t[idx])
             optimiser.zero_grad()
             loss.backward()
             optimiser.step()
             total += float(loss.detach()) * len(idx)
         policy.set_training_mode(False)
         with torch.no_grad():
-            held_loss = float(loss_of(xt, yt)) if len(xt) else total / len(x)
+            held_loss = float(loss_of(xh, yh)) if len(xh) else total / len(x_t)
         curve["epoch"].append(epoch + 1)
-        curve["train_loss"].append(total / len(x))
+        curve["train_loss"].append(total / len(x_t))
         curve["holdout_loss"].append(held_loss)
         if held_loss < best:
             best, best_state = held_loss, {k: v.clone() for k, v in policy.state_dict().items()}
     if best_state is not None:
         policy.load_state_dict(best_state)
-    seconds = time.perf_counter() - t0
-    meta = {"dataset_id": dataset_id, "dataset_episodes": int(data.total_episodes), "dataset_steps": int(len(obs)),
-            "holdout_episodes": sorted(int(e) for e in held), "bc": hp, "train_seconds": seconds,
-            "best_epoch": int(np.argmin(curve["holdout_loss"]) + 1), "curve": curve}
-    return model, meta
+    return curve
 
 
 def plot_bc_curve(curve: dict[str, list[float]], path: str | Path, title: str) -> Path:

@@ -120,7 +120,8 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
 
 #: a later version of a task ranks and measures its episodes as the first does (same scenarios and metrics)
 LATER_VERSIONS = {"paragym/CaPaManCollisionFree-v1": "paragym/CaPaManCollisionFree-v0",
-                  "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0"}
+                  "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0",
+                  "paragym/HybridSingularityFree-v1": "paragym/HybridSingularityFree-v0"}
 for _new, _old in LATER_VERSIONS.items():
     METRICS[_new] = METRICS[_old]
 
@@ -599,6 +600,7 @@ VALIDATED: dict[str, tuple[str, Callable[[int], tuple[bool, dict[str, Any]]]]] =
     "paragym/HybridSingularityFree-v0": ("polynomial-detour", _validate_hybrid),
 }
 VALIDATED["paragym/CaPaManCollisionFree-v1"] = VALIDATED["paragym/CaPaManCollisionFree-v0"]  # the same plan
+VALIDATED["paragym/HybridSingularityFree-v1"] = VALIDATED["paragym/HybridSingularityFree-v0"]
 
 
 # --- the run ----------------------------------------------------------------------------------------------------

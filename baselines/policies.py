@@ -220,7 +220,7 @@ def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[st
     folder = models_dir / env_name(env_id)
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
-        m = re.fullmatch(r"(ppo|sac|td3|tqc|bc)_seed(\d+)", path.stem)
+        m = re.fullmatch(r"(ppo|sac|td3|tqc|bc|dagger)_seed(\d+)", path.stem)
         if m:
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)
@@ -240,6 +240,8 @@ def _what_trained(path: Path, algo: str) -> str:
         info = {}
     if algo == "bc":
         return f"behaviour cloning of {info.get('dataset_id', 'a Minari dataset')} (a PPO policy)"
+    if algo == "dagger":
+        return f"DAgger with the expert {info.get('expert', '(unknown)')} (a PPO policy)"
     what = "TQC (sb3-contrib)" if algo == "tqc" else f"{algo.upper()} (Stable-Baselines3)"
     if (info.get("hyperparams") or {}).get("init_from") == "bc":
         what += " started from its seed's behaviour clone"
@@ -292,6 +294,19 @@ def _grid_path(env: gym.Env, seed: int) -> Any:
     from paragym.planners import GridPathPolicy
 
     return GridPathPolicy(max_joint_step=env.unwrapped.max_joint_step)
+
+
+def _grid_field(env: gym.Env, seed: int) -> Any:
+    from paragym.planners import GridFieldPolicy
+
+    return GridFieldPolicy(max_joint_step=env.unwrapped.max_joint_step)
+
+
+def _grid_field_params() -> dict[str, Any]:
+    from paragym.planners import GridFieldPolicy
+    from paragym.planners.grid_path import GridPathPlanner
+
+    return {"policy": init_defaults(GridFieldPolicy, planner=None), "planner": init_defaults(GridPathPlanner)}
 
 
 def _polynomial_detour(env: gym.Env, seed: int) -> Any:
@@ -428,15 +443,19 @@ _BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], 
      _estimator_params("FusionEstimator")),
     ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
      "= odometry only: no correction (paper 004's uncorrected estimate)", None),
+    ("paragym/CaPaManCollisionFree-v1", "grid-field", _grid_field, "other",
+     "grid-dijkstra's shortest free paths on Theta, followed from wherever the cranks are (DAgger's expert)",
+     _grid_field_params),
     # v1 of the tripod acts through trust in the paper's correction: the reference is its test of the faulty unit
     ("paragym/MobileTripodOdometry-v1", "encoder-correction", _encoder_trust, "reference",
      "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
      _encoder_trust_params),
 )
-#: v1 id -> (v0 id, the v0 policies that play v1 unchanged: the CaPaMan's v1 keeps v0's action)
+#: v1 id -> (v0 id, the v0 policies that play v1 unchanged: the CaPaMan's and the hybrid's v1 keep v0's action)
 _SAME_IN_V1 = {
     "paragym/CaPaManCollisionFree-v1": ("paragym/CaPaManCollisionFree-v0", ("rrt-ga", "grid-dijkstra", "zero")),
     "paragym/MobileTripodOdometry-v1": ("paragym/MobileTripodOdometry-v0", ("zero",)),
+    "paragym/HybridSingularityFree-v1": ("paragym/HybridSingularityFree-v0", ("polynomial-detour", "zero")),
 }
 _BUILT_IN += tuple((new, *row[1:]) for new, (old, names) in _SAME_IN_V1.items()
                    for row in _BUILT_IN if row[0] == old and row[1] in names)

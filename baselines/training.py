@@ -51,8 +51,9 @@ from paragym.models import shipped_models_dir
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
 ALGOS = ("ppo", "sac", "td3", "tqc")  # tqc: sb3-contrib's Truncated Quantile Critics
-#: what :func:`load_model` loads: the RL algorithms and bc, behaviour cloning (a PPO policy; bc.py)
-LOADABLE = (*ALGOS, "bc")
+#: what :func:`load_model` loads: the RL algorithms, bc (behaviour cloning; bc.py) and dagger (dagger.py),
+#: both PPO policies
+LOADABLE = (*ALGOS, "bc", "dagger")
 #: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
 EVAL_SEED = 10_000
 #: keys that paragym consumes (rl-zoo's and paragym.yml's); all others go to the SB3 algorithm
@@ -64,9 +65,9 @@ OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq", "init_
 
 def check_algo(algo: str, known: tuple[str, ...] = ALGOS) -> str:
     """``algo`` lower-cased, or a ValueError naming the ``known`` algorithms."""
-    if isinstance(algo, str) and algo.lower() == "bc" and "bc" not in known:
-        raise ValueError("bc learns from demonstrations, not by interaction: paragym.baselines.bc.train_bc "
-                         "(paragym train ENV --algo bc)")
+    if isinstance(algo, str) and algo.lower() in ("bc", "dagger") and algo.lower() not in known:
+        raise ValueError(f"{algo.lower()} learns from an expert's demonstrations, not from rewards: paragym train "
+                         f"ENV --algo {algo.lower()} (paragym.baselines.{algo.lower()})")
     if not isinstance(algo, str) or algo.lower() not in known:
         raise ValueError(f"unknown algorithm {algo!r}; known: {', '.join(known)}")
     return algo.lower()
@@ -158,7 +159,7 @@ def _algorithm(algo: str) -> type:
         from sb3_contrib import TQC
 
         return TQC
-    return {"ppo": PPO, "sac": SAC, "td3": TD3, "bc": PPO}[algo]  # a cloned policy is a PPO policy
+    return {"ppo": PPO, "sac": SAC, "td3": TD3, "bc": PPO, "dagger": PPO}[algo]  # imitation: a PPO policy
 
 
 def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dict[str, Any]) -> Any:

@@ -24,9 +24,10 @@ from paragym.tasks.hybrid import (
     hybrid_random_scenarios,
     resolve_hybrid,
 )
-from paragym.tasks.hybrid_step import OBS_SIZE, HybridParams, HybridTaskState
+from paragym.tasks.hybrid_step import HybridParams, HybridTaskState
 
-__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
+__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
+           "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
 
@@ -37,7 +38,7 @@ class _HybridTask:
     params: HybridParams
 
     def new_state(self, n: int) -> HybridTaskState:
-        return HybridTaskState.empty(n, self.params.tau)
+        return HybridTaskState.empty(n, self.params.tau, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), rngs, self.geometry)
@@ -101,14 +102,25 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
       before runs the same (tested against recorded rollouts).
+    * v1 (paragym 0.5.0): :class:`HybridSingularityFreeV1Env`, the end of
+      the path added to the observation; v0 is unchanged.
     """
+
+    version = 0
+    _w_end = 0.0
 
     def __init__(self, scenario: str | HybridScenario = "random", render_mode: str | None = None,
                  max_delta_step: float = 0.05, j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05,
                  w_singular: float = 1.0, w_limit: float = 1.0,
-                 geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01) -> None:
+                 geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
+                 w_end: float | None = None) -> None:
         super().__init__(render_mode)
         resolve_hybrid(scenario)
+        if self.version == 0 and w_end is not None:
+            raise ValueError("w_end (the shaping toward a feasible end) is an argument of HybridSingularityFree-v1")
+        w_end = self._w_end if w_end is None else w_end
+        if not (np.isfinite(w_end) and w_end >= 0):
+            raise ValueError(f"w_end must be a number >= 0; got {w_end!r}")
         for name, value in (("max_delta_step", max_delta_step), ("j_bar", j_bar), ("tau", tau)):
             if not (np.isfinite(value) and value > 0):
                 raise ValueError(f"{name} must be a positive number; got {value!r}")
@@ -116,9 +128,10 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
         self.max_delta_step, self.j_bar, self.tau = float(max_delta_step), float(j_bar), float(tau)
         self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
         self.params = HybridParams(self.max_delta_step, self.j_bar, float(w_offset), float(w_delta),
-                                   float(w_singular), float(w_limit), geometry, self.tau)
+                                   float(w_singular), float(w_limit), geometry, self.tau, self.version,
+                                   float(w_end))
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
-        self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
+        self.observation_space = spaces.Box(-10.0, 10.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
 
     def _info(self) -> dict[str, Any]:
@@ -138,6 +151,38 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
                            lambda scene: scene.set_state(solved.t_a[0], solved.t_e[0]))
 
 
+class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
+    """``paragym/HybridSingularityFree-v1``: v0's mechanism, scenarios,
+    action, reward and success, with an observation that shows where the
+    path ends.
+
+    ## Why v1
+    In v0 the observation holds the nominal pose now and one step ahead, not
+    P1. Learned agents reached 90-93 % and failed the same scenarios: those
+    where P1's legs are within their limits only for a split far from 0.5,
+    which the reference (paper 002's serial optimisation of Delta) moves to
+    over the last 20-30 % of the path, and a policy must start moving toward
+    before P1 comes into its one-step view (Delta moves at most
+    ``max_delta_step`` a step). The measurements are in
+    ``baselines/ABLATION.md``.
+
+    ## Observation Space
+    ``Box(-10, 10, (45,), float32)``: v0's 28 numbers, then P1 (x, y, z /
+    0.1 m, angles / 0.5 rad), the nine strokes of P1 solved at the current
+    Delta (L_min -> -1, L_max -> +1) and its two singularity measures
+    (:data:`paragym.tasks.hybrid_step.OBS_SIZE_V1`).
+
+    ## Action Space, Rewards, Starting State, Episode End, Arguments
+    As v0.
+
+    ## Version History
+    * v1 (paragym 0.5.0): the observation above; everything else is v0's.
+    """
+
+    version = 1
+    _w_end = 10.0
+
+
 class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
     the same transition (:mod:`paragym.tasks.hybrid_step`) over N robots.
@@ -152,3 +197,9 @@ class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
     def _load_single(self, i: int) -> None:
         one, s = self.single_env.state, self.state
         one.pose[0], one.delta[0] = s.pose[i], s.delta[i]
+
+
+class HybridSingularityFreeV1VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeV1Env` stepped together."""
+
+    single_class = HybridSingularityFreeV1Env

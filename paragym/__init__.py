@@ -25,6 +25,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.hybrid:HybridSingularityFreeEnv", 100,
         "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations (paper 002)",
     ),
+    "paragym/HybridSingularityFree-v1": (
+        "paragym.envs.hybrid:HybridSingularityFreeV1Env", 100,
+        "hybrid v1: the v0 path with the end pose P1, and P1 solved at the current split, in the observation",
+    ),
     "paragym/Orthoglide2PRRKappa-v0": (
         "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv", 1000,
         "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)",
@@ -45,6 +49,7 @@ VECTOR_ENTRY_POINTS: dict[str, str] = {
     "paragym/CaPaManCollisionFree-v1": "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv",
     "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
+    "paragym/HybridSingularityFree-v1": "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv",
     "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",
     "paragym/MobileTripodOdometry-v1": "paragym.envs.mobile_tripod:MobileTripodOdometryV1VectorEnv",
 }

@@ -401,6 +401,17 @@ def _cmd_train(args: argparse.Namespace) -> int:
               f"{meta['train_seconds']:.0f} s; best held-out loss at epoch {meta['best_epoch']}")
         print(f"wrote {res.files.model}, {res.files.meta.name}, {res.files.curve_png.name}")
         return 0
+    if args.algo.lower() == "dagger":  # imitation of a feedback expert in the learner's own states
+        from paragym.baselines.dagger import train_dagger
+
+        res = train_dagger(args.env_id, seed=args.seed, models_dir=args.models, threads=args.threads,
+                           force=args.force, echo=None if args.no_progress else print)
+        meta, curve = res.meta, res.meta["curve"]
+        print(f"DAgger seed {meta['seed']} on {meta['env_id']}: {len(curve['iteration'])} iterations, "
+              f"{meta['pairs']:,} pairs labelled by {meta['expert']} in {meta['train_seconds']:.0f} s; last "
+              f"evaluation {curve['eval_success'][-1]:.0%} success")
+        print(f"wrote {res.files.model}, {res.files.meta.name}, {res.files.curve_png.name}")
+        return 0
     try:
         res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
                     progress_bar=not args.no_progress, threads=args.threads, force=args.force,
@@ -516,8 +527,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("train", help="train a Stable-Baselines3 agent (needs the 'rl' extra); resumable")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
-    p.add_argument("--algo", default="ppo", help="ppo, sac or td3 (hyper-parameters: baselines/hyperparams/), or bc: "
-                                                 "behaviour cloning of the dataset `paragym demos` records")
+    p.add_argument("--algo", default="ppo", help="ppo, sac, td3 or tqc (hyper-parameters: baselines/hyperparams/); "
+                                                 "bc: behaviour cloning of the dataset `paragym demos` records; "
+                                                 "dagger: DAgger with the expert of paragym.yml's dagger section")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--timesteps", type=int, default=None, help="env steps (default: the yml's n_timesteps)")
     p.add_argument("--models", default="runs/models",

@@ -96,10 +96,10 @@ def test_orthoglide(cx, cy, r, duration, start, mode, seed, data):
 @settings(max_examples=12, **SETTINGS)
 @given(p0=st.lists(st.floats(-0.12, 0.12), min_size=6, max_size=6),
        p1=st.lists(st.floats(-0.12, 0.12), min_size=6, max_size=6),
-       seed=st.integers(0, 2 ** 16), data=st.data())
-def test_hybrid(p0, p1, seed, data):
+       seed=st.integers(0, 2 ** 16), version=st.sampled_from(["v0", "v1"]), data=st.data())
+def test_hybrid(p0, p1, seed, version, data):
     scenario = HybridScenario("h", (p0[0], p0[1], abs(p0[2]), *p0[3:]), (p1[0], p1[1], abs(p1[2]), *p1[3:]))
-    _same_run("paragym/HybridSingularityFree-v0", scenario, data.draw(_actions(4, 120)), seed)
+    _same_run(f"paragym/HybridSingularityFree-{version}", scenario, data.draw(_actions(4, 120)), seed)
 
 
 @settings(max_examples=12, **SETTINGS)

@@ -1,4 +1,4 @@
-"""Version 1 of the CaPaMan and tripod envs (issue 17): what changed, and that it poses a task."""
+"""Version 1 of the CaPaMan, tripod and hybrid envs (issue 17): what changed, and that it poses a task."""
 
 from __future__ import annotations
 
@@ -8,12 +8,13 @@ import pytest
 
 import paragym  # noqa: F401
 from paragym.baselines.policies import get_policy
-from paragym.mechanisms import capaman
+from paragym.mechanisms import capaman, hybrid
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.tasks.capaman_step import LOOKAHEAD
 from paragym.units import DEG
 
 TRIPOD, CAPAMAN = "paragym/MobileTripodOdometry-v1", "paragym/CaPaManCollisionFree-v1"
+HYBRID = "paragym/HybridSingularityFree-v1"
 
 
 def _run(env: gym.Env, act, seed: int, **reset) -> tuple[float, dict, list[dict]]:
@@ -144,7 +145,80 @@ def test_capaman_v1_reach_tolerance_and_penalties():
         gym.make("paragym/CaPaManCollisionFree-v0", time_penalty=0.1)
 
 
-@pytest.mark.parametrize("env_id", [CAPAMAN, TRIPOD])
+# --- the hybrid --------------------------------------------------------------------------------------------------
+
+def _excess(p1: np.ndarray, delta: float) -> float:
+    g = hybrid.DEFAULT_GEOMETRY
+    lengths = hybrid.solve_rows(p1[None], np.array([delta]), g)[0][0]
+    return float(np.maximum(0, np.abs(2 * (lengths - g.l_min) / (g.l_max - g.l_min) - 1) - 1).sum())
+
+
+def test_hybrid_v1_observation_shows_where_the_path_ends():
+    """v0's observation, then P1, P1 solved at the current split, and its stroke excess with the
+    excess's change one split step up and down; the step, flags and success are v0's."""
+    from paragym.tasks.hybrid_step import POSE_SCALE
+
+    old, new = gym.make("paragym/HybridSingularityFree-v0"), gym.make(HYBRID)
+    g = hybrid.DEFAULT_GEOMETRY
+    rng = np.random.default_rng(0)
+    o0, i0 = old.reset(seed=100000 + 3003)  # a scenario whose end needs a split near 0.8
+    o1, i1 = new.reset(seed=100000 + 3003)
+    assert o1.shape == (48,) and new.observation_space.shape == (48,)
+    p1 = np.array(i1["scenario"].p1)
+    assert _excess(p1, 0.5) > 0.01
+    t1 = False
+    while not t1:
+        d = i1["delta"]
+        np.testing.assert_array_equal(o1[:28], o0)
+        np.testing.assert_allclose(o1[28:34], p1 / POSE_SCALE, atol=1e-6)
+        lengths, mu_h, mu_t, _, _ = hybrid.solve_rows(p1[None], np.array([d]), g)
+        np.testing.assert_allclose(o1[34:43], 2 * (lengths[0] - g.l_min) / (g.l_max - g.l_min) - 1, atol=1e-6)
+        np.testing.assert_allclose(o1[43:45], [mu_h[0], mu_t[0]], atol=1e-6)
+        here = _excess(p1, d)
+        np.testing.assert_allclose(o1[45:], [10 * here, 100 * (_excess(p1, min(1, d + 0.05)) - here),
+                                             100 * (_excess(p1, max(0, d - 0.05)) - here)], atol=1e-5)
+        a = rng.uniform(-1, 1, 4).astype(np.float32)
+        o0, r0, t0, _, i0 = old.step(a)
+        o1, r1, t1, _, i1 = new.step(a)
+        assert t1 == t0 and i1["is_success"] == i0["is_success"]
+
+
+@pytest.mark.parametrize("seed", [3, 4])
+def test_hybrid_v1_shaping_sums_to_a_constant_of_the_scenario(seed):
+    """v1's return is v0's plus w_end * e(0.5) at P1, whatever the actions (potential-based)."""
+    rng = np.random.default_rng(seed)
+    old, new = gym.make("paragym/HybridSingularityFree-v0"), gym.make(HYBRID)
+    for scenario_seed in (100000 + 3003, 100000 + 9):
+        _, info = new.reset(seed=scenario_seed)
+        old.reset(seed=scenario_seed)
+        p1 = np.array(info["scenario"].p1)
+        actions = rng.uniform(-1, 1, (100, 4)).astype(np.float32)
+        actions[:, 0] = rng.choice([-1.0, 0.2, 1.0])  # walk the split far one way
+        r_old = sum(old.step(a)[1] for a in actions)
+        r_new = sum(new.step(a)[1] for a in actions)
+        assert r_new - r_old == pytest.approx(new.unwrapped.params.w_end * _excess(p1, 0.5), abs=1e-9)
+    assert new.unwrapped.params.w_end == 10.0
+    with pytest.raises(ValueError, match="w_end"):
+        gym.make("paragym/HybridSingularityFree-v0", w_end=1.0)
+
+
+def test_hybrid_v1_plays_the_v0_reference_and_floors():
+    from paragym.baselines.policies import policies_for
+
+    names = set(policies_for(HYBRID))
+    assert {"polynomial-detour", "zero", "random"} <= names
+    policy = get_policy(HYBRID, "polynomial-detour").factory(gym.make(HYBRID), 0)
+    env = gym.make(HYBRID)
+    obs, info = env.reset(seed=100000 + 3003)
+    policy.reset(obs, info)
+    done = False
+    while not done:
+        obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
+        done = terminated or truncated
+    assert info["is_success"]
+
+
+@pytest.mark.parametrize("env_id", [CAPAMAN, TRIPOD, HYBRID])
 def test_v1_envs_pass_the_env_checker(env_id):
     from gymnasium.utils.env_checker import check_env
 

@@ -19,6 +19,25 @@ in steps of tau) with split Delta and offset o:
 Reward: -w_offset |o| / j_bar - w_delta |dDelta| / max_delta_step
 - w_singular * sum of max(0, 2 thr - mu) / (2 thr) over both stages
 - w_limit * (legs outside their limits). Terminated at u = 1.
+
+Version 1 (``HybridParams.version == 1``) keeps the step, the success and
+the end. In v0 a policy sees one step ahead only, and the learned agents
+failed exactly the scenarios where the split must move well before the end
+for P1's legs to be within their limits. v1 shows where the path ends and
+how far that end is from feasible (:data:`OBS_SIZE_V1`):
+
+* P1, and P1 solved at the current Delta: its nine strokes and both measures
+  (a second :func:`~paragym.mechanisms.hybrid.k_solve` per robot-step);
+* P1's stroke excess e(Delta) = sum over the legs of how far each stroke is
+  beyond its limits (in units of the stroke range, L_max - L_min, halved),
+  times 10, and its change if Delta moved one ``max_delta_step`` up or down,
+  times 100 (two more leg-only solves);
+
+and adds to v0's reward the potential-based shaping
+``w_end * (phi(s') - phi(s))`` with ``phi = -e(Delta)`` at P1, and 0 at the
+end (Ng, Harada and Russell, 1999): over an episode it sums to
+``w_end * e(0.5)``, a constant of the scenario, so the shaping moves credit
+earlier without changing which policies are best.
 """
 
 from __future__ import annotations
@@ -34,10 +53,13 @@ from paragym.mechanisms import hybrid
 from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.trajectories import nominal_path
 
-__all__ = ["OBS_SIZE", "POSE_SCALE", "HybridParams", "HybridTaskState", "reset", "step"]
+__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "HybridParams", "HybridTaskState", "reset", "step"]
 
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
 OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
+#: v1: v0's observation, then P1 (6), P1's strokes (9) and measures (2) at the current Delta, and its
+#: stroke excess with the excess's change one Delta step up and down (3)
+OBS_SIZE_V1 = OBS_SIZE + 6 + 9 + 2 + 3
 
 
 @dataclass(frozen=True)
@@ -52,13 +74,20 @@ class HybridParams:
     w_limit: float = 1.0
     geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
     tau: float = 0.01
+    version: int = 0
+    w_end: float = 0.0
+
+    @property
+    def obs_size(self) -> int:
+        """The observation's length in this version."""
+        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
 
     @cached_property
     def kernel_args(self) -> tuple:
         """The numbers the kernel takes (made once: a step must not rebuild them)."""
         g = self.geometry
         weights = np.array([self.max_delta_step, self.j_bar, self.w_offset, self.w_delta, self.w_singular,
-                            self.w_limit, g.l_min, g.l_max, g.singularity_threshold])
+                            self.w_limit, g.l_min, g.l_max, g.singularity_threshold, self.w_end])
         return (*hybrid.kernel_consts(g), weights, POSE_SCALE)
 
 
@@ -84,16 +113,17 @@ class HybridTaskState:
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
+    phi: np.ndarray
     scenarios: list[HybridScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, tau: float) -> HybridTaskState:
+    def empty(cls, n: int, tau: float, obs_size: int = OBS_SIZE) -> HybridTaskState:
         u = nominal_path(np.zeros(6), np.zeros(6), tau)[0]
         return cls(u=u, nominal=np.zeros((n, len(u), 6)), k=np.zeros(n, np.int64), delta=np.full(n, 0.5),
                    d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
                    lengths=np.zeros((n, 9)), mu_h=np.zeros(n), mu_t=np.zeros(n), within=np.zeros(n, bool),
-                   free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32),
-                   reward=np.zeros(n), scenarios=[None] * n)
+                   free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
+                   reward=np.zeros(n), phi=np.zeros(n), scenarios=[None] * n)
 
 
 def reset(state: HybridTaskState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
@@ -121,20 +151,22 @@ def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, 
              move: bool) -> None:
     s = state
     _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
-                    s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward,
-                    np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args)
+                    s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward, s.phi,
+                    np.ascontiguousarray(actions, np.float64), rows, move, params.version, *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free,
-                    terminated, obs, reward, actions, rows, move,
+                    terminated, obs, reward, phi, actions, rows, move, version,
                     base, plat, top, axes, tri_base, pinv_t, home, sc, w, scale):
     """The transition of every robot with ``rows[i]`` (module docstring).
     ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
-    L_min, L_max, singularity threshold."""
+    L_min, L_max, singularity threshold, w_end (v1)."""
     last = len(u) - 1
     work = np.empty((5, 6, 6))
-    row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
+    size = obs.shape[1]
+    row = np.empty(size)  # one robot's observation before the clip, reused
+    end_lengths = np.empty(9)
     for i in range(len(k)):
         if not rows[i]:
             continue
@@ -173,5 +205,34 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
         row[23], row[24] = mu_h[i], mu_t[i]
         for c in range(3):
             row[25 + c] = offset[i, c] / w[1]
-        for c in range(OBS_SIZE):
+        if version == 1:  # where the path ends: P1 solved at the current split, its excess, the shaping
+            mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
+                                                pinv_t, home, sc, True, end_lengths, work)
+            excess = _excess(end_lengths, w)
+            new_phi = 0.0 if terminated[i] else -excess
+            if move:
+                reward[i] += w[9] * (new_phi - phi[i])
+            phi[i] = new_phi
+            for c in range(6):
+                row[28 + c] = nominal[i, last, c] / scale[c]
+            for c in range(9):
+                row[34 + c] = 2 * (end_lengths[c] - w[6]) / (w[7] - w[6]) - 1
+            row[43], row[44] = mu_h_end, mu_t_end
+            row[45] = 10 * excess
+            for j, sign in ((46, 1.0), (47, -1.0)):
+                moved = min(1.0, max(0.0, delta[i] + sign * w[0]))
+                hybrid.k_solve(nominal[i, last], moved, base, plat, top, axes, tri_base, pinv_t, home, sc, False,
+                               end_lengths, work)
+                row[j] = 100 * (_excess(end_lengths, w) - excess)
+        for c in range(size):
             obs[i, c] = min(10.0, max(-10.0, row[c]))
+
+
+@njit(cache=True)
+def _excess(lengths, w):
+    """How far the nine strokes are beyond their limits, summed, in units of half the stroke range."""
+    total = 0.0
+    for c in range(9):
+        x = 2 * (lengths[c] - w[6]) / (w[7] - w[6]) - 1
+        total += max(0.0, abs(x) - 1.0)
+    return total
