@@ -2,13 +2,15 @@
 
     python benchmarks/ablation.py --task tripod --out runs/ablation [--rows 0 3]
     python benchmarks/ablation.py --task capaman --out runs/ablation
+    python benchmarks/ablation.py --task hybrid --out runs/ablation
 
 Every row trains PPO (Stable-Baselines3) on the native vector env of 64
 robots with the v1 hyper-parameters of ``baselines/hyperparams/ppo.yml``
 (only ``env_kwargs`` and the row's overrides change), for the row's env
 steps and the same training seed, then evaluates the deterministic
 policy on the leaderboard's first evaluation seeds (reset seeds 100000 +
-k, random scenarios) in the single env of the row's settings. It prints
+k, random scenarios; ``--full-suite``: the full leaderboard's 50) in the
+single env of the row's settings. It prints
 one markdown row per design, with the row of each floor and reference, and
 writes them to ``<out>/ablation-<task>.md``; the numbers in
 ``baselines/ABLATION.md`` come from it.
@@ -56,29 +58,46 @@ ROWS: dict[str, list[tuple[str, str, dict[str, Any], dict[str, Any], int]]] = {
         ("v1 with v0's reach tolerance (1 deg)", "paragym/CaPaManCollisionFree-v1", {"reach_tolerance": 1 * DEG}, {},
          1_500_000),
     ],
+    "hybrid": [
+        ("v0, the shipped PPO setup", "paragym/HybridSingularityFree-v0", {}, {}, 2_000_000),
+        ("v1 as released: P1, P1 solved at the split, its stroke excess and look-ahead in the observation",
+         "paragym/HybridSingularityFree-v1", {}, {}, 2_000_000),
+        ("v1 + shaping toward a feasible end, w_end 10", "paragym/HybridSingularityFree-v1", {"w_end": 10.0}, {},
+         2_000_000),
+        ("the same, longer", "paragym/HybridSingularityFree-v1", {"w_end": 10.0}, {}, 3_000_000),
+        ("v1 + shaping, w_end 30", "paragym/HybridSingularityFree-v1", {"w_end": 30.0}, {}, 2_000_000),
+    ],
 }
 #: the policies each task's table compares with (floors and reference)
 BESIDE = {"tripod": ("paragym/MobileTripodOdometry-v1", ["zero", "encoder-correction"]),
-          "capaman": ("paragym/CaPaManCollisionFree-v1", ["zero", "rrt-ga"])}
-V1_PPO = {"tripod": "paragym/MobileTripodOdometry-v1", "capaman": "paragym/CaPaManCollisionFree-v1"}
+          "capaman": ("paragym/CaPaManCollisionFree-v1", ["zero", "rrt-ga"]),
+          "hybrid": ("paragym/HybridSingularityFree-v1", ["zero", "polynomial-detour"])}
+V1_PPO = {"tripod": "paragym/MobileTripodOdometry-v1", "capaman": "paragym/CaPaManCollisionFree-v1",
+          "hybrid": "paragym/HybridSingularityFree-v1"}
+#: the task's metric column: (label, value of an episode from its infos)
+METRIC = {"tripod": ("final unit error [cm]", lambda infos: infos[-1]["unit_error"] * 100),
+          "capaman": ("collisions", lambda infos: float(infos[-1]["collision"])),
+          "hybrid": ("singular/limit poses", lambda infos: float(sum(not i["free"] for i in infos)))}
 
 
-def evaluate(env_id: str, kwargs: dict[str, Any], act: Any, episodes: int, reset: Any = None) -> dict[str, float]:
-    """Success, mean return and the task's metric over ``episodes`` seeded episodes."""
+def evaluate(task: str, env_id: str, kwargs: dict[str, Any], act: Any, seeds: list[int],
+             reset: Any = None) -> dict[str, float]:
+    """Success, mean return and the task's metric over episodes reset with ``seeds``."""
     env = gym.make(env_id, **kwargs)
     success, returns, metric = [], [], []
-    for k in range(episodes):
-        obs, info = env.reset(seed=100_000 + k)
+    for seed in seeds:
+        obs, info = env.reset(seed=seed)
         if reset is not None:
             reset(obs, info)
-        total, done = 0.0, False
+        total, done, infos = 0.0, False, []
         while not done:
             obs, reward, terminated, truncated, info = env.step(act(obs, info))
             total += float(reward)
+            infos.append(info)
             done = terminated or truncated
         success.append(bool(info["is_success"]))
         returns.append(total)
-        metric.append(info["unit_error"] * 100 if "unit_error" in info else float(info["collision"]))
+        metric.append(METRIC[task][1](infos))
     env.close()
     return {"success": float(np.mean(success)), "return": float(np.mean(returns)), "metric": float(np.mean(metric))}
 
@@ -89,19 +108,24 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=None, help="env steps of every row (default: each row's own)")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--episodes", type=int, default=30)
+    parser.add_argument("--full-suite", action="store_true",
+                        help="evaluate on the full leaderboard's 50 episodes (reset seeds 100000 + 1000 s + e, "
+                             "s < 5, e < 10) instead of --episodes at 100000 + k")
     parser.add_argument("--rows", type=int, nargs="*", default=None, help="row indices to run (default all)")
     parser.add_argument("--out", default="runs/ablation")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    metric = "final unit error [cm]" if args.task == "tripod" else "collisions"
+    metric = METRIC[args.task][0]
+    seeds = ([100_000 + 1000 * s + e for s in range(5) for e in range(10)] if args.full_suite
+             else [100_000 + k for k in range(args.episodes)])
     lines = [f"| design | env steps | success | return | {metric} | train [s] |", "|---|---|---|---|---|---|"]
     env_id, names = BESIDE[args.task]
     for name in names:
         spec = get_policy(env_id, name)
         env = gym.make(env_id)
         policy = spec.factory(env, 0)
-        r = evaluate(env_id, {}, policy.act, args.episodes, policy.reset)
+        r = evaluate(args.task, env_id, {}, policy.act, seeds, policy.reset)
         lines.append(f"| `{name}` ({spec.kind}) | - | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | - |")
         print(lines[-1], flush=True)
     for index, (label, row_env, kwargs, overrides, steps) in enumerate(ROWS[args.task]):
@@ -117,8 +141,8 @@ def main() -> None:
                     progress_bar=False, force=True, vectorized=True, hyperparams=hp)
         seconds = time.perf_counter() - t0
         model = load_model(res.files.model)
-        r = evaluate(row_env, kwargs, lambda obs, info, m=model: m.predict(obs, deterministic=True)[0],
-                     args.episodes)
+        r = evaluate(args.task, row_env, kwargs, lambda obs, info, m=model: m.predict(obs, deterministic=True)[0],
+                     seeds)
         lines.append(f"| {label} | {steps:,} | {r['success']:.2f} | {r['return']:.2f} | {r['metric']:.2f} | "
                      f"{seconds:.0f} |")
         print(lines[-1], flush=True)

@@ -180,14 +180,15 @@ def test_hybrid_v1_observation_shows_where_the_path_ends():
         a = rng.uniform(-1, 1, 4).astype(np.float32)
         o0, r0, t0, _, i0 = old.step(a)
         o1, r1, t1, _, i1 = new.step(a)
-        assert t1 == t0 and i1["is_success"] == i0["is_success"]
+        assert r1 == r0 and t1 == t0 and i1["is_success"] == i0["is_success"]
 
 
 @pytest.mark.parametrize("seed", [3, 4])
 def test_hybrid_v1_shaping_sums_to_a_constant_of_the_scenario(seed):
-    """v1's return is v0's plus w_end * e(0.5) at P1, whatever the actions (potential-based)."""
+    """With w_end, v1's return is v0's plus w_end * e(0.5) at P1, whatever the actions
+    (potential-based); by default (w_end 0) it is v0's."""
     rng = np.random.default_rng(seed)
-    old, new = gym.make("paragym/HybridSingularityFree-v0"), gym.make(HYBRID)
+    old, new = gym.make("paragym/HybridSingularityFree-v0"), gym.make(HYBRID, w_end=10.0)
     for scenario_seed in (100000 + 3003, 100000 + 9):
         _, info = new.reset(seed=scenario_seed)
         old.reset(seed=scenario_seed)
@@ -197,7 +198,7 @@ def test_hybrid_v1_shaping_sums_to_a_constant_of_the_scenario(seed):
         r_old = sum(old.step(a)[1] for a in actions)
         r_new = sum(new.step(a)[1] for a in actions)
         assert r_new - r_old == pytest.approx(new.unwrapped.params.w_end * _excess(p1, 0.5), abs=1e-9)
-    assert new.unwrapped.params.w_end == 10.0
+    assert gym.make(HYBRID).unwrapped.params.w_end == 0.0
     with pytest.raises(ValueError, match="w_end"):
         gym.make("paragym/HybridSingularityFree-v0", w_end=1.0)
 

@@ -20,10 +20,10 @@ Reward: -w_offset |o| / j_bar - w_delta |dDelta| / max_delta_step
 - w_singular * sum of max(0, 2 thr - mu) / (2 thr) over both stages
 - w_limit * (legs outside their limits). Terminated at u = 1.
 
-Version 1 (``HybridParams.version == 1``) keeps the step, the success and
-the end. In v0 a policy sees one step ahead only, and the learned agents
-failed exactly the scenarios where the split must move well before the end
-for P1's legs to be within their limits. v1 shows where the path ends and
+Version 1 (``HybridParams.version == 1``) keeps the step, the reward, the
+success and the end. In v0 a policy sees one step ahead only, and the learned
+agents failed exactly the scenarios where the split must move well before the
+end for P1's legs to be within their limits. v1 shows where the path ends and
 how far that end is from feasible (:data:`OBS_SIZE_V1`):
 
 * P1, and P1 solved at the current Delta: its nine strokes and both measures
@@ -31,13 +31,14 @@ how far that end is from feasible (:data:`OBS_SIZE_V1`):
 * P1's stroke excess e(Delta) = sum over the legs of how far each stroke is
   beyond its limits (in units of the stroke range, L_max - L_min, halved),
   times 10, and its change if Delta moved one ``max_delta_step`` up or down,
-  times 100 (two more leg-only solves);
+  times 100 (two more leg-only solves).
 
-and adds to v0's reward the potential-based shaping
+``w_end`` > 0 (default 0) adds the potential-based shaping
 ``w_end * (phi(s') - phi(s))`` with ``phi = -e(Delta)`` at P1, and 0 at the
 end (Ng, Harada and Russell, 1999): over an episode it sums to
-``w_end * e(0.5)``, a constant of the scenario, so the shaping moves credit
-earlier without changing which policies are best.
+``w_end * e(0.5)``, a constant of the scenario, so it moves credit earlier
+without changing which policies are best. It was tried and made PPO worse
+(``baselines/ABLATION.md``), so it is off.
 """
 
 from __future__ import annotations
