@@ -144,7 +144,7 @@ from paragym.baselines.leaderboard import REFERENCE_SUCCESS  # noqa: E402
 CAPAMAN, TRIPOD = "paragym/CaPaManCollisionFree-v0", "paragym/MobileTripodOdometry-v0"
 #: where learning works today: a learned agent beats both floors on return (README, LEADERBOARD.md)
 LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
-          "paragym/CaPaManCollisionFree-v1", "paragym/MobileTripodOdometry-v1"}
+          "paragym/CaPaManCollisionFree-v1", "paragym/MobileTripodOdometry-v1", "paragym/HybridSingularityFree-v1"}
 
 
 @pytest.fixture(scope="module")
@@ -181,9 +181,11 @@ def learned(tmp_path_factory):
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
-#: the v1 envs ship behaviour clones and PPO fine-tuned from them (and the tripod a SAC)
-SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "ppo") for k in range(3)],
-           "paragym/MobileTripodOdometry-v1": [f"{a}-seed{k}" for a in ("bc", "ppo") for k in range(3)] + ["sac-seed0"]}
+#: the v1 envs ship behaviour clones, PPO fine-tuned from them and SAC (and the CaPaMan DAgger); the hybrid PPO
+SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac", "dagger")
+                                               for k in range(3)],
+           "paragym/MobileTripodOdometry-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac") for k in range(3)],
+           "paragym/HybridSingularityFree-v1": [f"ppo-seed{k}" for k in range(3)]}
 
 
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):
