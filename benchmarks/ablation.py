@@ -4,9 +4,10 @@
     python benchmarks/ablation.py --task capaman --out runs/ablation
     python benchmarks/ablation.py --task hybrid --out runs/ablation
 
-Every row trains PPO (Stable-Baselines3) on the native vector env of 64
-robots with the v1 hyper-parameters of ``baselines/hyperparams/ppo.yml``
-(only ``env_kwargs`` and the row's overrides change), for the row's env
+Every row trains PPO (Stable-Baselines3) from scratch on the native vector
+env of 64 robots with its task's settings (:data:`PROTOCOL`; the hybrid's:
+its ``baselines/hyperparams/ppo.yml`` entry); only ``env_kwargs`` and the
+row's overrides change, for the row's env
 steps and the same training seed, then evaluates the deterministic
 policy on the leaderboard's first evaluation seeds (reset seeds 100000 +
 k, random scenarios; ``--full-suite``: the full leaderboard's 50) in the
@@ -73,8 +74,20 @@ ROWS: dict[str, list[tuple[str, str, dict[str, Any], dict[str, Any], int]]] = {
 BESIDE = {"tripod": ("paragym/MobileTripodOdometry-v1", ["zero", "encoder-correction"]),
           "capaman": ("paragym/CaPaManCollisionFree-v1", ["zero", "rrt-ga"]),
           "hybrid": ("paragym/HybridSingularityFree-v1", ["zero", "polynomial-detour"])}
-V1_PPO = {"tripod": "paragym/MobileTripodOdometry-v1", "capaman": "paragym/CaPaManCollisionFree-v1",
-          "hybrid": "paragym/HybridSingularityFree-v1"}
+#: the PPO of every row of a task, before the row's overrides: for the tripod and the CaPaMan the
+#: settings the 0.4.0 rows were run with (the v1 entries of ppo.yml now fine-tune a behaviour clone),
+#: for the hybrid its ppo.yml entry; never started from a clone
+PROTOCOL = {"n_envs": 64, "policy": "MlpPolicy", "n_steps": 64, "batch_size": 1024, "n_epochs": 10, "gamma": 0.99,
+            "gae_lambda": 0.95, "learning_rate": 3e-4, "ent_coef": 0.0, "clip_range": 0.2,
+            "policy_kwargs": {"net_arch": [64, 64]}, "normalize": "{'norm_obs': False, 'norm_reward': True}"}
+
+
+def protocol(task: str) -> dict[str, Any]:
+    """The PPO settings of ``task``'s rows (:data:`PROTOCOL`)."""
+    from paragym.baselines.training import load_hyperparams
+
+    base = load_hyperparams("ppo", "paragym/HybridSingularityFree-v1") if task == "hybrid" else dict(PROTOCOL)
+    return {**base, "vec_env": "native", "init_from": None}
 #: the task's metric column: (label, value of an episode from its infos)
 METRIC = {"tripod": ("final unit error [cm]", lambda infos: infos[-1]["unit_error"] * 100),
           "capaman": ("collisions", lambda infos: float(infos[-1]["collision"])),
@@ -141,10 +154,7 @@ def main() -> None:
     for index, (label, row_env, kwargs, overrides, steps) in enumerate(ROWS[args.task]):
         if args.rows is not None and index not in args.rows:
             continue
-        from paragym.baselines.training import load_hyperparams
-
-        hp = {**load_hyperparams("ppo", V1_PPO[args.task]), **overrides, "env_kwargs": kwargs,
-              "eval_freq": 10 ** 12, "n_eval_episodes": 1}
+        hp = {**protocol(args.task), **overrides, "env_kwargs": kwargs, "eval_freq": 10 ** 12, "n_eval_episodes": 1}
         t0 = time.perf_counter()
         steps = args.steps or steps
         res = train(row_env, "ppo", seed=args.seed, timesteps=steps, models_dir=out / f"{args.task}-{index}",
