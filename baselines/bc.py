@@ -27,11 +27,11 @@ from typing import Any
 import numpy as np
 
 import paragym.baselines.training as training
-from paragym import check_env_id
+from paragym import check_env_id, plots
 from paragym.baselines.demos import dataset_id_for, reference_name
 from paragym.baselines.training import USER_MODELS, TrainResult
 
-__all__ = ["BC_DEFAULTS", "fit_bc", "fit_policy", "load_demonstrations", "train_bc"]
+__all__ = ["BC_DEFAULTS", "fit_bc", "fit_policy", "imitation_run", "load_demonstrations", "save_imitation", "train_bc"]
 
 #: the settings of a BC run (``paragym.yml``'s ``bc`` section overrides them per env)
 BC_DEFAULTS: dict[str, Any] = {"epochs": 60, "batch_size": 256, "learning_rate": 1e-3, "net_arch": [64, 64],
@@ -130,27 +130,6 @@ def fit_policy(policy: Any, x: np.ndarray, y: np.ndarray, x_held: np.ndarray, y_
     return curve
 
 
-def plot_bc_curve(curve: dict[str, list[float]], path: str | Path, title: str) -> Path:
-    """The loss per epoch, on the training and the held-out episodes."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.plot(curve["epoch"], curve["train_loss"], label="training episodes")
-    ax.plot(curve["epoch"], curve["holdout_loss"], label="held-out episodes")
-    ax.set_xlabel("epoch")
-    ax.set_ylabel("negative log-likelihood of the expert's action (lower is better)")
-    ax.set_title(title, fontsize=9)
-    ax.legend()
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
-
-
 def train_bc(env_id: str, seed: int = 0, models_dir: str | Path = USER_MODELS, threads: int = 1, force: bool = False,
              overrides: dict[str, Any] | None = None) -> TrainResult:
     """Behaviour cloning (module docstring) of ``env_id``'s reference from its
@@ -159,22 +138,39 @@ def train_bc(env_id: str, seed: int = 0, models_dir: str | Path = USER_MODELS, t
     where :func:`paragym.baselines.training.train` saves; an existing model
     is replaced only with ``force``."""
     env_id = check_env_id(env_id)
-    table = training.hyperparams_table("paragym.yml").get("bc") or {}
-    settings = {**(table.get(env_id) or {}), **(overrides or {})}
+    settings, files = imitation_run(env_id, "bc", seed, models_dir, force, overrides)
     dataset_id = settings.pop("dataset_id", None) or dataset_id_for(env_id, reference_name(env_id))
-    files = training.run_files(env_id, "bc", seed, training.writable_models_dir(models_dir))
+    model, meta = fit_bc(env_id, dataset_id, seed, settings, threads)
+    meta = save_imitation(files, env_id, "bc", seed, threads, model, meta)
+    plots.plot_imitation_curve("bc", meta["curve"], files.curve_png,
+                               f"BC seed {seed} on {training.env_name(env_id)} from {dataset_id} "
+                               f"({meta['dataset_episodes']} episodes)")
+    return TrainResult(files, model, meta)
+
+
+def imitation_run(env_id: str, algo: str, seed: int, models_dir: str | Path, force: bool,
+                  overrides: dict[str, Any] | None) -> tuple[dict[str, Any], training.RunFiles]:
+    """The settings of an imitation run (``paragym.yml``'s ``algo`` section
+    for ``env_id``, then ``overrides``) and its files; a ValueError if its
+    model exists and not ``force``."""
+    table = training.hyperparams_table("paragym.yml").get(algo) or {}
+    settings = {**(table.get(env_id) or {}), **(overrides or {})}
+    files = training.run_files(env_id, algo, seed, training.writable_models_dir(models_dir))
     if files.model.exists() and not force:
         raise ValueError(f"{files.model} exists; --force retrains it over that file, or choose another --models "
                          f"folder or --seed")
-    model, meta = fit_bc(env_id, dataset_id, seed, settings, threads)
-    meta = {"env_id": env_id, "algo": "bc", "seed": seed, **meta, "versions": training.versions(),
+    return settings, files
+
+
+def save_imitation(files: training.RunFiles, env_id: str, algo: str, seed: int, threads: int, model: Any,
+                   meta: dict[str, Any]) -> dict[str, Any]:
+    """Save an imitation run's model and its JSON (``meta`` with the run's
+    identity, versions, machine and size); returns the JSON's content."""
+    meta = {"env_id": env_id, "algo": algo, "seed": seed, **meta, "versions": training.versions(),
             "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
             "parameters": training.count_parameters(model)}
     files.model.parent.mkdir(parents=True, exist_ok=True)
     model.save(files.model)
     meta["model_bytes"] = files.model.stat().st_size
     training.write_atomic(files.meta, json.dumps(meta, indent=1))
-    plot_bc_curve(meta["curve"], files.curve_png, f"BC seed {seed} on {training.env_name(env_id)} from {dataset_id} "
-
-                                                  f"({meta['dataset_episodes']} episodes)")
-    return TrainResult(files, model, meta)
+    return meta

@@ -31,9 +31,6 @@ iteration) and a picture of the curve; the leaderboard ranks it as
 
 from __future__ import annotations
 
-import json
-import os
-import platform
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -42,12 +39,12 @@ from typing import Any
 import numpy as np
 
 import paragym.baselines.training as training
-from paragym import check_env_id
-from paragym.baselines.bc import fit_policy
+from paragym import check_env_id, plots
+from paragym.baselines.bc import fit_policy, imitation_run, save_imitation
 from paragym.baselines.training import EVAL_SEED, USER_MODELS, TrainResult
 from paragym.planners.base import PlanningError
 
-__all__ = ["DAGGER_DEFAULTS", "ROLLOUT_SEED", "Rollout", "fit_dagger", "plot_dagger_curve", "rollout",
+__all__ = ["DAGGER_DEFAULTS", "ROLLOUT_SEED", "Rollout", "fit_dagger", "rollout",
            "train_dagger"]
 
 #: the settings of a DAgger run (``paragym.yml``'s ``dagger`` section overrides them per env)
@@ -166,28 +163,6 @@ def fit_dagger(env_id: str, seed: int, settings: dict[str, Any], threads: int = 
     return model, meta
 
 
-def plot_dagger_curve(curve: dict[str, list[float]], path: str | Path, title: str) -> Path:
-    """Success per iteration: of the rollouts (iteration 0: the expert's) and of the evaluation."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7, 4))
-    ax.plot(curve["pairs"], curve["rollout_success"], "o-", label="rollouts (iteration 0: the expert)")
-    ax.plot(curve["pairs"], curve["eval_success"], "s-", label="evaluation, deterministic policy")
-    ax.set_xlabel("state-action pairs aggregated")
-    ax.set_ylabel("success rate")
-    ax.set_ylim(-0.02, 1.02)
-    ax.set_title(title, fontsize=9)
-    ax.legend()
-    fig.tight_layout()
-    path = Path(path)
-    fig.savefig(path, dpi=90)
-    plt.close(fig)
-    return path
-
-
 def train_dagger(env_id: str, seed: int = 0, models_dir: str | Path = USER_MODELS, threads: int = 1,
                  force: bool = False, overrides: dict[str, Any] | None = None, echo: Any = None) -> TrainResult:
     """DAgger (module docstring) on ``env_id`` with the settings of
@@ -195,20 +170,9 @@ def train_dagger(env_id: str, seed: int = 0, models_dir: str | Path = USER_MODEL
     :func:`paragym.baselines.training.train` saves; an existing model is
     replaced only with ``force``."""
     env_id = check_env_id(env_id)
-    table = training.hyperparams_table("paragym.yml").get("dagger") or {}
-    settings = {**(table.get(env_id) or {}), **(overrides or {})}
-    files = training.run_files(env_id, "dagger", seed, training.writable_models_dir(models_dir))
-    if files.model.exists() and not force:
-        raise ValueError(f"{files.model} exists; --force retrains it over that file, or choose another --models "
-                         f"folder or --seed")
+    settings, files = imitation_run(env_id, "dagger", seed, models_dir, force, overrides)
     model, meta = fit_dagger(env_id, seed, settings, threads, echo)
-    meta = {"env_id": env_id, "algo": "dagger", "seed": seed, **meta, "versions": training.versions(),
-            "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
-            "parameters": training.count_parameters(model)}
-    files.model.parent.mkdir(parents=True, exist_ok=True)
-    model.save(files.model)
-    meta["model_bytes"] = files.model.stat().st_size
-    training.write_atomic(files.meta, json.dumps(meta, indent=1))
-    plot_dagger_curve(meta["curve"], files.curve_png,
-                      f"DAgger seed {seed} on {training.env_name(env_id)}, expert {meta['expert']}")
+    meta = save_imitation(files, env_id, "dagger", seed, threads, model, meta)
+    plots.plot_imitation_curve("dagger", meta["curve"], files.curve_png,
+                               f"DAgger seed {seed} on {training.env_name(env_id)}, expert {meta['expert']}")
     return TrainResult(files, model, meta)

@@ -17,7 +17,7 @@ from paragym.rollout import Episode  # noqa: E402
 from paragym.sim.obstacles import Box, Cylinder  # noqa: E402
 
 __all__ = ["plot_capaman_episode", "plot_capaman_motion", "plot_hybrid_episode", "plot_hybrid_plan",
-           "plot_kappa_episode", "plot_leaderboard", "plot_orthoglide_cases",
+           "plot_imitation_curve", "plot_kappa_episode", "plot_leaderboard", "plot_orthoglide_cases",
            "plot_training_curve"]
 
 
@@ -310,6 +310,26 @@ def plot_training_curve(curve: dict[str, list], path: str | Path, title: str = "
     else:  # a run too short to finish an episode or reach an evaluation: say so instead of an empty frame
         ax.text(0.5, 0.5, "no training episode finished and no evaluation yet", ha="center", va="center",
                 transform=ax.transAxes, color="0.4")
+    return _save(fig, path, title, dpi=90)
+
+
+def plot_imitation_curve(algo: str, curve: dict[str, list[float]], path: str | Path, title: str = "") -> Path:
+    """An imitation run's curve: for ``bc``, the loss per epoch on the training
+    and the held-out episodes; for ``dagger``, the success of each round's
+    rollouts and of its evaluation against the pairs aggregated."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    if algo == "bc":
+        ax.plot(curve["epoch"], curve["train_loss"], label="training episodes")
+        ax.plot(curve["epoch"], curve["holdout_loss"], label="held-out episodes")
+        ax.set_xlabel("epoch")
+        ax.set_ylabel("negative log-likelihood of the expert's action (lower is better)")
+    else:
+        ax.plot(curve["pairs"], curve["rollout_success"], "o-", label="rollouts (iteration 0: the expert)")
+        ax.plot(curve["pairs"], curve["eval_success"], "s-", label="evaluation, deterministic policy")
+        ax.set_xlabel("state-action pairs aggregated")
+        ax.set_ylabel("success rate")
+        ax.set_ylim(-0.02, 1.02)
+    ax.legend()
     return _save(fig, path, title, dpi=90)
 
 

@@ -89,11 +89,7 @@ def test_field_policy_completes_the_tour_in_the_env():
     env = gym.make("paragym/CaPaManCollisionFree-v1")
     policy = GridFieldPolicy(max_joint_step=env.unwrapped.max_joint_step)
     assert isinstance(policy, Policy)
+    from paragym.rollout import run_episode
+
     for seed in range(3):
-        obs, info = env.reset(seed=seed)
-        policy.reset(obs, info)
-        done = False
-        while not done:
-            obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
-            done = terminated or truncated
-        assert info["is_success"]
+        assert run_episode(env, policy, seed).success

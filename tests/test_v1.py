@@ -209,14 +209,9 @@ def test_hybrid_v1_plays_the_v0_reference_and_floors():
     names = set(policies_for(HYBRID))
     assert {"polynomial-detour", "zero", "random"} <= names
     policy = get_policy(HYBRID, "polynomial-detour").factory(gym.make(HYBRID), 0)
-    env = gym.make(HYBRID)
-    obs, info = env.reset(seed=100000 + 3003)
-    policy.reset(obs, info)
-    done = False
-    while not done:
-        obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
-        done = terminated or truncated
-    assert info["is_success"]
+    from paragym.rollout import run_episode
+
+    assert run_episode(gym.make(HYBRID), policy, 100000 + 3003).success
 
 
 @pytest.mark.parametrize("env_id", [CAPAMAN, TRIPOD, HYBRID])
