@@ -181,11 +181,11 @@ def learned(tmp_path_factory):
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
-#: the v1 envs ship behaviour clones, PPO fine-tuned from them and SAC (and the CaPaMan DAgger); the hybrid PPO
+#: the v1 envs ship behaviour clones, PPO fine-tuned from them and SAC (and the CaPaMan DAgger); the hybrid PPO, SAC
 SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac", "dagger")
                                                for k in range(3)],
            "paragym/MobileTripodOdometry-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac") for k in range(3)],
-           "paragym/HybridSingularityFree-v1": [f"ppo-seed{k}" for k in range(3)]}
+           "paragym/HybridSingularityFree-v1": [f"{a}-seed{k}" for a in ("ppo", "sac") for k in range(3)]}
 
 
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):
