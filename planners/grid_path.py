@@ -82,7 +82,8 @@ class GridPathPlanner:
         # Each T.P. enters the grid at its nearest free cell.
         entry = free_idx[np.argmin(np.linalg.norm(axis[cells[free_idx]][None] - tp[:, None], axis=2), axis=1)]
         dist, pred = dijkstra(graph, directed=False, indices=entry, return_predecessors=True)
-        return GridField(axis[cells], free_idx, entry, dist, pred, tp)
+        reachable = tuple(free_idx[np.isfinite(dist[j, free_idx])] for j in range(len(tp)))
+        return GridField(axis[cells], free_idx, entry, dist, pred, tp, reachable)
 
     def plan(self, scenario: CaPaManScenario) -> JointPath:
         """The tour T.P.1 -> T.P.2 -> T.P.3 -> T.P.1 as a joint path."""
@@ -115,6 +116,7 @@ class GridField:
         dist: (3, n^3) the free path's length from each T.P.'s cell (rad; inf: not connected).
         pred: (3, n^3) the next cell toward T.P. j on that path (scipy's predecessors).
         tp: (3, 3) the task points (rad).
+        reachable: per T.P., the free cells connected to it.
     """
 
     points: np.ndarray
@@ -123,12 +125,13 @@ class GridField:
     dist: np.ndarray
     pred: np.ndarray
     tp: np.ndarray
+    reachable: tuple[np.ndarray, ...]
 
     def next_waypoint(self, alpha: np.ndarray, target: int) -> np.ndarray:
         """Where to steer from the cranks ``alpha`` (rad) toward T.P. ``target``:
         the next cell on the shortest free path from the nearest free cell
         connected to the target, or the T.P. itself from its own cell."""
-        reachable = self.free_idx[np.isfinite(self.dist[target, self.free_idx])]
+        reachable = self.reachable[target]
         node = reachable[np.argmin(np.linalg.norm(self.points[reachable] - alpha, axis=1))]
         if node == self.entry[target]:
             return self.tp[target]
