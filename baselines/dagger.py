@@ -90,18 +90,14 @@ def rollout(env: Any, expert: Any, model: Any, reset_seed: int, expert_acts: boo
 
 
 def _evaluate(env: Any, model: Any, episodes: int) -> tuple[float, float]:
-    """Success rate and mean return of the deterministic policy on seeds EVAL_SEED + k."""
-    succ, rets = [], []
-    for k in range(episodes):
-        obs, info = env.reset(seed=EVAL_SEED + k)
-        total, done = 0.0, False
-        while not done:
-            obs, reward, terminated, truncated, info = env.step(model.predict(obs, deterministic=True)[0])
-            total += float(reward)
-            done = terminated or truncated
-        succ.append(bool(info.get("is_success", False)))
-        rets.append(total)
-    return float(np.mean(succ)), float(np.mean(rets))
+    """Success rate and mean return of the deterministic policy on seeds EVAL_SEED + k, as the
+    leaderboard plays it (:class:`paragym.baselines.policies.LearnedPolicy`, this round's weights)."""
+    from paragym.baselines.policies import LearnedPolicy
+    from paragym.rollout import run_episode
+
+    policy = LearnedPolicy(model)
+    runs = [run_episode(env, policy, EVAL_SEED + k) for k in range(episodes)]
+    return float(np.mean([r.success for r in runs])), float(np.mean([r.episode_return for r in runs]))
 
 
 def fit_dagger(env_id: str, seed: int, settings: dict[str, Any], threads: int = 1,
