@@ -15,6 +15,7 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
+from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene
 from paragym.tasks import hybrid_step as task_step
 from paragym.tasks.hybrid import (
     HybridScenario,
@@ -43,10 +44,12 @@ class _HybridTask:
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), rngs, self.geometry)
         task_step.reset(self.state, self.params, rows, scenarios)
+        if getattr(self, "world", None) is not None:
+            self.world.reset(self.state)
         return scenarios
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
+        task_step.step(self.state, self.params, actions, active, getattr(self, "world", None))
 
 
 class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
@@ -95,9 +98,23 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
     ``scenario``: "random" (default), "paper" or a HybridScenario;
     ``max_delta_step``, ``j_bar`` (m), ``w_offset``, ``w_delta``,
     ``w_singular``, ``w_limit``, ``geometry``, ``render_mode``.
+    ``fidelity``: "kinematic" (default: E goes where the action says and
+    the legs are solved) or "dynamic" (:mod:`paragym.sim.hybrid_dynamic`:
+    the nine prismatic actuators, position-controlled with a force limit,
+    chase the commanded pose's strokes for ``control_period`` s (0.05 s: the
+    path in 5 s) under gravity; the pose, the offset, the strokes and both
+    measures are then read from the simulated platforms, so a leg that
+    cannot follow or a platform that sags costs reward; a step whose E is
+    more than ``track_tolerance`` (5 mm) from its command is not free, so
+    the episode fails). ``dynamics``: a
+    :class:`~paragym.sim.hybrid_dynamic.HybridDynamics` (default
+    ``HybridDynamics.fast()``). ``info["tracking_error"]`` (m) is E's distance
+    from its command (0 in kinematic fidelity).
 
     ## Version History
     * v0: initial release (kinematic fidelity).
+      Since paragym 0.6.0 ``fidelity="dynamic"`` is offered; the default,
+      kinematic, is unchanged.
       Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
@@ -113,8 +130,16 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
                  max_delta_step: float = 0.05, j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05,
                  w_singular: float = 1.0, w_limit: float = 1.0,
                  geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
-                 w_end: float | None = None) -> None:
+                 w_end: float | None = None, fidelity: str = "kinematic", dynamics: HybridDynamics | None = None,
+                 control_period: float = 0.05, track_tolerance: float = 0.005) -> None:
         super().__init__(render_mode)
+        if fidelity not in ("kinematic", "dynamic"):
+            raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
+        if dynamics is not None and not isinstance(dynamics, HybridDynamics):
+            raise TypeError(f"dynamics must be a HybridDynamics or None; got {type(dynamics).__name__}")
+        for name, value in (("control_period", control_period), ("track_tolerance", track_tolerance)):
+            if not (np.isfinite(value) and value > 0):
+                raise ValueError(f"{name} must be a positive number; got {value!r}")
         resolve_hybrid(scenario)
         if self.version == 0 and w_end is not None:
             raise ValueError("w_end (the shaping toward a feasible end) is an argument of HybridSingularityFree-v1")
@@ -133,6 +158,11 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
+        self.fidelity = fidelity
+        self.world: task_step.DynamicWorld | None = None
+        if fidelity == "dynamic":
+            scene = HybridDynamicScene(geometry, dynamics or HybridDynamics.fast(), gui=render_mode == "human")
+            self.world = task_step.DynamicWorld(scene, float(control_period), float(track_tolerance))
 
     def _info(self) -> dict[str, Any]:
         s = self.state
@@ -141,14 +171,27 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
                 "mu_hexapod": float(s.mu_h[0]), "mu_tripod": float(s.mu_t[0]),
                 "free": bool(s.free[0]), "within_limits": bool(s.within[0]),
                 "is_success": bool(s.terminated[0] and s.all_free[0]),
-                "max_delta_step": self.max_delta_step, "j_bar": self.j_bar}
+                "max_delta_step": self.max_delta_step, "j_bar": self.j_bar,
+                "tracking_error": 0.0 if self.world is None else self.world.tracking_error}
+
+    def _show(self) -> None:
+        if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
+            self._render_rgb()
 
     def _render_rgb(self) -> np.ndarray:
         from paragym.sim.hybrid_model import HybridScene
 
+        if self.world is not None:  # the simulated robot, not the command
+            return self.world.scene.render()
+
         solved = hybrid.solve(self.state.pose[:1], self.state.delta[0], self.geometry, validate=False)
         return self._drawn(lambda gui: HybridScene(self.geometry, gui=gui),
                            lambda scene: scene.set_state(solved.t_a[0], solved.t_e[0]))
+
+    def _close(self) -> None:
+        self._close_render_scene()
+        if self.world is not None:
+            self.world.scene.close()
 
 
 class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
@@ -207,6 +250,13 @@ class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
     Keyword arguments are the single env's."""
 
     single_class = HybridSingularityFreeEnv
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        if kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

@@ -57,7 +57,7 @@ from paragym.units import DEG
 
 __all__ = [
     "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
-    "hexapod_matrix", "is_singularity_free", "k_solve", "kernel_consts", "pose_matrix", "solve", "split",
+    "hexapod_matrix", "is_singularity_free", "k_measure", "k_solve", "kernel_consts", "pose_matrix", "solve", "split",
     "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
 ]
 
@@ -254,8 +254,18 @@ def k_solve(pose, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, meas
     work[0, 3, :3], R_T work[1, :3, :3], p_T work[1, 3, :3]. ``sc``: tripod home
     height, 1 / platform radius, 1 / r_te, the home sigmas."""
     ra, pa, rt, pt, re = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], work[1, 3, :3], work[2, :3, :3]
-    h, t = work[3], work[4]
     _stages(pose, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
+    return k_measure(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, measures, lengths, work)
+
+
+@njit(cache=True, error_model="numpy")
+def k_measure(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, measures, lengths, work):
+    """The robot with its stages at (R_A ``ra``, p_A ``pa``) in the base frame
+    and (R_T ``rt``, p_T ``pt``) in A's frame, wherever they come from (the
+    split of :func:`k_solve`, or a simulation): the nine leg lengths into
+    ``lengths`` (9,) (eqs 1, 4) and, if ``measures``, the two singularity
+    measures (eq 11's matrices; sigma_min over its home value), returned."""
+    h, t = work[3], work[4]
     _legs(ra, pa, plat, base, sc[1], lengths, h, 0)
     _legs(rt, pt, top, tri_base, sc[2], lengths[6:], t, 0)
     if not measures:

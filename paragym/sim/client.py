@@ -250,11 +250,16 @@ class PyBulletSim:
         return tuple(np.array(v) for v in state[4:8 if velocity else 6])
 
     # --- dynamics -------------------------------------------------------------------------
-    def set_physics(self, gravity: float, time_step: float, solver_iterations: int) -> None:
-        """Gravity (m/s^2, along -z), the fixed time step (s) and the constraint solver's iterations."""
+    def set_physics(self, gravity: float, time_step: float, solver_iterations: int, erp: float | None = None) -> None:
+        """Gravity (m/s^2, along -z), the fixed time step (s), the constraint
+        solver's iterations and, if given, its error reduction parameter (the
+        share of a constraint's drift corrected per step; PyBullet's default
+        otherwise)."""
         pb.setGravity(0, 0, -gravity, physicsClientId=self._client)
         pb.setPhysicsEngineParameter(fixedTimeStep=time_step, numSolverIterations=solver_iterations,
                                      physicsClientId=self._client)
+        if erp is not None:
+            pb.setPhysicsEngineParameter(erp=erp, physicsClientId=self._client)
 
     def no_self_collision(self, name: str) -> None:
         """The parts of body ``name`` do not collide with each other."""

@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -54,7 +55,8 @@ from paragym.mechanisms import hybrid
 from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.trajectories import nominal_path
 
-__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "HybridParams", "HybridTaskState", "reset", "step"]
+__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "DynamicWorld", "HybridParams", "HybridTaskState", "reset",
+           "step"]
 
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
 OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
@@ -142,27 +144,89 @@ def reset(state: HybridTaskState, params: HybridParams, rows: np.ndarray, scenar
     _advance(state, params, np.zeros((len(state.k), 4)), mask, False)
 
 
-def step(state: HybridTaskState, params: HybridParams, actions: np.ndarray, active: np.ndarray) -> None:
+def step(state: HybridTaskState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
+         world: DynamicWorld | None = None) -> None:
     """Move the ``active`` robots (N,) one sample on with ``actions`` (N, 4)
-    inside the Box (the env clips), and solve them."""
-    _advance(state, params, actions, active, True)
+    inside the Box (the env clips), and solve them. ``world``: the dynamics
+    of one robot (dynamic fidelity): the step's commanded pose is solved for
+    its strokes, the simulated actuators chase them, and the robot is then
+    evaluated where the simulation put it (:class:`DynamicWorld`)."""
+    if world is None:
+        _advance(state, params, actions, active, True, _ALL)
+        return
+    _advance(state, params, actions, active, True, _COMMAND)
+    world.move(state)
+    _advance(state, params, actions, active, True, _EVALUATE)
+    state.all_free &= world.tracked
+
+
+_ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+
+
+class DynamicWorld:
+    """One robot under PyBullet's dynamics (:class:`paragym.sim.hybrid_dynamic.HybridDynamicScene`).
+
+    A step drives the nine actuators from their last targets to the strokes
+    of the commanded pose, linearly over ``control_period`` s of simulated
+    time, under their force limits. The robot is then measured: T_A and T_E
+    from the platforms' simulated poses, the strokes from the actuators'
+    joints, the singularity measures from the simulated stages
+    (:func:`paragym.mechanisms.hybrid.k_measure`). The state's pose becomes
+    E's simulated pose and its offset E's simulated position minus the
+    nominal path, so that the reward's offset term sees a platform that sags
+    or lags. ``tracked`` is False once E's position is more than
+    ``track_tolerance`` (m) from the commanded one: that step is not free
+    (in kinematic fidelity the error is 0, so the definition is the same)."""
+
+    def __init__(self, scene: Any, control_period: float, track_tolerance: float) -> None:
+        self.scene, self.control_period, self.track_tolerance = scene, control_period, track_tolerance
+        self.tracked = np.ones(1, bool)
+        self.tracking_error = 0.0
+        self._work = np.empty((5, 6, 6))
+
+    def reset(self, state: HybridTaskState) -> None:
+        """Put the simulated robot at the state's (solved) start pose, at rest."""
+        self.scene.reset(state.pose[0], float(state.delta[0]))
+        self.tracked[0], self.tracking_error = True, 0.0
+
+    def move(self, state: HybridTaskState) -> None:
+        """Drive to the commanded strokes (``state.lengths``) and measure."""
+        g = self.scene.geometry
+        commanded = state.pose[0, :3].copy()
+        self.scene.drive(state.lengths[0], self.control_period)
+        t_a, t_e, strokes = self.scene.measure()
+        t_t = np.linalg.solve(t_a, t_e)
+        consts = hybrid.kernel_consts(g)
+        state.mu_h[0], state.mu_t[0] = hybrid.k_measure(
+            np.ascontiguousarray(t_a[:3, :3]), np.ascontiguousarray(t_a[:3, 3]), np.ascontiguousarray(t_t[:3, :3]),
+            np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True, np.empty(9), self._work)
+        state.lengths[0] = strokes
+        state.pose[0, :3] = t_e[:3, 3] - consts[6][:3]
+        state.pose[0, 3:] = hybrid.matrix_euler(t_e[:3, :3])
+        state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
+        self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - commanded))
+        self.tracked[0] = self.tracking_error <= self.track_tolerance
 
 
 def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
-             move: bool) -> None:
+             move: bool, stage: int = _ALL) -> None:
     s = state
     _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
                     s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward, s.phi,
-                    np.ascontiguousarray(actions, np.float64), rows, move, params.version, *params.kernel_args)
+                    np.ascontiguousarray(actions, np.float64), rows, move, params.version, stage,
+                    *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free,
-                    terminated, obs, reward, phi, actions, rows, move, version,
+                    terminated, obs, reward, phi, actions, rows, move, version, stage,
                     base, plat, top, axes, tri_base, pinv_t, home, sc, w, scale):
     """The transition of every robot with ``rows[i]`` (module docstring).
     ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
-    L_min, L_max, singularity threshold, w_end (v1)."""
+    L_min, L_max, singularity threshold, w_end (v1). ``stage``: 0 the whole
+    step; 1 the command only (move and solve the commanded pose's strokes);
+    2 the evaluation only, of the pose, strokes, measures and offset a
+    simulation wrote into the state (dynamic fidelity: :class:`DynamicWorld`)."""
     last = len(u) - 1
     work = np.empty((5, 6, 6))
     size = obs.shape[1]
@@ -171,17 +235,20 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
     for i in range(len(k)):
         if not rows[i]:
             continue
-        if move and k[i] < last:
-            new = min(1.0, max(0.0, delta[i] + actions[i, 0] * w[0]))
-            d_delta[i] = new - delta[i]
-            delta[i] = new
-            k[i] += 1
-            for c in range(3):
-                offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w[1]
-        for c in range(6):
-            pose[i, c] = nominal[i, k[i], c] + (offset[i, c] if c < 3 else 0.0)
-        mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home, sc,
-                                          True, lengths[i], work)
+        if stage != 2:
+            if move and k[i] < last:
+                new = min(1.0, max(0.0, delta[i] + actions[i, 0] * w[0]))
+                d_delta[i] = new - delta[i]
+                delta[i] = new
+                k[i] += 1
+                for c in range(3):
+                    offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w[1]
+            for c in range(6):
+                pose[i, c] = nominal[i, k[i], c] + (offset[i, c] if c < 3 else 0.0)
+            mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home,
+                                              sc, True, lengths[i], work)
+            if stage == 1:
+                continue
         out = 0
         for c in range(9):
             if lengths[i, c] < w[6] or lengths[i, c] > w[7]:

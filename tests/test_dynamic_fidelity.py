@@ -1,0 +1,116 @@
+"""Dynamic fidelity of every env: the checker, seeded determinism, and the physics.
+
+For each task: ``gym.make(id, fidelity="dynamic")`` passes Gymnasium's
+checker with warnings as errors; two runs of a seed are equal; a slow
+motion agrees with the kinematic model and a fast one differs measurably;
+and the fast settings the env uses stay close to the fine ones (the check of
+their accuracy that the sim modules' docstrings quote).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import paragym  # noqa: F401
+
+DYNAMIC_IDS = ["paragym/CaPaManCollisionFree-v1", "paragym/HybridSingularityFree-v0",
+               "paragym/HybridSingularityFree-v1"]
+
+
+def _checked(env_id: str) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        warnings.filterwarnings("ignore", message=".*is out of date.*")
+        env = gym.make(env_id, fidelity="dynamic")
+        check_env(env.unwrapped, skip_render_check=True)
+        env.close()
+
+
+def _rollout(env_id: str, seed: int, steps: int, **kwargs) -> np.ndarray:
+    env = gym.make(env_id, fidelity="dynamic", **kwargs)
+    env.action_space.seed(seed)
+    obs, _ = env.reset(seed=seed)
+    rows = [obs]
+    for _ in range(steps):
+        obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+        rows.append(np.append(obs, reward))
+        if terminated or truncated:
+            break
+    env.close()
+    width = max(len(r) for r in rows)
+    return np.array([np.pad(r, (0, width - len(r))) for r in rows])
+
+
+@pytest.mark.parametrize("env_id", DYNAMIC_IDS)
+def test_dynamic_fidelity_passes_the_checker_and_repeats_its_seed(env_id):
+    _checked(env_id)
+    np.testing.assert_array_equal(_rollout(env_id, 3, 30), _rollout(env_id, 3, 30))
+
+
+def test_fidelity_is_checked_at_the_boundary():
+    for env_id in DYNAMIC_IDS:
+        with pytest.raises(ValueError, match="fidelity"):
+            gym.make(env_id, fidelity="dynamical")
+
+
+# --- the hybrid ------------------------------------------------------------------------------------------
+
+
+def _hybrid_paper(fidelity: str, **kwargs) -> tuple[np.ndarray, list[dict]]:
+    """E's pose at every step of the paper's path with the zero action (the nominal path at split 0.5)."""
+    env = gym.make("paragym/HybridSingularityFree-v1", scenario="paper", fidelity=fidelity, **kwargs)
+    env.reset(seed=0)
+    poses, infos = [], []
+    while True:
+        *_, terminated, truncated, info = env.step(np.zeros(4, np.float32))
+        poses.append(env.unwrapped.state.pose[0].copy())
+        infos.append(info)
+        if terminated or truncated:
+            break
+    env.close()
+    return np.array(poses), infos
+
+
+def test_hybrid_dynamic_agrees_with_the_kinematics_when_slow_and_lags_when_fast():
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+
+    fine = HybridDynamics()
+    kinematic, _ = _hybrid_paper("kinematic")
+    slow, slow_infos = _hybrid_paper("dynamic", dynamics=fine, control_period=0.05)  # the path in 5 s
+    fast, _ = _hybrid_paper("dynamic", dynamics=fine, control_period=0.004)  # in 0.4 s
+    gap_slow = np.abs(slow[:, :3] - kinematic[:, :3]).max()
+    gap_fast = np.abs(fast[:, :3] - kinematic[:, :3]).max()
+    assert gap_slow < 1.5e-4  # m
+    assert gap_fast > 4 * gap_slow
+    assert max(i["tracking_error"] for i in slow_infos) < 1.5e-4
+    # the strokes and the measures come from the simulation: close to the kinematic ones, not equal
+    assert 0 < abs(slow_infos[50]["mu_hexapod"] - 1) < 1
+
+
+def test_hybrid_fast_settings_stay_within_their_stated_error_of_the_fine_ones():
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+
+    fine, _ = _hybrid_paper("dynamic", dynamics=HybridDynamics())
+    fast, infos = _hybrid_paper("dynamic")  # the env's default: HybridDynamics.fast()
+    assert np.abs(fast[:, :3] - fine[:, :3]).max() < 1.5e-3  # m (the docstring's 1.2 mm)
+    assert max(i["tracking_error"] for i in infos) < 1.5e-3
+
+
+def test_hybrid_weak_actuators_sag_and_fail_the_episode():
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+
+    _, infos = _hybrid_paper("dynamic", dynamics=HybridDynamics(motor_force=15.0, time_step=5e-3,
+                                                                  solver_iterations=50, erp=0.9))
+    assert max(i["tracking_error"] for i in infos) > 0.005
+    assert not infos[-1]["is_success"]
+
+
+def test_hybrid_dynamic_vector_env_is_refused():
+    with pytest.raises(ValueError, match="kinematic"):
+        gym.make_vec("paragym/HybridSingularityFree-v1", 2, vectorization_mode="vector_entry_point",
+                     fidelity="dynamic")
