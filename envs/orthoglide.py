@@ -15,6 +15,7 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import orthoglide as og
+from paragym.sim.orthoglide_dynamic import OrthoglideDynamics, OrthoglideDynamicScene
 from paragym.tasks import orthoglide_step as task_step
 from paragym.tasks.orthoglide import draw_tasks, orthoglide_random_task, orthoglide_random_tasks, resolve_task
 from paragym.tasks.orthoglide_step import KAPPA_LIMIT, OBS_SIZE, OrthoglideParams, OrthoglideState
@@ -35,10 +36,12 @@ class _OrthoglideTask:
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         tasks = draw_tasks(options.get("scenario", self.scenario_arg), rngs, self.geometry)
         task_step.reset(self.state, self.params, rows, tasks)
+        if getattr(self, "world", None) is not None:
+            self.world.reset(self.state)
         return tasks
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
+        task_step.step(self.state, self.params, actions, active, getattr(self, "world", None))
 
 
 class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
@@ -84,10 +87,21 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
     ``scenario``: "paper" (the 0.8 m circle in 10 s) or "random" (default:
     seeded circles, ellipses, lines); ``action_mode``; ``max_null_rate`` (0.5
     m/s); ``max_joint_rate`` (0.5 m/s); ``w_track``; ``limit_penalty`` (10);
-    ``geometry``; ``render_mode``.
+    ``geometry``; ``render_mode``. ``fidelity``: "kinematic" (default: the
+    joints are set where the step puts them) or "dynamic"
+    (:mod:`paragym.sim.orthoglide_dynamic`: the table and the two sliders
+    are motors with force limits that chase those joints over the path's
+    time step, the links and the tool's closure follow under PyBullet's
+    dynamics; the encoders are the joints the env observes, kappa is taken
+    where they put the tool, and the tracking error, charged by
+    ``w_track`` in both action modes, is how far the tool is from the
+    path). ``dynamics``: an
+    :class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamics`.
 
     ## Version History
     * v0: initial release (kinematic fidelity).
+      Since paragym 0.6.0 ``fidelity="dynamic"`` is offered; the default,
+      kinematic, is unchanged.
       Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
@@ -97,8 +111,13 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
     def __init__(self, scenario: str | Any = "random", action_mode: str = "null_space",
                  render_mode: str | None = None, max_null_rate: float = 0.5, max_joint_rate: float = 0.5,
                  w_track: float = 1.0, limit_penalty: float = 10.0,
-                 geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> None:
+                 geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, fidelity: str = "kinematic",
+                 dynamics: OrthoglideDynamics | None = None) -> None:
         super().__init__(render_mode)
+        if fidelity not in ("kinematic", "dynamic"):
+            raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
+        if dynamics is not None and not isinstance(dynamics, OrthoglideDynamics):
+            raise TypeError(f"dynamics must be an OrthoglideDynamics or None; got {type(dynamics).__name__}")
         if action_mode not in ("null_space", "joint_velocity"):
             raise ValueError(f"action_mode must be 'null_space' or 'joint_velocity'; got {action_mode!r}")
         self.scenario_arg = resolve_task(scenario, geometry)
@@ -111,6 +130,11 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (dim,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
         self.state = self.new_state(1)
+        self.fidelity = fidelity
+        self.world: task_step.DynamicWorld | None = None
+        if fidelity == "dynamic":
+            self.world = task_step.DynamicWorld(OrthoglideDynamicScene(geometry, dynamics,
+                                                                       gui=render_mode == "human"))
 
     @property
     def task(self) -> Any:
@@ -126,11 +150,22 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         return {"kappa": float(s.kappa[0]), "tracking_error": float(s.err[0]), "rho": s.rho[0].copy(),
                 "step": int(s.k[0]), "is_success": done and not s.failed[0]}
 
+    def _show(self) -> None:
+        if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
+            self._render_rgb()
+
     def _render_rgb(self) -> np.ndarray:
         from paragym.sim.orthoglide_model import OrthoglideScene
 
+        if self.world is not None:  # the simulated mechanism, not the command
+            return self.world.scene.render()
         return self._drawn(lambda gui: OrthoglideScene(self.geometry, gui=gui),
                            lambda scene: scene.set_state(self.state.rho[0].copy(), self.task.points))
+
+    def _close(self) -> None:
+        self._close_render_scene()
+        if self.world is not None:
+            self.world.scene.close()
 
 
 class Orthoglide2PRRKappaVectorEnv(_OrthoglideTask, ParagymVectorEnv):
@@ -139,6 +174,13 @@ class Orthoglide2PRRKappaVectorEnv(_OrthoglideTask, ParagymVectorEnv):
     Keyword arguments are the single env's."""
 
     single_class = Orthoglide2PRRKappaEnv
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        if kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native Orthoglide vector env is kinematic: use gymnasium's sync/async vector "
+                             "modes for the dynamic fidelity")
+        super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

@@ -19,7 +19,7 @@ from gymnasium.utils.env_checker import check_env
 import paragym  # noqa: F401
 
 DYNAMIC_IDS = ["paragym/CaPaManCollisionFree-v1", "paragym/HybridSingularityFree-v0",
-               "paragym/HybridSingularityFree-v1"]
+               "paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0"]
 
 
 def _checked(env_id: str) -> None:
@@ -110,7 +110,48 @@ def test_hybrid_weak_actuators_sag_and_fail_the_episode():
     assert not infos[-1]["is_success"]
 
 
-def test_hybrid_dynamic_vector_env_is_refused():
+@pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0"])
+def test_native_vector_envs_refuse_the_dynamic_fidelity(env_id):
     with pytest.raises(ValueError, match="kinematic"):
-        gym.make_vec("paragym/HybridSingularityFree-v1", 2, vectorization_mode="vector_entry_point",
-                     fidelity="dynamic")
+        gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", fidelity="dynamic")
+
+
+# --- the 2PRR + table ---------------------------------------------------------------------------------------
+
+
+def _orthoglide_paper(fidelity: str, scenario="paper", **kwargs) -> tuple[list[dict], float]:
+    env = gym.make("paragym/Orthoglide2PRRKappa-v0", scenario=scenario, fidelity=fidelity, **kwargs)
+    env.reset(seed=0)
+    infos, total = [], 0.0
+    while True:
+        _, reward, terminated, truncated, info = env.step(np.zeros(1, np.float32))
+        infos.append(info)
+        total += reward
+        if terminated or truncated:
+            break
+    env.close()
+    return infos, total
+
+
+def test_orthoglide_dynamic_tracks_the_slow_circle_and_lags_on_a_fast_one():
+    from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+    from paragym.tasks.orthoglide import circle_task
+
+    kinematic, _ = _orthoglide_paper("kinematic")
+    fine = OrthoglideDynamics.fine()
+    slow, _ = _orthoglide_paper("dynamic", dynamics=fine)
+    assert max(i["tracking_error"] for i in kinematic) == 0.0
+    assert max(i["tracking_error"] for i in slow) < 3e-4  # m: a 0.25 m/s circle, one 1 ms step of lag
+    assert max(abs(a["kappa"] - b["kappa"]) for a, b in zip(slow, kinematic, strict=True)) < 1e-3
+    assert all(i["is_success"] for i in (slow[-1], kinematic[-1]))
+    fast_circle = circle_task((0.1, 0.55), 0.4, 1.0, steps=100, name="fast")  # the paper's circle in 1 s
+    fast, _ = _orthoglide_paper("dynamic", fast_circle, dynamics=fine)
+    assert max(i["tracking_error"] for i in fast) > 5 * max(i["tracking_error"] for i in slow)
+
+
+def test_orthoglide_default_settings_stay_within_their_stated_lag():
+    infos, total = _orthoglide_paper("dynamic")
+    assert max(i["tracking_error"] for i in infos) < 1.4e-3  # the docstring's 1.26 mm: one 5 ms step
+    kinematic, kinematic_total = _orthoglide_paper("kinematic")
+    assert max(abs(a["kappa"] - b["kappa"]) for a, b in zip(infos, kinematic, strict=True)) < 1e-3
+    assert total < kinematic_total  # the lag costs reward (w_track): the sim-to-sim gap

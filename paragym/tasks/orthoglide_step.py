@@ -35,7 +35,7 @@ from numba import njit
 from paragym.mechanisms import orthoglide as og
 from paragym.tasks.orthoglide import Task, start_table_position
 
-__all__ = ["KAPPA_LIMIT", "OBS_SIZE", "OrthoglideParams", "OrthoglideState", "reset", "step"]
+__all__ = ["KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -125,28 +125,76 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, ta
     _advance(state, params, np.zeros((len(state.k), 3 if params.joint_mode else 1)), mask, False)
 
 
-def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray) -> None:
+def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
+         world: DynamicWorld | None = None) -> None:
     """Move the ``active`` robots (N,) one path point on with ``actions``
-    (N, 1) or (N, 3), inside the Box (the env clips), and evaluate them."""
-    _advance(state, params, actions, active, True)
+    (N, 1) or (N, 3), inside the Box (the env clips), and evaluate them.
+    ``world``: the dynamics of one robot (dynamic fidelity): the step's
+    joints are the motors' command, and the robot is evaluated where the
+    simulation put it (:class:`DynamicWorld`)."""
+    if world is None:
+        _advance(state, params, actions, active, True, _ALL)
+        return
+    h = float(state.dt[0, state.k[0]]) if state.k[0] < state.last[0] else 0.0
+    state.rho[0] = world.command  # the controller integrates its own command; the encoders feed the motors
+    _advance(state, params, actions, active, True, _COMMAND)
+    world.move(state, h)
+    _advance(state, params, actions, active, True, _EVALUATE)
+
+
+_ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+
+
+class DynamicWorld:
+    """One robot under PyBullet's dynamics (:class:`paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`).
+
+    A step's joints (the least-norm motion and the agent's null-space motion,
+    or the agent's joint rates, added to the last command, as a controller
+    integrates its own reference) become the three motors' targets, reached
+    linearly over the path's time step; the encoders then replace the
+    state's joints. The evaluation takes the tool point from them (the
+    forward kinematics of the measured joints, where the closed chain put
+    C): J, kappa and n there, and the tracking error from the path point,
+    which the reward's ``w_track`` term charges in both action modes (in
+    kinematic null-space mode it is 0 by construction, so the definition is
+    the same)."""
+
+    def __init__(self, scene: Any) -> None:
+        self.scene = scene
+        self.command = np.zeros(3)
+
+    def reset(self, state: OrthoglideState) -> None:
+        """Put the simulated robot at the state's joints, at rest."""
+        self.scene.reset(state.rho[0])
+        self.command = state.rho[0].copy()
+
+    def move(self, state: OrthoglideState, duration: float) -> None:
+        """Drive to the commanded joints over ``duration`` s and read the encoders."""
+        self.command = state.rho[0].copy()
+        if duration > 0:
+            self.scene.drive(self.command, duration)
+        state.rho[0] = self.scene.rho
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
-             move: bool) -> None:
+             move: bool, stage: int = _ALL) -> None:
     s = state
     _advance_kernel(s.rho, s.k, s.last, s.path, s.dt, s.j, s.n, s.kappa, s.err, s.failed, s.terminated, s.obs,
-                    s.reward, np.ascontiguousarray(actions, np.float64), rows, move, *params.kernel_args)
+                    s.reward, np.ascontiguousarray(actions, np.float64), rows, move, stage, *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
 def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated, obs, reward, actions, rows, move,
-                    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty):
+                    stage, p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty):
     """The transition of every robot with ``rows[i]`` (see the module docstring):
-    move it if ``move``, then evaluate it at its path point."""
+    move it if ``move``, then evaluate it at its path point. ``stage``: 0 the
+    whole step; 1 the move only (the motors' command); 2 the evaluation only,
+    of joints a simulation measured (:class:`DynamicWorld`): J and kappa at
+    the tool point those joints give, and the tracking error in either mode."""
     for i in range(len(k)):
         if not rows[i]:
             continue
-        if move and k[i] < last[i]:
+        if stage != 2 and move and k[i] < last[i]:
             h = dt[i, k[i]]
             if joint_mode:
                 for c in range(3):
@@ -159,11 +207,15 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated
                 k[i] += 1
                 r2, r3, _ = og.k_inverse(r1, path[i, k[i], 0], path[i, k[i], 1], p)  # exact tracking
                 rho[i, 0], rho[i, 1], rho[i, 2] = r1, r2, r3
+        if stage == 1:
+            continue
         px, py = path[i, k[i], 0], path[i, k[i], 1]
         err[i] = 0.0
-        if joint_mode:
+        if joint_mode or stage == 2:
             tx, ty = og.k_forward(rho[i, 0], rho[i, 1], rho[i, 2], p)
             err[i] = math.hypot(tx - px, ty - py)
+            if stage == 2:  # evaluated where the simulated joints put the tool
+                px, py = tx, ty
         mode = og.k_inverse(rho[i, 0], px, py, p)[2]
         inside = True
         for c in range(3):
@@ -179,7 +231,9 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated
             n[i, :] = 0.0
             failed[i] = True
         terminated[i] = failed[i] or k[i] >= last[i]
-        reward[i] = -limit_penalty if failed[i] else -math.log(kappa[i]) - w_track * err[i] / 0.01
+        track = joint_mode or stage == 2
+        reward[i] = -limit_penalty if failed[i] else -math.log(kappa[i]) - (w_track * err[i] / 0.01 if track else 0.0)
+        px, py = path[i, k[i], 0], path[i, k[i], 1]
         # observation: rho normalised to [-1, 1], the path point now and next, log kappa, n; clipped to +-10
         nxt = min(k[i] + 1, last[i])
         row = (2 * (rho[i, 0] - lo[0]) / (hi[0] - lo[0]) - 1, 2 * (rho[i, 1] - lo[1]) / (hi[1] - lo[1]) - 1,
