@@ -155,3 +155,39 @@ def test_orthoglide_default_settings_stay_within_their_stated_lag():
     kinematic, kinematic_total = _orthoglide_paper("kinematic")
     assert max(abs(a["kappa"] - b["kappa"]) for a, b in zip(infos, kinematic, strict=True)) < 1e-3
     assert total < kinematic_total  # the lag costs reward (w_track): the sim-to-sim gap
+
+
+# --- the CaPaMan --------------------------------------------------------------------------------------------
+
+
+def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_ones():
+    from paragym.mechanisms import capaman
+    from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
+
+    g = capaman.DEFAULT_GEOMETRY
+    rng = np.random.default_rng(0)
+    alpha = np.asarray(g.alpha_home, float).ravel().copy()
+    commands = []
+    for _ in range(200):
+        alpha = np.clip(alpha + rng.uniform(-1, 1, 3) * np.radians(2), np.radians(46), np.radians(134))
+        commands.append(alpha.copy())
+
+    def run(dynamics):
+        scene = CaPaManDynamicScene(g, dynamics)
+        scene.set_configuration(np.asarray(g.alpha_home, float).ravel())
+        tips, cranks = [], []
+        for c in commands:
+            tips.append(scene.drive(c, 0.02))
+            cranks.append(scene.alpha)
+        closure = scene.closure_error()
+        scene.close()
+        return np.array(tips), np.array(cranks), closure
+
+    tips, cranks, _ = run(CaPaManDynamics())
+    fast_tips, fast_cranks, closure = run(CaPaManDynamics.fast())
+    assert np.abs(fast_tips - tips).max() < 6e-4  # m
+    assert np.degrees(np.abs(fast_cranks - cranks).max()) < 0.45
+    assert closure < 1e-3
+    env = gym.make("paragym/CaPaManCollisionFree-v1", fidelity="dynamic", dynamics=CaPaManDynamics.fast())
+    assert env.unwrapped.scene.dynamics.time_step == 5e-3
+    env.close()
