@@ -34,7 +34,8 @@ TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularity
 DYNAMIC = (("paragym/CaPaManCollisionFree-v1", "released", {}),
            ("paragym/CaPaManCollisionFree-v1", "fast", {"dynamics": "capaman-fast"}),
            ("paragym/HybridSingularityFree-v1", "default", {}),
-           ("paragym/Orthoglide2PRRKappa-v0", "default", {}))
+           ("paragym/Orthoglide2PRRKappa-v0", "default", {}),
+           ("paragym/MobileTripodOdometry-v1", "default", {}))
 DYNAMIC_TARGET = 2.0
 SCENARIOS = {"paragym/MobileTripodOdometry-v0": ("random", "push"),  # the paper's drives are named
              "paragym/MobileTripodOdometry-v1": ("random", "push")}
@@ -96,7 +97,7 @@ def main() -> None:
 
     for env_id, label, kwargs in DYNAMIC:
         kwargs = {k: CaPaManDynamics.fast() if v == "capaman-fast" else v for k, v in kwargs.items()}
-        env = gym.make(env_id, scenario="paper", fidelity="dynamic", **kwargs)
+        env = gym.make(env_id, scenario=SCENARIOS.get(env_id, ("paper",))[-1], fidelity="dynamic", **kwargs)
         sps = steps_per_second(env, args.seconds)
         rows.append((f"{env_id} dynamic", label, sps, benchmark_step(env, target_duration=args.seconds, seed=0),
                      reset_seconds(env, 5), DYNAMIC_TARGET * anchor if anchor else None))

@@ -17,6 +17,7 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
+from paragym.sim.tripod_dynamic import TripodDynamics
 from paragym.tasks import mobile_tripod_step as task_step
 from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenario, resolve_drive
 from paragym.tasks.mobile_tripod_step import TripodParams, TripodTaskState
@@ -38,10 +39,12 @@ class _TripodTask:
         choice = resolve_drive(options.get("scenario", self.scenario_arg))
         scenarios = [draw_drive(choice, rng) for rng in rngs]
         task_step.reset(self.state, self.params, rows, scenarios, rngs)
+        if getattr(self, "world", None) is not None:
+            self.world.reset(self.state)
         return scenarios
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active)
+        task_step.step(self.state, self.params, actions, active, getattr(self, "world", None))
 
 
 class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
@@ -83,9 +86,20 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     ``scenario``: one of initial_heading, push, random_slip, rough_terrain,
     random (default); ``encoder_noise`` (rad, 1 deg); ``max_correction`` (m);
     ``success_error`` (m); ``geometry`` (r, p: 5 ft each by default).
+    ``fidelity``: "kinematic" (default: the drive units are unicycles and
+    the disturbances are added to their motion,
+    :mod:`paragym.sim.tripod_drive`) or "dynamic"
+    (:mod:`paragym.sim.tripod_dynamic`: the plate, its three legs on
+    encoder joints and the three wheeled drive units on the terrain under
+    PyBullet's dynamics; slip, pushes and bumps come from contact and
+    forces, odometry from the wheel encoders, eta from the leg encoders;
+    the estimate, the observation and the reward are the same functions of
+    them). ``dynamics``: a :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
 
     ## Version History
     * v0: initial release.
+      Since paragym 0.6.0 ``fidelity="dynamic"`` is offered; the default,
+      kinematic, is unchanged.
       Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
@@ -103,8 +117,13 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
                  success_error: float = 0.05, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY,
-                 trust_rate: float | None = None, relative_reward: bool | None = None) -> None:
+                 trust_rate: float | None = None, relative_reward: bool | None = None, fidelity: str = "kinematic",
+                 dynamics: TripodDynamics | None = None) -> None:
         super().__init__(render_mode)
+        if fidelity not in ("kinematic", "dynamic"):
+            raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
+        if dynamics is not None and not isinstance(dynamics, TripodDynamics):
+            raise TypeError(f"dynamics must be a TripodDynamics or None; got {type(dynamics).__name__}")
         if self.version == 0 and (trust_rate is not None or relative_reward is not None):
             raise ValueError("trust_rate and relative_reward are v1 arguments: use paragym/MobileTripodOdometry-v1")
         trust_rate = 0.2 if trust_rate is None else trust_rate
@@ -123,6 +142,10 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
         self.action_space = spaces.Box(-1.0, 1.0, (self.params.action_size,), np.float32)
         self.observation_space = spaces.Box(-100.0, 100.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
+        self.fidelity = fidelity
+        self.world: task_step.DynamicWorld | None = None
+        if fidelity == "dynamic":
+            self.world = task_step.DynamicWorld(geometry, dynamics, gui=render_mode == "human")
 
     def _detected_fault(self) -> tuple[int, str] | None:
         """The paper's reading of eq 4 against eq 5 for the current estimate:
@@ -148,9 +171,20 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
             info["encoder_distances"] = s.smoothed[0].copy()
         return info
 
+    def _show(self) -> None:
+        if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
+            self._render_rgb()
+
+    def _close(self) -> None:
+        self._close_render_scene()
+        if self.world is not None:
+            self.world.close()
+
     def _render_rgb(self) -> np.ndarray:
         from paragym.sim.tripod_model import TripodScene
 
+        if self.world is not None:  # the simulated robot, not the kinematic model
+            return self.world.scene.render()
         d = self.state.drive
         _, rotation, centre = mt.forward(d.true[:1], eta0=d.eta[0], geometry=self.geometry)
         return self._drawn(lambda gui: TripodScene(self.scenario.terrain, gui=gui),
@@ -222,6 +256,13 @@ class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
     robots. Keyword arguments are the single env's."""
 
     single_class = MobileTripodOdometryEnv
+
+    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
+                 **kwargs: Any) -> None:
+        if kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native tripod vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
 
     def _infos(self) -> dict[str, Any]:
         s = self.state

@@ -19,7 +19,8 @@ from gymnasium.utils.env_checker import check_env
 import paragym  # noqa: F401
 
 DYNAMIC_IDS = ["paragym/CaPaManCollisionFree-v1", "paragym/HybridSingularityFree-v0",
-               "paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0"]
+               "paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0", "paragym/MobileTripodOdometry-v0",
+               "paragym/MobileTripodOdometry-v1"]
 
 
 def _checked(env_id: str) -> None:
@@ -110,7 +111,8 @@ def test_hybrid_weak_actuators_sag_and_fail_the_episode():
     assert not infos[-1]["is_success"]
 
 
-@pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0"])
+@pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0",
+                                    "paragym/MobileTripodOdometry-v1"])
 def test_native_vector_envs_refuse_the_dynamic_fidelity(env_id):
     with pytest.raises(ValueError, match="kinematic"):
         gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", fidelity="dynamic")
@@ -191,3 +193,83 @@ def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_on
     env = gym.make("paragym/CaPaManCollisionFree-v1", fidelity="dynamic", dynamics=CaPaManDynamics.fast())
     assert env.unwrapped.scene.dynamics.time_step == 5e-3
     env.close()
+
+
+# --- the mobile tripod --------------------------------------------------------------------------------------
+
+
+def _tripod_drive(scenario, fidelity: str, **kwargs) -> list[dict]:
+    env = gym.make("paragym/MobileTripodOdometry-v1", scenario=scenario, fidelity=fidelity, **kwargs)
+    env.reset(seed=0)
+    infos = []
+    while True:
+        *_, terminated, truncated, info = env.step(np.zeros(3, np.float32))
+        infos.append(info)
+        if terminated or truncated:
+            break
+    env.close()
+    return infos
+
+
+def test_tripod_dynamic_drive_agrees_with_the_kinematic_one_and_its_settings_with_fine_ones():
+    """The paper's initial-heading drive: the misaligned unit drifts sideways as the kinematic model says."""
+    from paragym.sim.tripod_dynamic import TripodDynamics
+
+    kinematic = _tripod_drive("initial_heading", "kinematic")[-1]
+    dynamic = _tripod_drive("initial_heading", "dynamic")[-1]
+    fine = _tripod_drive("initial_heading", "dynamic", dynamics=TripodDynamics(time_step=2e-3,
+                                                                              solver_iterations=100))[-1]
+    drift = lambda info: np.linalg.norm(info["odometry"][:, :2] - info["true_units"][:, :2], axis=1)  # noqa: E731
+    assert drift(kinematic)[0] == pytest.approx(0.698, abs=0.01)
+    assert abs(drift(dynamic)[0] - drift(kinematic)[0]) < 0.02  # m, of 0.7 m
+    assert np.abs(dynamic["true_units"][:, :2] - fine["true_units"][:, :2]).max() < 0.01
+    assert np.abs(dynamic["eta"] - kinematic["eta"]).max() < 0.05  # rad (plus the encoders' +-1 deg noise)
+
+
+def test_tripod_fast_drive_slips_where_the_slow_one_rolls():
+    """At 0.66 m/s, ramped at 1 m/s^2, the wheels roll where odometry says; launched hard to 3 m/s they spin."""
+    import dataclasses
+
+    from paragym.sim.tripod_drive import Terrain
+    from paragym.sim.tripod_dynamic import TripodDynamics
+    from paragym.tasks.mobile_tripod import drive_scenario
+
+    slow = drive_scenario("random", np.random.default_rng(0))  # a heading of -2.93 rad
+    slow = dataclasses.replace(slow, heading_error=(0.0, 0.0, 0.0), push=None, slip=0.0, distance=4.0,
+                               terrain=Terrain())
+    fast = dataclasses.replace(slow, speed=3.0, distance=8.0)
+
+    def odometry_error(scenario, **kwargs):
+        info = _tripod_drive(scenario, "dynamic", **kwargs)[-1]
+        return np.linalg.norm(info["odometry"][:, :2] - info["true_units"][:, :2], axis=1).max()
+
+    rolled = odometry_error(slow)
+    slipped = odometry_error(fast, dynamics=TripodDynamics(acceleration=30.0))
+    assert rolled < 0.01  # m over 4 m
+    assert slipped > 3 * rolled
+
+
+def test_tripod_push_and_slip_come_from_contact():
+    import dataclasses
+
+    from paragym.tasks.mobile_tripod import drive_scenario
+
+    push = drive_scenario("push", np.random.default_rng(0))
+    with_push = _tripod_drive(push, "dynamic")
+    without = _tripod_drive(dataclasses.replace(push, push=None), "dynamic")
+    moved = np.linalg.norm(with_push[340]["true_units"][:, :2] - without[340]["true_units"][:, :2], axis=1)
+    assert moved[push.push[0]] == pytest.approx(push.push[2], abs=0.01)  # the paper's 2.5 cm, by a force
+    assert np.delete(moved, push.push[0]).max() < 0.01
+
+    # slip from contact: on a floor too slippery to carry the legs' outward thrust (friction 0.3), the units slide
+    # out, odometry does not see it and the leg encoders do
+    from paragym.sim.tripod_dynamic import TripodDynamics
+
+    short = dataclasses.replace(push, push=None, distance=3.3)
+    grip = _tripod_drive(short, "dynamic")[-1]
+    ice = _tripod_drive(short, "dynamic", dynamics=TripodDynamics(friction=0.3))[-1]
+    odometry_error = lambda info: np.linalg.norm(info["odometry"][:, :2] - info["true_units"][:, :2], axis=1)  # noqa: E731
+    assert odometry_error(grip).max() < 0.01
+    assert odometry_error(ice).max() > 0.05
+    assert np.abs(ice["eta"] - grip["eta"]).max() > 0.1  # rad
+

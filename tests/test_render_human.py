@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 CASES = [("paragym/CaPaManCollisionFree-v1", "dynamic"), ("paragym/HybridSingularityFree-v1", "dynamic"),
-         ("paragym/Orthoglide2PRRKappa-v0", "dynamic"), ("paragym/MobileTripodOdometry-v1", "kinematic")]
+         ("paragym/Orthoglide2PRRKappa-v0", "dynamic"), ("paragym/MobileTripodOdometry-v1", "dynamic")]
 
 _CHECK = """
 import sys, warnings

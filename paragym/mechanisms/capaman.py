@@ -465,7 +465,7 @@ class PartShape:
     """
 
     name: str
-    kind: str  # "box" or "cylinder"
+    kind: str  # "box", "cylinder" or "sphere" (``radius``)
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     radius: float = 0.0
     length: float = 0.0

@@ -124,7 +124,11 @@ class PyBulletSim:
         c = self._client
         frame = {"collisionFramePosition": list(offset)}
         vframe = {"visualFramePosition": list(offset)}
-        if isinstance(shape, Cylinder) or (isinstance(shape, PartShape) and shape.kind == "cylinder"):
+        if isinstance(shape, PartShape) and shape.kind == "sphere":
+            col = pb.createCollisionShape(pb.GEOM_SPHERE, radius=shape.radius, physicsClientId=c, **frame)
+            vis = pb.createVisualShape(pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=rgba, physicsClientId=c,
+                                       **vframe)
+        elif isinstance(shape, Cylinder) or (isinstance(shape, PartShape) and shape.kind == "cylinder"):
             radius = shape.radius
             length = shape.height if isinstance(shape, Cylinder) else shape.length
             col = pb.createCollisionShape(pb.GEOM_CYLINDER, radius=radius, height=length, physicsClientId=c,
@@ -184,6 +188,16 @@ class PyBulletSim:
         body = pb.createMultiBody(0, shape, basePosition=list(position), physicsClientId=c)
         pb.changeVisualShape(body, -1, rgbaColor=list(rgba), physicsClientId=c)
         self._bodies[name] = body
+
+    def add_plane(self, name: str, rgba: Sequence[float]) -> None:
+        """Add flat ground named ``name``: the plane z = 0 (cheaper to collide with than a flat heightfield)."""
+        self._check_new(name)
+        self._recipe[name] = (self.add_plane, (name, rgba))
+        c = self._client
+        shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
+        visual = pb.createVisualShape(pb.GEOM_BOX, halfExtents=[14.0, 5.0, 0.001], rgbaColor=list(rgba),
+                                      visualFramePosition=[11.0, 0.0, -0.001], physicsClientId=c)
+        self._bodies[name] = pb.createMultiBody(0, shape, visual, physicsClientId=c)
 
     def place(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Move body ``name``'s base to ``position`` (m), turned by the xyzw ``quaternion``."""
@@ -269,6 +283,13 @@ class PyBulletSim:
             for j in range(i + 1, n):
                 pb.setCollisionFilterPair(body, body, i, j, 0, physicsClientId=c)
 
+    def no_collision_between(self, name: str, other: str) -> None:
+        """The parts of bodies ``name`` and ``other`` do not collide with each other (joined by constraints)."""
+        a, b, c = self._bodies[name], self._bodies[other], self._client
+        for i in range(-1, pb.getNumJoints(a, physicsClientId=c)):
+            for j in range(-1, pb.getNumJoints(b, physicsClientId=c)):
+                pb.setCollisionFilterPair(a, b, i, j, 0, physicsClientId=c)
+
     def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
         """Make joints free (no motor): PyBullet's default velocity motors off,
         for 1-dof ``joints`` and ``spherical`` ones."""
@@ -280,13 +301,34 @@ class PyBulletSim:
                                             force=[0.0, 0.0, 0.0], physicsClientId=c)
 
     def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int,
-                   pivot_b: Sequence[float]) -> None:
+                   pivot_b: Sequence[float], other: str | None = None) -> None:
         """Close a loop of body ``name``: a ball joint (point-to-point
         constraint) between a point of ``link_a`` and a point of ``link_b``
-        (each in its link's centre-of-mass frame, m)."""
+        (each in its link's centre-of-mass frame, m); ``link_b`` of body
+        ``other`` when given (a loop through two bodies)."""
         body = self._bodies[name]
-        pb.createConstraint(body, link_a, body, link_b, pb.JOINT_POINT2POINT, [0, 0, 0], list(pivot_a),
-                            list(pivot_b), physicsClientId=self._client)
+        pb.createConstraint(body, link_a, self._bodies[other or name], link_b, pb.JOINT_POINT2POINT, [0, 0, 0],
+                            list(pivot_a), list(pivot_b), physicsClientId=self._client)
+
+    def friction(self, name: str, links: Sequence[int], lateral: float, anchor: bool = False) -> None:
+        """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base); ``anchor``: a
+        friction anchor at each contact, which corrects the drift of a sticking contact (PyBullet's
+        ``frictionAnchor``)."""
+        for link in links:
+            pb.changeDynamics(self._bodies[name], link, lateralFriction=lateral, frictionAnchor=anchor,
+                              physicsClientId=self._client)
+
+    def push(self, name: str, link: int, force: Sequence[float]) -> None:
+        """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step."""
+        pos = self.link_frame(name, link)[0]
+        pb.applyExternalForce(self._bodies[name], link, list(force), list(pos), pb.WORLD_FRAME,
+                              physicsClientId=self._client)
+
+    def spin(self, name: str, joints: Sequence[int], rates: Sequence[float], torque: float) -> None:
+        """Velocity motors on ``joints``: chase ``rates`` (rad/s) with at most ``torque`` (N m) each."""
+        pb.setJointMotorControlArray(self._bodies[name], list(joints), pb.VELOCITY_CONTROL,
+                                     targetVelocities=list(rates), forces=[torque] * len(joints),
+                                     physicsClientId=self._client)
 
     def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint), at rest."""
@@ -348,6 +390,11 @@ class PyBulletSim:
         self._removed += 1
         if self._removed >= self.REBUILD_AFTER:
             self._rebuild()
+
+    def rebuild(self) -> None:
+        """Reset the PyBullet world and build every body and set-up again (:meth:`remove`): a fresh
+        world, with nothing cached from what ran before (contacts and their impulses included)."""
+        self._rebuild()
 
     def _rebuild(self) -> None:
         """Reset the PyBullet world and build every body and set-up again."""

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -43,7 +44,7 @@ from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks.mobile_tripod import DriveScenario
 
-__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE",
+__all__ = ["DynamicWorld", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE",
            "TripodParams", "TripodTaskState", "reset", "step"]
 
 OBS_SIZE = 9 + 3 + 3 + 6
@@ -122,25 +123,128 @@ def reset(state: TripodTaskState, params: TripodParams, rows: np.ndarray, scenar
     state.last_eta[rows] = state.eta[rows]
 
 
-def step(state: TripodTaskState, params: TripodParams, actions: np.ndarray, active: np.ndarray) -> None:
+def step(state: TripodTaskState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
+         world: DynamicWorld | None = None) -> None:
     """Advance the ``active`` robots (N,) one sample with ``actions`` inside
     the Box (the env clips): corrections (N, 6) in v0, trust in the paper's
-    correction per unit (N, 3) in v1."""
-    _advance(state, params, actions, active, True)
+    correction per unit (N, 3) in v1. ``world``: the dynamics of one robot
+    (dynamic fidelity), which advances the drive before the estimate moves
+    (:class:`DynamicWorld`)."""
+    if world is None:
+        _advance(state, params, actions, active, True)
+        return
+    moved = world.move(state)
+    _advance(state, params, actions, active, True, moved, world.increment)
+
+
+class DynamicWorld:
+    """One robot's drive under PyBullet's dynamics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`).
+
+    It replaces :func:`paragym.sim.tripod_drive.k_drive_step` sample by
+    sample: the units drive for one sample's time on their wheels; the true
+    units become the simulated ones, eta the leg encoders', and each unit's
+    odometry moves by its own wheel encoders' travel along the heading it
+    believes (so the units' odometric increments differ: ``increment``
+    (1, 3, 2)). The scenario's disturbances act through the physics: its
+    heading errors misalign the units, its push is a force of
+    ``push_force`` x depth N on the pushed unit toward the robot's centre for
+    0.1 s, its slip (a slippery floor) sets each unit's wheel friction every
+    second from the drive's own slip numbers (no new draws: a seed gives the
+    same encoder noise in both fidelities): a slip speed s (m/s) lowers it
+    from ``friction`` toward ``slip_friction``, reached at 1 cm/s, the
+    paper's; and its terrain is the ground's heightfield over the drive's
+    path.
+    """
+
+    def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False) -> None:
+        from paragym.sim.tripod_dynamic import TripodDynamics
+
+        self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
+        self.scene: Any = None
+        self._terrain: Any = None
+        self.increment = np.zeros((1, 3, 2))
+        self._push_left = 0
+
+    def reset(self, state: TripodTaskState) -> None:
+        """Build the scene for the drive's terrain (kept when it is the same) and put the robot at its start."""
+        from paragym.sim.tripod_dynamic import TripodDynamicScene
+
+        d = state.drive
+        scenario = d.scenarios[0]
+        heading, reach = float(d.heading[0]), scenario.distance + 4.0  # the path, and the robot's span about it
+        ends = np.array([[0.0, 0.0], [reach * math.cos(heading), reach * math.sin(heading)]])
+        region = (float(ends[:, 0].min() - 4), float(ends[:, 0].max() + 4), float(ends[:, 1].min() - 4),
+                  float(ends[:, 1].max() + 4))
+        if self.scene is None or (scenario.terrain, region if scenario.terrain.bumps else None) != self._terrain:
+            if self.scene is not None:
+                self.scene.close()
+            self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region)
+            self._terrain = (scenario.terrain, region if scenario.terrain.bumps else None)
+        self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0])
+        self.scene.set_friction(np.full(3, self.dynamics.friction))
+        self._push_left = 0
+        self.increment[:] = 0.0
+
+    def move(self, state: TripodTaskState) -> np.ndarray:
+        """Advance the drive one sample if it has not ended; returns which robots moved (1,)."""
+        d, dyn = state.drive, self.dynamics
+        if d.k[0] >= d.steps[0]:
+            return np.zeros(1, bool)
+        scenario, k = d.scenarios[0], int(d.k[0])
+        if scenario.slip > 0 and k % int(round(1.0 / d.dt)) == 0:
+            share = np.minimum(1.0, d.slip_speed[0, k] / 0.01)
+            self.scene.set_friction(dyn.friction - (dyn.friction - dyn.slip_friction) * share)
+        push = None
+        if d.t[0] < d.push[0, 1] <= d.t[0] + d.dt:  # (NaN: no push)
+            self._push_left = int(round(0.1 / dyn.time_step))
+        if self._push_left:
+            unit = int(d.push[0, 0])
+            inward = d.true[0].mean(axis=0) - d.true[0, unit]
+            inward[2] = 0.0
+            push = (unit, dyn.push_force * d.push[0, 2] * inward / np.linalg.norm(inward))
+        steps = max(1, int(round(d.dt / dyn.time_step)))
+        used = min(steps, self._push_left)
+        travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
+        self._push_left -= used
+        heading = float(d.heading[0])
+        self.increment[0, :, 0], self.increment[0, :, 1] = travel * math.cos(heading), travel * math.sin(heading)
+        bumps, count = d.bumps[0], int(d.bump_count[0])
+        true = self.scene.units_true
+        for u in range(3):
+            d.odometry[0, u, :2] += self.increment[0, u]
+            d.odometry[0, u, 2] = k_terrain(d.odometry[0, u, 0], d.odometry[0, u, 1], bumps, count)[0]
+            d.true[0, u, :2] = true[u, :2]
+            d.true[0, u, 2], d.gradient[0, u, 0], d.gradient[0, u, 1] = k_terrain(true[u, 0], true[u, 1], bumps,
+                                                                                 count)
+        d.eta[0] = self.scene.eta
+        d.t[0] += d.dt
+        d.k[0] += 1
+        return np.ones(1, bool)
+
+    def close(self) -> None:
+        if self.scene is not None:
+            self.scene.close()
+
+
+_NONE = np.zeros(0, bool)
+_NO_INCREMENT = np.zeros((0, 3, 2))
 
 
 def _advance(state: TripodTaskState, params: TripodParams, actions: np.ndarray, rows: np.ndarray,
-             move: bool) -> None:
+             move: bool, moved: np.ndarray = _NONE, increment: np.ndarray = _NO_INCREMENT) -> None:
+    """``moved`` and ``increment``: a dynamic world advanced the drives already (which of them, and each
+    unit's odometric increment (N, 3, 2)); empty, the kernel advances them (:func:`k_drive_step`)."""
     s, d = state, state.drive
+    external = len(moved) > 0
     if params.version == 1:
         _advance_v1_kernel(s.estimate, s.eta, s.last_eta, s.smoothed, s.unit_error, s.plate_error, s.terminated,
                            s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, params.smoothing,
-                           params.trust_rate, params.relative_reward,
+                           params.trust_rate, params.relative_reward, external, moved, increment,
                            d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
         return
     _advance_kernel(s.estimate, s.eta, s.last_eta, s.unit_error, s.plate_error, s.terminated, s.obs, s.reward,
-                    np.ascontiguousarray(actions, np.float64), rows, move, params.max_correction, d.steps, d.noise,
-                    mt.kernel_consts(params.geometry), *d.kernel_args())
+                    np.ascontiguousarray(actions, np.float64), rows, move, external, moved, increment,
+                    params.max_correction, d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
 
 
 @njit(cache=True, error_model="numpy")
@@ -163,17 +267,22 @@ def _score(i, estimate, true, unit_error, plate_error, reward):
 
 @njit(cache=True, error_model="numpy")
 def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, terminated, obs, reward, actions, rows,
-                    move, max_correction, steps, noise, geo, true, odometry, gradient, eta, t, k, speed, heading,
-                    heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
-    """The transition of every robot with ``rows[i]`` (module docstring)."""
+                    move, external, moved, increment, max_correction, steps, noise, geo, true, odometry, gradient, eta,
+                    t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
+    """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
+    advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity."""
     row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
     for i in range(len(k)):
         if not rows[i]:
             continue
-        if move and k[i] < steps[i]:
-            ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push,
-                                  bumps, bump_count, slip_angle, slip_speed, dt)
+        if move and (moved[i] if external else k[i] < steps[i]):
+            ox, oy = 0.0, 0.0
+            if not external:
+                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
+                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
             for u in range(3):
+                if external:
+                    ox, oy = increment[i, u, 0], increment[i, u, 1]
                 estimate[i, u, 0] += ox + actions[i, 2 * u] * max_correction
                 estimate[i, u, 1] += oy + actions[i, 2 * u + 1] * max_correction
                 estimate[i, u, 2] = k_terrain(estimate[i, u, 0], estimate[i, u, 1], bumps[i], bump_count[i])[0]
@@ -196,25 +305,30 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
 
 @njit(cache=True, error_model="numpy")
 def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward,
-                       actions, rows, move, smoothing, trust_rate, relative, steps, noise, geo, true, odometry,
-                       gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle,
-                       slip_speed, dt):
-    """Version 1's transition of every robot with ``rows[i]`` (module docstring)."""
+                       actions, rows, move, smoothing, trust_rate, relative, external, moved, increment, steps, noise,
+                       geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
+                       bump_count, slip_angle, slip_speed, dt):
+    """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``external``,
+    ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
     row = np.empty(OBS_SIZE_V1)
     plate = np.empty((3, 3))
     for i in range(len(k)):
         if not rows[i]:
             continue
-        if move and k[i] < steps[i]:
+        if move and (moved[i] if external else k[i] < steps[i]):
             for u in range(3):  # the agent's trust in the paper's correction, unit by unit, on what it saw
                 w = trust_rate * min(1.0, max(0.0, actions[i, u]))
                 if w > 0.0:
                     x, y = mt.k_relocate(estimate[i], u, smoothed[i])
                     estimate[i, u, 0] += w * (x - estimate[i, u, 0])
                     estimate[i, u, 1] += w * (y - estimate[i, u, 1])
-            ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push,
-                                  bumps, bump_count, slip_angle, slip_speed, dt)
+            ox, oy = 0.0, 0.0
+            if not external:
+                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
+                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
             for u in range(3):
+                if external:
+                    ox, oy = increment[i, u, 0], increment[i, u, 1]
                 estimate[i, u, 0] += ox
                 estimate[i, u, 1] += oy
                 estimate[i, u, 2] = k_terrain(estimate[i, u, 0], estimate[i, u, 1], bumps[i], bump_count[i])[0]
