@@ -287,6 +287,41 @@ def _plan_tripod(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -
     return 0
 
 
+def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
+    """Run a policy's episode in dynamic fidelity and validate what it executed against what it commanded
+    (:func:`paragym.validation.episode.validate_episode`); print the report, save Figs 8-9 and a JSON."""
+    import json
+    from dataclasses import asdict
+
+    from paragym.baselines.policies import get_policy, policies_for
+    from paragym.validation.episode import validate_episode
+    from paragym.validation.report import plot_report
+
+    name = args.policy or next(n for n, s in policies_for(env_id).items() if s.kind == "reference")
+    spec = get_policy(env_id, name, args.models)
+    env = gym.make(env_id, scenario=_scenario(env_id, args), fidelity="dynamic")
+    try:
+        print(f"{env_id}: {args.scenario} scenario, seed {args.seed}, policy {name} ({spec.kind}), dynamic fidelity")
+        val = validate_episode(env, spec.factory(env, args.seed), seed=args.seed, sensor_seed=args.seed)
+    finally:
+        env.close()
+    rep = val.report
+    print(f"episode: {val.steps} steps, return {val.episode_return:.2f}, success {val.success}; the body "
+          f"executed at most {val.position_error * 1000:.2f} mm from its command")
+    print(rep.table())
+    out = Path(args.out) / (env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}_{name}")
+    paths = plot_report(rep, out, f"{env_id.split('/')[1]}, {args.scenario}, {name}: "
+                                  f"{'PASS' if rep.passed else 'FAIL'}")
+    (out / "report.json").write_text(json.dumps({
+        "env_id": env_id, "scenario": args.scenario, "seed": args.seed, "policy": name,
+        "producer": json.loads(spec.producer()), "passed": rep.passed, "judged": rep.judged,
+        "position_error_m": val.position_error, "success": val.success, "return": val.episode_return,
+        "steps": val.steps, "tolerances": asdict(rep.tolerances), "components": [asdict(c) for c in rep.components]},
+        indent=2, default=repr))
+    print(f"wrote {', '.join(str(p) for p in paths)} and {out / 'report.json'}")
+    return 0 if rep.passed else 1
+
+
 #: env id -> the scenario demo, plan and validate use when --scenario is not given: the paper's case
 DEFAULT_SCENARIO: dict[str, str] = {
     "paragym/CaPaManCollisionFree-v0": "paper",
@@ -295,6 +330,7 @@ DEFAULT_SCENARIO: dict[str, str] = {
     "paragym/MobileTripodOdometry-v0": "push",  # paper 004's scenario 2 (the paper has three; no single "paper")
     "paragym/CaPaManCollisionFree-v1": "paper",
     "paragym/MobileTripodOdometry-v1": "push",
+    "paragym/HybridSingularityFree-v1": "paper",
 }
 
 
@@ -320,6 +356,7 @@ VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] 
     "paragym/CaPaManCollisionFree-v0": _validate_capaman,
     "paragym/HybridSingularityFree-v0": _validate_hybrid,
     "paragym/CaPaManCollisionFree-v1": _validate_capaman,
+    "paragym/HybridSingularityFree-v1": _validate_hybrid,
 }
 
 
@@ -345,8 +382,8 @@ def _cmd_plan(args: argparse.Namespace) -> int:
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    if env_id not in VALIDATIONS:
-        raise ValueError(f"no validation loop for {env_id} yet")
+    if args.policy is not None or env_id not in VALIDATIONS:  # a policy's executed episode
+        return _validate_episode(env_id, args)
     env = gym.make(env_id, scenario=_scenario(env_id, args))
     out = Path(args.out)
     stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}" + (
@@ -515,14 +552,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--dt", type=float, default=0.45, help="seconds between via points (paper: 0.09, 0.45, 0.9)")
     p.add_argument("--out", default="runs/plan", help="folder for the PNG and the JSON")
     p.set_defaults(func=_cmd_plan)
-    p = sub.add_parser("validate", help="plan, execute in the dynamic simulation, validate with the accelerometer "
-                                        "array and the Kalman filter; print the report, save Figs 8-9")
+    p = sub.add_parser("validate", help="execute in the dynamic simulation and validate with the accelerometer "
+                                        "array and the Kalman filter: a policy's episode (--policy), or the "
+                                        "CaPaMan's and the hybrid's plan; print the report, save Figs 8-9")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
     p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario, planner and sensor-noise seed")
     p.add_argument("--dt", type=float, default=0.9,
                    help="CaPaMan: seconds between via points (paper: 0.09, 0.45, 0.9)")
     p.add_argument("--duration", type=float, default=2.0, help="hybrid: seconds for the whole path")
+    p.add_argument("--policy", default=None,
+                   help="validate this policy's episode (a name of `paragym policies ENV`: the reference, a shipped "
+                        "model, user-<algo>-seed<N> with --models); without it the CaPaMan and the hybrid validate "
+                        "their reference plan, the 2PRR and the tripod their reference policy's episode")
+    p.add_argument("--models", default=None, help="folder of your own models (for --policy user-...)")
     p.add_argument("--out", default="runs/validate", help="folder for the pictures and the JSON report")
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("train", help="train a Stable-Baselines3 agent (needs the 'rl' extra); resumable")

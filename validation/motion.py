@@ -43,18 +43,20 @@ def capaman_planned_motion(trajectory: JointTrajectory, rate: float,
     return RigidMotion(t, pose.position, pose.rotation, twist[:, :3], twist[:, 3:], acc[:, :3], acc[:, 3:])
 
 
-def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle: float = 0.0) -> RigidMotion:
+def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle: float = 0.0,
+                     moving_at_end: bool = False) -> RigidMotion:
     """A body's planned motion from poses (K, 6) = (x, y, z, roll, pitch, yaw)
     (m, rad; ``R = Rz(yaw) Ry(pitch) Rx(roll)``) at times ``t_knots`` (K,):
-    cubic splines through the poses (at rest at both ends), sampled at
-    ``rate`` Hz, plus ``settle`` s at rest. Angular velocity from the angle
+    cubic splines through the poses (at rest at both ends, or, with
+    ``moving_at_end``, free of acceleration at the end: a path cut off while
+    moving), sampled at ``rate`` Hz, plus ``settle`` s at rest. Angular velocity from the angle
     rates, ``omega = roll' Rz Ry e_x + pitch' Rz e_y + yaw' e_z``; angular
     acceleration by central differences of omega."""
     from scipy.interpolate import CubicSpline
 
     from paragym.mechanisms.hybrid import euler_matrix
 
-    spline = CubicSpline(t_knots, poses, bc_type="clamped")
+    spline = CubicSpline(t_knots, poses, bc_type=((1, np.zeros(6)), (2, np.zeros(6))) if moving_at_end else "clamped")
     end = float(t_knots[-1])
     t = np.arange(0.0, end + settle + 0.5 / rate, 1.0 / rate)
     tc = np.clip(t, 0.0, end)

@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["FOOT", "TripodGeometry", "distances", "eta", "forward", "inverse", "k_eta", "kernel_consts",
-           "plate_frame_units", "relocate"]
+           "plate_fit", "plate_frame_units", "relocate"]
 
 FOOT = 0.3048
 #: Newton's iterations for eta (from the last sample's it converges in 3-5); a configuration that has not
@@ -289,6 +289,17 @@ def _kabsch(local: np.ndarray, world: np.ndarray) -> tuple[np.ndarray, np.ndarra
     fix[:, 2] = d
     rot = np.swapaxes(vt, 1, 2) @ (fix[:, :, None] * np.swapaxes(u, 1, 2))
     return rot, wc - np.einsum("nij,nj->ni", rot, lc)
+
+
+def plate_fit(units: np.ndarray, eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """The plate's rotation (N, 3, 3) and centre (N, 3) that best place its
+    frame's units at ``eta`` (N, 3) (eqs 1-3) onto ``units`` (N, 3, 3), in the
+    least-squares sense (Kabsch): defined for any units, consistent with the
+    legs or not (an estimate's, say)."""
+    units = np.asarray(units, float)
+    units = units[None] if units.ndim == 2 else units
+    return _kabsch(plate_frame_units(np.atleast_2d(eta), geometry), units)
 
 
 def forward(units: np.ndarray, eta0: np.ndarray | None = None, geometry: TripodGeometry = DEFAULT_GEOMETRY,

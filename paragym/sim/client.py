@@ -95,6 +95,8 @@ class PyBulletSim:
         self._removed = 0
         self._links: dict[str, dict[str, int]] = {}
         self._link_names: dict[str, dict[int, str]] = {}
+        #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
+        self.after_step: list[Any] = []
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._client)
 
@@ -349,8 +351,10 @@ class PyBulletSim:
                                      physicsClientId=self._client)
 
     def step(self) -> None:
-        """One step of the physics."""
+        """One step of the physics (then the :attr:`after_step` callbacks: a recorder's)."""
         pb.stepSimulation(physicsClientId=self._client)
+        for callback in self.after_step:
+            callback()
 
     def joint_positions(self, name: str, joints: Sequence[int]) -> np.ndarray:
         """The positions of 1-dof joints now (rad or m)."""
