@@ -39,28 +39,57 @@ import numpy as np
 
 import paragym
 from paragym.baselines.policies import PolicySpec, policies_for
-from paragym.baselines.store import EpisodeRow, ResultStore
+from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.training import check_env_id, env_name
 from paragym.rollout import Episode, run_episode
 
-__all__ = ["FULL", "METRICS", "PRIMARY", "QUICK", "EvalSuite", "Summary", "episode_seed", "evaluate_episode",
-           "markdown", "run_leaderboard", "summarise", "terminal_table"]
+__all__ = ["FULL", "METRICS", "PAPER_SCENARIO", "PRIMARY", "QUICK", "EvalSuite", "Summary", "dynamic_kwargs",
+           "episode_seed", "evaluate_dynamic", "evaluate_episode", "markdown", "run_leaderboard", "summarise",
+           "terminal_table"]
 
 
 @dataclass(frozen=True)
 class EvalSuite:
-    """Which episodes are evaluated: ``episodes`` per evaluation seed."""
+    """Which episodes are evaluated: ``episodes`` per evaluation seed, and
+    ``dynamic``: the episodes each policy also runs in the dynamic fidelity,
+    as (scenario, reset seed), "paper" being each env's paper case
+    (:data:`PAPER_SCENARIO`); ``dynamic_all``: whether every policy runs them
+    (the quick suite leaves out the floors and the learned seeds other than
+    0, to stay under two minutes)."""
 
     name: str
     seeds: tuple[int, ...]
     episodes: int
+    dynamic: tuple[tuple[str, int], ...] = ()
+    dynamic_all: bool = True  # every policy runs the dynamic episodes (else: no floors, learned seed 0 only)
+
+    def runs_dynamic(self, spec: PolicySpec) -> bool:
+        """Whether ``spec`` runs the dynamic episodes in this suite."""
+        if self.dynamic_all:
+            return True
+        return spec.kind != "floor" and not (spec.kind == "learned" and not spec.name.endswith("seed0"))
 
     def keys(self) -> list[tuple[int, int]]:
         return [(s, k) for s in self.seeds for k in range(self.episodes)]
 
 
-FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10)
-QUICK = EvalSuite("quick", (0,), 3)
+FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))
+QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
+
+#: each env's paper case as its scenario argument, where it is not "paper" (paper 004 has three drives: the push)
+PAPER_SCENARIO = {"paragym/MobileTripodOdometry-v0": "push", "paragym/MobileTripodOdometry-v1": "push"}
+
+
+def dynamic_kwargs(env_id: str) -> dict[str, Any]:
+    """The env's arguments for the leaderboard's dynamic episodes: its
+    dynamic fidelity at its default settings, except the CaPaMan's, run at
+    ``CaPaManDynamics.fast()`` (within 0.5 mm of its released settings at 8x
+    their speed; :mod:`paragym.sim.capaman_dynamic`)."""
+    if "CaPaMan" in env_id:
+        from paragym.sim.capaman_dynamic import CaPaManDynamics
+
+        return {"fidelity": "dynamic", "dynamics": CaPaManDynamics.fast()}
+    return {"fidelity": "dynamic"}
 
 
 def episode_seed(seed: int, episode: int) -> int:
@@ -196,15 +225,56 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
                       ep.success, metrics, wall, producer=spec.producer())
 
 
+def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
+    """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
+    from reset seed ``seed`` in the dynamic fidelity (:func:`dynamic_kwargs`),
+    measure it as a kinematic episode is measured, and validate what it
+    executed against what it commanded (the accelerometers and the Kalman
+    filter: :func:`paragym.validation.episode.validate_episode`). A planner
+    that finds no plan stands still, as in :func:`evaluate_episode`."""
+    import warnings
+
+    from paragym.baselines.simple import ZeroPolicy
+    from paragym.planners.base import PlanningError
+    from paragym.validation.episode import validate_episode
+
+    arg = PAPER_SCENARIO.get(spec.env_id, "paper") if scenario == "paper" else scenario
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*is out of date.*")
+        env = gym.make(spec.env_id, scenario=arg, **dynamic_kwargs(spec.env_id))
+    failed = 0.0
+    try:
+        try:
+            val = validate_episode(env, spec.factory(env, seed), seed=seed, sensor_seed=seed)
+        except PlanningError:
+            failed = 1.0
+            val = validate_episode(env, ZeroPolicy(env.action_space), seed=seed, sensor_seed=seed)
+    finally:
+        env.close()
+    metrics = METRICS[spec.env_id][0](val.episode)
+    metrics["policy_failed"] = failed
+    kf = {"worst": _worst(val.report), "position_error_mm": round(val.position_error * 1000, 3)}
+    return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
+                      kf, time.perf_counter() - t0, producer=spec.producer())
+
+
 # --- executors: each yields finished rows as they come --------------------------------------------------------
 
 Job = tuple[PolicySpec, int, int]
+#: a dynamic-fidelity job: the spec, the scenario, the reset seed
+DynamicJob = tuple[PolicySpec, str, int]
 
 
-def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
-               ) -> Iterator[EpisodeRow]:
-    for spec, seed, episode in jobs:
-        yield evaluate_episode(spec, seed, episode)
+def _dispatch(kind: str, spec: PolicySpec, a: Any, b: Any) -> EpisodeRow | DynamicRow:
+    """One job of either kind: an episode (seed, episode) or a dynamic episode (scenario, seed)."""
+    return evaluate_episode(spec, a, b) if kind == "episode" else evaluate_dynamic(spec, a, b)
+
+
+def _run_local(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+               kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+    for spec, a, b in jobs:
+        yield _dispatch(kind, spec, a, b)
 
 
 def die_with_parent(parent: int) -> None:
@@ -245,14 +315,15 @@ def _init_worker(parent: int) -> None:
         pass
 
 
-def _evaluate_by_name(env_id: str, name: str, models_dir: str | None, seed: int, episode: int) -> EpisodeRow:
+def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any
+                      ) -> EpisodeRow | DynamicRow:
     from paragym.baselines.policies import get_policy
 
-    return evaluate_episode(get_policy(env_id, name, models_dir), seed, episode)
+    return _dispatch(kind, get_policy(env_id, name, models_dir), a, b)
 
 
-def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
-              ) -> Iterator[EpisodeRow]:
+def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+              kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
     """A fork-started process pool: workers inherit the policy registry, so
     policies registered in the calling script work too. The workers die with
     this process (:func:`die_with_parent`), and an interrupted run stops them
@@ -265,8 +336,8 @@ def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir
                                initargs=(os.getpid(),))
     finished = False
     try:
-        futures = [pool.submit(_evaluate_by_name, spec.env_id, spec.name, models_dir, seed, episode)
-                   for spec, seed, episode in jobs]
+        futures = [pool.submit(_evaluate_by_name, kind, spec.env_id, spec.name, models_dir, a, b)
+                   for spec, a, b in jobs]
         for fut in as_completed(futures):
             yield fut.result()
         finished = True
@@ -277,8 +348,8 @@ def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir
         pool.shutdown(wait=finished, cancel_futures=True)
 
 
-def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None
-             ) -> Iterator[EpisodeRow]:
+def _run_ray(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+             kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
     """Ray tasks (one per episode; the policy spec travels with the task,
     pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
     try:
@@ -294,8 +365,8 @@ def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir:
             if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
                 reaper = _start_reaper()
             ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
-        remote = ray.remote(num_cpus=1)(evaluate_episode)
-        pending = [remote.remote(spec, seed, episode) for spec, seed, episode in jobs]
+        remote = ray.remote(num_cpus=1)(_dispatch)
+        pending = [remote.remote(kind, spec, a, b) for spec, a, b in jobs]
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             try:
@@ -423,6 +494,9 @@ class Summary:
     validation: dict[str, Any] | None = None
     rank: int = 0
     producer: str = ""
+    #: the dynamic fidelity's episodes: episodes, success_rate, return_mean, metrics (means), kf (the verdict on
+    #: the paper episode: passed, worst, position_error_mm); None when they were not run
+    dynamic: dict[str, Any] | None = None
 
     def sort_key(self) -> tuple[float, float, float, str]:
         """Success rate, then the env's primary metric, then the return (all best first)."""
@@ -468,7 +542,7 @@ def _verdict(s: Summary) -> str:
     return "PASS" if s.validation["passed"] else "FAIL"
 
 
-def _columns(env: str) -> list[tuple[str, Callable[[Summary], str]]]:
+def _columns(env: str, dynamic: bool = False) -> list[tuple[str, Callable[[Summary], str]]]:
     cols: list[tuple[str, Callable[[Summary], str]]] = [
         ("#", lambda s: str(s.rank)), ("policy", lambda s: s.policy), ("kind", lambda s: s.kind),
         ("success", lambda s: f"{s.success_rate:.2f}"),
@@ -478,12 +552,24 @@ def _columns(env: str) -> list[tuple[str, Callable[[Summary], str]]]:
     cols.append(("s/episode", lambda s: f"{s.wall_seconds:.3f}"))
     if env in VALIDATED:
         cols.append(("KF validation", _verdict))
+    if dynamic:
+        key = PRIMARY[env][0]
+        fmt = next((f for k, _, f in METRICS[env][1] if k == key), ".2f")
+        cols += [("dynamic: success", lambda s: _dyn(s, lambda d: f"{d['success_rate']:.2f}")),
+                 (f"dynamic: {_primary_label(env)}", lambda s: _dyn(s, lambda d: format(
+                     d["return_mean"] if key == "return" else d["metrics"].get(key, math.nan), fmt))),
+                 ("dynamic: KF, own episode", lambda s: _dyn(s, lambda d: "" if d["kf"] is None else (
+                     "PASS" if d["kf"]["passed"] else "FAIL")))]
     return cols
+
+
+def _dyn(s: Summary, cell: Callable[[dict[str, Any]], str]) -> str:
+    return "" if s.dynamic is None else cell(s.dynamic)
 
 
 def terminal_table(summaries: list[Summary]) -> str:
     """A plain-text table of one env's summaries."""
-    cols = _columns(summaries[0].env)
+    cols = _columns(summaries[0].env, any(s.dynamic is not None for s in summaries))
     cells = [[label for label, _ in cols]] + [[f(s) for _, f in cols] for s in summaries]
     widths = [max(len(row[i]) for row in cells) for i in range(len(cols))]
     lines = ["  ".join(c.ljust(w) if i in (1, 2) else c.rjust(w)
@@ -497,13 +583,19 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
     """LEADERBOARD.md: one section per env (table, picture, notes)."""
     out = [header, ""]
     for env, summaries in all_summaries.items():
-        cols = _columns(env)
+        cols = _columns(env, any(s.dynamic is not None for s in summaries))
         out += [f"## `{env}`", "", "| " + " | ".join(label for label, _ in cols) + " |",
                 "|" + "|".join("---" for _ in cols) + "|"]
         out += ["| " + " | ".join(f(s).replace("|", "/") for _, f in cols) + " |" for s in summaries]
         sign = PRIMARY[env][1]
         out += ["", f"Ranked by success rate, then {_primary_label(env)} "
                 f"({'higher' if sign > 0 else 'lower'} is better). {summaries[0].episodes} episodes per policy.", ""]
+        dyn = next((s.dynamic for s in summaries if s.dynamic is not None), None)
+        if dyn is not None:
+            out += [f"Dynamic: {dyn['episodes']} episodes per policy under PyBullet's dynamics "
+                    f"({dyn['settings']}), the paper's case first; KF: the accelerometers and the Kalman filter on "
+                    "the policy's own paper-case episode, what it executed against what it commanded "
+                    "(`paragym validate ENV --policy NAME`). Beside the kinematic columns, the sim-to-sim gap.", ""]
         for s in summaries:
             if s.validation is not None:
                 v = s.validation
@@ -544,16 +636,26 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
     writer = csv.writer(buf)
     keys = sorted({k for ss in all_summaries.values() for s in ss for k in s.metrics})
     writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "return_mean", "return_std",
-                     *keys, "wall_seconds_per_episode", "kf_validation", "producer"])
+                     *keys, "wall_seconds_per_episode", "kf_validation", "dynamic_episodes", "dynamic_success_rate",
+                     "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode", "producer"])
     for ss in all_summaries.values():
         for s in ss:
             writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
                              f"{s.return_mean:.6g}", f"{s.return_std:.6g}",
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
-                             f"{s.wall_seconds:.4f}", _verdict(s), s.producer])
+                             f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys), s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
     return path
+
+
+def _dynamic_cells(s: Summary, keys: list[str]) -> list[str]:
+    d = s.dynamic
+    if d is None:
+        return [""] * (4 + len(keys))
+    return [str(d["episodes"]), f"{d['success_rate']:.4f}", f"{d['return_mean']:.6g}",
+            *(f"{d['metrics'][k]:.6g}" if k in d["metrics"] else "" for k in keys),
+            "" if d["kf"] is None else ("PASS" if d["kf"]["passed"] else "FAIL")]
 
 
 # --- KF validation of the reference plans ----------------------------------------------------------------------
@@ -678,6 +780,12 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
              f"{store.path}; running {len(jobs)} with the {executor} executor")
         _execute(store, jobs, executor, workers, ray_address, models, progress, on_row)
+        if validate and suite.dynamic:
+            dynamic_jobs = _plan_dynamic(store, chosen, suite, producers)
+            who = "" if suite.dynamic_all else ": the references, the other methods, each learned algorithm's seed 0"
+            echo(f"dynamic fidelity: {len(dynamic_jobs)} episodes to run ({len(suite.dynamic)} per policy{who}; "
+                 f"each with the KF validation of what it executed)")
+            _execute(store, dynamic_jobs, executor, workers, ray_address, models, progress, None, kind="dynamic")
         if validate:
             _validate_references(store, chosen, producers, echo)
         all_summaries = _summaries(store, chosen, suite, producers)
@@ -714,19 +822,33 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
     return jobs, sum(len(specs) for specs in chosen.values()) * len(suite.keys())
 
 
-def _execute(store: ResultStore, jobs: list[Job], executor: str, workers: int, ray_address: str | None,
-             models: Path | None, progress: bool, on_row: Callable[[EpisodeRow], None] | None) -> None:
+def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+                  producers: dict[tuple[str, str], str]) -> list[DynamicJob]:
+    """The dynamic-fidelity episodes ``store`` lacks for the current producers."""
+    done = store.dynamic_keys()
+    return [(spec, scenario, seed) for specs in chosen.values() for spec in specs.values()
+            if suite.runs_dynamic(spec) for scenario, seed in suite.dynamic
+            if (spec.env_id, spec.name, scenario, seed, store.version, producers[spec.env_id, spec.name]) not in done]
+
+
+def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,
+             models: Path | None, progress: bool, on_row: Callable[[EpisodeRow], None] | None,
+             kind: str = "episode") -> None:
     """Run ``jobs`` with the executor, storing each row as it comes (Ctrl-C
-    keeps what is stored and stops the workers)."""
+    keeps what is stored and stops the workers). ``kind``: "episode" or
+    "dynamic" (:data:`DynamicJob`)."""
     from tqdm.auto import tqdm
 
     run = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}[executor]
-    stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
+    stream = run(jobs, workers, ray_address, str(models) if models is not None else None, kind)
     saved = 0
     try:
         with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
             for row in stream:
-                store.add(row)
+                if kind == "dynamic":
+                    store.add_dynamic(row)
+                else:
+                    store.add(row)
                 saved += 1
                 bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
                 bar.update()
@@ -741,11 +863,14 @@ def _validate_references(store: ResultStore, chosen: dict[str, dict[str, PolicyS
                          producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> None:
     """The KF validation of each validated reference plan that takes part and
     has none stored for its producer (dynamic fidelity)."""
+    verdicts: dict[Any, tuple[bool, dict[str, Any]]] = {}  # v1 validates v0's plan: run each check once
     for env, (name, check) in VALIDATED.items():
         producer = producers.get((env, name))
         if env in chosen and name in chosen[env] and store.validation(env, name, producer) is None:
-            echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
-            passed, summary = check(0)
+            if check not in verdicts:
+                echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
+                verdicts[check] = check(0)
+            passed, summary = verdicts[check]
             store.set_validation(env, name, passed, summary, producer)
 
 
@@ -756,10 +881,32 @@ def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], sui
     keys = set(suite.keys())
     rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
     all_summaries = summarise(rows, store)
+    wanted = set(suite.dynamic)
+    dynamic: dict[tuple[str, str], list[DynamicRow]] = {}
+    for r in store.dynamic_rows():
+        if producers.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted:
+            dynamic.setdefault((r.env, r.policy), []).append(r)
+    for env, ss in all_summaries.items():
+        for s in ss:
+            s.dynamic = _dynamic_summary(dynamic.get((env, s.policy), []), suite)
     for env, ss in all_summaries.items():
         for s in ss:
             s.description = chosen[env][s.policy].description
     return all_summaries
+
+
+def _dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] | None:
+    """One policy's dynamic episodes in a few numbers (None when it has none)."""
+    if not rows:
+        return None
+    paper = next((r for r in rows if r.scenario == suite.dynamic[0][0] and r.seed == suite.dynamic[0][1]), None)
+    settings = ("`CaPaManDynamics.fast()`: a 5 ms step, 30 solver iterations" if "CaPaMan" in rows[0].env else
+                "the env's default dynamic settings")
+    return {"episodes": len(rows), "success_rate": float(np.mean([r.success for r in rows])),
+            "return_mean": float(np.mean([r.episode_return for r in rows])),
+            "metrics": {k: float(np.mean([r.metrics[k] for r in rows])) for k in rows[0].metrics},
+            "kf": None if paper is None else {"passed": paper.kf_passed, **paper.kf},
+            "settings": settings}
 
 
 def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producers: dict[tuple[str, str], str],

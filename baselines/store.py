@@ -23,9 +23,9 @@ from typing import Any
 
 import paragym
 
-__all__ = ["SCHEMA_VERSION", "EpisodeRow", "ResultStore"]
+__all__ = ["SCHEMA_VERSION", "DynamicRow", "EpisodeRow", "ResultStore"]
 
-SCHEMA_VERSION = "2"
+SCHEMA_VERSION = "3"  # 3: the dynamic fidelity's episodes (paragym 0.6.0)
 
 _SCHEMA = """
 CREATE TABLE IF NOT EXISTS meta (key TEXT PRIMARY KEY, value TEXT NOT NULL);
@@ -37,6 +37,11 @@ CREATE TABLE IF NOT EXISTS episodes (
 CREATE TABLE IF NOT EXISTS validations (
     env TEXT NOT NULL, policy TEXT NOT NULL, version TEXT NOT NULL, passed INTEGER NOT NULL,
     summary TEXT NOT NULL, producer TEXT NOT NULL, PRIMARY KEY (env, policy, version, producer));
+CREATE TABLE IF NOT EXISTS dynamic (
+    env TEXT NOT NULL, policy TEXT NOT NULL, scenario TEXT NOT NULL, seed INTEGER NOT NULL, version TEXT NOT NULL,
+    producer TEXT NOT NULL, episode_return REAL NOT NULL, success INTEGER NOT NULL, metrics TEXT NOT NULL,
+    kf_passed INTEGER NOT NULL, kf TEXT NOT NULL, wall_seconds REAL NOT NULL,
+    PRIMARY KEY (env, policy, scenario, seed, version, producer));
 """
 
 
@@ -60,6 +65,30 @@ class EpisodeRow:
     @property
     def key(self) -> tuple[str, str, int, int, str, str]:
         return (self.env, self.policy, self.seed, self.episode, self.version, self.producer)
+
+
+@dataclass(frozen=True)
+class DynamicRow:
+    """One episode in the dynamic fidelity: the task's measures, and the KF
+    verdict on what the policy executed against what it commanded (``kf``:
+    the worst component and the body's largest distance from its command)."""
+
+    env: str
+    policy: str
+    scenario: str
+    seed: int
+    episode_return: float
+    success: bool
+    metrics: dict[str, float]
+    kf_passed: bool
+    kf: dict[str, Any]
+    wall_seconds: float = 0.0
+    version: str = paragym.__version__
+    producer: str = ""
+
+    @property
+    def key(self) -> tuple[str, str, str, int, str, str]:
+        return (self.env, self.policy, self.scenario, self.seed, self.version, self.producer)
 
 
 #: SQLite's application id of a paragym results file ("PGYM"): a file without it was not made by paragym
@@ -150,6 +179,25 @@ class ResultStore:
         args = (self.version, env) if env else (self.version,)
         return [EpisodeRow(e, p, s, k, kind, r, n, bool(ok), json.loads(m), w, v, prod)
                 for e, p, s, k, kind, r, n, ok, m, w, v, prod in self.db.execute(query, args)]
+
+    def dynamic_keys(self) -> set[tuple[str, str, str, int, str, str]]:
+        """The keys of every stored dynamic-fidelity episode."""
+        return set(self.db.execute("SELECT env, policy, scenario, seed, version, producer FROM dynamic").fetchall())
+
+    def add_dynamic(self, row: DynamicRow) -> None:
+        """Store one dynamic-fidelity episode now (a key already stored is kept as it was)."""
+        with self.db:
+            self.db.execute("INSERT OR IGNORE INTO dynamic VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
+                            (row.env, row.policy, row.scenario, row.seed, row.version, row.producer,
+                             float(row.episode_return), int(row.success), json.dumps(row.metrics, sort_keys=True),
+                             int(row.kf_passed), json.dumps(row.kf, sort_keys=True), float(row.wall_seconds)))
+
+    def dynamic_rows(self) -> list[DynamicRow]:
+        """This version's dynamic-fidelity episodes, in key order."""
+        query = ("SELECT env, policy, scenario, seed, episode_return, success, metrics, kf_passed, kf, wall_seconds, "
+                 "version, producer FROM dynamic WHERE version = ? ORDER BY env, policy, scenario, seed, producer")
+        return [DynamicRow(e, p, sc, s, r, bool(ok), json.loads(m), bool(kp), json.loads(kf), w, v, prod)
+                for e, p, sc, s, r, ok, m, kp, kf, w, v, prod in self.db.execute(query, (self.version,))]
 
     def set_validation(self, env: str, policy: str, passed: bool, summary: dict[str, Any], producer: str = "") -> None:
         with self.db:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sqlite3
 import sys
 from collections.abc import Callable, Sequence
@@ -617,7 +618,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="also rank the models you trained in this folder (as user-<algo>-seed<N>; the shipped "
                         "models always take part)")
     p.add_argument("--executor", choices=("local", "workers", "ray"), default="local")
-    p.add_argument("--workers", type=int, default=1, help="processes (a local pool) or Ray CPUs")
+    p.add_argument("--workers", type=int, default=min(4, os.cpu_count() or 1),
+                   help="processes (a local pool; 1: in this process) or Ray CPUs (default: the cores, at most 4)")
     p.add_argument("--ray-address", default=None, help="a Ray cluster's address (default: start a local Ray)")
     p.add_argument("--no-validation", action="store_true", help="skip the KF validation of the reference plans")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")

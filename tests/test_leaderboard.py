@@ -204,3 +204,37 @@ def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(l
         if env_id in LEARNS:
             best = max(s.return_mean for s in models)
             assert best > rows["zero"].return_mean and best > rows["random"].return_mean, env_id
+
+
+def test_every_policy_gets_dynamic_episodes_and_its_own_kf_verdict(tmp_path):
+    """The dynamic columns: each policy's episodes in dynamic fidelity, with the KF verdict on what it executed;
+    stored once, resumed, and written to the tables and the CSV."""
+    suite = EvalSuite("test", (0,), 1, (("paper", 0),))
+    kw = dict(suite=suite, env_ids=[ORTHO], policies=["zero", "gradient-c"], validate=True, progress=False,
+              echo=lambda s: None, out=tmp_path / "out")
+    run = run_leaderboard(db=tmp_path / "r.sqlite", executor="workers", workers=2, **kw)
+    by_policy = {s.policy: s for s in run.summaries[ORTHO]}
+    for s in by_policy.values():
+        assert s.dynamic is not None and s.dynamic["episodes"] == 1
+        assert s.dynamic["kf"]["passed"] in (True, False) and "position_error_mm" in s.dynamic["kf"]
+    ref = by_policy["gradient-c"].dynamic
+    assert ref["success_rate"] == 1.0 and ref["kf"]["passed"]
+    assert ref["metrics"]["mean_kappa"] == pytest.approx(by_policy["gradient-c"].metrics["mean_kappa"], rel=0.05)
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        assert len(store.dynamic_rows()) == 2
+    again = run_leaderboard(db=tmp_path / "r.sqlite", **kw)  # stored: nothing runs again
+    assert {s.policy: s.dynamic for s in again.summaries[ORTHO]} == {p: s.dynamic for p, s in by_policy.items()}
+    out = tmp_path / "out"  # a filtered run writes into a partial-... folder under it
+    text = "\n".join(p.read_text() for p in out.rglob("leaderboard.csv"))
+    assert "dynamic_success_rate" in text and "PASS" in text
+    md = "\n".join(p.read_text() for p in out.rglob("LEADERBOARD.md"))
+    assert "dynamic: KF, own episode" in md
+
+
+def test_the_quick_suite_runs_the_dynamic_episodes_of_the_references_and_seed_0():
+    from paragym.baselines.leaderboard import QUICK
+
+    specs = policies_for("paragym/CaPaManCollisionFree-v1")
+    chosen = {n for n, s in specs.items() if QUICK.runs_dynamic(s)}
+    assert {"rrt-ga", "grid-field", "dagger-seed0", "ppo-seed0"} <= chosen
+    assert not chosen & {"zero", "random", "ppo-seed1", "dagger-seed2"}

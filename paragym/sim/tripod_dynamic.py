@@ -101,7 +101,7 @@ class TripodDynamics:
     wheel_bandwidth: float = 20.0  # 1/s: the wheel servos correct an angle error at this rate
     acceleration: float = 1.0  # m/s^2: the units' speed ramps to the command at this rate (no wheelspin at start)
     push_force: float = 14000.0  # N per m of the scenario's push depth, for 0.1 s (module docstring)
-    time_step: float = 5e-3
+    time_step: float = 5e-3  # s (module docstring)
     solver_iterations: int = 30
     gravity: float = 9.81
 
