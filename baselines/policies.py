@@ -387,7 +387,7 @@ def _rrt_ga_params() -> dict[str, Any]:
     from paragym.planners import RrtGaPlanner, RrtGaPolicy
     from paragym.planners.rrt_ga import RrtGaSettings
 
-    return {"policy": init_defaults(RrtGaPolicy, planner=None),
+    return {"policy": {**init_defaults(RrtGaPolicy, planner=None), "arrival": RrtGaPolicy.ARRIVAL},
             "planner": init_defaults(RrtGaPlanner, settings=RrtGaSettings(), seed="the episode's seed")}
 
 
@@ -395,7 +395,8 @@ def _grid_path_params() -> dict[str, Any]:
     from paragym.planners import GridPathPolicy
     from paragym.planners.grid_path import GridPathPlanner
 
-    return {"policy": init_defaults(GridPathPolicy, planner=None), "planner": init_defaults(GridPathPlanner)}
+    return {"policy": {**init_defaults(GridPathPolicy, planner=None), "arrival": GridPathPolicy.ARRIVAL},
+            "planner": init_defaults(GridPathPlanner)}
 
 
 def _polynomial_detour_params() -> dict[str, Any]:

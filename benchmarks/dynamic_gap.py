@@ -10,12 +10,18 @@ smallest singularity measure and E's largest distance from its command
 tripod's final estimate error (mean over the units) and odometry's largest
 unit error (cm), on two of the paper's drives.
 
-    python benchmarks/dynamic_gap.py
+    python benchmarks/dynamic_gap.py [--plot report/dynamic_gap.png]
+
+``--plot`` also draws, per env, the reference's episode in both fidelities:
+the CaPaMan's first crank, the hybrid's E off its nominal path, the 2PRR's
+tracking error, the tripod's odometry error, against time.
 """
 
 from __future__ import annotations
 
+import argparse
 import warnings
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
@@ -48,8 +54,44 @@ def merit(env_id: str, infos: list[dict]) -> str:
     return f"mean kappa {kappa:.4f}, tracking {track * 1e3:.2f} mm"
 
 
+#: per env: what the picture draws of an episode's infos, and its label
+TRACES = {
+    "CaPaMan": (lambda i: np.degrees(i["alpha"][0]), "crank 1 [deg]"),
+    "Hybrid": (lambda i: np.linalg.norm(i["offset"]) * 1000, "E off the nominal path [mm]"),
+    "Orthoglide": (lambda i: i["tracking_error"] * 1000, "tool tracking error [mm]"),
+    "Tripod": (lambda i: np.linalg.norm(i["odometry"][:, :2] - i["true_units"][:, :2], axis=1).max() * 100,
+               "odometry's largest unit error [cm]"),
+}
+
+
+def plot(traces: dict[str, dict[str, list[float]]], path: Path) -> Path:
+    """One panel per env: the reference's trace in each fidelity against the step."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(traces), figsize=(4.2 * len(traces), 3.4))
+    for ax, (title, by_fidelity) in zip(axes, traces.items(), strict=True):
+        for fidelity, values in by_fidelity.items():
+            ax.plot(values, label=fidelity, lw=1.4 if fidelity == "kinematic" else 1.0,
+                    ls="-" if fidelity == "kinematic" else "--")
+        key = next(k for k in TRACES if k in title)
+        ax.set(title=title, xlabel="step", ylabel=TRACES[key][1])
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--plot", type=Path, default=None, help="also draw the references' traces to this PNG")
+    args = parser.parse_args()
     warnings.filterwarnings("ignore", message=".*is out of date.*")
+    traces: dict[str, dict[str, list[float]]] = {}
     print(f"{'environment, scenario':44s} {'policy':18s} {'fidelity':9s} {'success':>7s} {'return':>9s}  merit")
     for env_id, scenario, names in CASES:
         for name in names:
@@ -58,8 +100,14 @@ def main() -> None:
                 policy = get_policy(env_id, name).factory(env, 0)
                 ep = run_episode(env, policy, seed=0)
                 env.close()
+                key = next(k for k in TRACES if k in env_id)
+                if name == names[0] and (key != "Tripod" or scenario == "push"):
+                    title = f"{env_id.split('/')[1]} {scenario}: {name}"
+                    traces.setdefault(title, {})[fidelity] = [float(TRACES[key][0](i)) for i in ep.infos[1:]]
                 print(f"{env_id.split('/')[1] + ' ' + scenario:44s} {name:18s} {fidelity:9s} {str(ep.success):>7s} "
                       f"{ep.episode_return:9.2f}  {merit(env_id, ep.infos)}")
+    if args.plot is not None:
+        print(f"wrote {plot(traces, args.plot)}")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,17 @@ class PathFollowingPolicy:
     """Plans at ``reset`` with ``planner.plan(info["scenario"]) -> JointPath``
     and follows the path's waypoints in straight joint-space steps of at most
     ``max_joint_step`` rad per joint (the env's scale for an action of 1).
-    ``info["alpha"]`` (the joint state, float64) is what it steers from."""
+    ``info["alpha"]`` (the joint state, float64) is what it steers from.
+
+    It moves on to the next waypoint once every joint is within
+    :data:`ARRIVAL` x ``max_joint_step`` of the current one. In kinematic
+    fidelity a step lands on a waypoint exactly, so this changes nothing
+    there; in dynamic fidelity the encoders settle near a waypoint and never
+    on it to the last bit, and a follower that waited for equality (1e-9 rad,
+    before paragym 0.6.0) stood at the first waypoint it could not hit."""
+
+    #: the share of a step within which a waypoint counts as reached (0.1 deg for the default 2 deg step)
+    ARRIVAL = 0.05
 
     def __init__(self, planner: Any, max_joint_step: float) -> None:
         if not max_joint_step > 0:
@@ -46,7 +56,7 @@ class PathFollowingPolicy:
             raise RuntimeError("call reset(obs, info) before act")
         alpha = info["alpha"]
         w = self.path.waypoints
-        while self._next < len(w) - 1 and np.max(np.abs(w[self._next] - alpha)) < 1e-9:
+        while self._next < len(w) - 1 and np.max(np.abs(w[self._next] - alpha)) < self.ARRIVAL * self.max_joint_step:
             self._next += 1
         delta = w[self._next] - alpha
         return (delta / max(self.max_joint_step, np.max(np.abs(delta)))).astype(np.float32)

@@ -273,3 +273,18 @@ def test_tripod_push_and_slip_come_from_contact():
     assert odometry_error(ice).max() > 0.05
     assert np.abs(ice["eta"] - grip["eta"]).max() > 0.1  # rad
 
+
+
+def test_a_path_follower_tours_in_dynamic_fidelity_where_the_motors_settle_short_of_exact():
+    """The paper's planner follows its path by waypoints: in dynamic fidelity the encoders settle near a
+    waypoint, never on it to 1e-9, and the follower must still move on (it stood at a waypoint before)."""
+    from paragym.baselines.policies import get_policy
+    from paragym.rollout import run_episode
+    from paragym.sim.capaman_dynamic import CaPaManDynamics
+
+    env = gym.make("paragym/CaPaManCollisionFree-v1", scenario="paper", fidelity="dynamic",
+                   dynamics=CaPaManDynamics.fast())
+    for name in ("rrt-ga", "grid-dijkstra"):
+        ep = run_episode(env, get_policy("paragym/CaPaManCollisionFree-v1", name).factory(env, 0), seed=0)
+        assert ep.success, (name, ep.infos[-1]["reached"])
+    env.close()
