@@ -31,11 +31,14 @@ class PathFollowingPolicy:
     ``info["alpha"]`` (the joint state, float64) is what it steers from.
 
     It moves on to the next waypoint once every joint is within
-    :data:`ARRIVAL` x ``max_joint_step`` of the current one. In kinematic
-    fidelity a step lands on a waypoint exactly, so this changes nothing
-    there; in dynamic fidelity the encoders settle near a waypoint and never
-    on it to the last bit, and a follower that waited for equality (1e-9 rad,
-    before paragym 0.6.0) stood at the first waypoint it could not hit."""
+    :data:`ARRIVAL` x ``max_joint_step`` of the current one. Before paragym
+    0.6.0 it waited until it was there to 1e-9 rad: in dynamic fidelity the
+    encoders settle near a waypoint and never on it to the last bit, and the
+    follower stood at the first waypoint it could not hit; in kinematic
+    fidelity the float32 actions land within rounding (about 1e-8 rad) of a
+    waypoint, and it spent 1-3 extra steps on that rounding in 30 of the 500
+    RRT + GA episodes of the full leaderboard (whose returns rose by up to
+    0.2; the success rates did not change)."""
 
     #: the share of a step within which a waypoint counts as reached (0.1 deg for the default 2 deg step)
     ARRIVAL = 0.05

@@ -214,15 +214,12 @@ class CaPaManDynamicScene:
     def drive(self, target: np.ndarray, duration: float) -> np.ndarray:
         """Move the motors' targets linearly from the last target to ``target``
         (rad) over ``duration`` s of simulated time; returns the tool tip."""
-        d = self.dynamics
-        steps = max(1, int(round(duration / d.time_step)))
-        start = self._target
-        rate = (np.asarray(target, float) - start) / (steps * d.time_step)
-        for i in range(1, steps + 1):
-            goal = start + (target - start) * (i / steps)
-            self.sim.drive(self.ROBOT, self.motors, -goal, -rate, d.motor_torque, d.position_gain, d.velocity_gain)
-            self.sim.step()
-        self._target = np.asarray(target, float).copy()
+        d, target = self.dynamics, np.asarray(target, float)
+        # the motors' joints turn by -alpha (capaman_links): the ramp of -alpha is the negated ramp of alpha, bit
+        # for bit
+        self.sim.ramp(self.ROBOT, self.motors, -self._target, -target, duration, d.time_step, d.motor_torque,
+                      d.position_gain, d.velocity_gain)
+        self._target = target.copy()
         return self.tip
 
     @property

@@ -350,6 +350,18 @@ class PyBulletSim:
                                      positionGains=[position_gain] * n, velocityGains=[velocity_gain] * n,
                                      physicsClientId=self._client)
 
+    def ramp(self, name: str, joints: Sequence[int], start: np.ndarray, goal: np.ndarray, duration: float,
+             time_step: float, force: float, position_gain: float, velocity_gain: float) -> None:
+        """Move the targets of position-controlled motors on ``joints`` linearly
+        from ``start`` to ``goal`` over ``duration`` s (at least one physics
+        step of ``time_step`` s), stepping the physics as they go; the motors
+        chase the moving targets (and their constant rate) under ``force``."""
+        steps = max(1, int(round(duration / time_step)))
+        rate = (goal - start) / (steps * time_step)
+        for i in range(1, steps + 1):
+            self.drive(name, joints, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)
+            self.step()
+
     def step(self) -> None:
         """One step of the physics (then the :attr:`after_step` callbacks: a recorder's)."""
         pb.stepSimulation(physicsClientId=self._client)

@@ -189,14 +189,9 @@ class HybridDynamicScene:
         """Move the nine actuators' targets linearly from the last target to
         ``strokes`` (9,) (m) over ``duration`` s of simulated time, the motors
         chasing them under their force limit."""
-        d = self.dynamics
-        steps = max(1, int(round(duration / d.time_step)))
-        start, strokes = self._target, np.asarray(strokes, float)
-        rate = (strokes - start) / (steps * d.time_step)
-        for i in range(1, steps + 1):
-            self.sim.drive(self.ROBOT, self.actuators, start + (strokes - start) * (i / steps), rate, d.motor_force,
-                           d.position_gain, d.velocity_gain)
-            self.sim.step()
+        d, strokes = self.dynamics, np.asarray(strokes, float)
+        self.sim.ramp(self.ROBOT, self.actuators, self._target, strokes, duration, d.time_step, d.motor_force,
+                      d.position_gain, d.velocity_gain)
         self._target = strokes.copy()
 
     def measure(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

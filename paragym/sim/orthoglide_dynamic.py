@@ -126,14 +126,9 @@ class OrthoglideDynamicScene:
     def drive(self, rho: np.ndarray, duration: float) -> None:
         """Move the three motors' targets linearly from the last target to
         ``rho`` (m) over ``duration`` s of simulated time."""
-        d = self.dynamics
-        steps = max(1, int(round(duration / d.time_step)))
-        start, rho = self._target, np.asarray(rho, float)
-        rate = (rho - start) / (steps * d.time_step)
-        for i in range(1, steps + 1):
-            self.sim.drive(self.ROBOT, self.motors, start + (rho - start) * (i / steps), rate, d.motor_force,
-                           d.position_gain, d.velocity_gain)
-            self.sim.step()
+        d, rho = self.dynamics, np.asarray(rho, float)
+        self.sim.ramp(self.ROBOT, self.motors, self._target, rho, duration, d.time_step, d.motor_force,
+                      d.position_gain, d.velocity_gain)
         self._target = rho.copy()
 
     @property
