@@ -154,7 +154,10 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
       a crank 60 deg in one step past obstacles); episodes of in-Box actions are
       unchanged, bit for bit (tested against recorded rollouts). Since
       paragym 0.3.0 a scenario argument of the wrong type is a TypeError (it
-      was a ValueError), as in every paragym env; no episode changes.
+      was a ValueError), as in every paragym env; no episode changes. Since
+      paragym 0.6.0 a ``dynamics`` argument chooses the dynamic fidelity's
+      settings; its default is the released ones (episodes unchanged, bit for
+      bit).
     * v1 (paragym 0.4.0): :class:`CaPaManCollisionFreeV1Env`, a new
       observation, reward and reach tolerance; v0 is unchanged.
     """
