@@ -288,3 +288,30 @@ def test_a_path_follower_tours_in_dynamic_fidelity_where_the_motors_settle_short
         ep = run_episode(env, get_policy("paragym/CaPaManCollisionFree-v1", name).factory(env, 0), seed=0)
         assert ep.success, (name, ep.infos[-1]["reached"])
     env.close()
+
+
+def test_capaman_dynamic_agrees_with_the_kinematics_when_slow_and_lags_when_fast():
+    """The same 2-deg steps of the cranks, given 0.2 s each or 5 ms each: slow, the encoders follow the
+    kinematic model to the servo's lag of one physics step (2 deg / 40 = 0.05 deg); fast, the motors (8 N m)
+    fall behind by about 2 deg."""
+    from paragym.sim.capaman_dynamic import CaPaManDynamics
+
+    def gap(period: float) -> float:
+        kinematic = gym.make("paragym/CaPaManCollisionFree-v1", scenario="paper")
+        dynamic = gym.make("paragym/CaPaManCollisionFree-v1", scenario="paper", fidelity="dynamic",
+                           dynamics=CaPaManDynamics.fast(), control_period=period)
+        worst = 0.0
+        for env in (kinematic, dynamic):
+            env.reset(seed=0)
+        for _ in range(15):
+            action = np.array([1.0, -1.0, 0.5], np.float32)
+            *_, a = kinematic.step(action)
+            *_, b = dynamic.step(action)
+            worst = max(worst, float(np.abs(a["alpha"] - b["alpha"]).max()))
+        kinematic.close()
+        dynamic.close()
+        return np.degrees(worst)
+
+    slow, fast = gap(0.2), gap(0.005)
+    assert slow < 0.06  # deg
+    assert fast > 20 * slow
