@@ -285,13 +285,6 @@ class PyBulletSim:
             for j in range(i + 1, n):
                 pb.setCollisionFilterPair(body, body, i, j, 0, physicsClientId=c)
 
-    def no_collision_between(self, name: str, other: str) -> None:
-        """The parts of bodies ``name`` and ``other`` do not collide with each other (joined by constraints)."""
-        a, b, c = self._bodies[name], self._bodies[other], self._client
-        for i in range(-1, pb.getNumJoints(a, physicsClientId=c)):
-            for j in range(-1, pb.getNumJoints(b, physicsClientId=c)):
-                pb.setCollisionFilterPair(a, b, i, j, 0, physicsClientId=c)
-
     def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
         """Make joints free (no motor): PyBullet's default velocity motors off,
         for 1-dof ``joints`` and ``spherical`` ones."""
@@ -303,34 +296,24 @@ class PyBulletSim:
                                             force=[0.0, 0.0, 0.0], physicsClientId=c)
 
     def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int,
-                   pivot_b: Sequence[float], other: str | None = None) -> None:
+                   pivot_b: Sequence[float]) -> None:
         """Close a loop of body ``name``: a ball joint (point-to-point
         constraint) between a point of ``link_a`` and a point of ``link_b``
-        (each in its link's centre-of-mass frame, m); ``link_b`` of body
-        ``other`` when given (a loop through two bodies)."""
+        (each in its link's centre-of-mass frame, m)."""
         body = self._bodies[name]
-        pb.createConstraint(body, link_a, self._bodies[other or name], link_b, pb.JOINT_POINT2POINT, [0, 0, 0],
-                            list(pivot_a), list(pivot_b), physicsClientId=self._client)
+        pb.createConstraint(body, link_a, body, link_b, pb.JOINT_POINT2POINT, [0, 0, 0], list(pivot_a),
+                            list(pivot_b), physicsClientId=self._client)
 
-    def friction(self, name: str, links: Sequence[int], lateral: float, anchor: bool = False) -> None:
-        """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base); ``anchor``: a
-        friction anchor at each contact, which corrects the drift of a sticking contact (PyBullet's
-        ``frictionAnchor``)."""
+    def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
+        """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base)."""
         for link in links:
-            pb.changeDynamics(self._bodies[name], link, lateralFriction=lateral, frictionAnchor=anchor,
-                              physicsClientId=self._client)
+            pb.changeDynamics(self._bodies[name], link, lateralFriction=lateral, physicsClientId=self._client)
 
     def push(self, name: str, link: int, force: Sequence[float]) -> None:
         """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step."""
         pos = self.link_frame(name, link)[0]
         pb.applyExternalForce(self._bodies[name], link, list(force), list(pos), pb.WORLD_FRAME,
                               physicsClientId=self._client)
-
-    def spin(self, name: str, joints: Sequence[int], rates: Sequence[float], torque: float) -> None:
-        """Velocity motors on ``joints``: chase ``rates`` (rad/s) with at most ``torque`` (N m) each."""
-        pb.setJointMotorControlArray(self._bodies[name], list(joints), pb.VELOCITY_CONTROL,
-                                     targetVelocities=list(rates), forces=[torque] * len(joints),
-                                     physicsClientId=self._client)
 
     def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint), at rest."""

@@ -75,9 +75,6 @@ from paragym.sim.tripod_drive import Terrain
 
 __all__ = ["TripodDynamicScene", "TripodDynamics"]
 
-_ID = (0.0, 0.0, 0.0, 1.0)
-
-
 def _rot_y(angle: float) -> np.ndarray:
     c, s = math.cos(angle), math.sin(angle)
     return np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]])
