@@ -44,8 +44,8 @@ from paragym.baselines.training import check_env_id, env_name
 from paragym.rollout import Episode, run_episode
 
 __all__ = ["FULL", "METRICS", "PAPER_SCENARIO", "PRIMARY", "QUICK", "EvalSuite", "Summary", "dynamic_kwargs",
-           "episode_seed", "evaluate_dynamic", "evaluate_episode", "markdown", "run_leaderboard", "summarise",
-           "terminal_table"]
+           "dynamic_producer", "episode_seed", "evaluate_dynamic", "evaluate_episode", "markdown", "run_leaderboard",
+           "summarise", "terminal_table"]
 
 
 @dataclass(frozen=True)
@@ -81,15 +81,27 @@ PAPER_SCENARIO = {"paragym/MobileTripodOdometry-v0": "push", "paragym/MobileTrip
 
 
 def dynamic_kwargs(env_id: str) -> dict[str, Any]:
-    """The env's arguments for the leaderboard's dynamic episodes: its
-    dynamic fidelity at its default settings, except the CaPaMan's, run at
-    ``CaPaManDynamics.fast()`` (within 0.5 mm of its released settings at 8x
-    their speed; :mod:`paragym.sim.capaman_dynamic`)."""
-    if "CaPaMan" in env_id:
-        from paragym.sim.capaman_dynamic import CaPaManDynamics
+    """The env's arguments for the leaderboard's dynamic episodes, the
+    physics settings explicit (they are part of each row's producer,
+    :func:`dynamic_producer`): each env's default, except the CaPaMan's,
+    run at ``CaPaManDynamics.fast()`` (within 0.5 mm of its released
+    settings at 8x their speed; :mod:`paragym.sim.capaman_dynamic`)."""
+    from paragym.sim.capaman_dynamic import CaPaManDynamics
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+    from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+    from paragym.sim.tripod_dynamic import TripodDynamics
 
-        return {"fidelity": "dynamic", "dynamics": CaPaManDynamics.fast()}
-    return {"fidelity": "dynamic"}
+    settings = {"CaPaMan": CaPaManDynamics.fast(), "Hybrid": HybridDynamics.fast(), "Orthoglide": OrthoglideDynamics(),
+                "MobileTripod": TripodDynamics()}
+    return {"fidelity": "dynamic", "dynamics": next(v for k, v in settings.items() if k in env_id)}
+
+
+def dynamic_producer(spec: PolicySpec) -> str:
+    """What makes a dynamic row: the policy's producer and the physics settings it ran under."""
+    import json
+
+    return json.dumps({**json.loads(spec.producer()), "dynamics": repr(dynamic_kwargs(spec.env_id)["dynamics"])},
+                      sort_keys=True)
 
 
 def episode_seed(seed: int, episode: int) -> int:
@@ -256,7 +268,7 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
     metrics["policy_failed"] = failed
     kf = {"worst": _worst(val.report), "position_error_mm": round(val.position_error * 1000, 3)}
     return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
-                      kf, time.perf_counter() - t0, producer=spec.producer())
+                      kf, time.perf_counter() - t0, producer=dynamic_producer(spec))
 
 
 # --- executors: each yields finished rows as they come --------------------------------------------------------
@@ -824,11 +836,13 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
 
 def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
                   producers: dict[tuple[str, str], str]) -> list[DynamicJob]:
-    """The dynamic-fidelity episodes ``store`` lacks for the current producers."""
+    """The dynamic-fidelity episodes ``store`` lacks for the current producers
+    (the policy's and the physics settings: :func:`dynamic_producer`)."""
     done = store.dynamic_keys()
+    made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
     return [(spec, scenario, seed) for specs in chosen.values() for spec in specs.values()
             if suite.runs_dynamic(spec) for scenario, seed in suite.dynamic
-            if (spec.env_id, spec.name, scenario, seed, store.version, producers[spec.env_id, spec.name]) not in done]
+            if (spec.env_id, spec.name, scenario, seed, store.version, made[spec.env_id, spec.name]) not in done]
 
 
 def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,
@@ -882,9 +896,10 @@ def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], sui
     rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
     all_summaries = summarise(rows, store)
     wanted = set(suite.dynamic)
+    made = {key: dynamic_producer(chosen[key[0]][key[1]]) for key in producers}
     dynamic: dict[tuple[str, str], list[DynamicRow]] = {}
     for r in store.dynamic_rows():
-        if producers.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted:
+        if made.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted:
             dynamic.setdefault((r.env, r.policy), []).append(r)
     for env, ss in all_summaries.items():
         for s in ss:

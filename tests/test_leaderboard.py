@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sqlite3
 
 import pytest
@@ -221,7 +222,9 @@ def test_every_policy_gets_dynamic_episodes_and_its_own_kf_verdict(tmp_path):
     assert ref["success_rate"] == 1.0 and ref["kf"]["passed"]
     assert ref["metrics"]["mean_kappa"] == pytest.approx(by_policy["gradient-c"].metrics["mean_kappa"], rel=0.05)
     with ResultStore(tmp_path / "r.sqlite") as store:
-        assert len(store.dynamic_rows()) == 2
+        rows = store.dynamic_rows()
+        assert len(rows) == 2
+        assert all("OrthoglideDynamics(" in json.loads(r.producer)["dynamics"] for r in rows)  # what it ran under
     again = run_leaderboard(db=tmp_path / "r.sqlite", **kw)  # stored: nothing runs again
     assert {s.policy: s.dynamic for s in again.summaries[ORTHO]} == {p: s.dynamic for p, s in by_policy.items()}
     out = tmp_path / "out"  # a filtered run writes into a partial-... folder under it
