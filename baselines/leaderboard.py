@@ -85,7 +85,7 @@ def dynamic_kwargs(env_id: str) -> dict[str, Any]:
     physics settings explicit (they are part of each row's producer,
     :func:`dynamic_producer`): each env's default, except the CaPaMan's,
     run at ``CaPaManDynamics.fast()`` (within 0.5 mm of its released
-    settings at 8x their speed; :mod:`paragym.sim.capaman_dynamic`)."""
+    settings at 5-6x their speed; :mod:`paragym.sim.capaman_dynamic`)."""
     from paragym.sim.capaman_dynamic import CaPaManDynamics
     from paragym.sim.hybrid_dynamic import HybridDynamics
     from paragym.sim.orthoglide_dynamic import OrthoglideDynamics

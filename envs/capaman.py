@@ -145,7 +145,7 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
     ``geometry``, ``render_mode`` ("rgb_array" or "human"). ``dynamics``: a
     :class:`~paragym.sim.capaman_dynamic.CaPaManDynamics` for the dynamic
     fidelity (default ``CaPaManDynamics()``, the released settings: 1 ms,
-    150 solver iterations; ``CaPaManDynamics.fast()`` runs about 8x faster
+    150 solver iterations; ``CaPaManDynamics.fast()`` runs 5-6x faster
     within 0.5 mm of them).
 
     ## Version History

@@ -18,9 +18,10 @@ Speed. A profile of the env's dynamic step put 90 % of its time in
 ``stepSimulation``, and most of that in the six loop closures (18 solver
 rows): the same tree steps in 26 us without them and 152 us with them. The
 released settings (1 ms, 150 iterations; 20 physics steps per 0.02 s
-control period) run about 190 env steps/s here. :meth:`CaPaManDynamics.fast`
-takes a 5 ms step with 30 iterations: about 8x faster, and on 200 random
-steps of 2 deg the tool tip stays within 0.5 mm and the cranks within 0.37
+control period) run 86-134 env steps/s here (benchmarks/env_speed.py). :meth:`CaPaManDynamics.fast`
+takes a 5 ms step with 30 iterations: 8x faster in the drive loop (5-6x for
+the env's step, which also queries clearances), and on 200 random steps of
+2 deg the tool tip stays within 0.5 mm and the cranks within 0.37
 deg of the released settings, with the loops closed to 0.7 mm (a 10 ms step:
 1 mm and 0.72 deg; fewer rows, by gearing the parallelogram instead of
 closing it, opened the loops by 1.5 mm at the same speed, so the ball joints
