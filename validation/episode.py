@@ -46,6 +46,7 @@ from paragym.mechanisms import capaman, hybrid
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.mechanisms import orthoglide as og
 from paragym.rollout import Episode
+from paragym.sim.client import physics_steps
 from paragym.trajectories import RigidMotion
 from paragym.validation.motion import pose_path_motion
 from paragym.validation.report import Tolerances, ValidationReport, validate
@@ -151,38 +152,24 @@ class _CaPaMan(_Task):
         return _pose(pose.position[0], pose.rotation[0])
 
     def period(self) -> float:
-        return self.env.world.scene.dynamics.time_step * max(1, round(self.env.control_period /
-                                                                      self.env.world.scene.dynamics.time_step))
+        d = self.env.world.scene.dynamics
+        return d.time_step * physics_steps(self.env.control_period, d.time_step)
 
 
 class _Hybrid(_Task):
     sensors = AccelerometerArray.paper_layout(r=0.06, depth=0.03)
-
-    def __init__(self, env: Any) -> None:
-        super().__init__(env)
-        self._command = env.state.pose[0].copy()  # at the start: the nominal path's first pose
 
     def recorder(self) -> MotionRecorder:
         scene = self.env.world.scene
         return MotionRecorder(scene.sim, scene.ROBOT, scene.e_link, scene.dynamics.time_step)
 
     def commanded(self) -> np.ndarray:
-        t_e = hybrid.pose_matrix(hybrid.home_pose(self.env.geometry) + self._command)[0]
+        t_e = hybrid.pose_matrix(hybrid.home_pose(self.env.geometry) + self.env.world.command)[0]
         return _pose(t_e[:3, 3], t_e[:3, :3])
-
-    def observe_action(self, action: np.ndarray) -> None:
-        """The step's commanded displacement of E: the nominal path plus the action's offset (none at P1)."""
-        s, e = self.env.state, self.env
-        k = int(s.k[0]) + (0 if s.terminated[0] else 1)
-        k = min(k, len(s.u) - 1)
-        offset = np.zeros(6)
-        if k < len(s.u) - 1:
-            offset[:3] = np.clip(action[1:], -1, 1) * e.j_bar
-        self._command = s.nominal[0, k] + offset
 
     def period(self) -> float:
         d = self.env.world.scene.dynamics
-        return d.time_step * max(1, round(self.env.world.control_period / d.time_step))
+        return d.time_step * physics_steps(self.env.world.control_period, d.time_step)
 
 
 class _Orthoglide(_Task):
@@ -206,7 +193,7 @@ class _Orthoglide(_Task):
         s, d = self.env.state, self.env.world.scene.dynamics
         k = int(s.k[0])
         h = float(s.dt[0, k - 1]) if k > 0 else 0.0
-        return d.time_step * max(1, round(h / d.time_step))
+        return d.time_step * physics_steps(h, d.time_step)
 
 
 class _Tripod(_Task):
@@ -230,7 +217,7 @@ class _Tripod(_Task):
 
     def period(self) -> float:
         d = self.env.world.dynamics
-        return d.time_step * max(1, round(self.env.state.drive.dt / d.time_step))
+        return d.time_step * physics_steps(self.env.state.drive.dt, d.time_step)
 
 
 def _task(env: Any) -> _Task:
@@ -260,8 +247,6 @@ def validate_episode(env: Any, policy: Any, seed: int = 0, tolerances: Tolerance
     try:
         while True:
             action = policy.act(obs, info)
-            if isinstance(task, _Hybrid):
-                task.observe_action(np.asarray(action, float))
             obs, reward, terminated, truncated, info = env.step(action)
             episode.actions.append(np.asarray(action))
             episode.observations.append(obs)

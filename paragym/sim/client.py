@@ -28,11 +28,16 @@ import pybullet as pb
 from paragym.mechanisms.capaman import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "PyBulletSim"]
+__all__ = ["LinkSpec", "PyBulletSim", "physics_steps"]
 
 _IDENTITY = (0.0, 0.0, 0.0, 1.0)
 _JOINT_TYPES = {"revolute": pb.JOINT_REVOLUTE, "prismatic": pb.JOINT_PRISMATIC,
                 "spherical": pb.JOINT_SPHERICAL, "fixed": pb.JOINT_FIXED}
+
+
+def physics_steps(duration: float, time_step: float) -> int:
+    """Physics steps of ``time_step`` s that make up ``duration`` s of control (at least one)."""
+    return max(1, int(round(duration / time_step)))
 
 
 @dataclass(frozen=True)
@@ -339,7 +344,7 @@ class PyBulletSim:
         from ``start`` to ``goal`` over ``duration`` s (at least one physics
         step of ``time_step`` s), stepping the physics as they go; the motors
         chase the moving targets (and their constant rate) under ``force``."""
-        steps = max(1, int(round(duration / time_step)))
+        steps = physics_steps(duration, time_step)
         rate = (goal - start) / (steps * time_step)
         for i in range(1, steps + 1):
             self.drive(name, joints, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)

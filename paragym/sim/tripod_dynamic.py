@@ -70,7 +70,7 @@ import numpy as np
 
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.mechanisms.capaman import PartShape, matrix_to_quat, quat_to_matrix
-from paragym.sim.client import LinkSpec, PyBulletSim
+from paragym.sim.client import LinkSpec, PyBulletSim, physics_steps
 from paragym.sim.tripod_drive import Terrain
 
 __all__ = ["TripodDynamicScene", "TripodDynamics"]
@@ -226,7 +226,7 @@ class TripodDynamicScene:
             error = math.atan2(math.sin(self._heading[i] - yaw), math.cos(self._heading[i] - yaw))
             turn[i] = d.heading_gain * error * d.wheel_base / 2
         sides = np.repeat(turn, 2) * np.tile([-1.0, 1.0], 3)  # left wheels slower, right faster to turn left
-        steps = max(1, int(round(duration / d.time_step)))
+        steps = physics_steps(duration, d.time_step)
         gain = d.wheel_bandwidth * d.time_step
         wheels = [w for pair in self.wheels for w in pair]
         target = self._wheel_target.ravel()

@@ -182,17 +182,20 @@ class DynamicWorld:
         self.scene, self.control_period, self.track_tolerance = scene, control_period, track_tolerance
         self.tracked = np.ones(1, bool)
         self.tracking_error = 0.0
+        #: the last step's commanded displacement of E from home (6,): the pose the actuators were driven to
+        self.command = np.zeros(6)
         self._work = np.empty((5, 6, 6))
 
     def reset(self, state: HybridTaskState) -> None:
         """Put the simulated robot at the state's (solved) start pose, at rest."""
         self.scene.reset(state.pose[0], float(state.delta[0]))
         self.tracked[0], self.tracking_error = True, 0.0
+        self.command = state.pose[0].copy()
 
     def move(self, state: HybridTaskState) -> None:
         """Drive to the commanded strokes (``state.lengths``) and measure."""
         g = self.scene.geometry
-        commanded = state.pose[0, :3].copy()
+        self.command = state.pose[0].copy()
         self.scene.drive(state.lengths[0], self.control_period)
         t_a, t_e, strokes = self.scene.measure()
         t_t = np.linalg.solve(t_a, t_e)
@@ -204,7 +207,7 @@ class DynamicWorld:
         state.pose[0, :3] = t_e[:3, 3] - consts[6][:3]
         state.pose[0, 3:] = hybrid.matrix_euler(t_e[:3, :3])
         state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
-        self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - commanded))
+        self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - self.command[:3]))
         self.tracked[0] = self.tracking_error <= self.track_tolerance
 
 

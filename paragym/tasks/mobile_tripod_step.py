@@ -41,6 +41,7 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import mobile_tripod as mt
+from paragym.sim.client import physics_steps
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks.mobile_tripod import DriveScenario
 
@@ -202,8 +203,7 @@ class DynamicWorld:
             inward = d.true[0].mean(axis=0) - d.true[0, unit]
             inward[2] = 0.0
             push = (unit, dyn.push_force * d.push[0, 2] * inward / np.linalg.norm(inward))
-        steps = max(1, int(round(d.dt / dyn.time_step)))
-        used = min(steps, self._push_left)
+        used = min(physics_steps(d.dt, dyn.time_step), self._push_left)
         travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
         self._push_left -= used
         heading = float(d.heading[0])
