@@ -251,7 +251,7 @@ def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np
     state.path_length[rows], state.step_length[rows], state.progress[rows] = 0.0, 0.0, 0.0
     state.just_reached[rows] = False
     _place(state, world, rows, state.alpha[rows])
-    _look_ahead(state, params, world if probe is None else probe, rows)
+    _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     mask = np.zeros(len(state.alpha), bool)
     mask[rows] = True
     _finish(state, params, mask, state.alpha, False)
@@ -284,15 +284,17 @@ def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: 
     else:
         state.command[rows], state.alpha[rows] = command[rows], new
     _place(state, world, rows, new)
-    _look_ahead(state, params, world if probe is None else probe, rows)
+    _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
 
 
-def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray) -> None:
+def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,
+                pose_back: bool = True) -> None:
     """v1: the change of each robot's clearance if one crank alone moved
     :data:`LOOKAHEAD` further (inside the joint range), for the robots whose
     clearance is under the cap (elsewhere 0). A kinematic PyBullet scene is
-    posed back where the robot is."""
+    posed back where the robot is when ``pose_back`` (it is the env's own and
+    is drawn; a probe that only answers the look-ahead is not)."""
     if params.version == 0:
         return
     state.lookahead[rows] = 0.0
@@ -309,7 +311,7 @@ def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, ro
     else:
         ahead = np.stack([world.place(near, probes[k])[0] for k in range(3)], axis=1)
     state.lookahead[near] = np.minimum(ahead, params.clearance_cap) - state.clearance[near, None]
-    if isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
+    if pose_back and isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
         world.place(near, state.alpha[near])
 
 
