@@ -9,6 +9,7 @@ their accuracy that the sim modules' docstrings quote).
 
 from __future__ import annotations
 
+import importlib
 import warnings
 
 import gymnasium as gym
@@ -102,6 +103,25 @@ def test_hybrid_fast_settings_stay_within_their_stated_error_of_the_fine_ones():
     assert max(i["tracking_error"] for i in infos) < 1.5e-3
 
 
+def test_hybrid_split_layout_is_the_same_mechanism_and_its_preset_keeps_its_stated_error():
+    """Cut into eight multibodies instead of one, the robot moves as the tree does (at the same settings, to
+    solver precision: 5 um); ``HybridDynamics.split()``, at 30 iterations, stays within 0.6 mm of those
+    converged settings (5 ms, 150 iterations, the same servo) and tracks its command to 1.1 mm."""
+    from dataclasses import replace
+
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+
+    converged = HybridDynamics(time_step=5e-3, solver_iterations=150, erp=0.9, position_gain=1.0)
+    tree, _ = _hybrid_paper("dynamic", dynamics=converged)
+    split, _ = _hybrid_paper("dynamic", dynamics=replace(converged, layout="split"))
+    assert np.abs(split[:, :3] - tree[:, :3]).max() < 2e-5  # m (measured 4.7 um)
+    preset, infos = _hybrid_paper("dynamic", dynamics=HybridDynamics.split())
+    assert np.abs(preset[:, :3] - tree[:, :3]).max() < 1e-3  # m
+    assert max(i["tracking_error"] for i in infos) < 1.5e-3
+    with pytest.raises(ValueError, match="layout"):
+        gym.make("paragym/HybridSingularityFree-v1", fidelity="dynamic", dynamics=HybridDynamics(layout="chain"))
+
+
 def test_hybrid_weak_actuators_sag_and_fail_the_episode():
     from paragym.sim.hybrid_dynamic import HybridDynamics
 
@@ -109,6 +129,28 @@ def test_hybrid_weak_actuators_sag_and_fail_the_episode():
                                                                   solver_iterations=50, erp=0.9))
     assert max(i["tracking_error"] for i in infos) > 0.005
     assert not infos[-1]["is_success"]
+
+
+#: each task's dynamics dataclass, whose ``split()`` is its faster opt-in preset
+SPLIT = {"paragym/CaPaManCollisionFree-v1": ("paragym.sim.capaman_dynamic", "CaPaManDynamics"),
+         "paragym/HybridSingularityFree-v1": ("paragym.sim.hybrid_dynamic", "HybridDynamics")}
+
+
+def _split(env_id: str):
+    module, name = SPLIT[env_id]
+    return getattr(importlib.import_module(module), name).split()
+
+
+@pytest.mark.parametrize("env_id", list(SPLIT))
+def test_split_presets_pass_the_checker_and_repeat_their_seed(env_id):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env = gym.make(env_id, fidelity="dynamic", dynamics=_split(env_id))
+        check_env(env.unwrapped, skip_render_check=True)
+        env.close()
+    first = _rollout(env_id, 3, 30, dynamics=_split(env_id))
+    np.testing.assert_array_equal(first, _rollout(env_id, 3, 30, dynamics=_split(env_id)))
+    assert not np.array_equal(first, _rollout(env_id, 3, 30))  # other physics than the default's
 
 
 @pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v1", "paragym/Orthoglide2PRRKappa-v0",
@@ -163,6 +205,8 @@ def test_orthoglide_default_settings_stay_within_their_stated_lag():
 
 
 def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_ones():
+    import dataclasses
+
     from paragym.mechanisms import capaman
     from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
 
@@ -189,6 +233,15 @@ def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_on
     fast_tips, fast_cranks, closure = run(CaPaManDynamics.fast())
     assert np.abs(fast_tips - tips).max() < 6e-4  # m
     assert np.degrees(np.abs(fast_cranks - cranks).max()) < 0.45
+    assert closure < 1e-3
+    # the split layout: the same mechanism (at the released settings, to solver precision) and its preset's
+    # stated error (a 10 ms step: 0.9 mm, 0.72 deg)
+    same_tips, same_cranks, _ = run(dataclasses.replace(CaPaManDynamics(), layout="split"))
+    assert np.abs(same_tips - tips).max() < 2e-6  # m
+    assert np.degrees(np.abs(same_cranks - cranks).max()) < 1e-3
+    split_tips, split_cranks, closure = run(CaPaManDynamics.split())
+    assert np.abs(split_tips - tips).max() < 1e-3  # m
+    assert np.degrees(np.abs(split_cranks - cranks).max()) < 0.8
     assert closure < 1e-3
     env = gym.make("paragym/CaPaManCollisionFree-v1", fidelity="dynamic", dynamics=CaPaManDynamics.fast())
     assert env.unwrapped.scene.dynamics.time_step == 5e-3

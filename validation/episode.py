@@ -144,7 +144,7 @@ class _CaPaMan(_Task):
 
     def recorder(self) -> MotionRecorder:
         scene = self.env.scene
-        return MotionRecorder(scene.sim, scene.ROBOT, scene.plate, scene.dynamics.time_step)
+        return MotionRecorder(scene.sim, *scene.plate, scene.dynamics.time_step)
 
     def commanded(self) -> np.ndarray:
         e = self.env
@@ -161,7 +161,7 @@ class _Hybrid(_Task):
 
     def recorder(self) -> MotionRecorder:
         scene = self.env.world.scene
-        return MotionRecorder(scene.sim, scene.ROBOT, scene.e_link, scene.dynamics.time_step)
+        return MotionRecorder(scene.sim, *scene.e_platform, scene.dynamics.time_step)
 
     def commanded(self) -> np.ndarray:
         t_e = hybrid.pose_matrix(hybrid.home_pose(self.env.geometry) + self.env.world.command)[0]

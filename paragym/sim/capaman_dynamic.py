@@ -28,6 +28,22 @@ closing it, opened the loops by 1.5 mm at the same speed, so the ball joints
 stay). ``tests/test_dynamic_fidelity.py`` checks those bounds. The released
 ids keep the released settings by default (a released id never changes
 behaviour); ``dynamics=CaPaManDynamics.fast()`` opts in.
+
+Two layouts (``CaPaManDynamics.layout``) cut the same mechanism into PyBullet
+multibodies: "tree", the released one above, and "split", one multibody per
+leg on its fixed base (cranks, coupler, bar, rail and slider, its
+parallelogram closed inside it) and the plate with its tool as a free body,
+tied to the legs by the three ball joints. The joints, masses and motors are
+the same, and at the released settings the two layouts move the tool tip
+alike to 1 um over 200 random steps. The split's physics step is cheaper
+(at 30 iterations about 90 us against the tree's 145 us,
+``benchmarks/dynamic_floor.py``), as accurate as the tree at the same step:
+:meth:`CaPaManDynamics.split` (opt-in) takes the split at 10 ms
+and 30 iterations, within 0.9 mm (tool tip) and 0.72 deg (cranks) of the
+released settings with the loops closed to 0.8 mm, at 2.3-2.6x
+PandaReach-v3's steps/s (``benchmarks/env_speed.py``): the CaPaMan's dynamic
+fidelity at the benchmark's speed goal. The cranks' 0.72 deg is the servo's
+lag over a control period of two physics steps, as in the tree at 10 ms.
 """
 
 from __future__ import annotations
@@ -38,7 +54,7 @@ import numpy as np
 
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_model import capaman_links
-from paragym.sim.client import LinkSpec, PyBulletSim
+from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 from paragym.trajectories import JointTrajectory, RigidMotion
 
 __all__ = ["CaPaManDynamics", "CaPaManDynamicScene", "ExecutedMotion"]
@@ -63,12 +79,22 @@ class CaPaManDynamics:
     solver_iterations: int = 150
     gravity: float = 9.81
 
+    #: how the mechanism is cut into PyBullet multibodies: "tree" (one) or "split" (one per leg, and the
+    #: plate with its tool); the same joints and masses (module docstring)
+    layout: str = "tree"
+
     @classmethod
     def fast(cls) -> CaPaManDynamics:
         """A 5 ms step and 30 solver iterations (module docstring): opt-in,
         because the released ids' dynamic fidelity keeps the settings it was
         released with."""
         return cls(time_step=5e-3, solver_iterations=30)
+
+    @classmethod
+    def split(cls) -> CaPaManDynamics:
+        """The split layout at a 10 ms step and 30 solver iterations: opt-in, the fastest settings (module
+        docstring)."""
+        return cls(time_step=1e-2, solver_iterations=30, layout="split")
 
 
 @dataclass(frozen=True)
@@ -113,48 +139,71 @@ class CaPaManDynamicScene:
         self.clearance_cap = clearance_cap
         self.obstacles: tuple = ()
         self.dynamics = d = dynamics or CaPaManDynamics()
-        self.sim = PyBulletSim(gui=gui)
-        self.sim.add_tree_body(self.ROBOT, _dynamic_links(g, d))
-        idx = lambda link: self.sim.link_index(self.ROBOT, link)  # noqa: E731
+        if d.layout not in ("tree", "split"):
+            raise ValueError(f'dynamics.layout must be "tree" or "split"; got {d.layout!r}')
+        self.sim = sim = PyBulletSim(gui=gui)
+        links = _dynamic_links(g, d)
+        if d.layout == "tree":  # one multibody; the plate floats on three prismatic joints and a spherical one
+            sim.add_tree_body(self.ROBOT, links)
+            #: the mechanism's bodies
+            self.bodies: tuple[str, ...] = (self.ROBOT,)
+        else:  # each leg its own fixed-base multibody; the plate (with its tool) a free body
+            by_name = {link.name: link for link in links}
+            for k in (1, 2, 3):
+                sim.add_tree_body(f"leg{k}", [link for link in links if link.name.startswith(f"leg{k}_")])
+            plate = by_name["plate"]
+            sim.add_tree_body("plate", [replace(by_name["tool"], parent=None)], plate.mass, plate.shape, plate.rgba)
+            self.bodies = ("leg1", "leg2", "leg3", "plate")
+        at = sim.locate
         legs = (1, 2, 3)
-        self.motors = [idx(f"leg{k}_crank_a") for k in legs]
-        self.cranks_b = [idx(f"leg{k}_crank_b") for k in legs]
-        self.couplers = [idx(f"leg{k}_coupler") for k in legs]
-        self.sliders = [idx(f"leg{k}_slider") for k in legs]
-        self.plate = idx("plate")
-        self.float_joints = [idx("plate_x"), idx("plate_y"), idx("plate_z")]
+        #: the crank motors (body, joint), legs 1-3
+        self.motors = [at(f"leg{k}_crank_a") for k in legs]
+        self.cranks_b = [at(f"leg{k}_crank_b") for k in legs]
+        self.couplers = [at(f"leg{k}_coupler") for k in legs]
+        self.sliders = [at(f"leg{k}_slider") for k in legs]
+        #: the plate (body, link); link -1 is a free body's base
+        self.plate = at("plate") if d.layout == "tree" else ("plate", -1)
+        self.float_joints = [at(f"plate_{c}") for c in "xyz"] if d.layout == "tree" else []
+        self._motors = motors_of(self.motors)
         self.sim.on_rebuild(self._set_up_physics)
         self.set_configuration(g.alpha_home)
 
     def _set_up_physics(self) -> None:
         """Gravity, the engine's parameters, the passive joints, no self-collision and the six loop
         closures (run again whenever the world is rebuilt)."""
-        g, d, sim, name = self.geometry, self.dynamics, self.sim, self.ROBOT
+        g, d, sim = self.geometry, self.dynamics, self.sim
         sim.set_physics(d.gravity, d.time_step, d.solver_iterations)
-        sim.no_self_collision(name)  # the parts of one mechanism do not collide with each other
-        sim.passive(name, self.cranks_b + self.couplers + self.sliders + self.float_joints, [self.plate])
+        sim.no_self_collision(*self.bodies)  # the parts of one mechanism do not collide with each other
+        for body, joint in self.cranks_b + self.couplers + self.sliders + self.float_joints:
+            sim.passive(body, [joint])
+        if self.plate[1] >= 0:
+            sim.passive(self.plate[0], [], [self.plate[1]])
         for k in range(3):  # loop closures: parallelogram, then ball joint (frames at the links' COMs)
-            sim.ball_joint(name, self.cranks_b[k], [0, 0, g.a / 2], self.couplers[k], [0, 0, g.c / 2])
-            sim.ball_joint(name, self.sliders[k], [0, 0, 0], self.plate, list(g.plate_points[k]))
+            (leg, crank_b), (_, coupler), (_, slider) = self.cranks_b[k], self.couplers[k], self.sliders[k]
+            sim.ball_joint(leg, crank_b, [0, 0, g.a / 2], coupler, [0, 0, g.c / 2])
+            sim.ball_joint(leg, slider, [0, 0, 0], self.plate[1], list(g.plate_points[k]), other=self.plate[0])
 
     def reset(self, alpha: np.ndarray) -> None:
         """Put every joint where the analytic model has it at ``alpha`` (rad), at rest."""
-        g = self.geometry
+        g, sim = self.geometry, self.sim
         al = capaman.check_joint_angles(alpha, g)
         pose = capaman.forward(al, g)
         for k in range(3):
             a = float(al[0, k])
             for joint, value in ((self.motors[k], -a), (self.cranks_b[k], -a), (self.couplers[k], a),
                                  (self.sliders[k], float(pose.sliders[0, k]))):
-                self.sim.reset_joint(self.ROBOT, joint, value)
+                sim.reset_joint(*joint, value)
+        if self.plate[1] < 0:
+            sim.reset_base(self.plate[0], pose.position[0], pose.quaternion[0])
+            return
         for joint, value in zip(self.float_joints, pose.position[0], strict=True):
-            self.sim.reset_joint(self.ROBOT, joint, float(value))
-        self.sim.reset_joint(self.ROBOT, self.plate, pose.quaternion[0])
+            sim.reset_joint(*joint, float(value))
+        sim.reset_joint(*self.plate, pose.quaternion[0])
 
     def closure_error(self) -> float:
         """Largest gap (m) of the six loop closures now."""
         g = self.geometry
-        frame = lambda link: self.sim.link_frame(self.ROBOT, link)  # noqa: E731
+        frame = lambda joint: self.sim.link_frame(*joint)  # noqa: E731
         p_pos, p_orn = frame(self.plate)
         rot = capaman.quat_to_matrix(p_orn)
         worst = 0.0
@@ -182,10 +231,10 @@ class CaPaManDynamicScene:
         closure = 0.0
         for i in range(n):  # the physics is sequential: one step after the other
             if i:
-                sim.drive(self.ROBOT, self.motors, -target[i], -target_rate[i], d.motor_torque, d.position_gain,
+                sim.drive(self._motors, -target[i], -target_rate[i], d.motor_torque, d.position_gain,
                           d.velocity_gain)
                 sim.step()
-            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(self.ROBOT, self.plate, velocity=True)
+            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(*self.plate, velocity=True)
             alpha[i] = self.alpha
             if i % 100 == 0:
                 closure = max(closure, self.closure_error())
@@ -218,7 +267,7 @@ class CaPaManDynamicScene:
         d, target = self.dynamics, np.asarray(target, float)
         # the motors' joints turn by -alpha (capaman_links): the ramp of -alpha is the negated ramp of alpha, bit
         # for bit
-        self.sim.ramp(self.ROBOT, self.motors, -self._target, -target, duration, d.time_step, d.motor_torque,
+        self.sim.ramp(self._motors, -self._target, -target, duration, d.time_step, d.motor_torque,
                       d.position_gain, d.velocity_gain)
         self._target = target.copy()
         return self.tip
@@ -226,19 +275,20 @@ class CaPaManDynamicScene:
     @property
     def alpha(self) -> np.ndarray:
         """The crank angles now (rad), as the motors' encoders read them."""
-        return -self.sim.joint_positions(self.ROBOT, self.motors)
+        return -self.sim.motor_positions(self._motors)
 
     @property
     def tip(self) -> np.ndarray:
         """The tool tip now (m), from the plate's simulated pose."""
-        pos, orn = self.sim.link_frame(self.ROBOT, self.plate)
+        pos, orn = self.sim.link_frame(*self.plate)
         return pos - self.geometry.tool_length * capaman.quat_to_matrix(orn)[:, 2]
 
     def clearance(self) -> tuple[float, str | None]:
         """Signed distance (m) from the whole mechanism to the nearest obstacle, capped."""
         if not self.obstacles:
             return self.clearance_cap, None
-        return self.sim.clearance(self.ROBOT, ["obstacles"], self.clearance_cap)
+        return min((self.sim.clearance(body, ["obstacles"], self.clearance_cap) for body in self.bodies),
+                   key=lambda found: found[0])
 
     def render(self, width: int = 480, height: int = 360, yaw: float = 45.0, pitch: float = -25.0,
                distance: float = 0.9) -> np.ndarray:

@@ -28,11 +28,26 @@ import pybullet as pb
 from paragym.mechanisms.capaman import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "PyBulletSim", "physics_steps"]
+__all__ = ["LinkSpec", "Motors", "PyBulletSim", "motors_of", "physics_steps"]
+
+#: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
+Motors = Sequence[tuple[str, Sequence[int]]]
 
 _IDENTITY = (0.0, 0.0, 0.0, 1.0)
 _JOINT_TYPES = {"revolute": pb.JOINT_REVOLUTE, "prismatic": pb.JOINT_PRISMATIC,
                 "spherical": pb.JOINT_SPHERICAL, "fixed": pb.JOINT_FIXED}
+
+
+def motors_of(joints: Sequence[tuple[str, int]]) -> list[tuple[str, list[int]]]:
+    """:data:`Motors` for ``joints`` (body name, joint index), in their order: consecutive joints of one
+    body make one group."""
+    motors: list[tuple[str, list[int]]] = []
+    for body, joint in joints:
+        if motors and motors[-1][0] == body:
+            motors[-1][1].append(joint)
+        else:
+            motors.append((body, [joint]))
+    return motors
 
 
 def physics_steps(duration: float, time_step: float) -> int:
@@ -211,13 +226,19 @@ class PyBulletSim:
         pb.resetBasePositionAndOrientation(self._bodies[name], list(position), list(quaternion),
                                            physicsClientId=self._client)
 
-    def add_tree_body(self, name: str, links: Sequence[LinkSpec]) -> None:
-        """Add a multibody whose base (no shape) sits at the world origin and
-        whose ``links`` form a tree; a link is addressed by its name, its parent
-        by name (None: the base). Link frames are placed by the joint values
-        given to :meth:`set_joints`."""
+    def add_tree_body(self, name: str, links: Sequence[LinkSpec], base_mass: float = 0.0,
+                      base_shape: PartShape | None = None,
+                      base_rgba: Sequence[float] = (0.5, 0.5, 0.5, 1.0)) -> None:
+        """Add a multibody whose base sits at the world origin and whose
+        ``links`` form a tree; a link is addressed by its name, its parent by
+        name (None: the base, link index -1). Link frames are placed by the
+        joint values given to :meth:`set_joints`. The base is fixed and has no
+        shape unless ``base_mass`` (kg) > 0: then it is a free rigid body (its
+        centre of mass at its frame's origin, with ``base_shape``), placed by
+        :meth:`reset_base`."""
         self._check_new(name)
-        self._recipe[name] = (self.add_tree_body, (name, links))
+        self._recipe[name] = (self.add_tree_body, (name, links, base_mass, base_shape, base_rgba))
+        base_col, base_vis = (-1, -1) if base_shape is None else self._shape(base_shape, base_rgba)
         links = _depth_first(links)  # PyBullet stores links in this order whatever order it is given
         index = {link.name: i for i, link in enumerate(links)}
         cols, vis = [], []
@@ -231,7 +252,7 @@ class PyBulletSim:
                 vis.append(v)
         n = len(links)
         body = pb.createMultiBody(
-            0.0, -1, -1, linkMasses=[link.mass for link in links], linkCollisionShapeIndices=cols,
+            base_mass, base_col, base_vis, linkMasses=[link.mass for link in links], linkCollisionShapeIndices=cols,
             linkVisualShapeIndices=vis,
             linkPositions=[link.position for link in links],
             linkOrientations=[link.orientation for link in links],
@@ -258,6 +279,13 @@ class PyBulletSim:
         """PyBullet link index of ``link`` in body ``name``."""
         return self._links[name][link]
 
+    def locate(self, link: str) -> tuple[str, int]:
+        """The body holding the link named ``link``, and the link's index in it."""
+        for name, links in self._links.items():
+            if link in links:
+                return name, links[link]
+        raise ValueError(f"no link named {link!r}")
+
     def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and xyzw quaternion of a link's frame (the link by name or index)."""
         return self.link_motion(name, link)[:2]
@@ -266,6 +294,12 @@ class PyBulletSim:
         """A link's frame: world position (m), xyzw quaternion and, with
         ``velocity``, its linear (m/s) and angular (rad/s) velocity."""
         index = self._links[name][link] if isinstance(link, str) else link
+        if index < 0:  # the base
+            body, c = self._bodies[name], self._client
+            base = pb.getBasePositionAndOrientation(body, physicsClientId=c)
+            if velocity:
+                base += pb.getBaseVelocity(body, physicsClientId=c)
+            return tuple(np.array(v) for v in base)
         state = pb.getLinkState(self._bodies[name], index, computeLinkVelocity=velocity, computeForwardKinematics=True,
                                 physicsClientId=self._client)
         return tuple(np.array(v) for v in state[4:8 if velocity else 6])
@@ -282,13 +316,14 @@ class PyBulletSim:
         if erp is not None:
             pb.setPhysicsEngineParameter(erp=erp, physicsClientId=self._client)
 
-    def no_self_collision(self, name: str) -> None:
-        """The parts of body ``name`` do not collide with each other."""
-        body, c = self._bodies[name], self._client
-        n = pb.getNumJoints(body, physicsClientId=c)
-        for i in range(-1, n):
-            for j in range(i + 1, n):
-                pb.setCollisionFilterPair(body, body, i, j, 0, physicsClientId=c)
+    def no_self_collision(self, *names: str) -> None:
+        """The parts of the bodies ``names`` (one mechanism) do not collide with each other."""
+        c = self._client
+        parts = [(self._bodies[name], link) for name in names
+                 for link in range(-1, pb.getNumJoints(self._bodies[name], physicsClientId=c))]
+        for i, (body_a, link_a) in enumerate(parts):
+            for body_b, link_b in parts[i + 1:]:
+                pb.setCollisionFilterPair(body_a, body_b, link_a, link_b, 0, physicsClientId=c)
 
     def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
         """Make joints free (no motor): PyBullet's default velocity motors off,
@@ -301,13 +336,20 @@ class PyBulletSim:
                                             force=[0.0, 0.0, 0.0], physicsClientId=c)
 
     def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int,
-                   pivot_b: Sequence[float]) -> None:
-        """Close a loop of body ``name``: a ball joint (point-to-point
-        constraint) between a point of ``link_a`` and a point of ``link_b``
-        (each in its link's centre-of-mass frame, m)."""
-        body = self._bodies[name]
-        pb.createConstraint(body, link_a, body, link_b, pb.JOINT_POINT2POINT, [0, 0, 0], list(pivot_a),
-                            list(pivot_b), physicsClientId=self._client)
+                   pivot_b: Sequence[float], other: str | None = None) -> None:
+        """Close a loop: a ball joint (point-to-point constraint) between a
+        point of ``link_a`` of body ``name`` and a point of ``link_b`` of body
+        ``other`` (default: the same body; -1: a base), each in its link's
+        centre-of-mass frame (m)."""
+        pb.createConstraint(self._bodies[name], link_a, self._bodies[other or name], link_b, pb.JOINT_POINT2POINT,
+                            [0, 0, 0], list(pivot_a), list(pivot_b), physicsClientId=self._client)
+
+    def no_collision(self, name: str) -> None:
+        """No part of body ``name`` collides with anything (a mechanism alone in its scene, whose parts
+        meet at their joints): the parts leave the collision detection altogether."""
+        body, c = self._bodies[name], self._client
+        for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
+            pb.setCollisionFilterGroupMask(body, link, 0, 0, physicsClientId=c)
 
     def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
         """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base)."""
@@ -328,26 +370,32 @@ class PyBulletSim:
         else:
             pb.resetJointStateMultiDof(body, joint, list(value), [0.0, 0.0, 0.0], physicsClientId=c)
 
-    def drive(self, name: str, joints: Sequence[int], targets: Sequence[float], rates: Sequence[float],
+    def drive(self, motors: Motors, targets: Sequence[float], rates: Sequence[float],
               force: float, position_gain: float, velocity_gain: float) -> None:
-        """Force-limited PD motors on ``joints``: chase ``targets`` at ``rates``
-        (each motor at most ``force``, N or N m), from the next step on."""
-        n = len(joints)
-        pb.setJointMotorControlArray(self._bodies[name], list(joints), pb.POSITION_CONTROL,
-                                     targetPositions=list(targets), targetVelocities=list(rates), forces=[force] * n,
-                                     positionGains=[position_gain] * n, velocityGains=[velocity_gain] * n,
-                                     physicsClientId=self._client)
+        """Force-limited PD motors on the joints of ``motors``: chase
+        ``targets`` at ``rates`` (each motor at most ``force``, N or N m), from
+        the next step on."""
+        start, c = 0, self._client
+        targets, rates = [float(v) for v in targets], [float(v) for v in rates]  # one conversion, not per body
+        for name, joints in motors:
+            n = len(joints)
+            pb.setJointMotorControlArray(self._bodies[name], joints, pb.POSITION_CONTROL,
+                                         targetPositions=targets[start:start + n],
+                                         targetVelocities=rates[start:start + n], forces=[force] * n,
+                                         positionGains=[position_gain] * n, velocityGains=[velocity_gain] * n,
+                                         physicsClientId=c)
+            start += n
 
-    def ramp(self, name: str, joints: Sequence[int], start: np.ndarray, goal: np.ndarray, duration: float,
+    def ramp(self, motors: Motors, start: np.ndarray, goal: np.ndarray, duration: float,
              time_step: float, force: float, position_gain: float, velocity_gain: float) -> None:
-        """Move the targets of position-controlled motors on ``joints`` linearly
+        """Move the targets of the position-controlled ``motors`` linearly
         from ``start`` to ``goal`` over ``duration`` s (at least one physics
         step of ``time_step`` s), stepping the physics as they go; the motors
         chase the moving targets (and their constant rate) under ``force``."""
         steps = physics_steps(duration, time_step)
         rate = (goal - start) / (steps * time_step)
         for i in range(1, steps + 1):
-            self.drive(name, joints, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)
+            self.drive(motors, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)
             self.step()
 
     def step(self) -> None:
@@ -360,6 +408,18 @@ class PyBulletSim:
         """The positions of 1-dof joints now (rad or m)."""
         return np.array([s[0] for s in pb.getJointStates(self._bodies[name], list(joints),
                                                          physicsClientId=self._client)])
+
+    def motor_positions(self, motors: Motors) -> np.ndarray:
+        """The positions of the joints of ``motors`` now, in their order (rad or m)."""
+        c = self._client
+        return np.array([s[0] for name, joints in motors
+                         for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
+
+    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``, at rest."""
+        body, c = self._bodies[name], self._client
+        pb.resetBasePositionAndOrientation(body, list(position), list(quaternion), physicsClientId=c)
+        pb.resetBaseVelocity(body, [0.0, 0.0, 0.0], [0.0, 0.0, 0.0], physicsClientId=c)
 
     def on_rebuild(self, setup: Any) -> None:
         """Run ``setup()`` now and again whenever :meth:`remove` rebuilds the

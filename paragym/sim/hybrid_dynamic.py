@@ -26,18 +26,43 @@ half a centimetre of error that is not physics; the error reduction 0.9 and 50
 iterations bring it to 1.2 mm at 190 steps/s (fine: 21 steps/s; a 10 ms
 step drifts by 9 mm). ``tests/test_dynamic_fidelity.py`` checks that bound
 against the fine settings.
+
+Two layouts (``HybridDynamics.layout``) cut the same mechanism into PyBullet
+multibodies. "tree", the released default, is the one multibody above.
+"split" makes eight: each hexapod leg on its own fixed base (its universal
+joint and actuator), A a free body carrying the tripod's three legs, and E a
+free body; the nine ball joints then tie bodies together. The joints,
+masses and motors are the same, and so is the motion: at equal settings (5
+ms, 150 iterations) E's path in the two layouts agrees to 5 um. PyBullet's
+solver handles the split at a fraction of the cost, since each ball joint's
+rows then span a leg's and a platform's degrees of freedom, not the tree's
+36: a physics step costs 150-160 us instead of 460-720 us
+(``benchmarks/dynamic_floor.py``, two runs). :meth:`HybridDynamics.split`, opt-in
+(a released id's default never changes), runs the split at a 5 ms step, 30
+iterations, error reduction 0.9 and a servo gain of 1 (the servo corrects
+its whole error each step, a bandwidth of 200/s; the tree's gain of 0.3 is
+60/s at 5 ms and 300/s at the fine settings' 1 ms): E stays within 0.7 mm
+of the fine settings on the paper's path and tracks its command to 1.1 mm,
+at 3-4x the default settings' steps/s, about PandaReach-v3's.
+
+Twice PandaReach-v3's steps/s (the goal of the benchmark's dynamic
+fidelity) is out of this mechanism's reach in PyBullet at a 5 ms step: with
+the solver cut to one iteration, the ten physics steps of a 0.05 s control
+period alone allow 1.6-1.8x (``benchmarks/dynamic_floor.py``). At a 10 ms step,
+30 iterations leave E 4.5-8 mm off its command (the env's track tolerance is
+5 mm), and the 150 that bring it to 0.9 mm cost as much as the 5 ms step.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
 from paragym.mechanisms import capaman, hybrid
 from paragym.mechanisms.capaman import PartShape
-from paragym.sim.client import LinkSpec, PyBulletSim
+from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 
 __all__ = ["HybridDynamics", "HybridDynamicScene", "HybridRun"]
 
@@ -58,11 +83,21 @@ class HybridDynamics:
     solver_iterations: int = 150
     gravity: float = 9.81
     erp: float | None = None  # the constraint solver's error reduction (None: PyBullet's default)
+    #: how the mechanism is cut into PyBullet multibodies: "tree" (one) or "split" (one per hexapod leg,
+    #: A with the tripod's legs, E); the same joints and masses (module docstring)
+    layout: str = "tree"
 
     @classmethod
     def fast(cls) -> HybridDynamics:
-        """The env's settings: a 5 ms step, 50 solver iterations, error reduction 0.9 (module docstring)."""
+        """The env's default settings: one tree, a 5 ms step, 50 solver iterations, error reduction 0.9
+        (module docstring)."""
         return cls(time_step=5e-3, solver_iterations=50, erp=0.9)
+
+    @classmethod
+    def split(cls) -> HybridDynamics:
+        """The split layout at a 5 ms step, 30 solver iterations, error reduction 0.9 and a servo gain of 1
+        (200/s): opt-in, the fastest settings (module docstring)."""
+        return cls(time_step=5e-3, solver_iterations=30, erp=0.9, position_gain=1.0, layout="split")
 
 
 @dataclass(frozen=True)
@@ -93,7 +128,9 @@ def _quat_z_to(d: np.ndarray) -> tuple[float, ...]:
 
 
 class HybridDynamicScene:
-    """The dynamic hybrid robot (module docstring), built at the home pose."""
+    """The dynamic hybrid robot (module docstring), built at the home pose in
+    the dynamics' ``layout``: every joint is addressed as (body name, link
+    index), so that both layouts share the code below."""
 
     ROBOT = "hybrid"
 
@@ -101,33 +138,28 @@ class HybridDynamicScene:
                  dynamics: HybridDynamics | None = None, gui: bool = False) -> None:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or HybridDynamics()
-        self.sim = PyBulletSim(gui=gui)
-        self.sim.set_physics(d.gravity, d.time_step, d.solver_iterations, d.erp)
+        if d.layout not in ("tree", "split"):
+            raise ValueError(f'dynamics.layout must be "tree" or "split"; got {d.layout!r}')
+        self.sim = sim = PyBulletSim(gui=gui)
+        sim.set_physics(d.gravity, d.time_step, d.solver_iterations, d.erp)
         home = hybrid.solve(np.zeros(6), 0.5, g)
         t_a, t_t = home.t_a[0], home.t_t[0]
         rod = PartShape("rod", "cylinder", radius=0.008, length=0.05)
-        links = [LinkSpec("a_x", None, "prismatic", axis=(1, 0, 0)),
-                 LinkSpec("a_y", "a_x", "prismatic", axis=(0, 1, 0)),
-                 LinkSpec("a_z", "a_y", "prismatic", axis=(0, 0, 1)),
-                 LinkSpec("A", "a_z", "spherical", mass=d.platform_a_mass,
-                          shape=PartShape("A", "cylinder", radius=g.platform_radius + 0.015, length=0.01),
-                          rgba=(0.2, 0.45, 0.8, 1)),
-                 LinkSpec("e_x", "A", "prismatic", axis=(1, 0, 0)),
-                 LinkSpec("e_y", "e_x", "prismatic", axis=(0, 1, 0)),
-                 LinkSpec("e_z", "e_y", "prismatic", axis=(0, 0, 1)),
-                 LinkSpec("E", "e_z", "spherical", mass=d.platform_e_mass,
-                          shape=PartShape("E", "cylinder", radius=g.r_te + 0.015, length=0.01),
-                          rgba=(0.85, 0.7, 0.2, 1))]
+        a_shape = PartShape("A", "cylinder", radius=g.platform_radius + 0.015, length=0.01)
+        e_shape = PartShape("E", "cylinder", radius=g.r_te + 0.015, length=0.01)
+        a_rgba, e_rgba = (0.2, 0.45, 0.8, 1), (0.85, 0.7, 0.2, 1)
         self._frames = []  # each leg's fixed joint frame (orientation of its home direction)
+        hexapod = []  # each hexapod leg's links, from the base
         a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
         for i in range(6):
             direction = a_world[i] - g.base_joints[i]
             q0 = _quat_z_to(direction / np.linalg.norm(direction))
             self._frames.append(q0)
-            links += [LinkSpec(f"h{i}_u", None, "revolute", tuple(g.base_joints[i]), q0, (1, 0, 0)),
-                      LinkSpec(f"h{i}_v", f"h{i}_u", "revolute", axis=(0, 1, 0)),
-                      LinkSpec(f"h{i}_p", f"h{i}_v", "prismatic", axis=(0, 0, 1), shape=rod,
-                               shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.3, 0.3, 0.3, 1))]
+            hexapod.append([LinkSpec(f"h{i}_u", None, "revolute", tuple(g.base_joints[i]), q0, (1, 0, 0)),
+                            LinkSpec(f"h{i}_v", f"h{i}_u", "revolute", axis=(0, 1, 0)),
+                            LinkSpec(f"h{i}_p", f"h{i}_v", "prismatic", axis=(0, 0, 1), shape=rod,
+                                     shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.3, 0.3, 0.3, 1))])
+        tripod = []  # each tripod leg's links, from platform A
         e_in_a = (t_t[:3, :3] @ g.tripod_top.T).T + t_t[:3, 3]
         for j in range(3):
             direction = e_in_a[j] - g.tripod_base[j]
@@ -136,53 +168,85 @@ class HybridDynamicScene:
             frame = np.column_stack([x, np.cross(z, x), z])
             qj = tuple(capaman.matrix_to_quat(frame))
             self._frames.append(qj)
-            links += [LinkSpec(f"t{j}_r", "A", "revolute", tuple(g.tripod_base[j]), qj, (1, 0, 0)),
-                      LinkSpec(f"t{j}_p", f"t{j}_r", "prismatic", axis=(0, 0, 1), shape=rod,
-                               shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.6, 0.2, 0.2, 1))]
-        self.sim.add_tree_body(self.ROBOT, links)
-        idx = lambda name: self.sim.link_index(self.ROBOT, name)  # noqa: E731
-        self.a_float = [idx("a_x"), idx("a_y"), idx("a_z")]
-        self.e_float = [idx("e_x"), idx("e_y"), idx("e_z")]
-        self.a_link, self.e_link = idx("A"), idx("E")
-        self.hex_u = [idx(f"h{i}_u") for i in range(6)]
-        self.hex_v = [idx(f"h{i}_v") for i in range(6)]
-        self.tri_r = [idx(f"t{j}_r") for j in range(3)]
-        self.actuators = [idx(f"h{i}_p") for i in range(6)] + [idx(f"t{j}_p") for j in range(3)]
-        sim, name = self.sim, self.ROBOT
-        sim.no_self_collision(name)
-        sim.passive(name, self.a_float + self.e_float + self.hex_u + self.hex_v + self.tri_r,
-                    [self.a_link, self.e_link])
-        for i in range(6):  # ball joints: leg tip (the prismatic link's origin, COM offset -0.025) to A_i
-            sim.ball_joint(name, self.actuators[i], [0, 0, 0.025], self.a_link, list(g.platform_joints[i]))
-        for j in range(3):
-            sim.ball_joint(name, self.actuators[6 + j], [0, 0, 0.025], self.e_link, list(g.tripod_top[j]))
+            tripod.append([LinkSpec(f"t{j}_r", "A", "revolute", tuple(g.tripod_base[j]), qj, (1, 0, 0)),
+                           LinkSpec(f"t{j}_p", f"t{j}_r", "prismatic", axis=(0, 0, 1), shape=rod,
+                                    shape_offset=(0, 0, -0.025), mass=d.leg_mass, rgba=(0.6, 0.2, 0.2, 1))])
+        if d.layout == "tree":  # one multibody; A and E float on three prismatic joints and a spherical one
+            links = [LinkSpec("a_x", None, "prismatic", axis=(1, 0, 0)),
+                     LinkSpec("a_y", "a_x", "prismatic", axis=(0, 1, 0)),
+                     LinkSpec("a_z", "a_y", "prismatic", axis=(0, 0, 1)),
+                     LinkSpec("A", "a_z", "spherical", mass=d.platform_a_mass, shape=a_shape, rgba=a_rgba),
+                     LinkSpec("e_x", "A", "prismatic", axis=(1, 0, 0)),
+                     LinkSpec("e_y", "e_x", "prismatic", axis=(0, 1, 0)),
+                     LinkSpec("e_z", "e_y", "prismatic", axis=(0, 0, 1)),
+                     LinkSpec("E", "e_z", "spherical", mass=d.platform_e_mass, shape=e_shape, rgba=e_rgba)]
+            sim.add_tree_body(self.ROBOT, links + [link for leg in hexapod + tripod for link in leg])
+            at = lambda link: (self.ROBOT, sim.link_index(self.ROBOT, link))  # noqa: E731
+            self._a_float, self._e_float = [at(f"a_{c}") for c in "xyz"], [at(f"e_{c}") for c in "xyz"]
+            #: the platforms A and E: (body, link); link -1 is a free body's base
+            self.a_platform, self.e_platform = at("A"), at("E")
+            sim.no_self_collision(self.ROBOT)
+        else:  # each hexapod leg its own fixed-base multibody; A a free base carrying the tripod's legs; E free
+            for i, leg in enumerate(hexapod):
+                sim.add_tree_body(f"leg{i}", leg)
+            sim.add_tree_body("A", [replace(link, parent=None) if link.parent == "A" else link
+                                    for leg in tripod for link in leg], d.platform_a_mass, a_shape, a_rgba)
+            sim.add_tree_body("E", [], d.platform_e_mass, e_shape, e_rgba)
+            at = sim.locate
+            self._a_float, self._e_float = [], []
+            self.a_platform, self.e_platform = ("A", -1), ("E", -1)
+            for body in sim.body_names:
+                sim.no_collision(body)
+        self.hex_u = [at(f"h{i}_u") for i in range(6)]
+        self.hex_v = [at(f"h{i}_v") for i in range(6)]
+        self.tri_r = [at(f"t{j}_r") for j in range(3)]
+        self.actuators = [at(f"h{i}_p") for i in range(6)] + [at(f"t{j}_p") for j in range(3)]
+        #: the nine actuators as motors (body, joints), in the order of the strokes
+        self.motors = motors_of(self.actuators)
+        for body, link in self._a_float + self._e_float + self.hex_u + self.hex_v + self.tri_r:
+            sim.passive(body, [link])
+        for body, link in (self.a_platform, self.e_platform):
+            if link >= 0:
+                sim.passive(body, [], [link])
+        for leg, (body, link) in enumerate(self.actuators):  # ball joints: leg tip (COM offset -0.025) to its joint
+            platform, joint = ((self.a_platform, g.platform_joints[leg]) if leg < 6 else
+                               (self.e_platform, g.tripod_top[leg - 6]))
+            sim.ball_joint(body, link, [0, 0, 0.025], platform[1], list(joint), other=platform[0])
         self.reset(np.zeros(6), 0.5)
+
+    def _set(self, joint: tuple[str, int], value: float | np.ndarray) -> None:
+        self.sim.reset_joint(joint[0], joint[1], value if isinstance(value, np.ndarray) else float(value))
+
+    def _place(self, platform: tuple[str, int], floats: list[tuple[str, int]], t: np.ndarray) -> None:
+        quaternion = capaman.matrix_to_quat(t[:3, :3])
+        if platform[1] < 0:
+            self.sim.reset_base(platform[0], t[:3, 3], quaternion)
+            return
+        for joint, v in zip(floats, t[:3, 3], strict=True):
+            self._set(joint, v)
+        self._set(platform, quaternion)
 
     def reset(self, p: np.ndarray, delta: float) -> None:
         """Every joint where the kinematics has it for E displacement ``p`` at split ``delta``, at rest."""
         g = self.geometry
         st = hybrid.solve(p, delta, g)
         t_a, t_t = st.t_a[0], st.t_t[0]
-        set_ = lambda j, v: self.sim.reset_joint(self.ROBOT, j, float(v))  # noqa: E731
-        for j, v in zip(self.a_float, t_a[:3, 3], strict=True):
-            set_(j, v)
-        self.sim.reset_joint(self.ROBOT, self.a_link, capaman.matrix_to_quat(t_a[:3, :3]))
-        for j, v in zip(self.e_float, t_t[:3, 3], strict=True):
-            set_(j, v)
-        self.sim.reset_joint(self.ROBOT, self.e_link, capaman.matrix_to_quat(t_t[:3, :3]))
+        self._place(self.a_platform, self._a_float, t_a)
+        # E's pose: in A's frame along the tree's chain, in the world as a free body
+        self._place(self.e_platform, self._e_float, t_t if self.e_platform[1] >= 0 else t_a @ t_t)
         a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
         for i in range(6):
             d = a_world[i] - g.base_joints[i]
             local = capaman.quat_to_matrix(np.array(self._frames[i])).T @ (d / np.linalg.norm(d))
-            set_(self.hex_v[i], np.arcsin(np.clip(local[0], -1, 1)))
-            set_(self.hex_u[i], np.arctan2(-local[1], local[2]))
-            set_(self.actuators[i], st.lengths[0, i])
+            self._set(self.hex_v[i], np.arcsin(np.clip(local[0], -1, 1)))
+            self._set(self.hex_u[i], np.arctan2(-local[1], local[2]))
+            self._set(self.actuators[i], st.lengths[0, i])
         e_in_a = (t_t[:3, :3] @ g.tripod_top.T).T + t_t[:3, 3]
         for j in range(3):
             d = e_in_a[j] - g.tripod_base[j]
             local = capaman.quat_to_matrix(np.array(self._frames[6 + j])).T @ (d / np.linalg.norm(d))
-            set_(self.tri_r[j], np.arctan2(-local[1], local[2]))
-            set_(self.actuators[6 + j], st.lengths[0, 6 + j])
+            self._set(self.tri_r[j], np.arctan2(-local[1], local[2]))
+            self._set(self.actuators[6 + j], st.lengths[0, 6 + j])
         self._target = st.lengths[0].copy()
 
     def drive(self, strokes: np.ndarray, duration: float) -> None:
@@ -190,7 +254,7 @@ class HybridDynamicScene:
         ``strokes`` (9,) (m) over ``duration`` s of simulated time, the motors
         chasing them under their force limit."""
         d, strokes = self.dynamics, np.asarray(strokes, float)
-        self.sim.ramp(self.ROBOT, self.actuators, self._target, strokes, duration, d.time_step, d.motor_force,
+        self.sim.ramp(self.motors, self._target, strokes, duration, d.time_step, d.motor_force,
                       d.position_gain, d.velocity_gain)
         self._target = strokes.copy()
 
@@ -198,12 +262,12 @@ class HybridDynamicScene:
         """The simulated state now: T_A and T_E (4, 4, base frame) from the
         platforms' poses, and the nine strokes (m) from the actuators' joints."""
         out = []
-        for link in (self.a_link, self.e_link):
-            pos, orn = self.sim.link_frame(self.ROBOT, link)
+        for body, link in (self.a_platform, self.e_platform):
+            pos, orn = self.sim.link_frame(body, link)
             t = np.eye(4)
             t[:3, :3], t[:3, 3] = capaman.quat_to_matrix(orn), pos
             out.append(t)
-        return out[0], out[1], self.sim.joint_positions(self.ROBOT, self.actuators)
+        return out[0], out[1], self.sim.motor_positions(self.motors)
 
     def render(self, width: int = 480, height: int = 360) -> np.ndarray:
         """RGB image of the simulated robot (uint8, (height, width, 3))."""
@@ -212,10 +276,10 @@ class HybridDynamicScene:
     def closure_error(self) -> float:
         """Largest ball-joint gap (m) now."""
         g = self.geometry
-        frame = lambda link: self.sim.link_frame(self.ROBOT, link)  # noqa: E731
+        frame = lambda joint: self.sim.link_frame(*joint)  # noqa: E731
         worst = 0.0
-        for platform, joints, legs in ((self.a_link, g.platform_joints, self.actuators[:6]),
-                                       (self.e_link, g.tripod_top, self.actuators[6:])):
+        for platform, joints, legs in ((self.a_platform, g.platform_joints, self.actuators[:6]),
+                                       (self.e_platform, g.tripod_top, self.actuators[6:])):
             pos, orn = frame(platform)
             rot = capaman.quat_to_matrix(orn)
             for leg, joint in zip(legs, joints, strict=True):
@@ -240,12 +304,11 @@ class HybridDynamicScene:
         closure = 0.0
         for i in range(n):  # the physics is sequential
             if i:
-                sim.drive(self.ROBOT, self.actuators, target[i], target_rate[i], d.motor_force, d.position_gain,
-                          d.velocity_gain)
+                sim.drive(self.motors, target[i], target_rate[i], d.motor_force, d.position_gain, d.velocity_gain)
                 sim.step()
-            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(self.ROBOT, self.e_link, velocity=True)
-            a_pos[i] = sim.link_frame(self.ROBOT, self.a_link)[0]
-            measured[i] = sim.joint_positions(self.ROBOT, self.actuators)
+            pos[i], orn[i], vel[i], omega[i] = sim.link_motion(*self.e_platform, velocity=True)
+            a_pos[i] = sim.link_frame(*self.a_platform)[0]
+            measured[i] = sim.motor_positions(self.motors)
             if i % 200 == 0:
                 closure = max(closure, self.closure_error())
         return HybridRun(t, pos, capaman.quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),

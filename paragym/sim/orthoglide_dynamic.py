@@ -127,7 +127,7 @@ class OrthoglideDynamicScene:
         """Move the three motors' targets linearly from the last target to
         ``rho`` (m) over ``duration`` s of simulated time."""
         d, rho = self.dynamics, np.asarray(rho, float)
-        self.sim.ramp(self.ROBOT, self.motors, self._target, rho, duration, d.time_step, d.motor_force,
+        self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, d.time_step, d.motor_force,
                       d.position_gain, d.velocity_gain)
         self._target = rho.copy()
 
