@@ -1,0 +1,113 @@
+"""Where the dynamic fidelity's time goes, and the most PyBullet's physics alone would allow.
+
+For every dynamic env and physics preset, one core, random actions (resets
+included), PandaReach-v3 measured in the same run as the anchor:
+
+* the env's steps/s, and the share of its time inside ``stepSimulation``;
+* the physics steps per env step (the control period over the time step);
+* the cost of one physics step at the preset's settings, and with the
+  constraint solver cut to one iteration (the same preset otherwise);
+* the ceiling: the env steps/s that the physics alone would allow at one
+  solver iteration and with every line of Python free, as a ratio to the
+  anchor. Where that ceiling is under the goal of 2x PandaReach-v3, no
+  setting of the solver's iterations reaches the goal at that time step.
+
+    python benchmarks/dynamic_floor.py [--seconds 3]
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import time
+import warnings
+
+import gymnasium as gym
+import pybullet as pb
+
+import paragym  # noqa: F401
+from paragym.sim import capaman_dynamic, hybrid_dynamic, orthoglide_dynamic, tripod_dynamic
+
+GOAL = 2.0  # x PandaReach-v3
+#: (env id, scenario, preset label, the dynamics)
+ROWS = (
+    ("paragym/CaPaManCollisionFree-v1", "random", "fast", capaman_dynamic.CaPaManDynamics.fast()),
+    ("paragym/CaPaManCollisionFree-v1", "random", "split", capaman_dynamic.CaPaManDynamics.split()),
+    ("paragym/HybridSingularityFree-v1", "random", "default", hybrid_dynamic.HybridDynamics.fast()),
+    ("paragym/HybridSingularityFree-v1", "random", "split", hybrid_dynamic.HybridDynamics.split()),
+    ("paragym/Orthoglide2PRRKappa-v0", "random", "default", orthoglide_dynamic.OrthoglideDynamics()),
+    ("paragym/MobileTripodOdometry-v1", "push", "default", tripod_dynamic.TripodDynamics()),
+)
+
+
+class _PhysicsClock:
+    """Counts PyBullet's ``stepSimulation`` calls and their time (it wraps the module's function)."""
+
+    def __init__(self) -> None:
+        self.calls, self.seconds = 0, 0.0
+        self._step = pb.stepSimulation
+
+    def __enter__(self) -> _PhysicsClock:
+        def timed(*args, **kwargs):
+            t0 = time.perf_counter()
+            out = self._step(*args, **kwargs)
+            self.seconds += time.perf_counter() - t0
+            self.calls += 1
+            return out
+
+        pb.stepSimulation = timed
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pb.stepSimulation = self._step
+
+
+def _run(env_id: str, seconds: float, **kwargs) -> tuple[float, float, float]:
+    """Env steps/s, physics steps per env step, and physics seconds per physics step."""
+    env = gym.make(env_id, **kwargs)
+    env.reset(seed=0)
+    env.action_space.seed(0)
+    actions = [env.action_space.sample() for _ in range(5000)]
+    steps = 0
+    with _PhysicsClock() as clock:
+        t0 = time.perf_counter()
+        while time.perf_counter() - t0 < seconds:
+            _, _, terminated, truncated, _ = env.step(actions[steps % len(actions)])
+            steps += 1
+            if terminated or truncated:
+                env.reset()
+        elapsed = time.perf_counter() - t0
+    env.close()
+    return steps / elapsed, clock.calls / steps, clock.seconds / max(clock.calls, 1)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=3.0, help="duration of each measurement")
+    args = parser.parse_args()
+    if hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
+    import panda_gym  # noqa: F401
+
+    anchor, _, _ = _run("PandaReach-v3", args.seconds)
+    warnings.filterwarnings("ignore", message=".*is out of date.*")
+    print(f"PandaReach-v3 (anchor): {anchor:.0f} steps/s; goal {GOAL:.0f}x = {GOAL * anchor:.0f}\n")
+    head = (f"{'environment':34s} {'preset':8s} {'steps/s':>8s} {'x':>5s} {'physics':>8s} {'steps':>6s} "
+            f"{'us/step':>8s} {'us@1it':>7s} {'ceiling':>8s} {'x':>5s}")
+    print(head)
+    for env_id, scenario, label, dynamics in ROWS:
+        kwargs = {"scenario": scenario, "fidelity": "dynamic", "dynamics": dynamics}
+        sps, n, per_step = _run(env_id, args.seconds, **kwargs)
+        one = dataclasses.replace(dynamics, solver_iterations=1)
+        _, _, per_step_one = _run(env_id, args.seconds, **{**kwargs, "dynamics": one})
+        ceiling = 1.0 / (n * per_step_one)
+        print(f"{env_id.split('/')[1]:34s} {label:8s} {sps:8.0f} {sps / anchor:5.1f} {n * per_step * sps:8.0%} "
+              f"{n:6.1f} {per_step * 1e6:8.0f} {per_step_one * 1e6:7.0f} {ceiling:8.0f} {ceiling / anchor:5.1f}")
+    print("\nphysics: the share of the env's time in stepSimulation; steps: physics steps per env step; us/step: one "
+          "physics step at the preset, us@1it: at one solver iteration; ceiling: env steps/s the physics alone "
+          "allows at one iteration")
+
+
+if __name__ == "__main__":
+    main()
