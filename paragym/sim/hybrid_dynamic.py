@@ -46,11 +46,15 @@ of the fine settings on the paper's path and tracks its command to 1.1 mm,
 at 3-4x the default settings' steps/s, about PandaReach-v3's.
 
 Twice PandaReach-v3's steps/s (the goal of the benchmark's dynamic
-fidelity) is out of this mechanism's reach in PyBullet at a 5 ms step: with
-the solver cut to one iteration, the ten physics steps of a 0.05 s control
-period alone allow 1.6-1.8x (``benchmarks/dynamic_floor.py``). At a 10 ms step,
-30 iterations leave E 4.5-8 mm off its command (the env's track tolerance is
-5 mm), and the 150 that bring it to 0.9 mm cost as much as the 5 ms step.
+fidelity) is out of this mechanism's reach in PyBullet at a 5 ms step
+(``benchmarks/dynamic_floor.py``, which alternates with the anchor): the ten
+physics steps of a 0.05 s control period alone allow 1.1-1.3x at the split
+preset, and 2.1-2.2x with the solver cut to one iteration, leaving no time
+for the rest of the step (39 % of it); fewer iterations cost accuracy (at 30,
+10 and 5 iterations E tracks its command to 1.1, 3.4 and 5.8 mm; the env's
+track tolerance is 5 mm). At a 10 ms step, 30 iterations leave E 4.5-8 mm
+off its command, and the 150 that bring it to 0.9 mm cost as much as the
+5 ms step.
 """
 
 from __future__ import annotations

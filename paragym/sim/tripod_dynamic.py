@@ -61,9 +61,10 @@ drifts 0.697 m sideways where the kinematic model says 0.698 m
 (``tests/test_dynamic_fidelity.py`` checks both). About 440 env steps/s.
 
 Twice PandaReach-v3's steps/s (the benchmark's goal for the dynamic
-fidelity) is out of this model's reach in PyBullet at a 5 ms step: with the
-solver cut to one iteration, the ten physics steps of a 0.05 s control
-period alone allow 1.4-1.7x (``benchmarks/dynamic_floor.py``). A 10 ms step let
+fidelity) is out of this model's reach in PyBullet at a 5 ms step: the ten
+physics steps of a 0.05 s control period alone allow 0.8x at these
+settings, and 1.2-1.6x with the solver cut to one iteration
+(``benchmarks/dynamic_floor.py``, which alternates with the anchor). A 10 ms step let
 the wheels creep 1.5 cm in 4 m. Cutting the robot into four multibodies (the plate with its legs, and
 each unit with its wheels, tied by ball joints), as the CaPaMan and the
 hybrid are in their "split" layouts, ran 1.35x faster but let a slow,
