@@ -31,6 +31,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 import pybullet as pb
+from env_speed import run_for  # the measuring loop of benchmarks/env_speed.py (this script's folder is on the path)
 
 import paragym  # noqa: F401
 from paragym.sim import capaman_dynamic, hybrid_dynamic, orthoglide_dynamic, tripod_dynamic
@@ -73,18 +74,8 @@ class _PhysicsClock:
 def _run(env_id: str, seconds: float, **kwargs) -> tuple[float, float, float]:
     """Env steps/s, physics steps per env step, and physics seconds per physics step."""
     env = gym.make(env_id, **kwargs)
-    env.reset(seed=0)
-    env.action_space.seed(0)
-    actions = [env.action_space.sample() for _ in range(5000)]
-    steps = 0
     with _PhysicsClock() as clock:
-        t0 = time.perf_counter()
-        while time.perf_counter() - t0 < seconds:
-            _, _, terminated, truncated, _ = env.step(actions[steps % len(actions)])
-            steps += 1
-            if terminated or truncated:
-                env.reset()
-        elapsed = time.perf_counter() - t0
+        steps, elapsed = run_for(env, seconds)
     env.close()
     return steps / elapsed, clock.calls / steps, clock.seconds / max(clock.calls, 1)
 

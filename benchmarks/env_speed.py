@@ -54,9 +54,9 @@ SCENARIOS = {"paragym/MobileTripodOdometry-v0": ("random", "push"),  # the paper
              "paragym/MobileTripodOdometry-v1": ("random", "push")}
 
 
-def steps_per_second(env: gym.Env, seconds: float, seed: int = 0) -> float:
-    """Env steps per second with pre-drawn random actions (resets included), over ``seconds`` (checked
-    every 20 steps, so that a slow env is not held to a fixed number of steps)."""
+def run_for(env: gym.Env, seconds: float, seed: int = 0) -> tuple[int, float]:
+    """Step ``env`` with pre-drawn random actions (resets included) for ``seconds`` (checked every 20
+    steps, so that a slow env is not held to a fixed number of steps); the steps taken and the time (s)."""
     env.reset(seed=seed)
     env.action_space.seed(seed)
     actions = [env.action_space.sample() for _ in range(4_000)]
@@ -68,7 +68,13 @@ def steps_per_second(env: gym.Env, seconds: float, seed: int = 0) -> float:
             steps += 1
             if terminated or truncated:
                 env.reset()
-    return steps / (time.perf_counter() - t0)
+    return steps, time.perf_counter() - t0
+
+
+def steps_per_second(env: gym.Env, seconds: float, seed: int = 0) -> float:
+    """Env steps per second with pre-drawn random actions (resets included): :func:`run_for`."""
+    steps, elapsed = run_for(env, seconds, seed)
+    return steps / elapsed
 
 
 def reset_seconds(env: gym.Env, n: int = 20) -> float:

@@ -18,6 +18,17 @@ def test_env_speed_prints_a_row_per_env():
     assert "paragym/CaPaManCollisionFree-v0" in out and "steps/s" in out
 
 
+def test_dynamic_floor_prints_both_ceilings_for_every_dynamic_row():
+    out = _run("benchmarks/dynamic_floor.py", "--seconds", "0.06")
+    rows = [ln.split() for ln in out.splitlines() if ln.split()[:1] and ln.split()[0].endswith(("-v0", "-v1"))]
+    # env, preset, and the physics steps per env step (the control period over the preset's time step)
+    assert [(r[0], r[1], float(r[6])) for r in rows] == [
+        ("CaPaManCollisionFree-v1", "fast", 4.0), ("CaPaManCollisionFree-v1", "split", 2.0),
+        ("HybridSingularityFree-v1", "default", 10.0), ("HybridSingularityFree-v1", "split", 10.0),
+        ("Orthoglide2PRRKappa-v0", "default", 2.0), ("MobileTripodOdometry-v1", "default", 10.0)]
+    assert all(float(r[-2]) > 0 and float(r[-1]) > 0 for r in rows)  # both ceilings
+
+
 def test_planner_benchmark_prints_its_table():
     out = _run("benchmarks/planner_capaman.py", "--scenarios", "1", "--paper-runs", "1")
     assert "RRT + GA on the paper scenario" in out and "RRT+GA " in out
