@@ -86,8 +86,13 @@ def main() -> None:
     args = parser.parse_args()
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
-    import panda_gym  # noqa: F401
+    try:
+        import panda_gym  # noqa: F401
 
+        anchored = True
+    except ImportError:
+        anchored = False
+        print("panda-gym is not installed: no anchor, no ratios (pip install panda-gym to add them)")
     warnings.filterwarnings("ignore", message=".*is out of date.*")
     print(f"goal: {GOAL:.0f}x PandaReach-v3, measured beside each row ({ROUNDS} rounds of the anchor, the env at "
           "its preset and at one iteration; medians)\n")
@@ -100,14 +105,16 @@ def main() -> None:
         one = {**kwargs, "dynamics": dataclasses.replace(dynamics, solver_iterations=1)}
         rounds = []
         for _ in range(ROUNDS):  # alternating, so that the machine's load moves the anchor and the env alike
-            anchor, _, _ = _run("PandaReach-v3", share)
+            anchor = _run("PandaReach-v3", share)[0] if anchored else float("nan")
             sps, n, per_step = _run(env_id, share, **kwargs)
             _, n_one, per_step_one = _run(env_id, share, **one)
             rounds.append((anchor, sps, sps / anchor, n * per_step * sps, n, per_step, per_step_one,
                            1.0 / (n * per_step) / anchor, 1.0 / (n * per_step_one) / anchor))
         a, sps, ratio, physics, n, per_step, per_step_one, at_preset, at_one = np.median(rounds, axis=0)
-        print(f"{env_id.split('/')[1]:34s} {label:8s} {a:7.0f} {sps:8.0f} {ratio:5.1f} {physics:8.0%} {n:6.1f} "
-              f"{per_step * 1e6:8.0f} {per_step_one * 1e6:7.0f} {at_preset:7.1f} {at_one:7.1f}")
+        shown = lambda value, width, spec: f"{value:{width}{spec}}" if anchored else f"{'-':>{width}}"  # noqa: E731
+        print(f"{env_id.split('/')[1]:34s} {label:8s} {shown(a, 7, '.0f')} {sps:8.0f} {shown(ratio, 5, '.1f')} "
+              f"{physics:8.0%} {n:6.1f} {per_step * 1e6:8.0f} {per_step_one * 1e6:7.0f} {shown(at_preset, 7, '.1f')} "
+              f"{shown(at_one, 7, '.1f')}")
     print("\nanchor: PandaReach-v3's steps/s beside the row; x: the env's ratio to it; physics: the share of the "
           "env's time in stepSimulation; steps: physics steps per env step; us/step: one physics step at the preset, "
           "us@1it: at one solver iteration; ceil x: the env steps/s the physics alone allows at the preset, as a "
