@@ -193,12 +193,7 @@ class CaPaManDynamicScene:
             for joint, value in ((self.motors[k], -a), (self.cranks_b[k], -a), (self.couplers[k], a),
                                  (self.sliders[k], float(pose.sliders[0, k]))):
                 sim.reset_joint(*joint, value)
-        if self.plate[1] < 0:
-            sim.reset_base(self.plate[0], pose.position[0], pose.quaternion[0])
-            return
-        for joint, value in zip(self.float_joints, pose.position[0], strict=True):
-            sim.reset_joint(*joint, float(value))
-        sim.reset_joint(*self.plate, pose.quaternion[0])
+        sim.place_free(self.plate, self.float_joints, pose.position[0], pose.quaternion[0])
 
     def closure_error(self) -> float:
         """Largest gap (m) of the six loop closures now."""

@@ -415,6 +415,18 @@ class PyBulletSim:
         return np.array([s[0] for name, joints in motors
                          for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
 
+    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
+                   quaternion: Sequence[float]) -> None:
+        """Put a free rigid part at ``position`` (m), turned by the xyzw ``quaternion``, at rest: ``part`` is
+        (body, link), either a free body's base (link -1, ``floats`` empty) or a link on a spherical joint
+        at the end of the three prismatic joints ``floats`` (x, y, z; each (body, joint)) of a tree."""
+        if part[1] < 0:
+            self.reset_base(part[0], position, quaternion)
+            return
+        for joint, value in zip(floats, position, strict=True):
+            self.reset_joint(*joint, float(value))
+        self.reset_joint(*part, quaternion)
+
     def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``, at rest."""
         body, c = self._bodies[name], self._client

@@ -222,13 +222,7 @@ class HybridDynamicScene:
         self.sim.reset_joint(joint[0], joint[1], value if isinstance(value, np.ndarray) else float(value))
 
     def _place(self, platform: tuple[str, int], floats: list[tuple[str, int]], t: np.ndarray) -> None:
-        quaternion = capaman.matrix_to_quat(t[:3, :3])
-        if platform[1] < 0:
-            self.sim.reset_base(platform[0], t[:3, 3], quaternion)
-            return
-        for joint, v in zip(floats, t[:3, 3], strict=True):
-            self._set(joint, v)
-        self._set(platform, quaternion)
+        self.sim.place_free(platform, floats, t[:3, 3], capaman.matrix_to_quat(t[:3, :3]))
 
     def reset(self, p: np.ndarray, delta: float) -> None:
         """Every joint where the kinematics has it for E displacement ``p`` at split ``delta``, at rest."""
