@@ -216,3 +216,35 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
         mine = rows[robot] == g
         assert np.all(_values_at(grids, g, centres[robot[mine], parts[block[mine]]],
                                  rot[robot[mine], parts[block[mine]]], point[mine]) == 100)
+
+
+def _closest_directly(sim, bodies, other="obstacles", cap=0.05):
+    """PyBullet's own closest points between every link (the base included) of ``bodies`` and ``other``."""
+    import pybullet as pb
+
+    c, target = sim._client, sim.body(other)
+    return min((pt[8] for body in bodies for pt in pb.getClosestPoints(sim.body(body), target, cap,
+                                                                       physicsClientId=c)), default=cap)
+
+
+@pytest.mark.parametrize("layout", ["kinematic", "tree", "split"])
+def test_clearance_sees_every_link_of_every_body_the_base_included(layout):
+    """A box 25 mm into the movable plate is a collision in every body layout of the CaPaMan: in the split
+    dynamic layout the plate is a free body's base (link -1), which the query once dropped."""
+    from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
+    from paragym.sim.obstacles import Box
+
+    if layout == "kinematic":
+        s = CaPaManScene(G)
+        bodies = [s.ROBOT]
+    else:
+        s = CaPaManDynamicScene(G, CaPaManDynamics(layout=layout))
+        bodies = list(s.bodies)
+    s.set_configuration(G.alpha_home)
+    plate_z = G.a + G.h
+    s.set_obstacles([Box((0.075, 0.13, plate_z), (0.02, 0.02, 0.02))])  # 25 mm into the plate, between legs 1 and 2
+    d, part = s.clearance()
+    exact = _closest_directly(s.sim, bodies)
+    s.close()
+    assert exact < -0.02
+    assert part == "plate" and d == pytest.approx(exact, abs=1e-9)

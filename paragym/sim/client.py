@@ -351,6 +351,13 @@ class PyBulletSim:
         for link in range(-1, pb.getNumJoints(body, physicsClientId=c)):
             pb.setCollisionFilterGroupMask(body, link, 0, 0, physicsClientId=c)
 
+    def joint_stops(self, name: str, joints: Sequence[int], lower: float, upper: float) -> None:
+        """Hard stops on 1-dof ``joints`` of body ``name`` at ``lower`` and ``upper`` (rad or m): PyBullet's
+        joint-limit constraint, which acts only when a joint reaches a stop (a unilateral row, like a contact)."""
+        for joint in joints:
+            pb.changeDynamics(self._bodies[name], joint, jointLowerLimit=lower, jointUpperLimit=upper,
+                              physicsClientId=self._client)
+
     def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
         """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base)."""
         for link in links:
@@ -501,12 +508,14 @@ class PyBulletSim:
         """Smallest signed distance (m; negative when penetrating) between body
         ``name`` and the bodies ``others``, capped at ``max_distance``; and the
         link of ``name`` where it occurs (None when nothing is within the cap).
+        Every link counts, the base (link -1) included: a free body's base,
+        named after its body, is a part like any other.
 
         ``links`` restricts the query to those links of ``name`` (PyBullet
         runs the narrow phase on every link pair of two multibodies, so
         leaving out links that cannot come within the cap saves time).
         """
-        best, where = max_distance, -1
+        best, where = max_distance, None
         body, c = self._bodies[name], self._client
         for other in others:
             target = self._bodies[other]
@@ -518,9 +527,9 @@ class PyBulletSim:
             for pt in points:
                 if pt[8] < best:
                     best, where = pt[8], pt[3]
-        if where < 0:
+        if where is None:
             return max_distance, None
-        return best, self._link_names[name][where]
+        return best, name if where < 0 else self._link_names[name][where]
 
     def render(self, width: int, height: int, target: Sequence[float], distance: float,
                yaw: float, pitch: float, fov: float = 45.0) -> np.ndarray:
