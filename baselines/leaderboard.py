@@ -84,14 +84,15 @@ def dynamic_kwargs(env_id: str) -> dict[str, Any]:
     """The env's arguments for the leaderboard's dynamic episodes, the
     physics settings explicit (they are part of each row's producer,
     :func:`dynamic_producer`): each env's default, except the CaPaMan's,
-    run at ``CaPaManDynamics.fast()`` (within 0.5 mm of its released
-    settings at 5-6x their speed; :mod:`paragym.sim.capaman_dynamic`)."""
+    run at ``CaPaManDynamics.split()`` (within 1 mm of its released
+    settings, with joint stops, at a fraction of their cost;
+    :mod:`paragym.sim.capaman_dynamic`)."""
     from paragym.sim.capaman_dynamic import CaPaManDynamics
     from paragym.sim.hybrid_dynamic import HybridDynamics
     from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
     from paragym.sim.tripod_dynamic import TripodDynamics
 
-    settings = {"CaPaMan": CaPaManDynamics.fast(), "Hybrid": HybridDynamics.fast(), "Orthoglide": OrthoglideDynamics(),
+    settings = {"CaPaMan": CaPaManDynamics.split(), "Hybrid": HybridDynamics.fast(), "Orthoglide": OrthoglideDynamics(),
                 "MobileTripod": TripodDynamics()}
     return {"fidelity": "dynamic", "dynamics": next(v for k, v in settings.items() if k in env_id)}
 
@@ -915,8 +916,9 @@ def _dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any]
     if not rows:
         return None
     paper = next((r for r in rows if r.scenario == suite.dynamic[0][0] and r.seed == suite.dynamic[0][1]), None)
-    settings = ("`CaPaManDynamics.fast()`: a 5 ms step, 30 solver iterations" if "CaPaMan" in rows[0].env else
-                "the env's default dynamic settings")
+    d = dynamic_kwargs(rows[0].env)["dynamics"]
+    settings = (f"`{type(d).__name__}`: a {d.time_step * 1e3:g} ms step, {d.solver_iterations} solver iterations"
+                + (f", the {d.layout} layout" if getattr(d, "layout", "tree") != "tree" else ""))
     return {"episodes": len(rows), "success_rate": float(np.mean([r.success for r in rows])),
             "return_mean": float(np.mean([r.episode_return for r in rows])),
             "metrics": {k: float(np.mean([r.metrics[k] for r in rows])) for k in rows[0].metrics},

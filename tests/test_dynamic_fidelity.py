@@ -235,7 +235,7 @@ def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_on
     assert np.degrees(np.abs(fast_cranks - cranks).max()) < 0.45
     assert closure < 1e-3
     # the split layout: the same mechanism (at the released settings, to solver precision) and its preset's
-    # stated error (a 10 ms step: 0.9 mm, 0.72 deg)
+    # stated error (1 mm; the loops under contact: tests/test_rules.py)
     same_tips, same_cranks, _ = run(dataclasses.replace(CaPaManDynamics(), layout="split"))
     assert np.abs(same_tips - tips).max() < 2e-6  # m
     assert np.degrees(np.abs(same_cranks - cranks).max()) < 1e-3

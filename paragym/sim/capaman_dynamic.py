@@ -14,40 +14,42 @@ overshoots and sags as the physics makes it.
 Masses, torque limit and gains are assumptions (the paper gives none), set
 in :class:`CaPaManDynamics`.
 
-Speed. A profile of the env's dynamic step put 90 % of its time in
-``stepSimulation``, and most of that in the six loop closures (18 solver
-rows): the same tree steps in 26 us without them and 152 us with them. The
-released settings (1 ms, 150 iterations; 20 physics steps per 0.02 s
-control period) run 86-134 env steps/s here (benchmarks/env_speed.py). :meth:`CaPaManDynamics.fast`
-takes a 5 ms step with 30 iterations: 8x faster in the drive loop (5-6x for
-the env's step, which also queries clearances), and on 200 random steps of
-2 deg the tool tip stays within 0.5 mm and the cranks within 0.37
-deg of the released settings, with the loops closed to 0.7 mm (a 10 ms step:
-1 mm and 0.72 deg; fewer rows, by gearing the parallelogram instead of
-closing it, opened the loops by 1.5 mm at the same speed, so the ball joints
-stay). ``tests/test_dynamic_fidelity.py`` checks those bounds. The released
-ids keep the released settings by default (a released id never changes
-behaviour); ``dynamics=CaPaManDynamics.fast()`` opts in.
+Contact, loops and stops. The obstacles are rigid bodies and PyBullet's
+contact solver stops every part at every physics step. The loop closures are
+constraints that the solver satisfies to its tolerance, so how closed they
+stay depends on the settings, most of all when the motors push a part into
+an obstacle at their torque limit. The contract, checked by
+``tests/test_rules.py`` for the released settings and for every preset:
+
+* free motion: the loops stay closed within 0.1 mm;
+* pushed into an obstacle at the torque limit: within 1 mm, and the tool tip
+  within 1 mm of where the released settings put it under the same push;
+* presets have joint stops (:attr:`CaPaManDynamics.joint_stops`) just
+  outside the commanded range 45-135 deg, so that a push on an obstacle
+  cannot force a crank round or flip a parallelogram. The released settings
+  have none (their episodes end at the first contact, before a crank can be
+  forced), so that the released ids keep their motion bit for bit.
+
+Presets (opt-in: the released ids keep the released settings by default):
+:meth:`CaPaManDynamics.fast` takes a 5 ms step with 100 solver iterations
+and an error reduction of 0.95 (the solver corrects 95 % of a loop's drift
+each step); :meth:`CaPaManDynamics.split` the same settings in the split
+layout. Their speed against the released settings is measured by
+``benchmarks/env_speed.py``; the figures are in CHANGELOG.md.
 
 Two layouts (``CaPaManDynamics.layout``) cut the same mechanism into PyBullet
 multibodies: "tree", the released one above, and "split", one multibody per
 leg on its fixed base (cranks, coupler, bar, rail and slider, its
 parallelogram closed inside it) and the plate with its tool as a free body,
 tied to the legs by the three ball joints. The joints, masses and motors are
-the same, and at the released settings the two layouts move the tool tip
-alike to 1 um over 200 random steps. The split's physics step is cheaper
-(at 5 ms and 30 iterations a 0.02 s drive took 0.46 ms against the tree's
-0.71 ms in the same run) and as accurate as the tree at the same step:
-:meth:`CaPaManDynamics.split` (opt-in) takes the split at 10 ms
-and 30 iterations, within 0.9 mm (tool tip) and 0.72 deg (cranks) of the
-released settings with the loops closed to 0.8 mm, at 2.3-2.6x
-PandaReach-v3's steps/s (``benchmarks/env_speed.py``): the CaPaMan's dynamic
-fidelity at the benchmark's speed goal. The cranks' 0.72 deg is the servo's
-lag over a control period of two physics steps, as in the tree at 10 ms.
+the same, and so is the motion at equal settings (to solver precision,
+tested); the split's physics step is cheaper, since each closure's solver
+rows span a leg and the plate instead of the whole tree.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -78,6 +80,14 @@ class CaPaManDynamics:
     time_step: float = 1e-3  # s
     solver_iterations: int = 150
     gravity: float = 9.81
+    #: the constraint solver's error reduction (share of a loop's drift corrected per step); None: PyBullet's
+    erp: float | None = None
+    #: hard stops on the cranks, ``stop_margin`` (rad) outside the commanded range 45-135 deg (as a servo's soft
+    #: limits sit inside its mechanical ones, so that a crank held at the end of its range never rests on its
+    #: stop). The released settings have none: PyBullet's limit rows change the solver's results even where no
+    #: stop is reached, so the released ids' default keeps its motion; every preset has them
+    joint_stops: bool = False
+    stop_margin: float = math.radians(1.0)
 
     #: how the mechanism is cut into PyBullet multibodies: "tree" (one) or "split" (one per leg, and the
     #: plate with its tool); the same joints and masses (module docstring)
@@ -85,16 +95,14 @@ class CaPaManDynamics:
 
     @classmethod
     def fast(cls) -> CaPaManDynamics:
-        """A 5 ms step and 30 solver iterations (module docstring): opt-in,
-        because the released ids' dynamic fidelity keeps the settings it was
-        released with."""
-        return cls(time_step=5e-3, solver_iterations=30)
+        """A 5 ms step, 100 solver iterations and an error reduction of 0.95, with joint stops (module
+        docstring): opt-in, because the released ids' dynamic fidelity keeps the settings it was released with."""
+        return cls(time_step=5e-3, solver_iterations=100, erp=0.95, joint_stops=True)
 
     @classmethod
     def split(cls) -> CaPaManDynamics:
-        """The split layout at a 10 ms step and 30 solver iterations: opt-in, the fastest settings (module
-        docstring)."""
-        return cls(time_step=1e-2, solver_iterations=30, layout="split")
+        """:meth:`fast`'s settings in the split layout: the same motion at a lower cost (module docstring)."""
+        return replace(cls.fast(), layout="split")
 
 
 @dataclass(frozen=True)
@@ -172,8 +180,10 @@ class CaPaManDynamicScene:
         """Gravity, the engine's parameters, the passive joints, no self-collision and the six loop
         closures (run again whenever the world is rebuilt)."""
         g, d, sim = self.geometry, self.dynamics, self.sim
-        sim.set_physics(d.gravity, d.time_step, d.solver_iterations)
+        sim.set_physics(d.gravity, d.time_step, d.solver_iterations, d.erp)
         sim.no_self_collision(*self.bodies)  # the parts of one mechanism do not collide with each other
+        for body, joint in self.motors + self.cranks_b if d.joint_stops else ():  # these joints turn by -alpha
+            sim.joint_stops(body, [joint], -g.alpha_max - d.stop_margin, -g.alpha_min + d.stop_margin)
         for body, joint in self.cranks_b + self.couplers + self.sliders + self.float_joints:
             sim.passive(body, [joint])
         if self.plate[1] >= 0:
