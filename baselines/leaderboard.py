@@ -163,7 +163,8 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
 #: a later version of a task ranks and measures its episodes as the first does (same scenarios and metrics)
 LATER_VERSIONS = {"paragym/CaPaManCollisionFree-v1": "paragym/CaPaManCollisionFree-v0",
                   "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0",
-                  "paragym/HybridSingularityFree-v1": "paragym/HybridSingularityFree-v0"}
+                  "paragym/HybridSingularityFree-v1": "paragym/HybridSingularityFree-v0",
+                  "paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0"}
 for _new, _old in LATER_VERSIONS.items():
     METRICS[_new] = METRICS[_old]
 

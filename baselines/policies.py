@@ -41,7 +41,7 @@ import numpy as np
 import paragym
 from paragym.baselines.simple import RandomPolicy, ZeroPolicy
 from paragym.baselines.training import check_env_id, env_name, load_model
-from paragym.models import shipped_models_dir
+from paragym.models import SHARED_WITH, shipped_models_dir, shipped_models_folder
 
 __all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "get_policy", "init_defaults", "policies_for", "register_policy",
            "shipped_models_dir"]
@@ -217,7 +217,9 @@ class _LearnedFactory:
 
 
 def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[str, PolicySpec]:
-    folder = models_dir / env_name(env_id)
+    folder = shipped_models_folder(env_id) if origin == "shipped" else models_dir / env_name(env_id)
+    if origin == "shipped" and env_id in SHARED_WITH:
+        origin += f" (trained on {SHARED_WITH[env_id]}, whose episodes this id's default mode runs bit for bit)"
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
         m = re.fullmatch(r"(ppo|sac|td3|tqc|bc|dagger)_seed(\d+)", path.stem)
@@ -457,6 +459,7 @@ _SAME_IN_V1 = {
     "paragym/CaPaManCollisionFree-v1": ("paragym/CaPaManCollisionFree-v0", ("rrt-ga", "grid-dijkstra", "zero")),
     "paragym/MobileTripodOdometry-v1": ("paragym/MobileTripodOdometry-v0", ("zero",)),
     "paragym/HybridSingularityFree-v1": ("paragym/HybridSingularityFree-v0", ("polynomial-detour", "zero")),
+    "paragym/Orthoglide2PRRKappa-v1": ("paragym/Orthoglide2PRRKappa-v0", ("gradient-c", "fixed-table-a", "zero")),
 }
 _BUILT_IN += tuple((new, *row[1:]) for new, (old, names) in _SAME_IN_V1.items()
                    for row in _BUILT_IN if row[0] == old and row[1] in names)

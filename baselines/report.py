@@ -31,7 +31,7 @@ import paragym
 from paragym.baselines.policies import policies_for
 from paragym.baselines.store import ResultStore
 from paragym.baselines.training import env_name
-from paragym.models import shipped_models_dir
+from paragym.models import shipped_models_dir, shipped_models_folder
 
 __all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalized_scores", "task_scores",
            "write_report"]
@@ -67,7 +67,9 @@ def _runs(models_dirs: list[Path]) -> dict[str, dict[str, list[dict[str, Any]]]]
     found: dict[str, dict[str, list[dict[str, Any]]]] = defaultdict(lambda: defaultdict(list))
     for folder in models_dirs:
         for env_id in paragym.ENVIRONMENTS:
-            for path in sorted((folder / env_name(env_id)).glob("*_seed*.json")):
+            shipped = folder.resolve() == shipped_models_dir().resolve()
+            for path in sorted((shipped_models_folder(env_id) if shipped else folder / env_name(env_id)
+                                ).glob("*_seed*.json")):
                 meta = json.loads(path.read_text())
                 curve = meta.get("curve") or {}
                 if meta.get("algo") in ("ppo", "sac", "td3", "tqc") and curve.get("eval_timesteps"):

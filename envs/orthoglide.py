@@ -7,6 +7,7 @@ scenarios come from :mod:`paragym.tasks.orthoglide`.
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import numpy as np
@@ -20,7 +21,8 @@ from paragym.tasks import orthoglide_step as task_step
 from paragym.tasks.orthoglide import draw_tasks, orthoglide_random_task, orthoglide_random_tasks, resolve_task
 from paragym.tasks.orthoglide_step import KAPPA_LIMIT, OBS_SIZE, OrthoglideParams, OrthoglideState
 
-__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
+__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
+           "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
            "orthoglide_random_tasks"]
 
 
@@ -35,6 +37,7 @@ class _OrthoglideTask:
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         tasks = draw_tasks(options.get("scenario", self.scenario_arg), rngs, self.geometry)
+        self._warn_rounded_time(tasks)
         task_step.reset(self.state, self.params, rows, tasks)
         if getattr(self, "world", None) is not None:
             self.world.reset(self.state)
@@ -42,6 +45,22 @@ class _OrthoglideTask:
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
         task_step.step(self.state, self.params, actions, active, getattr(self, "world", None))
+
+    def _warn_rounded_time(self, tasks: list[Any]) -> None:
+        """v0 in dynamic fidelity simulates each path step over whole physics steps: say so where that is
+        not the path's own time (its hole; v1 simulates it exactly)."""
+        world = getattr(self, "world", None)
+        if world is None or world.exact_time:
+            return
+        step = world.scene.dynamics.time_step
+        for task in tasks:
+            dt = np.diff(task.t)
+            simulated = np.maximum(1, np.round(dt / step)) * step
+            if np.abs(simulated - dt).max() > 1e-9 * dt.max():
+                warnings.warn(f"the path's {task.t[-1]:g} s are simulated over {simulated.sum():g} s: the dynamic "
+                              f"fidelity of {self.spec.id if self.spec else 'v0'} rounds each path step to whole "
+                              f"physics steps of {step:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly",
+                              UserWarning, stacklevel=3)
 
 
 class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
@@ -106,14 +125,28 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
       the workspace, malformed) and non-dict ``options`` are refused at reset
       with a ValueError or TypeError naming them; every episode that ran
       before runs the same (tested against recorded rollouts).
+      Its holes, kept so that its episodes replay: in joint-velocity mode
+      success ignores tracking (doing nothing succeeds); kappa is taken at
+      the path point in kinematic fidelity and at the tool in dynamic; the
+      dynamic fidelity rounds each path step to whole physics steps (it
+      warns where that is not the path's time). Since paragym 0.8.0
+      ``info["failure"]`` names why an episode failed.
+    * v1 (paragym 0.8.0): :class:`Orthoglide2PRRKappaV1Env` closes them.
     """
+
+    version = 0
 
     def __init__(self, scenario: str | Any = "random", action_mode: str = "null_space",
                  render_mode: str | None = None, max_null_rate: float = 0.5, max_joint_rate: float = 0.5,
                  w_track: float = 1.0, limit_penalty: float = 10.0,
                  geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, fidelity: str = "kinematic",
-                 dynamics: OrthoglideDynamics | None = None) -> None:
+                 dynamics: OrthoglideDynamics | None = None, track_tolerance: float | None = None) -> None:
         super().__init__(render_mode)
+        if self.version == 0 and track_tolerance is not None:
+            raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1")
+        track_tolerance = 0.005 if track_tolerance is None else track_tolerance
+        if not (np.isfinite(track_tolerance) and track_tolerance > 0):
+            raise ValueError(f"track_tolerance must be a positive number of metres; got {track_tolerance!r}")
         if fidelity not in ("kinematic", "dynamic"):
             raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
         if dynamics is not None and not isinstance(dynamics, OrthoglideDynamics):
@@ -124,8 +157,10 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         self.action_mode, self.geometry = action_mode, geometry
         self.max_null_rate, self.max_joint_rate = float(max_null_rate), float(max_joint_rate)
         self.w_track, self.limit_penalty = float(w_track), float(limit_penalty)
+        self.track_tolerance = float(track_tolerance)
         self.params = OrthoglideParams(action_mode == "joint_velocity", self.max_null_rate, self.max_joint_rate,
-                                       self.w_track, self.limit_penalty, geometry)
+                                       self.w_track, self.limit_penalty, geometry, self.version,
+                                       self.track_tolerance)
         dim = 1 if action_mode == "null_space" else 3
         self.action_space = spaces.Box(-1.0, 1.0, (dim,), np.float32)
         self.observation_space = spaces.Box(-10.0, 10.0, (OBS_SIZE,), np.float32)
@@ -134,7 +169,8 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         self.world: task_step.DynamicWorld | None = None
         if fidelity == "dynamic":
             self.world = task_step.DynamicWorld(OrthoglideDynamicScene(geometry, dynamics,
-                                                                       gui=render_mode == "human"))
+                                                                       gui=render_mode == "human"),
+                                                exact_time=self.version >= 1)
 
     @property
     def task(self) -> Any:
@@ -148,7 +184,8 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         s = self.state
         done = bool(s.k[0] >= s.last[0])
         return {"kappa": float(s.kappa[0]), "tracking_error": float(s.err[0]), "rho": s.rho[0].copy(),
-                "step": int(s.k[0]), "is_success": done and not s.failed[0]}
+                "step": int(s.k[0]), "is_success": done and not s.failed[0],
+                "failure": task_step.FAILURES[int(s.reason[0])]}
 
     def _show(self) -> None:
         if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
@@ -166,6 +203,48 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         self._close_render_scene()
         if self.world is not None:
             self.world.scene.close()
+
+
+class Orthoglide2PRRKappaV1Env(Orthoglide2PRRKappaEnv):
+    """``paragym/Orthoglide2PRRKappa-v1``: v0's mechanism, paths, spaces and
+    reward, with success that requires the tracking the task asks for.
+
+    ## Why v1
+    In v0's joint-velocity mode success checked the joint limits and the
+    singularity only: the zero action, which leaves the tool where it
+    starts, "succeeded" on every path with a tracking error of 0.73 m. The
+    two fidelities also took kappa at different points in that mode, and
+    the dynamic fidelity rounded each path step to whole physics steps (a
+    path of 1.25 s was simulated over 5 s).
+
+    ## Episode End
+    As v0, and a step whose tool is more than ``track_tolerance`` (5 mm)
+    from its path point is a failure: it costs ``limit_penalty`` and ends
+    the episode. In null-space mode the kinematic tool is on the path by
+    construction (eq 5); the dynamic fidelity's lag counts. In dynamic
+    fidelity a loop open by more than 5 mm (a broken mechanism) is a
+    failure too. ``info["failure"]`` names the reason ("joint limit",
+    "working mode", "singular", "tracking", "broken"; None while none).
+
+    ## Rewards, Observation Space
+    As v0, with kappa (eq 8) and the null vector n taken where the joints
+    put the tool, in every mode and fidelity (in kinematic null-space mode
+    that is the path point).
+
+    ## Arguments
+    As v0, plus ``track_tolerance`` (m). In dynamic fidelity each path step
+    is simulated over exactly its duration: where the physics step does not
+    divide it, the step is shortened to the fewest equal steps that do.
+
+    ## Starting State, Action Space
+    As v0.
+
+    ## Version History
+    * v1 (paragym 0.8.0): the rules above; in null-space mode and kinematic
+      fidelity its episodes are v0's, bit for bit.
+    """
+
+    version = 1
 
 
 class Orthoglide2PRRKappaVectorEnv(_OrthoglideTask, ParagymVectorEnv):
@@ -192,3 +271,9 @@ class Orthoglide2PRRKappaVectorEnv(_OrthoglideTask, ParagymVectorEnv):
         one._room(m)
         one.rho[0], one.k[0], one.last[0], one.scenarios[0] = s.rho[i], s.k[i], s.last[i], s.scenarios[i]
         one.path[0, :m] = s.path[i, :m]
+
+
+class Orthoglide2PRRKappaV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaV1Env` stepped together."""
+
+    single_class = Orthoglide2PRRKappaV1Env

@@ -7,10 +7,20 @@ Found by name from any directory (:func:`shipped_models_dir`);
 
 from pathlib import Path
 
-__all__ = ["shipped_models_dir"]
+__all__ = ["SHARED_WITH", "shipped_models_dir", "shipped_models_folder"]
+
+#: env id -> the env id whose shipped models it plays: a later version whose default mode runs the earlier one's
+#: episodes bit for bit (tested), so that the earlier version's models are its own
+SHARED_WITH = {"paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0"}
 
 
 def shipped_models_dir() -> Path:
     """The folder of the shipped models (this package's data), wherever
     paragym is installed and whatever the working directory."""
     return Path(__file__).resolve().parent
+
+
+def shipped_models_folder(env_id: str) -> Path:
+    """The folder of ``env_id``'s shipped models (:data:`SHARED_WITH` read first)."""
+    source = SHARED_WITH.get(env_id, env_id)
+    return shipped_models_dir() / source.split("/", 1)[-1]

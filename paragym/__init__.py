@@ -33,6 +33,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv", 1000,
         "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)",
     ),
+    "paragym/Orthoglide2PRRKappa-v1": (
+        "paragym.envs.orthoglide:Orthoglide2PRRKappaV1Env", 1000,
+        "2PRR v1: the v0 task, with success that requires tracking in every action mode and fidelity",
+    ),
     "paragym/MobileTripodOdometry-v0": (
         "paragym.envs.mobile_tripod:MobileTripodOdometryEnv", 700,
         "mobile tripod: estimate the three drive units under slip from odometry and leg encoders (paper 004)",
@@ -48,6 +52,7 @@ VECTOR_ENTRY_POINTS: dict[str, str] = {
     "paragym/CaPaManCollisionFree-v0": "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv",
     "paragym/CaPaManCollisionFree-v1": "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv",
     "paragym/Orthoglide2PRRKappa-v0": "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv",
+    "paragym/Orthoglide2PRRKappa-v1": "paragym.envs.orthoglide:Orthoglide2PRRKappaV1VectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
     "paragym/HybridSingularityFree-v1": "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv",
     "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",

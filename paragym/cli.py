@@ -56,6 +56,7 @@ DEMOS: dict[str, tuple[str, Callable[[Episode, Path], Path]]] = {
     "paragym/CaPaManCollisionFree-v1": ("RRT + GA (paper 000)", _capaman_plot),
     "paragym/HybridSingularityFree-v0": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
     "paragym/Orthoglide2PRRKappa-v0": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
+    "paragym/Orthoglide2PRRKappa-v1": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
     "paragym/MobileTripodOdometry-v0": ("redundant-encoder correction (paper 004)", _tripod_plot),
     "paragym/MobileTripodOdometry-v1": ("redundant-encoder correction (paper 004)", _tripod_plot),
 }
@@ -332,6 +333,7 @@ DEFAULT_SCENARIO: dict[str, str] = {
     "paragym/CaPaManCollisionFree-v1": "paper",
     "paragym/MobileTripodOdometry-v1": "push",
     "paragym/HybridSingularityFree-v1": "paper",
+    "paragym/Orthoglide2PRRKappa-v1": "paper",
 }
 
 
@@ -350,6 +352,7 @@ PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/MobileTripodOdometry-v0": _plan_tripod,
     "paragym/CaPaManCollisionFree-v1": _plan_capaman,
     "paragym/MobileTripodOdometry-v1": _plan_tripod,
+    "paragym/Orthoglide2PRRKappa-v1": _plan_orthoglide,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate

@@ -23,7 +23,7 @@ def test_dynamic_floor_prints_both_ceilings_for_every_dynamic_row():
     rows = [ln.split() for ln in out.splitlines() if ln.split()[:1] and ln.split()[0].endswith(("-v0", "-v1"))]
     # env, preset, and the physics steps per env step (the control period over the preset's time step)
     assert [(r[0], r[1], float(r[6])) for r in rows] == [
-        ("CaPaManCollisionFree-v1", "fast", 4.0), ("CaPaManCollisionFree-v1", "split", 2.0),
+        ("CaPaManCollisionFree-v1", "fast", 4.0), ("CaPaManCollisionFree-v1", "split", 4.0),
         ("HybridSingularityFree-v1", "default", 10.0), ("HybridSingularityFree-v1", "split", 10.0),
         ("Orthoglide2PRRKappa-v0", "default", 2.0), ("MobileTripodOdometry-v1", "default", 10.0)]
     assert all(float(r[7]) > 0 and float(r[8]) > 0 for r in rows)  # a physics step at the preset, at 1 iteration

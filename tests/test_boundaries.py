@@ -85,6 +85,7 @@ BAD = {
 BAD["paragym/CaPaManCollisionFree-v1"] = BAD["paragym/CaPaManCollisionFree-v0"]
 BAD["paragym/MobileTripodOdometry-v1"] = BAD[TRIPOD]
 BAD["paragym/HybridSingularityFree-v1"] = BAD["paragym/HybridSingularityFree-v0"]
+BAD["paragym/Orthoglide2PRRKappa-v1"] = BAD[ORTHO]
 
 
 @pytest.mark.parametrize("env_id", IDS)

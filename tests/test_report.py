@@ -29,7 +29,8 @@ def test_latest_versions_pick_v1_where_it_exists():
     latest = latest_versions()
     assert "paragym/CaPaManCollisionFree-v1" in latest and "paragym/CaPaManCollisionFree-v0" not in latest
     assert "paragym/HybridSingularityFree-v1" in latest and "paragym/HybridSingularityFree-v0" not in latest
-    assert "paragym/Orthoglide2PRRKappa-v0" in latest and len(latest) == 4
+    assert "paragym/Orthoglide2PRRKappa-v1" in latest and "paragym/Orthoglide2PRRKappa-v0" not in latest
+    assert len(latest) == 4
 
 
 def test_scores_are_normalised_between_the_floor_and_the_reference(tmp_path: Path):

@@ -188,3 +188,97 @@ def test_the_released_settings_end_the_episode_before_a_crank_leaves_its_range()
             break
     env.close()
     assert terminated
+
+
+# --- the 2PRR: success is tracking, kappa has one definition, time runs at the path's rate --------------------
+
+FIDELITIES = ("kinematic", "dynamic")
+
+
+def _trivial_actions(name: str, space: gym.spaces.Box, rng: np.random.Generator) -> np.ndarray:
+    """A trivial policy's action: zeros, the Box's low or high corner, or a uniform draw."""
+    return {"zeros": lambda: np.zeros(space.shape), "low": lambda: space.low, "high": lambda: space.high,
+            "random": lambda: rng.uniform(space.low, space.high)}[name]().astype(np.float32)
+
+
+@pytest.mark.parametrize("fidelity", FIDELITIES)
+@pytest.mark.parametrize("policy", ["zeros", "low", "high", "random"])
+def test_2prr_v1_joint_rates_succeed_only_by_tracking(policy, fidelity):
+    """In joint-velocity mode the agent must track the path: a trivial policy never succeeds, and says why (in
+    v0 doing nothing succeeded on every path with a tracking error of up to 0.73 m)."""
+    rng = np.random.default_rng(0)
+    for seed in range(3):
+        env = gym.make("paragym/Orthoglide2PRRKappa-v1", action_mode="joint_velocity", fidelity=fidelity)
+        env.reset(seed=seed)
+        while True:
+            *_, terminated, truncated, info = env.step(_trivial_actions(policy, env.action_space, rng))
+            if terminated or truncated:
+                break
+        env.close()
+        assert not info["is_success"] and info["failure"] is not None, (seed, info)
+
+
+@pytest.mark.parametrize("fidelity", FIDELITIES)
+@pytest.mark.parametrize("mode", ["null_space", "joint_velocity"])
+def test_2prr_v1_kappa_is_taken_where_the_joints_put_the_tool(mode, fidelity):
+    """One definition of kappa (eq 8) in every mode and fidelity: J at the joints the env reports (in v0's
+    kinematic joint-velocity mode it was taken at the path point, up to 0.58 away from the dynamic one's)."""
+    from paragym.mechanisms import orthoglide as og
+
+    env = gym.make("paragym/Orthoglide2PRRKappa-v1", action_mode=mode, fidelity=fidelity)
+    env.reset(seed=1)
+    rng, checked = np.random.default_rng(1), 0
+    for _ in range(40):
+        action = 0.2 * rng.uniform(env.action_space.low, env.action_space.high).astype(np.float32)
+        *_, terminated, truncated, info = env.step(action)
+        if np.isfinite(info["kappa"]):
+            np.testing.assert_allclose(info["kappa"], og.kappa(info["rho"][None])[0], rtol=1e-6)
+            checked += 1
+        if terminated or truncated:
+            break
+    env.close()
+    assert checked >= 3
+
+
+@pytest.mark.parametrize("duration", [1.25, 2.5, 7.0, 13.0])
+def test_2prr_v1_dynamic_time_runs_at_the_path_rate(duration):
+    """A path of 1,000 samples over any duration is simulated over exactly that time (v0 rounded each sample to
+    whole 5 ms physics steps: 1.25 s took 5 s)."""
+    from paragym.tasks.orthoglide import circle_task
+
+    task = circle_task((0.1, 0.55), 0.4, duration, steps=1000, name="custom")
+    env = gym.make("paragym/Orthoglide2PRRKappa-v1", scenario=task, fidelity="dynamic")
+    env.reset(seed=0)
+    sim = env.unwrapped.world.scene.sim
+    start = sim.elapsed
+    for _ in range(30):
+        *_, terminated, _, info = env.step(np.zeros(1, np.float32))
+        if terminated:
+            break
+    env.close()
+    assert sim.elapsed - start == pytest.approx(task.t[info["step"]], rel=1e-9, abs=1e-12)
+
+
+@pytest.mark.parametrize("fidelity", FIDELITIES)
+def test_2prr_v1_default_mode_replays_v0_bit_for_bit(fidelity):
+    """In null-space mode v1's rules change nothing v0 did on its own scenarios (the tool is on the path by
+    construction, the paths' samples divide into physics steps): v0's shipped models are v1's."""
+
+    def rollout(env_id: str, seed: int) -> np.ndarray:
+        env = gym.make(env_id, fidelity=fidelity)
+        env.action_space.seed(seed)
+        obs, _ = env.reset(seed=seed)
+        rows = [obs]
+        for _ in range(300):
+            obs, reward, terminated, truncated, _ = env.step(env.action_space.sample())
+            rows.append(np.append(obs, reward))
+            if terminated or truncated:
+                break
+        env.close()
+        return np.concatenate(rows)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for seed in (0, 1):
+            np.testing.assert_array_equal(rollout("paragym/Orthoglide2PRRKappa-v1", seed),
+                                          rollout("paragym/Orthoglide2PRRKappa-v0", seed))

@@ -16,6 +16,7 @@ part).
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 from collections.abc import Sequence
@@ -28,7 +29,7 @@ import pybullet as pb
 from paragym.mechanisms.capaman import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "Motors", "PyBulletSim", "motors_of", "physics_steps"]
+__all__ = ["LinkSpec", "Motors", "PyBulletSim", "exact_time_step", "motors_of", "physics_steps"]
 
 #: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
 Motors = Sequence[tuple[str, Sequence[int]]]
@@ -51,8 +52,19 @@ def motors_of(joints: Sequence[tuple[str, int]]) -> list[tuple[str, list[int]]]:
 
 
 def physics_steps(duration: float, time_step: float) -> int:
-    """Physics steps of ``time_step`` s that make up ``duration`` s of control (at least one)."""
+    """Physics steps of ``time_step`` s that make up ``duration`` s of control (at least one): the duration
+    rounded to whole steps (:func:`exact_time_step` gives the step that makes it up exactly)."""
     return max(1, int(round(duration / time_step)))
+
+
+def exact_time_step(duration: float, time_step: float) -> float:
+    """The physics step (s) that makes up ``duration`` s exactly, at most ``time_step``: ``time_step`` itself
+    where it divides the duration (to 1e-9 of it), else the duration cut into the fewest equal steps no longer
+    than ``time_step``."""
+    n = physics_steps(duration, time_step)
+    if abs(n * time_step - duration) <= 1e-9 * duration:
+        return time_step
+    return duration / math.ceil(duration / time_step)
 
 
 @dataclass(frozen=True)
@@ -117,6 +129,9 @@ class PyBulletSim:
         self._link_names: dict[str, dict[int, str]] = {}
         #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
         self.after_step: list[Any] = []
+        #: the physics step (s) and the simulated time (s) so far
+        self.time_step = 1.0 / 240.0  # PyBullet's default
+        self.elapsed = 0.0
         if gui:
             pb.configureDebugVisualizer(pb.COV_ENABLE_GUI, 0, physicsClientId=self._client)
 
@@ -313,6 +328,7 @@ class PyBulletSim:
         pb.setGravity(0, 0, -gravity, physicsClientId=self._client)
         pb.setPhysicsEngineParameter(fixedTimeStep=time_step, numSolverIterations=solver_iterations,
                                      physicsClientId=self._client)
+        self.time_step = time_step
         if erp is not None:
             pb.setPhysicsEngineParameter(erp=erp, physicsClientId=self._client)
 
@@ -405,9 +421,15 @@ class PyBulletSim:
             self.drive(motors, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)
             self.step()
 
+    def set_time_step(self, time_step: float) -> None:
+        """Change the physics step (s) from the next step on."""
+        pb.setPhysicsEngineParameter(fixedTimeStep=time_step, physicsClientId=self._client)
+        self.time_step = time_step
+
     def step(self) -> None:
         """One step of the physics (then the :attr:`after_step` callbacks: a recorder's)."""
         pb.stepSimulation(physicsClientId=self._client)
+        self.elapsed += self.time_step
         for callback in self.after_step:
             callback()
 

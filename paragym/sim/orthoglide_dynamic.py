@@ -30,7 +30,7 @@ import numpy as np
 
 from paragym.mechanisms import orthoglide as og
 from paragym.mechanisms.capaman import PartShape, quat_to_matrix
-from paragym.sim.client import LinkSpec, PyBulletSim
+from paragym.sim.client import LinkSpec, PyBulletSim, exact_time_step
 from paragym.sim.obstacles import Box
 
 __all__ = ["OrthoglideDynamicScene", "OrthoglideDynamics"]
@@ -123,12 +123,17 @@ class OrthoglideDynamicScene:
         self.sim.reset_joint(self.ROBOT, self.links[1], math.atan2(cy - by, cx))
         self._target = rho.copy()
 
-    def drive(self, rho: np.ndarray, duration: float) -> None:
+    def drive(self, rho: np.ndarray, duration: float, exact: bool = False) -> None:
         """Move the three motors' targets linearly from the last target to
-        ``rho`` (m) over ``duration`` s of simulated time."""
+        ``rho`` (m) over ``duration`` s of simulated time: rounded to whole
+        physics steps, or, with ``exact``, exactly (the physics step then
+        shortened to divide it, the motors' bandwidth kept)."""
         d, rho = self.dynamics, np.asarray(rho, float)
-        self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, d.time_step, d.motor_force,
-                      d.position_gain, d.velocity_gain)
+        step = exact_time_step(duration, d.time_step) if exact else d.time_step
+        if step != self.sim.time_step:
+            self.sim.set_time_step(step)
+        self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, step, d.motor_force,
+                      d.bandwidth * step, d.velocity_gain)
         self._target = rho.copy()
 
     @property

@@ -35,10 +35,14 @@ from numba import njit
 from paragym.mechanisms import orthoglide as og
 from paragym.tasks.orthoglide import Task, start_table_position
 
-__all__ = ["KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState", "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState",
+           "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
+#: why a robot failed (``OrthoglideState.reason``; 0: it did not): the names ``info["failure"]`` reports
+FAILURES = (None, "joint limit", "working mode", "singular", "tracking", "broken")
+_LIMIT, _MODE, _SINGULAR, _TRACKING, _BROKEN = 1, 2, 3, 4, 5
 
 
 @dataclass(frozen=True)
@@ -51,13 +55,17 @@ class OrthoglideParams:
     w_track: float = 1.0
     limit_penalty: float = 10.0
     geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY
+    #: 1: the task's rules of Orthoglide2PRRKappa-v1 (module docstring)
+    version: int = 0
+    #: v1: the largest tracking error (m) of a step that counts as tracking; beyond it the robot fails
+    track_tolerance: float = 0.005
 
     @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
         """The numbers the kernel takes (made once: a step must not rebuild them)."""
         g = self.geometry
         return (og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode, self.max_null_rate,
-                self.max_joint_rate, self.w_track, self.limit_penalty)
+                self.max_joint_rate, self.w_track, self.limit_penalty, self.version, self.track_tolerance)
 
 
 @dataclass
@@ -81,6 +89,7 @@ class OrthoglideState:
     kappa: np.ndarray
     err: np.ndarray
     failed: np.ndarray
+    reason: np.ndarray
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
@@ -92,8 +101,8 @@ class OrthoglideState:
         return cls(rho=np.zeros((n, 3)), k=np.zeros(n, np.int64), last=np.zeros(n, np.int64),
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
                    n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
-                   terminated=np.zeros(n, bool), obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
-                   scenarios=[None] * n)
+                   reason=np.zeros(n, np.int64), terminated=np.zeros(n, bool),
+                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n), scenarios=[None] * n)
 
     def _room(self, points: int) -> None:
         """Grow the path arrays to hold ``points`` points."""
@@ -119,7 +128,7 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, ta
         state.last[i] = m - 1
         state.scenarios[i] = task
     rho, _ = og.inverse(r1, first, params.geometry)
-    state.rho[rows], state.k[rows], state.failed[rows] = rho, 0, False
+    state.rho[rows], state.k[rows], state.failed[rows], state.reason[rows] = rho, 0, False, 0
     mask = np.zeros(len(state.k), bool)
     mask[rows] = True
     _advance(state, params, np.zeros((len(state.k), 3 if params.joint_mode else 1)), mask, False)
@@ -140,9 +149,14 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
     _advance(state, params, actions, active, True, _COMMAND)
     world.move(state, h)
     _advance(state, params, actions, active, True, _EVALUATE)
+    if params.version >= 1 and world.scene.closure_error() > BROKEN_GAP and not state.failed[0]:
+        state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
+        state.reward[0] = -params.limit_penalty
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+#: v1, dynamic fidelity: a loop open by more than this (m) is a broken mechanism, and the robot fails
+BROKEN_GAP = 0.005
 
 
 class DynamicWorld:
@@ -159,9 +173,12 @@ class DynamicWorld:
     kinematic null-space mode it is 0 by construction, so the definition is
     the same)."""
 
-    def __init__(self, scene: Any) -> None:
+    def __init__(self, scene: Any, exact_time: bool = False) -> None:
         self.scene = scene
         self.command = np.zeros(3)
+        #: simulate each path step over exactly its duration (v1), else over whole physics steps (v0: the
+        #: duration rounded to the physics step)
+        self.exact_time = exact_time
 
     def reset(self, state: OrthoglideState) -> None:
         """Put the simulated robot at the state's joints, at rest."""
@@ -172,25 +189,29 @@ class DynamicWorld:
         """Drive to the commanded joints over ``duration`` s and read the encoders."""
         self.command = state.rho[0].copy()
         if duration > 0:
-            self.scene.drive(self.command, duration)
+            self.scene.drive(self.command, duration, exact=self.exact_time)
         state.rho[0] = self.scene.rho
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     s = state
-    _advance_kernel(s.rho, s.k, s.last, s.path, s.dt, s.j, s.n, s.kappa, s.err, s.failed, s.terminated, s.obs,
-                    s.reward, np.ascontiguousarray(actions, np.float64), rows, move, stage, *params.kernel_args)
+    _advance_kernel(s.rho, s.k, s.last, s.path, s.dt, s.j, s.n, s.kappa, s.err, s.failed, s.reason, s.terminated,
+                    s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, stage,
+                    *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated, obs, reward, actions, rows, move,
-                    stage, p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty):
+def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, actions, rows,
+                    move, stage, p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty,
+                    version, track_tolerance):
     """The transition of every robot with ``rows[i]`` (see the module docstring):
     move it if ``move``, then evaluate it at its path point. ``stage``: 0 the
     whole step; 1 the move only (the motors' command); 2 the evaluation only,
     of joints a simulation measured (:class:`DynamicWorld`): J and kappa at
-    the tool point those joints give, and the tracking error in either mode."""
+    the tool point those joints give, and the tracking error in either mode.
+    ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
+    and a tracking error beyond ``track_tolerance`` fails the robot."""
     for i in range(len(k)):
         if not rows[i]:
             continue
@@ -211,10 +232,11 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated
             continue
         px, py = path[i, k[i], 0], path[i, k[i], 1]
         err[i] = 0.0
-        if joint_mode or stage == 2:
+        track = joint_mode or stage == 2
+        if track:
             tx, ty = og.k_forward(rho[i, 0], rho[i, 1], rho[i, 2], p)
             err[i] = math.hypot(tx - px, ty - py)
-            if stage == 2:  # evaluated where the simulated joints put the tool
+            if stage == 2 or version >= 1:  # evaluated where the joints put the tool
                 px, py = tx, ty
         mode = og.k_inverse(rho[i, 0], px, py, p)[2]
         inside = True
@@ -225,13 +247,20 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, terminated
              n[i, 0], n[i, 1], n[i, 2]) = og.k_jacobian(rho[i, 0], px, py, p)
             if not kappa[i] < KAPPA_LIMIT:
                 failed[i] = True
+                if reason[i] == 0:
+                    reason[i] = _SINGULAR
         else:
             kappa[i] = math.inf
             j[i, :] = math.nan
             n[i, :] = 0.0
             failed[i] = True
+            if reason[i] == 0:
+                reason[i] = _MODE if inside else _LIMIT
+        if version >= 1 and track and not err[i] <= track_tolerance:
+            failed[i] = True
+            if reason[i] == 0:
+                reason[i] = _TRACKING
         terminated[i] = failed[i] or k[i] >= last[i]
-        track = joint_mode or stage == 2
         reward[i] = -limit_penalty if failed[i] else -math.log(kappa[i]) - (w_track * err[i] / 0.01 if track else 0.0)
         px, py = path[i, k[i], 0], path[i, k[i], 1]
         # observation: rho normalised to [-1, 1], the path point now and next, log kappa, n; clipped to +-10
