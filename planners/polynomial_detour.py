@@ -22,7 +22,7 @@ All poses are displacements of E from home (m, rad); see
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -74,13 +74,21 @@ class PolynomialDetourPlanner:
         detour_step: resolution of the detour search (m).
         prefer_weight: cost, per sample and per unit of |Delta - Delta0|, of
             staying away from Delta0 (against 1 per unit of change of Delta).
+        stroke_margin: plan the strokes this far (m) inside their limits, where
+            the path allows it (else at the limits, as paper 002 does): a
+            simulated actuator that chases a stroke planned at its limit
+            overshoots it (0: the paper's plan).
     """
 
     def __init__(self, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
                  delta0: float = 0.5, delta_points: int = 101, max_delta_step: float = 0.05,
-                 j_bar: float = 0.02, detour_step: float = 0.001, prefer_weight: float = 0.05) -> None:
+                 j_bar: float = 0.02, detour_step: float = 0.001, prefer_weight: float = 0.05,
+                 stroke_margin: float = 0.0) -> None:
         if not 0 <= delta0 <= 1:
             raise ValueError(f"delta0 must lie in [0, 1]; got {delta0}")
+        if not (np.isfinite(stroke_margin) and 0 <= stroke_margin < (geometry.l_max - geometry.l_min) / 2):
+            raise ValueError(f"stroke_margin must be >= 0 m and under half the stroke range; got {stroke_margin!r}")
+        self.stroke_margin = float(stroke_margin)
         self.geometry, self.tau, self.delta0 = geometry, tau, delta0
         self.deltas = np.linspace(0.0, 1.0, delta_points)
         self.max_delta_step, self.j_bar, self.detour_step = max_delta_step, j_bar, detour_step
@@ -150,7 +158,23 @@ class PolynomialDetourPlanner:
         return np.clip(offsets, -self.j_bar, self.j_bar)
 
     def plan(self, p0: np.ndarray, p1: np.ndarray) -> HybridPlan:
-        """Plan from ``p0`` to ``p1`` (E displacements from home, (6,), m and rad)."""
+        """Plan from ``p0`` to ``p1`` (E displacements from home, (6,), m and rad): with the strokes
+        ``stroke_margin`` inside their limits where that plan exists, else at them."""
+        if self.stroke_margin > 0:
+            g = self.geometry
+            inner = PolynomialDetourPlanner(replace(g, l_min=g.l_min + self.stroke_margin,
+                                                    l_max=g.l_max - self.stroke_margin), self.tau, self.delta0,
+                                            len(self.deltas), self.max_delta_step, self.j_bar, self.detour_step,
+                                            self.prefer_weight)
+            try:
+                plan = inner.plan(p0, p1)
+            except PlanningError:
+                pass
+            else:  # the strokes, measures and verdicts of the robot itself, at the plan's poses and splits
+                state = hybrid.solve(plan.path, plan.delta, g, validate=False)
+                nominal_free = hybrid.solve(plan.nominal, self.delta0, g, validate=False).free
+                return replace(plan, lengths=state.lengths, mu_hexapod=state.mu_hexapod,
+                                  mu_tripod=state.mu_tripod, free=state.free, nominal_free=nominal_free)
         p0, p1 = hybrid.check_pose(p0, "p0")[0], hybrid.check_pose(p1, "p1")[0]
         u, nominal = nominal_path(p0, p1, self.tau)
         nominal_free = hybrid.solve(nominal, self.delta0, self.geometry, validate=False).free
