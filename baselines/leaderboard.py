@@ -77,7 +77,8 @@ FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001)
 QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
 
 #: each env's paper case as its scenario argument, where it is not "paper" (paper 004 has three drives: the push)
-PAPER_SCENARIO = {"paragym/MobileTripodOdometry-v0": "push", "paragym/MobileTripodOdometry-v1": "push"}
+PAPER_SCENARIO = {"paragym/MobileTripodOdometry-v0": "push", "paragym/MobileTripodOdometry-v1": "push",
+                  "paragym/MobileTripodOdometry-v2": "push"}
 
 
 def dynamic_kwargs(env_id: str) -> dict[str, Any]:
@@ -164,6 +165,8 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
 LATER_VERSIONS = {"paragym/CaPaManCollisionFree-v1": "paragym/CaPaManCollisionFree-v0",
                   "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0",
                   "paragym/HybridSingularityFree-v1": "paragym/HybridSingularityFree-v0",
+                  "paragym/HybridSingularityFree-v2": "paragym/HybridSingularityFree-v0",
+                  "paragym/MobileTripodOdometry-v2": "paragym/MobileTripodOdometry-v0",
                   "paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0"}
 for _new, _old in LATER_VERSIONS.items():
     METRICS[_new] = METRICS[_old]
@@ -717,6 +720,7 @@ VALIDATED: dict[str, tuple[str, Callable[[int], tuple[bool, dict[str, Any]]]]] =
 }
 VALIDATED["paragym/CaPaManCollisionFree-v1"] = VALIDATED["paragym/CaPaManCollisionFree-v0"]  # the same plan
 VALIDATED["paragym/HybridSingularityFree-v1"] = VALIDATED["paragym/HybridSingularityFree-v0"]
+VALIDATED["paragym/HybridSingularityFree-v2"] = VALIDATED["paragym/HybridSingularityFree-v0"]
 
 
 # --- the run ----------------------------------------------------------------------------------------------------

@@ -317,6 +317,25 @@ def _polynomial_detour(env: gym.Env, seed: int) -> Any:
     return PolynomialDetourPolicy()
 
 
+def _polynomial_detour_margin(env: gym.Env, seed: int) -> Any:
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
+
+    u = env.unwrapped
+    return PolynomialDetourPolicy(PolynomialDetourPlanner(u.geometry, j_bar=u.j_bar, stroke_margin=STROKE_MARGIN))
+
+
+def _polynomial_detour_margin_params() -> dict[str, Any]:
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+
+    return {"planner": {**init_defaults(PolynomialDetourPlanner, geometry=None), "stroke_margin": STROKE_MARGIN,
+                        "j_bar": "the env's"}}
+
+
+#: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a
+#: simulated actuator chasing a stroke planned at its limit overshoots it by up to 0.5 mm
+STROKE_MARGIN = 0.001
+
+
 def _gradient(env: gym.Env, seed: int) -> Any:
     from paragym.planners.nullspace_gradient import GradientPolicy
 
@@ -449,8 +468,14 @@ _BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], 
     ("paragym/CaPaManCollisionFree-v1", "grid-field", _grid_field, "other",
      "grid-dijkstra's shortest free paths on Theta, followed from wherever the cranks are (DAgger's expert)",
      _grid_field_params),
+    ("paragym/HybridSingularityFree-v2", "polynomial-detour", _polynomial_detour_margin, "reference",
+     "7th-degree path, serial optimisation of Delta, detour via poses (paper 002), strokes planned 1 mm inside "
+     "their limits where the path allows", _polynomial_detour_margin_params),
     # v1 of the tripod acts through trust in the paper's correction: the reference is its test of the faulty unit
     ("paragym/MobileTripodOdometry-v1", "encoder-correction", _encoder_trust, "reference",
+     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
+     _encoder_trust_params),
+    ("paragym/MobileTripodOdometry-v2", "encoder-correction", _encoder_trust, "reference",
      "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
      _encoder_trust_params),
 )
@@ -460,6 +485,8 @@ _SAME_IN_V1 = {
     "paragym/MobileTripodOdometry-v1": ("paragym/MobileTripodOdometry-v0", ("zero",)),
     "paragym/HybridSingularityFree-v1": ("paragym/HybridSingularityFree-v0", ("polynomial-detour", "zero")),
     "paragym/Orthoglide2PRRKappa-v1": ("paragym/Orthoglide2PRRKappa-v0", ("gradient-c", "fixed-table-a", "zero")),
+    "paragym/HybridSingularityFree-v2": ("paragym/HybridSingularityFree-v0", ("zero",)),
+    "paragym/MobileTripodOdometry-v2": ("paragym/MobileTripodOdometry-v0", ("zero",)),
 }
 _BUILT_IN += tuple((new, *row[1:]) for new, (old, names) in _SAME_IN_V1.items()
                    for row in _BUILT_IN if row[0] == old and row[1] in names)

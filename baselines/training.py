@@ -46,7 +46,7 @@ import yaml
 
 import paragym
 from paragym import check_env_id
-from paragym.models import shipped_models_dir
+from paragym.models import shipped_models_dir, shipped_models_folder
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
@@ -397,7 +397,7 @@ def _initialise_from(model: Any, algo: str, source: str, files: RunFiles) -> Non
         raise ValueError(f"init_from must be 'bc' and the algorithm PPO; got {source!r} for {algo}")
     seed = files.model.stem.rsplit("seed", 1)[1]
     own = files.model.parent / f"bc_seed{seed}.zip"
-    shipped = shipped_models_dir() / files.model.parent.name / "bc_seed0.zip"
+    shipped = shipped_models_folder(f"paragym/{files.model.parent.name}") / "bc_seed0.zip"
     path = own if own.is_file() else shipped
     if not path.is_file():
         raise ValueError(f"init_from: bc needs a cloned policy ({own} or {shipped}): paragym train "

@@ -51,7 +51,8 @@ DYNAMIC_TARGET = 2.0
 #: figures are the medians (the env's steps/s, and the ratio of each round)
 ROUNDS = 3
 SCENARIOS = {"paragym/MobileTripodOdometry-v0": ("random", "push"),  # the paper's drives are named
-             "paragym/MobileTripodOdometry-v1": ("random", "push")}
+             "paragym/MobileTripodOdometry-v1": ("random", "push"),
+             "paragym/MobileTripodOdometry-v2": ("random", "push")}
 
 
 def run_for(env: gym.Env, seconds: float, seed: int = 0) -> tuple[int, float]:

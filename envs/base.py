@@ -8,12 +8,15 @@ render mode); a task fills the hooks below. All randomness comes from
 
 from __future__ import annotations
 
+import warnings
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["ParagymEnv", "check_action", "check_options", "check_seed"]
+from paragym.sim.client import physics_steps
+
+__all__ = ["ParagymEnv", "check_action", "check_control_period", "check_options", "check_seed"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -29,6 +32,21 @@ def check_seed(seed: Any, name: str = "seed") -> int | None:
     if seed < 0:
         raise ValueError(f"{name} must be a non-negative integer or None; got {seed!r}")
     return int(seed)
+
+
+def check_control_period(control_period: float, time_step: float, refuse: bool, later: str | None = None) -> None:
+    """Simulated time must run at the control period's rate: a ``control_period`` (s) that is not a whole number
+    of physics steps of ``time_step`` (s) is refused with a ValueError naming it (``refuse``), or, in a released
+    id that ran it rounded, warned about (naming the ``later`` id that refuses it)."""
+    steps = physics_steps(control_period, time_step)
+    if abs(steps * time_step - control_period) <= 1e-9 * control_period:
+        return
+    said = (f"control_period {control_period!r} s is not a whole number of physics steps of {time_step!r} s: each "
+            f"step would be simulated over {steps * time_step:g} s")
+    if refuse:
+        raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
+    why = f"; {later} refuses it" if later else ""
+    warnings.warn(f"{said} (this id's released behaviour{why})", UserWarning, stacklevel=3)
 
 
 def check_options(options: Any) -> dict[str, Any]:

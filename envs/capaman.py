@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv
+from paragym.envs.base import ParagymEnv, check_control_period
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
@@ -163,6 +163,11 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
       bit).
     * v1 (paragym 0.4.0): :class:`CaPaManCollisionFreeV1Env`, a new
       observation, reward and reach tolerance; v0 is unchanged.
+    * paragym 0.8.0, v0 and v1: ``info["failure"]`` ("collision",
+      "broken"); in dynamic fidelity a loop open by more than 5 mm ends the
+      episode as "broken" (no released setting opens one that far before a
+      collision ends the episode: their rollouts are unchanged); a
+      ``control_period`` that the physics step does not divide warns.
     """
 
     version = 0
@@ -220,6 +225,7 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
             self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
             self.world = GridWorld(1, geometry, clearance_cap) if collision == "grid" else SceneWorld(self.scene)
         else:
+            check_control_period(self.control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
             self.scene = CaPaManDynamicScene(geometry, dynamics, gui=render_mode == "human",
                                              clearance_cap=clearance_cap)
             self.world = DynamicWorld(self.scene, self.control_period)
@@ -239,14 +245,16 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
     def _info(self) -> dict[str, Any]:
         s = self.state
         collision = bool(s.clearance[0] <= 0.0)
+        broken = isinstance(self.world, DynamicWorld) and self.world.broken
         return {
             "collision": collision,
+            "failure": "collision" if collision else "broken" if broken else None,
             "clearance": float(s.clearance[0]),
             "nearest_part": s.near[0],
             "reached": int(s.reached[0]),
             "target_index": TOUR[min(int(s.reached[0]), len(TOUR) - 1)],
             "path_length": float(s.path_length[0]),
-            "is_success": bool(s.reached[0] >= len(TOUR) and not collision),
+            "is_success": bool(s.reached[0] >= len(TOUR) and not collision and not broken),
             "alpha": s.alpha[0].copy(),
             "tool_tip": s.tip[0].copy(),
         }

@@ -7,16 +7,18 @@ scenarios come from :mod:`paragym.tasks.hybrid`.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv
+from paragym.envs.base import ParagymEnv, check_control_period
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
 from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene
 from paragym.tasks import hybrid_step as task_step
+from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.hybrid import (
     HybridScenario,
     draw_scenarios,
@@ -28,7 +30,8 @@ from paragym.tasks.hybrid import (
 from paragym.tasks.hybrid_step import HybridParams, HybridTaskState
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
-           "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
+           "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",
+           "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
            "hybrid_random_scenario", "hybrid_random_scenarios"]
 
 
@@ -121,17 +124,26 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
       before runs the same (tested against recorded rollouts).
     * v1 (paragym 0.5.0): :class:`HybridSingularityFreeV1Env`, the end of
       the path added to the observation; v0 is unchanged.
+    * v2 (paragym 0.8.0): :class:`HybridSingularityFreeV2Env`, the dynamic
+      fidelity tracks E's orientation and ends a broken mechanism. v0's and
+      v1's holes, kept so that their episodes replay: a dynamic step is free
+      whatever E's orientation; since 0.8.0 ``info["orientation_error"]``
+      and ``info["failure"]`` report it, and a custom ``control_period``
+      that the physics step does not divide warns.
     """
 
     version = 0
     _w_end = 0.0
+    #: v2's rules in dynamic fidelity: orientation tracking, a broken mechanism's end, whole physics steps
+    _v2_rules = False
 
     def __init__(self, scenario: str | HybridScenario = "random", render_mode: str | None = None,
                  max_delta_step: float = 0.05, j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05,
                  w_singular: float = 1.0, w_limit: float = 1.0,
                  geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
                  w_end: float | None = None, fidelity: str = "kinematic", dynamics: HybridDynamics | None = None,
-                 control_period: float = 0.05, track_tolerance: float = 0.005) -> None:
+                 control_period: float = 0.05, track_tolerance: float = 0.005,
+                 track_angle_tolerance: float | None = None) -> None:
         super().__init__(render_mode)
         if fidelity not in ("kinematic", "dynamic"):
             raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
@@ -160,9 +172,20 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
         self.state = self.new_state(1)
         self.fidelity = fidelity
         self.world: task_step.DynamicWorld | None = None
+        if track_angle_tolerance is not None and not self._v2_rules:
+            raise ValueError("track_angle_tolerance is an argument of paragym/HybridSingularityFree-v2")
+        angle = math.radians(1.0) if track_angle_tolerance is None else track_angle_tolerance
+        if not (np.isfinite(angle) and angle > 0):
+            raise ValueError(f"track_angle_tolerance must be a positive angle (rad); got {angle!r}")
+        self._failure: str | None = None
         if fidelity == "dynamic":
-            scene = HybridDynamicScene(geometry, dynamics or HybridDynamics.fast(), gui=render_mode == "human")
-            self.world = task_step.DynamicWorld(scene, float(control_period), float(track_tolerance))
+            dynamics = dynamics or HybridDynamics.fast()
+            check_control_period(control_period, dynamics.time_step, refuse=self._v2_rules,
+                                 later="paragym/HybridSingularityFree-v2")
+            scene = HybridDynamicScene(geometry, dynamics, gui=render_mode == "human")
+            self.world = task_step.DynamicWorld(scene, float(control_period), float(track_tolerance),
+                                                angle if self._v2_rules else None,
+                                                BROKEN_GAP if self._v2_rules else None)
 
     def _info(self) -> dict[str, Any]:
         s = self.state
@@ -172,7 +195,29 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
                 "free": bool(s.free[0]), "within_limits": bool(s.within[0]),
                 "is_success": bool(s.terminated[0] and s.all_free[0]),
                 "max_delta_step": self.max_delta_step, "j_bar": self.j_bar,
-                "tracking_error": 0.0 if self.world is None else self.world.tracking_error}
+                "tracking_error": 0.0 if self.world is None else self.world.tracking_error,
+                "orientation_error": 0.0 if self.world is None else self.world.orientation_error,
+                "failure": self._failure}
+
+    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
+        self._failure = None
+        return super()._reset_task(options)
+
+    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
+        super()._transition(actions, active)
+        if self._failure is None:  # the first reason the episode fails, kept
+            self._failure = self._failure_now()
+
+    def _failure_now(self) -> str | None:
+        """Why this step is not free: "broken", "tracking", "leg limit" or "singular" (None: it is free)."""
+        s, w = self.state, self.world
+        if w is not None and w.broken:
+            return "broken"
+        if w is not None and not w.tracked[0]:
+            return "tracking"
+        if not s.within[0]:
+            return "leg limit"
+        return None if s.free[0] else "singular"
 
     def _show(self) -> None:
         if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
@@ -244,6 +289,46 @@ class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
     _w_end = 0.0
 
 
+class HybridSingularityFreeV2Env(HybridSingularityFreeV1Env):
+    """``paragym/HybridSingularityFree-v2``: v1's task, with a dynamic
+    fidelity whose tracking covers E's orientation and whose mechanism can
+    break.
+
+    ## Why v2
+    In v1's dynamic fidelity a step was free when E's position was within
+    5 mm of its command, whatever its orientation: E could turn 1.5 deg off
+    its commanded attitude in a free step. A ball joint could open without
+    ending anything. Both change episodes v1 could run, so they make v2;
+    in kinematic fidelity v2 is v1, bit for bit (v1's shipped models are
+    v2's).
+
+    ## Episode End
+    As v1 (u = 1; ``is_success`` when every step was free), and in dynamic
+    fidelity a ball joint open by more than 5 mm (a broken mechanism) ends
+    the episode as a failure. A step is free only if E is within
+    ``track_tolerance`` (5 mm) of its commanded position and within
+    ``track_angle_tolerance`` (1 deg) of its commanded orientation: the
+    reference, planned 1 mm inside the stroke limits, stays within 2.2 mm
+    and 0.44 deg over the paper's and 15 random paths. ``info["failure"]``
+    names the first reason a step was not free ("broken", "tracking",
+    "leg limit", "singular"); ``info["orientation_error"]`` is E's (rad).
+
+    ## Arguments
+    As v1, plus ``track_angle_tolerance`` (rad). A ``control_period`` that is
+    not a whole number of the dynamics' physics steps is refused (v0 and v1
+    simulate it rounded, and warn).
+
+    ## Observation Space, Action Space, Rewards, Starting State
+    As v1.
+
+    ## Version History
+    * v2 (paragym 0.8.0): the dynamic fidelity's rules above; the kinematic
+      fidelity is v1's.
+    """
+
+    _v2_rules = True
+
+
 class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
     the same transition (:mod:`paragym.tasks.hybrid_step`) over N robots.
@@ -271,3 +356,9 @@ class HybridSingularityFreeV1VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeV1Env` stepped together."""
 
     single_class = HybridSingularityFreeV1Env
+
+
+class HybridSingularityFreeV2VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeV2Env` stepped together (kinematic: v1's)."""
+
+    single_class = HybridSingularityFreeV2Env

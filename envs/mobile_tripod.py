@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv
+from paragym.envs.base import ParagymEnv, check_control_period
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.tripod_dynamic import TripodDynamics
@@ -23,7 +23,8 @@ from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenari
 from paragym.tasks.mobile_tripod_step import TripodParams, TripodTaskState
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripodOdometryV1VectorEnv",
-           "MobileTripodOdometryVectorEnv", "drive_scenario"]
+           "MobileTripodOdometryV2Env", "MobileTripodOdometryV2VectorEnv", "MobileTripodOdometryVectorEnv",
+           "drive_scenario"]
 
 
 class _TripodTask:
@@ -95,6 +96,9 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     forces, odometry from the wheel encoders, eta from the leg encoders;
     the estimate, the observation and the reward are the same functions of
     them). ``dynamics``: a :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
+    On rough terrain the fidelities differ most: the kinematic units roll
+    over the bumps without slip, the dynamic ones bounce and slip, and
+    their odometry drifts several times further (CHANGELOG.md, 0.8.0).
 
     ## Version History
     * v0: initial release.
@@ -108,11 +112,18 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
       refused drives of more than 8 terrain bumps, or longer than its first),
       and a custom drive of more than 10 million samples is refused at reset
       with a ValueError naming it (it could not run: it failed allocating).
+      Its hole, kept so that its episodes replay: a drive that folds the
+      tripod (a leg past horizontal) carries on; since paragym 0.8.0
+      ``info["failure"]`` says "folded". v2 ends it.
     * v1 (paragym 0.4.0): :class:`MobileTripodOdometryV1Env`, a new action and
       observation; v0 is unchanged.
+    * v2 (paragym 0.8.0): :class:`MobileTripodOdometryV2Env`, a folded
+      tripod ends the episode as a failure.
     """
 
     version = 0
+    #: v2's rules: a folded mechanism ends the episode; a physics step that does not divide the sample is refused
+    _v2_rules = False
 
     def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
@@ -138,13 +149,16 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
         self.encoder_noise, self.max_correction, self.success_error = encoder_noise, max_correction, success_error
         self.trust_rate, self.relative_reward = float(trust_rate), bool(relative_reward)
         self.params = TripodParams(float(encoder_noise), float(max_correction), geometry, self.version,
-                                   trust_rate=self.trust_rate, relative_reward=self.relative_reward)
+                                   trust_rate=self.trust_rate, relative_reward=self.relative_reward,
+                                   fold_ends=self._v2_rules)
         self.action_space = spaces.Box(-1.0, 1.0, (self.params.action_size,), np.float32)
         self.observation_space = spaces.Box(-100.0, 100.0, (self.params.obs_size,), np.float32)
         self.state = self.new_state(1)
         self.fidelity = fidelity
         self.world: task_step.DynamicWorld | None = None
         if fidelity == "dynamic":
+            check_control_period(self.state.drive.dt, (dynamics or TripodDynamics()).time_step, refuse=self._v2_rules,
+                                 later="paragym/MobileTripodOdometry-v2")
             self.world = task_step.DynamicWorld(geometry, dynamics, gui=render_mode == "human")
 
     def _detected_fault(self) -> tuple[int, str] | None:
@@ -166,7 +180,9 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
         info = {"true_units": d.true[0].copy(), "estimate": s.estimate[0].copy(), "odometry": d.odometry[0].copy(),
                 "eta": s.eta[0].copy(), "unit_error": float(s.unit_error[0]), "plate_error": float(s.plate_error[0]),
                 "detected_fault": self._detected_fault(), "t": float(d.t[0]),
-                "is_success": bool(s.terminated[0] and s.unit_error[0] < self.success_error)}
+                "is_success": bool(s.terminated[0] and s.unit_error[0] < self.success_error
+                                   and not (self._v2_rules and s.folded[0])),
+                "failure": "folded" if s.folded[0] else None}
         if self.version == 1:  # the smoothed encoder distances that v1's correction steers to
             info["encoder_distances"] = s.smoothed[0].copy()
         return info
@@ -250,6 +266,38 @@ class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
     version = 1
 
 
+class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
+    """``paragym/MobileTripodOdometry-v2``: v1's task, in which a folded
+    mechanism ends the episode as a failure.
+
+    ## Why v2
+    Some drives fold the tripod: a leg reaches the horizontal (true eta <= 0)
+    and the plate comes down. In v0 and v1 both fidelities carried on as if
+    nothing happened (7 % of random drives fold in kinematic fidelity, 14 of
+    200 seeds; the dynamic fidelity folds on others, since its units slip
+    and bump differently). Ending those episodes changes what v1 did, so it
+    is v2.
+
+    ## Episode End
+    As v1, and when a leg reaches the horizontal: the episode ends there,
+    ``is_success`` is False and ``info["failure"]`` is "folded" (in v0 and v1
+    it says so too, without ending the episode).
+
+    ## Arguments
+    As v1. A dynamics whose physics step does not divide the 0.05 s sample is
+    refused (v0 and v1 round it, and warn).
+
+    ## Action Space, Observation Space, Rewards, Starting State
+    As v1.
+
+    ## Version History
+    * v2 (paragym 0.8.0): the folded end above; drives that do not fold are
+      v1's, bit for bit, and so are v1's shipped models.
+    """
+
+    _v2_rules = True
+
+
 class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
     """``num_envs`` copies of :class:`MobileTripodOdometryEnv` stepped together:
     the same transition (:mod:`paragym.tasks.mobile_tripod_step`) over N
@@ -266,8 +314,10 @@ class MobileTripodOdometryVectorEnv(_TripodTask, ParagymVectorEnv):
 
     def _infos(self) -> dict[str, Any]:
         s = self.state
+        folded_fails = s.folded & self.params.fold_ends
         return self._for_every_robot(unit_error=s.unit_error.copy(),
-                                     is_success=s.terminated & (s.unit_error < self.single_env.success_error))
+                                     is_success=s.terminated & (s.unit_error < self.single_env.success_error)
+                                     & ~folded_fails)
 
     def _load_single(self, i: int) -> None:
         one, s = self.single_env.state, self.state
@@ -279,3 +329,9 @@ class MobileTripodOdometryV1VectorEnv(MobileTripodOdometryVectorEnv):
     """``num_envs`` copies of :class:`MobileTripodOdometryV1Env` stepped together."""
 
     single_class = MobileTripodOdometryV1Env
+
+
+class MobileTripodOdometryV2VectorEnv(MobileTripodOdometryVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryV2Env` stepped together."""
+
+    single_class = MobileTripodOdometryV2Env

@@ -10,8 +10,11 @@ from pathlib import Path
 __all__ = ["SHARED_WITH", "shipped_models_dir", "shipped_models_folder"]
 
 #: env id -> the env id whose shipped models it plays: a later version whose default mode runs the earlier one's
-#: episodes bit for bit (tested), so that the earlier version's models are its own
-SHARED_WITH = {"paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0"}
+#: episodes bit for bit where its rules do not end them sooner (tested), so that the earlier version's models are
+#: its own
+SHARED_WITH = {"paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0",
+               "paragym/HybridSingularityFree-v2": "paragym/HybridSingularityFree-v1",
+               "paragym/MobileTripodOdometry-v2": "paragym/MobileTripodOdometry-v1"}
 
 
 def shipped_models_dir() -> Path:

@@ -29,6 +29,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.hybrid:HybridSingularityFreeV1Env", 100,
         "hybrid v1: the v0 path with the end pose P1, and P1 solved at the current split, in the observation",
     ),
+    "paragym/HybridSingularityFree-v2": (
+        "paragym.envs.hybrid:HybridSingularityFreeV2Env", 100,
+        "hybrid v2: v1's task; in dynamic fidelity E's orientation is tracked too and a broken mechanism fails",
+    ),
     "paragym/Orthoglide2PRRKappa-v0": (
         "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv", 1000,
         "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)",
@@ -45,6 +49,10 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
         "paragym.envs.mobile_tripod:MobileTripodOdometryV1Env", 700,
         "mobile tripod v1: per unit, how far to trust the encoders' correction of the odometry (paper 004)",
     ),
+    "paragym/MobileTripodOdometry-v2": (
+        "paragym.envs.mobile_tripod:MobileTripodOdometryV2Env", 700,
+        "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a failure",
+    ),
 }
 
 #: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
@@ -55,8 +63,10 @@ VECTOR_ENTRY_POINTS: dict[str, str] = {
     "paragym/Orthoglide2PRRKappa-v1": "paragym.envs.orthoglide:Orthoglide2PRRKappaV1VectorEnv",
     "paragym/HybridSingularityFree-v0": "paragym.envs.hybrid:HybridSingularityFreeVectorEnv",
     "paragym/HybridSingularityFree-v1": "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv",
+    "paragym/HybridSingularityFree-v2": "paragym.envs.hybrid:HybridSingularityFreeV2VectorEnv",
     "paragym/MobileTripodOdometry-v0": "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv",
     "paragym/MobileTripodOdometry-v1": "paragym.envs.mobile_tripod:MobileTripodOdometryV1VectorEnv",
+    "paragym/MobileTripodOdometry-v2": "paragym.envs.mobile_tripod:MobileTripodOdometryV2VectorEnv",
 }
 
 for _env_id, (_entry, _steps, _doc) in ENVIRONMENTS.items():

@@ -55,10 +55,13 @@ DEMOS: dict[str, tuple[str, Callable[[Episode, Path], Path]]] = {
     "paragym/CaPaManCollisionFree-v0": ("RRT + GA (paper 000)", _capaman_plot),
     "paragym/CaPaManCollisionFree-v1": ("RRT + GA (paper 000)", _capaman_plot),
     "paragym/HybridSingularityFree-v0": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
+    "paragym/HybridSingularityFree-v1": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
+    "paragym/HybridSingularityFree-v2": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
     "paragym/Orthoglide2PRRKappa-v0": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
     "paragym/Orthoglide2PRRKappa-v1": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
     "paragym/MobileTripodOdometry-v0": ("redundant-encoder correction (paper 004)", _tripod_plot),
     "paragym/MobileTripodOdometry-v1": ("redundant-encoder correction (paper 004)", _tripod_plot),
+    "paragym/MobileTripodOdometry-v2": ("redundant-encoder correction (paper 004)", _tripod_plot),
 }
 
 
@@ -334,6 +337,8 @@ DEFAULT_SCENARIO: dict[str, str] = {
     "paragym/MobileTripodOdometry-v1": "push",
     "paragym/HybridSingularityFree-v1": "paper",
     "paragym/Orthoglide2PRRKappa-v1": "paper",
+    "paragym/HybridSingularityFree-v2": "paper",
+    "paragym/MobileTripodOdometry-v2": "push",
 }
 
 
@@ -353,6 +358,7 @@ PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
     "paragym/CaPaManCollisionFree-v1": _plan_capaman,
     "paragym/MobileTripodOdometry-v1": _plan_tripod,
     "paragym/Orthoglide2PRRKappa-v1": _plan_orthoglide,
+    "paragym/MobileTripodOdometry-v2": _plan_tripod,
 }
 
 #: env id -> plan, execute (dynamic fidelity) and validate
@@ -361,6 +367,7 @@ VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] 
     "paragym/HybridSingularityFree-v0": _validate_hybrid,
     "paragym/CaPaManCollisionFree-v1": _validate_capaman,
     "paragym/HybridSingularityFree-v1": _validate_hybrid,
+    "paragym/HybridSingularityFree-v2": _validate_hybrid,
 }
 
 

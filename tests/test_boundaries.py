@@ -86,6 +86,8 @@ BAD["paragym/CaPaManCollisionFree-v1"] = BAD["paragym/CaPaManCollisionFree-v0"]
 BAD["paragym/MobileTripodOdometry-v1"] = BAD[TRIPOD]
 BAD["paragym/HybridSingularityFree-v1"] = BAD["paragym/HybridSingularityFree-v0"]
 BAD["paragym/Orthoglide2PRRKappa-v1"] = BAD[ORTHO]
+BAD["paragym/HybridSingularityFree-v2"] = BAD[HYBRID]
+BAD["paragym/MobileTripodOdometry-v2"] = BAD[TRIPOD]
 
 
 @pytest.mark.parametrize("env_id", IDS)

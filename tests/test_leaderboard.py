@@ -187,6 +187,8 @@ SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "p
                                                for k in range(3)],
            "paragym/MobileTripodOdometry-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac") for k in range(3)],
            "paragym/HybridSingularityFree-v1": [f"{a}-seed{k}" for a in ("ppo", "sac") for k in range(3)]}
+SHIPPED["paragym/HybridSingularityFree-v2"] = SHIPPED["paragym/HybridSingularityFree-v1"]  # models.SHARED_WITH
+SHIPPED["paragym/MobileTripodOdometry-v2"] = SHIPPED["paragym/MobileTripodOdometry-v1"]
 
 
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):

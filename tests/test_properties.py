@@ -31,6 +31,8 @@ SCENARIOS = {
     "paragym/MobileTripodOdometry-v1": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
     "paragym/HybridSingularityFree-v1": ["random", "paper"],
     "paragym/Orthoglide2PRRKappa-v1": ["random", "paper"],
+    "paragym/HybridSingularityFree-v2": ["random", "paper"],
+    "paragym/MobileTripodOdometry-v2": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
 }
 FAST = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                        HealthCheck.function_scoped_fixture])

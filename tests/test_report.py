@@ -28,7 +28,8 @@ def test_bootstrap_interval_holds_the_mean_and_narrows_with_agreement():
 def test_latest_versions_pick_v1_where_it_exists():
     latest = latest_versions()
     assert "paragym/CaPaManCollisionFree-v1" in latest and "paragym/CaPaManCollisionFree-v0" not in latest
-    assert "paragym/HybridSingularityFree-v1" in latest and "paragym/HybridSingularityFree-v0" not in latest
+    assert "paragym/HybridSingularityFree-v2" in latest and "paragym/HybridSingularityFree-v1" not in latest
+    assert "paragym/MobileTripodOdometry-v2" in latest
     assert "paragym/Orthoglide2PRRKappa-v1" in latest and "paragym/Orthoglide2PRRKappa-v0" not in latest
     assert len(latest) == 4
 

@@ -1,4 +1,4 @@
-"""What every task's scenario layer shares: resolving the ``scenario`` argument.
+"""What every task shares: resolving the ``scenario`` argument, and when a mechanism counts as broken.
 
 An env, its vector env, a planner and the CLI all take a scenario as a name
 ("paper", "random", ...) or as a custom scenario object; this one helper
@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-__all__ = ["resolve_scenario"]
+__all__ = ["BROKEN_GAP", "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -30,3 +30,7 @@ def resolve_scenario(choice: Any, names: tuple[str, ...], custom: type[S],
     error = ValueError if isinstance(choice, str) else TypeError
     one_of = f"one of {', '.join(map(repr, names))} or " if names else ""
     raise error(f"{name} must be {one_of}a {custom.__name__}; got {choice!r:.120}")
+
+#: a loop of a closed chain open by more than this (m) in dynamic fidelity is a broken mechanism: the episode ends
+#: as a failure ("broken") in the ids whose rules say so (the presets hold their loops within 1 mm under contact)
+BROKEN_GAP = 0.005

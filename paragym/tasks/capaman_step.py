@@ -57,6 +57,7 @@ from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
+from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
 from paragym.units import DEG
 
@@ -214,15 +215,19 @@ class DynamicWorld(SceneWorld):
         super().__init__(scene)
         self.control_period = control_period
         self._moved = False
+        #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism)
+        self.broken = False
 
     def move(self, command: np.ndarray) -> np.ndarray:
         """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
         self.scene.drive(command[0], self.control_period)
         self._moved = True
+        self.broken = self.scene.closure_error() > BROKEN_GAP
         return self.scene.alpha[None]
 
     def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
         if not self._moved:  # a reset: pose the chain; after a move the dynamics has posed it
+            self.broken = False
             return super().place(rows, alpha)
         self._moved = False
         clearance, near = self.scene.clearance()
@@ -286,6 +291,9 @@ def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: 
     _place(state, world, rows, new)
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
+    if isinstance(world, DynamicWorld) and world.broken and not state.terminated[0]:
+        state.terminated[0] = True  # a broken mechanism ends the episode as a failure, as a collision does
+        state.reward[0] -= params.collision_penalty
 
 
 def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,

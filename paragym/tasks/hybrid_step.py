@@ -158,6 +158,8 @@ def step(state: HybridTaskState, params: HybridParams, actions: np.ndarray, acti
     world.move(state)
     _advance(state, params, actions, active, True, _EVALUATE)
     state.all_free &= world.tracked
+    if world.broken:  # a broken mechanism ends the episode as a failure
+        state.all_free[0], state.terminated[0] = False, True
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -175,13 +177,21 @@ class DynamicWorld:
     E's simulated pose and its offset E's simulated position minus the
     nominal path, so that the reward's offset term sees a platform that sags
     or lags. ``tracked`` is False once E's position is more than
-    ``track_tolerance`` (m) from the commanded one: that step is not free
-    (in kinematic fidelity the error is 0, so the definition is the same)."""
+    ``track_tolerance`` (m) from the commanded one, or, with
+    ``angle_tolerance`` (rad; v2), E's orientation more than that from the
+    commanded one: that step is not free (in kinematic fidelity both errors
+    are 0, so the definition is the same). ``broken_gap`` (m; v2): a ball
+    joint open by more than that is a broken mechanism (``broken``)."""
 
-    def __init__(self, scene: Any, control_period: float, track_tolerance: float) -> None:
+    def __init__(self, scene: Any, control_period: float, track_tolerance: float,
+                 angle_tolerance: float | None = None, broken_gap: float | None = None) -> None:
         self.scene, self.control_period, self.track_tolerance = scene, control_period, track_tolerance
+        self.angle_tolerance, self.broken_gap = angle_tolerance, broken_gap
         self.tracked = np.ones(1, bool)
         self.tracking_error = 0.0
+        #: E's orientation error (rad): the angle of the rotation from its commanded to its simulated attitude
+        self.orientation_error = 0.0
+        self.broken = False
         #: the last step's commanded displacement of E from home (6,): the pose the actuators were driven to
         self.command = np.zeros(6)
         self._work = np.empty((5, 6, 6))
@@ -189,7 +199,7 @@ class DynamicWorld:
     def reset(self, state: HybridTaskState) -> None:
         """Put the simulated robot at the state's (solved) start pose, at rest."""
         self.scene.reset(state.pose[0], float(state.delta[0]))
-        self.tracked[0], self.tracking_error = True, 0.0
+        self.tracked[0], self.tracking_error, self.orientation_error, self.broken = True, 0.0, 0.0, False
         self.command = state.pose[0].copy()
 
     def move(self, state: HybridTaskState) -> None:
@@ -208,7 +218,11 @@ class DynamicWorld:
         state.pose[0, 3:] = hybrid.matrix_euler(t_e[:3, :3])
         state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
         self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - self.command[:3]))
-        self.tracked[0] = self.tracking_error <= self.track_tolerance
+        turn = hybrid.euler_matrix(*self.command[3:]).T @ t_e[:3, :3]
+        self.orientation_error = float(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0)))
+        self.tracked[0] = self.tracking_error <= self.track_tolerance and (
+            self.angle_tolerance is None or self.orientation_error <= self.angle_tolerance)
+        self.broken = self.broken_gap is not None and self.scene.closure_error() > self.broken_gap
 
 
 def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,

@@ -69,6 +69,8 @@ class TripodParams:
     smoothing: float = 0.1
     trust_rate: float = 0.2
     relative_reward: bool = True
+    #: v2: a folded mechanism (a leg at or past horizontal, true eta <= 0) ends the episode as a failure
+    fold_ends: bool = False
 
     @property
     def obs_size(self) -> int:
@@ -96,13 +98,15 @@ class TripodTaskState:
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
+    #: whether the mechanism has folded in this episode (a leg at or past horizontal: true eta <= 0)
+    folded: np.ndarray
 
     @classmethod
     def empty(cls, n: int, obs_size: int = OBS_SIZE) -> TripodTaskState:
         return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
                    last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
                    plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n))
+                   reward=np.zeros(n), folded=np.zeros(n, bool))
 
     @property
     def scenarios(self) -> list[DriveScenario | None]:
@@ -120,6 +124,7 @@ def reset(state: TripodTaskState, params: TripodParams, rows: np.ndarray, scenar
     mask = np.zeros(len(state.estimate), bool)
     mask[rows] = True
     state.smoothed[rows] = np.nan  # v1: the first reading starts the average
+    state.folded[rows] = False
     _advance(state, params, np.zeros((len(state.estimate), params.action_size)), mask, False)
     state.last_eta[rows] = state.eta[rows]
 
@@ -133,9 +138,12 @@ def step(state: TripodTaskState, params: TripodParams, actions: np.ndarray, acti
     (:class:`DynamicWorld`)."""
     if world is None:
         _advance(state, params, actions, active, True)
-        return
-    moved = world.move(state)
-    _advance(state, params, actions, active, True, moved, world.increment)
+    else:
+        moved = world.move(state)
+        _advance(state, params, actions, active, True, moved, world.increment)
+    state.folded |= active & (state.drive.eta.min(axis=1) <= 0.0)
+    if params.fold_ends:
+        state.terminated |= state.folded
 
 
 class DynamicWorld:

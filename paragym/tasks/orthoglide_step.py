@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import orthoglide as og
+from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.orthoglide import Task, start_table_position
 
 __all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState",
@@ -155,8 +156,6 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
-#: v1, dynamic fidelity: a loop open by more than this (m) is a broken mechanism, and the robot fails
-BROKEN_GAP = 0.005
 
 
 class DynamicWorld:
