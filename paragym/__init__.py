@@ -9,7 +9,7 @@ Importing ``paragym`` registers its environments with Gymnasium::
 
 from gymnasium.envs.registration import register, registry
 
-__version__ = "0.7.0"
+__version__ = "0.8.0"
 
 #: env id -> (entry point, max episode steps, one-line description)
 ENVIRONMENTS: dict[str, tuple[str, int, str]] = {
