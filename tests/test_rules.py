@@ -473,3 +473,41 @@ def test_hybrid_ball_joints_hold_under_any_in_box_actions(preset):
         env.close()
         assert info["failure"] != "broken"
     assert gap < 4e-3, f"{preset}: ball joints open by {gap * 1e3:.2f} mm"
+
+
+def test_a_hybrid_or_2prr_that_comes_apart_ends_its_v2_or_v1_episode_as_broken():
+    """A solver too weak to hold the closures opens them by over 5 mm: the newest ids end the episode there as a
+    failure, "broken" (the released ids carry on, as released)."""
+    from paragym.sim.hybrid_dynamic import HybridDynamics
+    from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+
+    weak = {"paragym/HybridSingularityFree-v2": (HybridDynamics(time_step=0.01, solver_iterations=2, erp=0.1), {}),
+            "paragym/Orthoglide2PRRKappa-v1": (OrthoglideDynamics(time_step=0.01, solver_iterations=1),
+                                               {"action_mode": "joint_velocity", "track_tolerance": 10.0})}
+    for env_id, (dynamics, kwargs) in weak.items():
+        env = _make_any(env_id, "dynamic", dynamics, scenario="paper", **kwargs)
+        env.action_space.seed(0)
+        env.reset(seed=0)
+        for _ in range(30):
+            *_, terminated, _, info = env.step(env.action_space.sample())
+            if terminated:
+                break
+        env.close()
+        assert terminated and info["failure"] == "broken" and not info["is_success"], (env_id, info["failure"])
+
+
+@pytest.mark.parametrize("mode", ["null_space", "joint_velocity"])
+def test_2prr_closure_holds_under_any_in_box_actions(mode):
+    """The tool's closure at C stays within 0.1 mm under random actions in either mode (the tracking rule
+    loosened so that the episode runs on)."""
+    env = _make_any("paragym/Orthoglide2PRRKappa-v1", "dynamic", None, action_mode=mode, track_tolerance=10.0)
+    env.action_space.seed(0)
+    env.reset(seed=0)
+    gap = 0.0
+    for _ in range(200):
+        *_, terminated, _, _ = env.step(env.action_space.sample())
+        gap = max(gap, env.unwrapped.world.scene.closure_error())
+        if terminated:
+            break
+    env.close()
+    assert gap < 1e-4, f"closure open by {gap * 1e3:.3f} mm"
