@@ -41,6 +41,7 @@ import paragym
 from paragym.baselines.policies import PolicySpec, policies_for
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.training import check_env_id, env_name
+from paragym.registry import ROWS, first_version, task_of
 from paragym.rollout import Episode, run_episode
 
 __all__ = ["FULL", "METRICS", "PAPER_SCENARIO", "PRIMARY", "QUICK", "EvalSuite", "Summary", "dynamic_kwargs",
@@ -76,9 +77,8 @@ class EvalSuite:
 FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))
 QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
 
-#: each env's paper case as its scenario argument, where it is not "paper" (paper 004 has three drives: the push)
-PAPER_SCENARIO = {"paragym/MobileTripodOdometry-v0": "push", "paragym/MobileTripodOdometry-v1": "push",
-                  "paragym/MobileTripodOdometry-v2": "push"}
+#: each env's paper case as its scenario argument (:attr:`paragym.registry.EnvRow.paper_scenario`)
+PAPER_SCENARIO = {r.id: r.paper_scenario for r in ROWS}
 
 
 def dynamic_kwargs(env_id: str) -> dict[str, Any]:
@@ -93,9 +93,9 @@ def dynamic_kwargs(env_id: str) -> dict[str, Any]:
     from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
     from paragym.sim.tripod_dynamic import TripodDynamics
 
-    settings = {"CaPaMan": CaPaManDynamics.split(), "Hybrid": HybridDynamics.fast(), "Orthoglide": OrthoglideDynamics(),
-                "MobileTripod": TripodDynamics()}
-    return {"fidelity": "dynamic", "dynamics": next(v for k, v in settings.items() if k in env_id)}
+    settings = {"capaman": CaPaManDynamics.split(), "hybrid": HybridDynamics.fast(), "orthoglide": OrthoglideDynamics(),
+                "tripod": TripodDynamics()}
+    return {"fidelity": "dynamic", "dynamics": settings[task_of(env_id)]}
 
 
 def dynamic_producer(spec: PolicySpec) -> str:
@@ -162,12 +162,7 @@ METRICS: dict[str, tuple[Callable[[Episode], dict[str, float]], list[tuple[str, 
 }
 
 #: a later version of a task ranks and measures its episodes as the first does (same scenarios and metrics)
-LATER_VERSIONS = {"paragym/CaPaManCollisionFree-v1": "paragym/CaPaManCollisionFree-v0",
-                  "paragym/MobileTripodOdometry-v1": "paragym/MobileTripodOdometry-v0",
-                  "paragym/HybridSingularityFree-v1": "paragym/HybridSingularityFree-v0",
-                  "paragym/HybridSingularityFree-v2": "paragym/HybridSingularityFree-v0",
-                  "paragym/MobileTripodOdometry-v2": "paragym/MobileTripodOdometry-v0",
-                  "paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0"}
+LATER_VERSIONS = {r.id: first_version(r.id) for r in ROWS if first_version(r.id) != r.id}
 for _new, _old in LATER_VERSIONS.items():
     METRICS[_new] = METRICS[_old]
 
@@ -255,7 +250,7 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
     from paragym.planners.base import PlanningError
     from paragym.validation.episode import validate_episode
 
-    arg = PAPER_SCENARIO.get(spec.env_id, "paper") if scenario == "paper" else scenario
+    arg = PAPER_SCENARIO[spec.env_id] if scenario == "paper" else scenario
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*is out of date.*")

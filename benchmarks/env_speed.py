@@ -34,6 +34,7 @@ import numpy as np
 from gymnasium.utils.performance import benchmark_step
 
 import paragym
+from paragym import registry
 
 TARGETS = {"paragym/CaPaManCollisionFree-v0": 5000.0, "paragym/HybridSingularityFree-v0": 5000.0,
            "paragym/Orthoglide2PRRKappa-v0": 20000.0, "paragym/MobileTripodOdometry-v0": 5000.0}
@@ -50,9 +51,6 @@ DYNAMIC_TARGET = 2.0
 #: a dynamic row's measurement: this many rounds of the env then the anchor, each a share of --seconds; the
 #: figures are the medians (the env's steps/s, and the ratio of each round)
 ROUNDS = 3
-SCENARIOS = {"paragym/MobileTripodOdometry-v0": ("random", "push"),  # the paper's drives are named
-             "paragym/MobileTripodOdometry-v1": ("random", "push"),
-             "paragym/MobileTripodOdometry-v2": ("random", "push")}
 
 
 def run_for(env: gym.Env, seconds: float, seed: int = 0) -> tuple[int, float]:
@@ -107,7 +105,7 @@ def main() -> None:
         print("panda-gym is not installed: no anchor (pip install panda-gym to add it)")
     warnings.filterwarnings("ignore", message=".*is out of date.*")  # v0 is measured beside v1 on purpose
     for env_id in () if args.dynamic_only else paragym.ENVIRONMENTS:
-        for scenario in SCENARIOS.get(env_id, ("random", "paper")):
+        for scenario in ("random", registry.row(env_id).paper_scenario):
             env = gym.make(env_id, scenario=scenario)
             sps = steps_per_second(env, args.seconds)
             rows.append((env_id, scenario, sps, benchmark_step(env, target_duration=args.seconds, seed=0),
@@ -121,7 +119,7 @@ def main() -> None:
         if preset is not None:
             cls, method = preset.split(".")
             kwargs["dynamics"] = getattr(presets[cls], method)()
-        env = gym.make(env_id, scenario=SCENARIOS.get(env_id, ("paper",))[-1], fidelity="dynamic", **kwargs)
+        env = gym.make(env_id, scenario=registry.row(env_id).paper_scenario, fidelity="dynamic", **kwargs)
         if anchor:  # the anchor and the env alternate, so that the machine's load moves both alike
             pairs = [(steps_per_second(env, args.seconds / ROUNDS, r), steps_per_second(anchor_env,
                                                                                       args.seconds / ROUNDS, r))

@@ -7,14 +7,12 @@ Found by name from any directory (:func:`shipped_models_dir`);
 
 from pathlib import Path
 
+from paragym.registry import ROWS
+
 __all__ = ["SHARED_WITH", "shipped_models_dir", "shipped_models_folder"]
 
-#: env id -> the env id whose shipped models it plays: a later version whose default mode runs the earlier one's
-#: episodes bit for bit where its rules do not end them sooner (tested), so that the earlier version's models are
-#: its own
-SHARED_WITH = {"paragym/Orthoglide2PRRKappa-v1": "paragym/Orthoglide2PRRKappa-v0",
-               "paragym/HybridSingularityFree-v2": "paragym/HybridSingularityFree-v1",
-               "paragym/MobileTripodOdometry-v2": "paragym/MobileTripodOdometry-v1"}
+#: env id -> the env id whose shipped models it plays (:attr:`paragym.registry.EnvRow.models_from`)
+SHARED_WITH = {r.id: r.models_from for r in ROWS if r.models_from}
 
 
 def shipped_models_dir() -> Path:

@@ -14,6 +14,7 @@ import gymnasium as gym
 import numpy as np
 
 import paragym
+from paragym import registry
 from paragym.baselines import RandomPolicy, ZeroPolicy
 from paragym.rollout import Episode, run_episode
 
@@ -50,18 +51,13 @@ def _tripod_plot(ep: Episode, path: Path) -> Path:
                                  f"{ep.infos[0]['scenario'].name}: final unit error {ep.infos[-1]['unit_error']:.3f} m")
 
 
-#: env id -> (the name of the best available policy: the paper's method, picture writer)
+#: task (:attr:`paragym.registry.EnvRow.task`) -> (the name of the best available policy: the paper's method,
+#: picture writer)
 DEMOS: dict[str, tuple[str, Callable[[Episode, Path], Path]]] = {
-    "paragym/CaPaManCollisionFree-v0": ("RRT + GA (paper 000)", _capaman_plot),
-    "paragym/CaPaManCollisionFree-v1": ("RRT + GA (paper 000)", _capaman_plot),
-    "paragym/HybridSingularityFree-v0": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
-    "paragym/HybridSingularityFree-v1": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
-    "paragym/HybridSingularityFree-v2": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
-    "paragym/Orthoglide2PRRKappa-v0": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
-    "paragym/Orthoglide2PRRKappa-v1": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
-    "paragym/MobileTripodOdometry-v0": ("redundant-encoder correction (paper 004)", _tripod_plot),
-    "paragym/MobileTripodOdometry-v1": ("redundant-encoder correction (paper 004)", _tripod_plot),
-    "paragym/MobileTripodOdometry-v2": ("redundant-encoder correction (paper 004)", _tripod_plot),
+    "capaman": ("RRT + GA (paper 000)", _capaman_plot),
+    "hybrid": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
+    "orthoglide": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
+    "tripod": ("redundant-encoder correction (paper 004)", _tripod_plot),
 }
 
 
@@ -121,6 +117,7 @@ def _plan_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) 
 
 
 def _validate_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    stem += f"_dt{args.dt:g}"
     """Plan (RRT + GA), execute in the dynamic simulation, validate, report."""
     import json
     from dataclasses import asdict
@@ -191,6 +188,7 @@ def _plan_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -
 
 
 def _validate_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    stem += f"_{args.duration:g}s"
     """Plan (paper 002), drive the nine actuators in the dynamic model, compare E, validate."""
     import json
     from dataclasses import asdict
@@ -327,47 +325,22 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
     return 0 if rep.passed else 1
 
 
-#: env id -> the scenario demo, plan and validate use when --scenario is not given: the paper's case
-DEFAULT_SCENARIO: dict[str, str] = {
-    "paragym/CaPaManCollisionFree-v0": "paper",
-    "paragym/HybridSingularityFree-v0": "paper",
-    "paragym/Orthoglide2PRRKappa-v0": "paper",
-    "paragym/MobileTripodOdometry-v0": "push",  # paper 004's scenario 2 (the paper has three; no single "paper")
-    "paragym/CaPaManCollisionFree-v1": "paper",
-    "paragym/MobileTripodOdometry-v1": "push",
-    "paragym/HybridSingularityFree-v1": "paper",
-    "paragym/Orthoglide2PRRKappa-v1": "paper",
-    "paragym/HybridSingularityFree-v2": "paper",
-    "paragym/MobileTripodOdometry-v2": "push",
-}
-
-
 def _scenario(env_id: str, args: argparse.Namespace) -> str:
-    """The --scenario argument, or the env's default (:data:`DEFAULT_SCENARIO`); kept in ``args``."""
+    """The --scenario argument, or the env's paper case (:attr:`paragym.registry.EnvRow.paper_scenario`);
+    kept in ``args``."""
     if args.scenario is None:
-        args.scenario = DEFAULT_SCENARIO[env_id]
+        args.scenario = registry.row(env_id).paper_scenario
     return args.scenario
 
 
-#: env id -> the reference planner's offline run
+#: task -> the reference planner's offline run
 PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
-    "paragym/CaPaManCollisionFree-v0": _plan_capaman,
-    "paragym/HybridSingularityFree-v0": _plan_hybrid,
-    "paragym/Orthoglide2PRRKappa-v0": _plan_orthoglide,
-    "paragym/MobileTripodOdometry-v0": _plan_tripod,
-    "paragym/CaPaManCollisionFree-v1": _plan_capaman,
-    "paragym/MobileTripodOdometry-v1": _plan_tripod,
-    "paragym/Orthoglide2PRRKappa-v1": _plan_orthoglide,
-    "paragym/MobileTripodOdometry-v2": _plan_tripod,
+    "capaman": _plan_capaman, "hybrid": _plan_hybrid, "orthoglide": _plan_orthoglide, "tripod": _plan_tripod,
 }
 
-#: env id -> plan, execute (dynamic fidelity) and validate
+#: task -> plan, execute (dynamic fidelity) and validate
 VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
-    "paragym/CaPaManCollisionFree-v0": _validate_capaman,
-    "paragym/HybridSingularityFree-v0": _validate_hybrid,
-    "paragym/CaPaManCollisionFree-v1": _validate_capaman,
-    "paragym/HybridSingularityFree-v1": _validate_hybrid,
-    "paragym/HybridSingularityFree-v2": _validate_hybrid,
+    "capaman": _validate_capaman, "hybrid": _validate_hybrid,
 }
 
 
@@ -379,28 +352,29 @@ def _cmd_envs(args: argparse.Namespace) -> int:
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    if env_id not in PLANS:
+    task = registry.task_of(env_id)
+    if task not in PLANS:
         raise ValueError(f"no offline planner for {env_id} yet")
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = env_id.split("/")[1] + f"_plan_{args.scenario}_seed{args.seed}"
     try:
-        return PLANS[env_id](env, args, out, stem)
+        return PLANS[task](env, args, out, stem)
     finally:
         env.close()
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    if args.policy is not None or env_id not in VALIDATIONS:  # a policy's executed episode
+    task = registry.task_of(env_id)
+    if args.policy is not None or task not in VALIDATIONS:  # a policy's executed episode
         return _validate_episode(env_id, args)
     env = gym.make(env_id, scenario=_scenario(env_id, args))
     out = Path(args.out)
-    stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}" + (
-        f"_dt{args.dt:g}" if "CaPaMan" in env_id else f"_{args.duration:g}s")
+    stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}"
     try:
-        return VALIDATIONS[env_id](env, args, out, stem)
+        return VALIDATIONS[task](env, args, out, stem)
     finally:
         env.close()
 
@@ -408,7 +382,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 def _cmd_demo(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
-    best_name, plot = DEMOS[env_id]
+    best_name, plot = DEMOS[registry.task_of(env_id)]
     policy = {"best": lambda: _reference(env, env_id, args.seed),
               "random": lambda: RandomPolicy(env.action_space, args.seed),
               "zero": lambda: ZeroPolicy(env.action_space)}[args.policy]()

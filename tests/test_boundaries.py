@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import paragym
+from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.mobile_tripod import DriveScenario
@@ -82,12 +83,7 @@ BAD = {
              DriveScenario("text", speed="fast"), DriveScenario("endless", speed=1e-9)],
     "paragym/CaPaManCollisionFree-v0": [None, 5, "moon"],
 }
-BAD["paragym/CaPaManCollisionFree-v1"] = BAD["paragym/CaPaManCollisionFree-v0"]
-BAD["paragym/MobileTripodOdometry-v1"] = BAD[TRIPOD]
-BAD["paragym/HybridSingularityFree-v1"] = BAD["paragym/HybridSingularityFree-v0"]
-BAD["paragym/Orthoglide2PRRKappa-v1"] = BAD[ORTHO]
-BAD["paragym/HybridSingularityFree-v2"] = BAD[HYBRID]
-BAD["paragym/MobileTripodOdometry-v2"] = BAD[TRIPOD]
+BAD.update({r.id: BAD[registry.first_version(r.id)] for r in registry.ROWS})  # later versions: the first's scenarios
 
 
 @pytest.mark.parametrize("env_id", IDS)

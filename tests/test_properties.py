@@ -16,24 +16,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import paragym
+from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.mobile_tripod import DriveScenario
 from paragym.tasks.orthoglide import Task, circle_task
 
 IDS = sorted(paragym.ENVIRONMENTS)
-SCENARIOS = {
-    "paragym/CaPaManCollisionFree-v0": ["random", "paper"],
-    "paragym/HybridSingularityFree-v0": ["random", "paper"],
-    "paragym/Orthoglide2PRRKappa-v0": ["random", "paper"],
-    "paragym/MobileTripodOdometry-v0": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
-    "paragym/CaPaManCollisionFree-v1": ["random", "paper"],
-    "paragym/MobileTripodOdometry-v1": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
-    "paragym/HybridSingularityFree-v1": ["random", "paper"],
-    "paragym/Orthoglide2PRRKappa-v1": ["random", "paper"],
-    "paragym/HybridSingularityFree-v2": ["random", "paper"],
-    "paragym/MobileTripodOdometry-v2": ["random", "push", "initial_heading", "random_slip", "rough_terrain"],
-}
+SCENARIOS = {r.id: ["random", *(n for n in r.scenarios if n != "random")] for r in registry.ROWS}
 FAST = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                        HealthCheck.function_scoped_fixture])
 _ENVS: dict[str, gym.Env] = {}

@@ -1,0 +1,132 @@
+"""The registry of paragym's env ids: one row per id, the one place that says what an id is.
+
+Everything keyed by env id elsewhere is derived from these rows: Gymnasium's registration
+(:mod:`paragym`), the paper's case that the CLI's commands and the leaderboard's dynamic episodes
+run, which earlier id a later version is measured like, and whose shipped models a later version
+plays. A row names its task (:attr:`EnvRow.task`); the outer layers look tasks up by that name,
+never by matching an id's text.
+
+This module is the bottom layer: it imports nothing of paragym, so that any layer may read it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["ROWS", "EnvRow", "check_env_id", "first_version", "row", "rows_of", "task_of"]
+
+
+@dataclass(frozen=True)
+class EnvRow:
+    """One env id.
+
+    Attributes:
+        id: the Gymnasium id, ``paragym/<Name>-v<N>``.
+        entry_point: the single env's class (``module:Class``).
+        vector_entry_point: the native vector env's class, or None.
+        max_episode_steps: the TimeLimit Gymnasium wraps the env in.
+        task: the task the id belongs to: its scenarios, metrics and policies are the task's.
+        paper_scenario: the ``scenario`` argument of the paper's case.
+        scenarios: every named ``scenario`` argument.
+        summary: one line of what the id is.
+        models_from: the id whose shipped models this one plays: a later version whose default mode
+            runs that id's episodes bit for bit where its rules do not end them sooner (tested); None:
+            its own (``models/<Name>-v<N>/``).
+    """
+
+    id: str
+    entry_point: str
+    vector_entry_point: str | None
+    max_episode_steps: int
+    task: str
+    paper_scenario: str
+    scenarios: tuple[str, ...]
+    summary: str
+    models_from: str | None = None
+
+    @property
+    def name(self) -> str:
+        """The id without ``paragym/`` (file and folder names use it)."""
+        return self.id.split("/", 1)[1]
+
+    @property
+    def version(self) -> int:
+        """The N of ``-vN``."""
+        return int(self.id.rsplit("-v", 1)[1])
+
+
+_CAPAMAN = ("paper", "random")
+_HYBRID = ("paper", "random")
+_ORTHOGLIDE = ("paper", "random")
+#: paper 004 has three drives and no single "paper" case: its scenario 2, the push, stands for it
+_TRIPOD = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
+
+ROWS: tuple[EnvRow, ...] = (
+    EnvRow("paragym/CaPaManCollisionFree-v0", "paragym.envs.capaman:CaPaManCollisionFreeEnv",
+           "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv", 400, "capaman", "paper", _CAPAMAN,
+           "CaPaMan 3-DOF: tour T.C.1->2->3->1 around obstacles, whole manipulator collision-free (paper 000)"),
+    EnvRow("paragym/CaPaManCollisionFree-v1", "paragym.envs.capaman:CaPaManCollisionFreeV1Env",
+           "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv", 400, "capaman", "paper", _CAPAMAN,
+           "CaPaMan v1: the v0 tour with goal-relative observations, a clearance look-ahead and a time penalty"),
+    EnvRow("paragym/HybridSingularityFree-v0", "paragym.envs.hybrid:HybridSingularityFreeEnv",
+           "paragym.envs.hybrid:HybridSingularityFreeVectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations "
+           "(paper 002)"),
+    EnvRow("paragym/HybridSingularityFree-v1", "paragym.envs.hybrid:HybridSingularityFreeV1Env",
+           "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "hybrid v1: the v0 path with the end pose P1, and P1 solved at the current split, in the observation"),
+    EnvRow("paragym/HybridSingularityFree-v2", "paragym.envs.hybrid:HybridSingularityFreeV2Env",
+           "paragym.envs.hybrid:HybridSingularityFreeV2VectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "hybrid v2: v1's task; in dynamic fidelity E's orientation is tracked too and a broken mechanism fails",
+           models_from="paragym/HybridSingularityFree-v1"),
+    EnvRow("paragym/Orthoglide2PRRKappa-v0", "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv",
+           "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv", 1000, "orthoglide", "paper", _ORTHOGLIDE,
+           "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)"),
+    EnvRow("paragym/Orthoglide2PRRKappa-v1", "paragym.envs.orthoglide:Orthoglide2PRRKappaV1Env",
+           "paragym.envs.orthoglide:Orthoglide2PRRKappaV1VectorEnv", 1000, "orthoglide", "paper", _ORTHOGLIDE,
+           "2PRR v1: the v0 task, with success that requires tracking in every action mode and fidelity",
+           models_from="paragym/Orthoglide2PRRKappa-v0"),
+    EnvRow("paragym/MobileTripodOdometry-v0", "paragym.envs.mobile_tripod:MobileTripodOdometryEnv",
+           "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv", 700, "tripod", "push", _TRIPOD,
+           "mobile tripod: estimate the three drive units under slip from odometry and leg encoders (paper 004)"),
+    EnvRow("paragym/MobileTripodOdometry-v1", "paragym.envs.mobile_tripod:MobileTripodOdometryV1Env",
+           "paragym.envs.mobile_tripod:MobileTripodOdometryV1VectorEnv", 700, "tripod", "push", _TRIPOD,
+           "mobile tripod v1: per unit, how far to trust the encoders' correction of the odometry (paper 004)"),
+    EnvRow("paragym/MobileTripodOdometry-v2", "paragym.envs.mobile_tripod:MobileTripodOdometryV2Env",
+           "paragym.envs.mobile_tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", _TRIPOD,
+           "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
+           "failure", models_from="paragym/MobileTripodOdometry-v1"),
+)
+
+_BY_ID = {r.id: r for r in ROWS}
+
+
+def check_env_id(env_id: str) -> str:
+    """The full id of a registered paragym env (the ``paragym/`` prefix may be
+    left out), or a ValueError listing the registered ids."""
+    if not isinstance(env_id, str):
+        raise ValueError(f"env id must be a string; got {env_id!r}")
+    full = env_id if env_id.startswith("paragym/") else f"paragym/{env_id}"
+    if full not in _BY_ID:
+        raise ValueError(f"unknown env id {env_id!r}; registered: {', '.join(_BY_ID)}")
+    return full
+
+
+def row(env_id: str) -> EnvRow:
+    """The row of ``env_id`` (checked: :func:`check_env_id`)."""
+    return _BY_ID[check_env_id(env_id)]
+
+
+def task_of(env_id: str) -> str:
+    """The task ``env_id`` belongs to."""
+    return row(env_id).task
+
+
+def rows_of(task: str) -> tuple[EnvRow, ...]:
+    """The rows of ``task``, oldest version first."""
+    return tuple(sorted((r for r in ROWS if r.task == task), key=lambda r: r.version))
+
+
+def first_version(env_id: str) -> str:
+    """The oldest id of ``env_id``'s task: later versions keep its scenarios and metrics."""
+    return rows_of(task_of(env_id))[0].id

@@ -1,0 +1,43 @@
+"""The registry is the one place that says what an env id is: every row is whole and consistent."""
+
+import importlib
+
+import gymnasium as gym
+import pytest
+
+import paragym
+from paragym import registry
+
+
+def _load(entry: str):
+    module, name = entry.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+@pytest.mark.parametrize("row", registry.ROWS, ids=lambda r: r.name)
+def test_every_row_is_whole_and_registered_as_it_says(row):
+    spec = gym.spec(row.id)
+    assert (spec.entry_point, spec.max_episode_steps, spec.vector_entry_point) == \
+        (row.entry_point, row.max_episode_steps, row.vector_entry_point)
+    single = _load(row.entry_point)
+    assert row.vector_entry_point is None or _load(row.vector_entry_point).single_class is single
+    assert row.paper_scenario in row.scenarios and "random" in row.scenarios
+    assert row.summary and len(row.summary) < 120
+
+
+def test_versions_of_a_task_are_contiguous_and_share_models_only_backwards():
+    for task in {r.task for r in registry.ROWS}:
+        versions = [r.version for r in registry.rows_of(task)]
+        assert versions == list(range(len(versions))), task
+    for r in registry.ROWS:
+        if r.models_from is not None:
+            source = registry.row(r.models_from)
+            assert source.task == r.task and source.version < r.version, r.id
+
+
+def test_the_tables_derived_from_the_registry_and_its_checks():
+    assert list(paragym.ENVIRONMENTS) == [r.id for r in registry.ROWS]
+    assert registry.check_env_id("HybridSingularityFree-v2") == "paragym/HybridSingularityFree-v2"
+    assert registry.first_version("paragym/MobileTripodOdometry-v2") == "paragym/MobileTripodOdometry-v0"
+    with pytest.raises(ValueError, match="unknown env id"):
+        registry.row("paragym/Nope-v0")
