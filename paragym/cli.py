@@ -344,6 +344,15 @@ VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] 
 }
 
 
+def _cmd_policies(args: argparse.Namespace) -> int:
+    from paragym.baselines.policies import policies_for
+
+    env_id = paragym.check_env_id(args.env_id)
+    for name, spec in policies_for(env_id, args.models).items():
+        print(f"{name:24s} {spec.kind:10s} {spec.description}")
+    return 0
+
+
 def _cmd_envs(args: argparse.Namespace) -> int:
     for env_id, (_, steps, doc) in paragym.ENVIRONMENTS.items():
         print(f"{env_id:40s} {doc} [max {steps} steps]")
@@ -521,6 +530,11 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("envs", help="list the registered environments")
     p.set_defaults(func=_cmd_envs)
+    p = sub.add_parser("policies", help="list an environment's policies: references, floors, shipped models "
+                                        "(and yours, with --models), by the names the other commands take")
+    p.add_argument("env_id", help="e.g. HybridSingularityFree-v2")
+    p.add_argument("--models", default=None, help="folder of your own models (listed as user-<algo>-seed<N>)")
+    p.set_defaults(func=_cmd_policies)
     p = sub.add_parser("demo", help="run one episode with the best available policy and save a picture")
     p.add_argument("env_id", help="e.g. paragym/CaPaManCollisionFree-v0 (the 'paragym/' may be omitted)")
     p.add_argument("--scenario", default=None, help=SCENARIO_HELP)

@@ -89,3 +89,16 @@ def test_demo_and_plan_work_on_every_env_with_their_defaults_and_name_the_policy
     assert names == ["MobileTripodOdometry-v0_push_seed0_best.png", "MobileTripodOdometry-v0_push_seed0_zero.png"]
     code, out, _ = _run(capsys, "plan", "MobileTripodOdometry-v0", "--out", str(tmp_path / "plan"))
     assert code == 0 and "correction (paper)" in out
+
+
+def test_policies_lists_every_registered_ids_policies_by_the_names_the_other_commands_take(capsys):
+    """``paragym validate --help`` and DAgger's messages point to ``paragym policies ENV``: it exists, for every
+    registered id, and lists what ``--policy`` accepts."""
+    from paragym import registry
+    from paragym.baselines.policies import policies_for
+
+    for row in registry.ROWS:
+        code, out, _ = _run(capsys, "policies", row.name)
+        listed = [line.split()[0] for line in out.splitlines() if line.strip()]
+        assert code == 0 and listed == list(policies_for(row.id)), row.id
+        assert any(line.split()[1] == "reference" for line in out.splitlines() if line.strip()), row.id
