@@ -14,7 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.sim.client import physics_steps
+from paragym.sim.client import divides, physics_steps
 
 __all__ = ["ParagymEnv", "check_action", "check_control_period", "check_options", "check_seed"]
 
@@ -38,11 +38,10 @@ def check_control_period(control_period: float, time_step: float, refuse: bool, 
     """Simulated time must run at the control period's rate: a ``control_period`` (s) that is not a whole number
     of physics steps of ``time_step`` (s) is refused with a ValueError naming it (``refuse``), or, in a released
     id that ran it rounded, warned about (naming the ``later`` id that refuses it)."""
-    steps = physics_steps(control_period, time_step)
-    if abs(steps * time_step - control_period) <= 1e-9 * control_period:
+    if divides(control_period, time_step):
         return
     said = (f"control_period {control_period!r} s is not a whole number of physics steps of {time_step!r} s: each "
-            f"step would be simulated over {steps * time_step:g} s")
+            f"step would be simulated over {physics_steps(control_period, time_step) * time_step:g} s")
     if refuse:
         raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
     why = f"; {later} refuses it" if later else ""

@@ -16,6 +16,7 @@ from gymnasium import spaces
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import orthoglide as og
+from paragym.sim.client import divides, physics_steps
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics, OrthoglideDynamicScene
 from paragym.tasks import orthoglide_step as task_step
 from paragym.tasks.orthoglide import draw_tasks, orthoglide_random_task, orthoglide_random_tasks, resolve_task
@@ -55,9 +56,9 @@ class _OrthoglideTask:
         step = world.scene.dynamics.time_step
         for task in tasks:
             dt = np.diff(task.t)
-            simulated = np.maximum(1, np.round(dt / step)) * step
-            if np.abs(simulated - dt).max() > 1e-9 * dt.max():
-                warnings.warn(f"the path's {task.t[-1]:g} s are simulated over {simulated.sum():g} s: the dynamic "
+            if not all(divides(float(d), step) for d in np.unique(dt)):
+                simulated = sum(physics_steps(float(d), step) * step for d in dt)
+                warnings.warn(f"the path's {task.t[-1]:g} s are simulated over {simulated:g} s: the dynamic "
                               f"fidelity of {self.spec.id if self.spec else 'v0'} rounds each path step to whole "
                               f"physics steps of {step:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly",
                               UserWarning, stacklevel=3)

@@ -29,7 +29,7 @@ import pybullet as pb
 from paragym.mechanisms.capaman import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "Motors", "PyBulletSim", "exact_time_step", "motors_of", "physics_steps"]
+__all__ = ["LinkSpec", "Motors", "PyBulletSim", "divides", "exact_time_step", "motors_of", "physics_steps"]
 
 #: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
 Motors = Sequence[tuple[str, Sequence[int]]]
@@ -57,12 +57,16 @@ def physics_steps(duration: float, time_step: float) -> int:
     return max(1, int(round(duration / time_step)))
 
 
+def divides(duration: float, time_step: float) -> bool:
+    """Whether whole physics steps of ``time_step`` s make up ``duration`` s (to 1e-9 of it)."""
+    return abs(physics_steps(duration, time_step) * time_step - duration) <= 1e-9 * duration
+
+
 def exact_time_step(duration: float, time_step: float) -> float:
     """The physics step (s) that makes up ``duration`` s exactly, at most ``time_step``: ``time_step`` itself
-    where it divides the duration (to 1e-9 of it), else the duration cut into the fewest equal steps no longer
-    than ``time_step``."""
-    n = physics_steps(duration, time_step)
-    if abs(n * time_step - duration) <= 1e-9 * duration:
+    where it :func:`divides` the duration, else the duration cut into the fewest equal steps no longer than
+    ``time_step``."""
+    if divides(duration, time_step):
         return time_step
     return duration / math.ceil(duration / time_step)
 
