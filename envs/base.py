@@ -16,7 +16,7 @@ import numpy as np
 
 from paragym.sim.client import divides, physics_steps
 
-__all__ = ["ParagymEnv", "check_action", "check_control_period", "check_options", "check_seed"]
+__all__ = ["ParagymEnv", "check_action", "check_control_period", "check_options", "check_seed", "pose6"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -46,6 +46,13 @@ def check_control_period(control_period: float, time_step: float, refuse: bool, 
         raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
     why = f"; {later} refuses it" if later else ""
     warnings.warn(f"{said} (this id's released behaviour{why})", UserWarning, stacklevel=3)
+
+
+def pose6(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """A pose as (6,): the position (m) and the roll, pitch, yaw (rad) of the rotation matrix."""
+    from paragym.mechanisms.hybrid import matrix_euler
+
+    return np.concatenate([position, matrix_euler(rotation[None])[0]])
 
 
 def check_options(options: Any) -> dict[str, Any]:
@@ -123,7 +130,9 @@ class ParagymEnv(gym.Env):
 
     Hooks: ``_reset_task(options) -> info``, ``_apply_action(action)``,
     ``_observe() -> obs``, ``_reward() -> float``, ``_terminated() -> bool``,
-    ``_info() -> dict``, ``_render_rgb() -> array``, ``_close()``. Every
+    ``_info() -> dict``, ``_render_rgb() -> array``, ``_close()``; in dynamic
+    fidelity ``_body()``, ``commanded_pose()`` and ``step_duration()``, what
+    KF validation reads (:mod:`paragym.validation.episode`). Every
     paragym env is the N = 1 case of its task's transition
     (``paragym.tasks.*_step``): the defaults of the first four read
     ``self.state`` and call the task's ``_start`` and ``_transition``, which
@@ -222,6 +231,52 @@ class ParagymEnv(gym.Env):
         """Update the GUI in ``render_mode="human"``: pose the scene by drawing
         it (an env whose scene PyBullet keeps up to date needs nothing)."""
         self._render_rgb()
+
+    # --- what KF validation reads in dynamic fidelity (paragym.validation.episode) ---------------
+    #: the accelerometer array on the validated body: the arguments of
+    #: ``paragym.validation.sensors.AccelerometerArray.paper_layout``
+    sensor_layout: dict[str, float] = {}
+
+    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """The validated body: (sim client, robot, link, the judged point in the link's frame (m), the
+        dynamics' physics step (s))."""
+        raise NotImplementedError
+
+    def _dynamic_body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        if getattr(self, "fidelity", None) != "dynamic":
+            raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
+                             "fidelity='dynamic'")
+        return self._body()
+
+    @property
+    def body_point(self) -> np.ndarray:
+        """The judged point of the validated body, in its link's frame (m, (3,))."""
+        return self._dynamic_body()[3]
+
+    @property
+    def physics_time_step(self) -> float:
+        """Seconds of one physics step of the dynamic fidelity (its dynamics' ``time_step``)."""
+        return float(self._dynamic_body()[4])
+
+    def body_motion(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The validated body's link now, as simulated: position (m), quaternion (x, y, z, w), velocity
+        (m/s) and angular velocity (rad/s), world frame."""
+        sim, robot, link, _, _ = self._dynamic_body()
+        return sim.link_motion(robot, link, velocity=True)
+
+    def on_physics_step(self, callback: Any) -> Any:
+        """Call ``callback()`` after every physics step from now on; returns the function that stops it."""
+        hooks = self._dynamic_body()[0].after_step
+        hooks.append(callback)
+        return lambda: callback in hooks and hooks.remove(callback)
+
+    def commanded_pose(self) -> np.ndarray:
+        """The pose of the validated body that the last action commanded: x, y, z (m), roll, pitch, yaw (rad)."""
+        raise NotImplementedError
+
+    def step_duration(self) -> float:
+        """Simulated seconds of the step just taken (whole physics steps)."""
+        raise NotImplementedError
 
     # --- a PyBullet scene built on the first render, for envs whose step needs none ----
     _render_scene: Any = None

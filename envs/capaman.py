@@ -13,11 +13,12 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv, check_control_period
+from paragym.envs.base import ParagymEnv, check_control_period, pose6
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.client import physics_steps
 from paragym.tasks import capaman_step as task_step
 from paragym.tasks.capaman import TOUR, CaPaManScenario, draw_scenario, resolve_capaman
 from paragym.tasks.capaman_step import (
@@ -261,6 +262,21 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
 
     def _ended(self) -> bool:
         return False  # stepping on after the end is the caller's business, as in the released env
+
+    # KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
+    sensor_layout: dict[str, float] = {}
+
+    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.dynamics.time_step)
+
+    def commanded_pose(self) -> np.ndarray:
+        """The plate's pose by the closed-form direct kinematics of the motors' targets."""
+        pose = capaman.forward(self.state.command[:1], self.geometry, validate=False)
+        return pose6(pose.position[0], pose.rotation[0])
+
+    def step_duration(self) -> float:
+        h = self._dynamic_body()[4]
+        return h * physics_steps(self.control_period, h)
 
     def _show(self) -> None:
         """PyBullet keeps the GUI's scene posed (the grid check does not pose it: render does)."""

@@ -13,9 +13,10 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv, check_control_period
+from paragym.envs.base import ParagymEnv, check_control_period, pose6
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import hybrid
+from paragym.sim.client import physics_steps
 from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene
 from paragym.tasks import hybrid_step as task_step
 from paragym.tasks.base import BROKEN_GAP
@@ -78,10 +79,17 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
     ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
-    ``Box(-10, 10, (28,), float32)``: u; the nominal pose at this step and at
-    the next (x, y, z / 0.1 m, angles / 0.5 rad); Delta; the nine strokes
-    mapped so that L_min -> -1 and L_max -> +1; the two singularity measures
-    (1 at home, singular below 0.2); the current offset / j_bar.
+    ``Box(-10, 10, (28,), float32)``:
+
+    ==========  ==========================================================
+    0           u, the path parameter (0 to 1)
+    1-6         the nominal pose of E at this step (x, y, z / 0.1 m, roll, pitch, yaw / 0.5 rad)
+    7-12        the nominal pose at the next step, scaled the same
+    13          Delta, the split between the stages (0 to 1)
+    14-22       the nine strokes, mapped so that L_min -> -1 and L_max -> +1
+    23-24       the singularity measures of the hexapod and the tripod (1 at home, singular below 0.2)
+    25-27       the current offset of E from the nominal path / j_bar
+    ==========  ==========================================================
 
     ## Rewards
     Per step: ``-w_offset |offset| / j_bar`` (deviation from the nominal
@@ -218,6 +226,22 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
         if not s.within[0]:
             return "leg limit"
         return None if s.free[0] else "singular"
+
+    # KF validation (dynamic fidelity): the paper's array scaled to platform E
+    sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
+
+    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        scene = self.world.scene
+        return (scene.sim, *scene.e_platform, np.zeros(3), scene.dynamics.time_step)
+
+    def commanded_pose(self) -> np.ndarray:
+        """E's pose of the step: the nominal path plus the action's offset."""
+        t_e = hybrid.pose_matrix(hybrid.home_pose(self.geometry) + self.world.command)[0]
+        return pose6(t_e[:3, 3], t_e[:3, :3])
+
+    def step_duration(self) -> float:
+        h = self._dynamic_body()[4]
+        return h * physics_steps(self.world.control_period, h)
 
     def _show(self) -> None:
         if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs

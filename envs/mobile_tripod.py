@@ -14,9 +14,10 @@ from typing import Any
 import numpy as np
 from gymnasium import spaces
 
-from paragym.envs.base import ParagymEnv, check_control_period
+from paragym.envs.base import ParagymEnv, check_control_period, pose6
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import mobile_tripod as mt
+from paragym.sim.client import physics_steps
 from paragym.sim.tripod_dynamic import TripodDynamics
 from paragym.tasks import mobile_tripod_step as task_step
 from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenario, resolve_drive
@@ -67,9 +68,14 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
-    ``Box(-100, 100, (21,))``: odometric unit positions (9, / 10 m), measured
-    eta (3, rad), the command (speed m/s, cos and sin of the heading), the
-    previous estimate of the units' horizontal positions (6, / 10 m).
+    ``Box(-100, 100, (21,), float32)``:
+
+    ==========  ==========================================================
+    0-8         the three units' odometric positions x, y, z (/ 10 m)
+    9-11        the measured leg angles eta (rad, with encoder noise)
+    12-14       the command: speed (m/s), cos and sin of the heading
+    15-20       the previous estimate of the units' x, y (/ 10 m)
+    ==========  ==========================================================
 
     ## Rewards
     ``-10 (mean unit error + plate centre error)`` per step (m): the estimate's
@@ -187,6 +193,30 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
             info["encoder_distances"] = s.smoothed[0].copy()
         return info
 
+    # KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
+    sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
+    _commanded_eta: np.ndarray | None = None
+
+    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        scene = self.world.scene
+        return scene.sim, scene.ROBOT, scene.plate_link, np.zeros(3), self.world.dynamics.time_step
+
+    def commanded_pose(self) -> np.ndarray:
+        """The plate the policy claims: fitted to its estimated units, on the legs' angles they imply (paper
+        004, eqs 4-5; least squares where no legs reach). The robot drives the commanded path whatever the
+        policy does; the policy is the estimator."""
+        s = self.state
+        if s.drive.k[0] == 0 or self._commanded_eta is None:  # a new episode: the legs as they start
+            self._commanded_eta = s.drive.eta[0].copy()
+        units = s.estimate[0] + [0.0, 0.0, self.world.dynamics.unit_height]
+        self._commanded_eta = mt.eta(units[None], self._commanded_eta[None], self.geometry)[0][0]
+        rotation, centre = mt.plate_fit(units, self._commanded_eta, self.geometry)
+        return pose6(centre[0], rotation[0])
+
+    def step_duration(self) -> float:
+        h = self._dynamic_body()[4]
+        return h * physics_steps(self.state.drive.dt, h)
+
     def _show(self) -> None:
         if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
             self._render_rgb()
@@ -235,11 +265,16 @@ class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
     when, and how far to trust the noisy encoders.
 
     ## Observation Space
-    ``Box(-100, 100, (16,))``, in the robot's frame (x along the commanded
-    heading): the estimate's inter-unit distances minus the smoothed encoder
-    distances (3, / 5 cm), the same for the odometry (3, / 5 cm), each unit's
-    estimate minus its odometry (6, / 10 cm), the drive's progress t /
-    duration (1), the measured eta (3, rad).
+    ``Box(-100, 100, (16,), float32)``, in the robot's frame (x along the
+    commanded heading):
+
+    ==========  ==========================================================
+    0-2         the estimate's inter-unit distances minus the smoothed encoder distances (/ 5 cm)
+    3-5         the odometry's inter-unit distances minus the same (/ 5 cm)
+    6-11        each unit's estimate minus its odometry, x and y (/ 10 cm)
+    12          the drive's progress, step / steps
+    13-15       the measured leg angles eta (rad)
+    ==========  ==========================================================
 
     ## Rewards
     v0's reward minus what odometry alone earns at the same sample:

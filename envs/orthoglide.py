@@ -86,8 +86,15 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
     ``ValueError``, strings and complex numbers ``TypeError``.
 
     ## Observation Space
-    ``Box(-10, 10, (11,))``: rho normalised to [-1, 1] over its limits; the
-    path point now and next (table frame, m); log kappa (clipped at 10); n.
+    ``Box(-10, 10, (11,), float32)``, each component clipped to +-10:
+
+    ==========  ==========================================================
+    0-2         rho (the table and the two sliders), normalised to [-1, 1] over their limits
+    3-4         the path point of this step (table frame, m)
+    5-6         the path point of the next step (table frame, m)
+    7           log kappa (10 from kappa = 2.2e4 on, and where J is singular)
+    8-10        n, the null vector of J (zeros where J is singular)
+    ==========  ==========================================================
 
     ## Rewards
     ``-log(kappa)`` per step (0 at an isotropic pose); in joint-velocity mode
@@ -187,6 +194,26 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
         return {"kappa": float(s.kappa[0]), "tracking_error": float(s.err[0]), "rho": s.rho[0].copy(),
                 "step": int(s.k[0]), "is_success": done and not s.failed[0],
                 "failure": task_step.FAILURES[int(s.reason[0])]}
+
+    # KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm below
+    sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
+
+    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        scene = self.world.scene
+        return (scene.sim, scene.ROBOT, scene.links[0], np.array([self.geometry.link, 0.0, 0.0]),
+                scene.dynamics.time_step)
+
+    def commanded_pose(self) -> np.ndarray:
+        """C and link AC's direction from the commanded joints (paper 003, eqs 1-6), at the link's height."""
+        g, rho = self.geometry, self.world.command
+        c = og.fixed_point(rho[:1], og.forward(rho[None], g), g)[0]
+        yaw = np.arctan2(c[1], c[0] - (g.slider2_origin + rho[1]))
+        sim, robot, link, _, _ = self._dynamic_body()
+        return np.array([c[0], c[1], sim.link_frame(robot, link)[0][2], 0.0, 0.0, yaw])
+
+    def step_duration(self) -> float:
+        h, k = self._dynamic_body()[4], int(self.state.k[0])
+        return h * physics_steps(float(self.state.dt[0, k - 1]), h) if k > 0 else 0.0
 
     def _show(self) -> None:
         if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
