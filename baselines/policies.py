@@ -24,7 +24,6 @@ SHA-256 for a learned policy, the planner's parameters for a planner.
 
 from __future__ import annotations
 
-import dataclasses
 import hashlib
 import inspect
 import json
@@ -38,10 +37,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-import paragym
-from paragym.baselines.simple import RandomPolicy, ZeroPolicy
+from paragym.baselines.tasks import bench_of, init_defaults, random_factory
 from paragym.baselines.training import check_env_id, env_name, load_model
-from paragym.models import SHARED_WITH, shipped_models_dir, shipped_models_folder
+from paragym.models import shared_with, shipped_models_dir, shipped_models_folder
 
 __all__ = ["KINDS", "LearnedPolicy", "PolicySpec", "get_policy", "init_defaults", "policies_for", "register_policy",
            "shipped_models_dir"]
@@ -72,18 +70,17 @@ class PolicySpec:
                           sort_keys=True, default=repr)
 
 
-def init_defaults(cls: type, **overrides: Any) -> dict[str, Any]:
-    """The keyword defaults of ``cls.__init__`` (dataclasses as dicts), with
-    ``overrides``: a planner's parameters as its constructor sets them."""
-    out: dict[str, Any] = {}
-    for name, p in inspect.signature(cls.__init__).parameters.items():
-        if name != "self" and p.default is not inspect.Parameter.empty:
-            out[name] = p.default
-    out.update(overrides)
-    return {k: dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v for k, v in out.items()}
+#: env id -> the policies registered in this process (:func:`register_policy`), beside the built-in ones
+_REGISTRY: dict[str, dict[str, PolicySpec]] = {}
 
 
-_REGISTRY: dict[str, dict[str, PolicySpec]] = {env_id: {} for env_id in paragym.ENVIRONMENTS}
+def _built_in(env_id: str) -> dict[str, PolicySpec]:
+    """The task's built-in policies that play ``env_id`` (its bench, :mod:`paragym.baselines.tasks`), and the
+    uniformly random floor every task has."""
+    found = {p.name: PolicySpec(env_id, p.name, p.factory, p.kind, p.description, p.params)
+             for p in bench_of(env_id).policies if p.plays(env_id)}
+    found["random"] = PolicySpec(env_id, "random", random_factory, "floor", "uniform random actions")
+    return found
 
 
 def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], Any], kind: str = "user",
@@ -100,10 +97,10 @@ def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], An
         raise ValueError(f"factory for {name!r} must be callable as factory(env, seed)")
     if kind not in KINDS:
         raise ValueError(f"kind must be one of {KINDS}; got {kind!r}")
-    if name in _REGISTRY[env_id] and not replace:
+    if (name in _REGISTRY.get(env_id, {}) or name in _built_in(env_id)) and not replace:
         raise ValueError(f"{env_id} already has a policy named {name!r} (replace=True overrides it)")
     spec = PolicySpec(env_id, name, factory, kind, description, params)
-    _REGISTRY[env_id][name] = spec
+    _REGISTRY.setdefault(env_id, {})[name] = spec
     return spec
 
 
@@ -218,8 +215,8 @@ class _LearnedFactory:
 
 def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[str, PolicySpec]:
     folder = shipped_models_folder(env_id) if origin == "shipped" else models_dir / env_name(env_id)
-    if origin == "shipped" and env_id in SHARED_WITH:
-        origin += f" (trained on {SHARED_WITH[env_id]}, whose episodes this id's default mode runs bit for bit)"
+    if origin == "shipped" and shared_with(env_id):
+        origin += f" (trained on {shared_with(env_id)}, whose episodes this id's default mode runs bit for bit)"
     found = {}
     for path in sorted(folder.glob("*_seed*.zip")):
         m = re.fullmatch(r"(ppo|sac|td3|tqc|bc|dagger)_seed(\d+)", path.stem)
@@ -264,7 +261,7 @@ def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str,
                              f"to runs/models by default)")
         if folder.resolve() != shipped_models_dir().resolve():
             learned.update(_learned(env_id, folder, "user-", "trained by you"))
-    specs = {**_REGISTRY[env_id], **learned}
+    specs = {**_built_in(env_id), **_REGISTRY.get(env_id, {}), **learned}
     return dict(sorted(specs.items(), key=lambda kv: (KINDS.index(kv[1].kind), kv[0])))
 
 
@@ -274,224 +271,3 @@ def get_policy(env_id: str, name: str, models_dir: str | Path | None = None) -> 
     if name not in specs:
         raise ValueError(f"unknown policy {name!r} for {env_id}; known: {', '.join(specs)}")
     return specs[name]
-
-
-# --- built-in policies -------------------------------------------------------------------------------------------
-
-def _random(env: gym.Env, seed: int) -> RandomPolicy:
-    return RandomPolicy(env.action_space, seed)
-
-
-def _zero(env: gym.Env, seed: int) -> ZeroPolicy:
-    return ZeroPolicy(env.action_space)
-
-
-def _rrt_ga(env: gym.Env, seed: int) -> Any:
-    from paragym.planners import RrtGaPlanner, RrtGaPolicy
-
-    return RrtGaPolicy(max_joint_step=env.unwrapped.max_joint_step, planner=RrtGaPlanner(seed=seed))
-
-
-def _grid_path(env: gym.Env, seed: int) -> Any:
-    from paragym.planners import GridPathPolicy
-
-    return GridPathPolicy(max_joint_step=env.unwrapped.max_joint_step)
-
-
-def _grid_field(env: gym.Env, seed: int) -> Any:
-    from paragym.planners import GridFieldPolicy
-
-    return GridFieldPolicy(max_joint_step=env.unwrapped.max_joint_step)
-
-
-def _grid_field_params() -> dict[str, Any]:
-    from paragym.planners import GridFieldPolicy
-    from paragym.planners.grid_path import GridPathPlanner
-
-    return {"policy": init_defaults(GridFieldPolicy, planner=None), "planner": init_defaults(GridPathPlanner)}
-
-
-def _polynomial_detour(env: gym.Env, seed: int) -> Any:
-    from paragym.planners.polynomial_detour import PolynomialDetourPolicy
-
-    return PolynomialDetourPolicy()
-
-
-def _polynomial_detour_margin(env: gym.Env, seed: int) -> Any:
-    from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
-
-    u = env.unwrapped
-    return PolynomialDetourPolicy(PolynomialDetourPlanner(u.geometry, j_bar=u.j_bar, stroke_margin=STROKE_MARGIN))
-
-
-def _polynomial_detour_margin_params() -> dict[str, Any]:
-    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-
-    return {"planner": {**init_defaults(PolynomialDetourPlanner, geometry=None), "stroke_margin": STROKE_MARGIN,
-                        "j_bar": "the env's"}}
-
-
-#: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a
-#: simulated actuator chasing a stroke planned at its limit overshoots it by up to 0.5 mm
-STROKE_MARGIN = 0.001
-
-
-def _gradient(env: gym.Env, seed: int) -> Any:
-    from paragym.planners.nullspace_gradient import GradientPolicy
-
-    return GradientPolicy(geometry=env.unwrapped.geometry)
-
-
-class FixedTablePolicy:
-    """Paper 003's case (a) in the env's null-space action: the null-space rate
-    that cancels the least-norm motion of the table (rho1), so the table
-    stays where the env put it. The paper's case (a) picks, offline, the
-    table position with the lowest mean kappa over the whole task; the env
-    starts at the optimum for the first point instead, and a policy cannot
-    move the start, so this is case (a) from the env's start."""
-
-    def __init__(self, env: gym.Env) -> None:
-        self.geometry = env.unwrapped.geometry
-        self.max_null_rate = env.unwrapped.max_null_rate
-
-    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
-        self.task = info["scenario"]
-
-    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        from paragym.mechanisms import orthoglide as og
-
-        k = min(info["step"], len(self.task.t) - 1)
-        r1 = float(info["rho"][0])
-        px, py = self.task.points[k]
-        j, _, n = og.jacobian_at(r1, px, py, self.geometry)
-        rate = og.least_norm(j, self.task.velocities[k])[0]
-        if abs(n[0, 0]) < 1e-9:
-            return np.zeros(1, np.float32)
-        return np.array([np.clip(-rate[0] / (self.max_null_rate * n[0, 0]), -1.0, 1.0)], np.float32)
-
-
-def _fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
-    if env.unwrapped.action_mode != "null_space":
-        raise ValueError("the fixed-table policy acts in the env's null_space action mode")
-    return FixedTablePolicy(env)
-
-
-@dataclass(frozen=True)
-class _Estimator:
-    """An estimator of :mod:`paragym.planners.encoder_correction` as a policy factory."""
-
-    kind: str
-
-    def __call__(self, env: gym.Env, seed: int) -> Any:
-        from paragym.planners import encoder_correction as ec
-
-        return ec.EstimatorPolicy(getattr(ec, self.kind), max_correction=env.unwrapped.max_correction,
-                                  geometry=env.unwrapped.geometry)
-
-
-_encoder_correction = _Estimator("EncoderCorrection")
-
-
-def _encoder_trust(env: gym.Env, seed: int) -> Any:
-    from paragym.planners.encoder_correction import EncoderTrustPolicy
-
-    return EncoderTrustPolicy()
-
-
-def _encoder_trust_params() -> dict[str, Any]:
-    from paragym.planners.encoder_correction import EncoderTrustPolicy
-
-    return {"policy": init_defaults(EncoderTrustPolicy)}
-_ukf_fusion = _Estimator("FusionEstimator")
-
-def _rrt_ga_params() -> dict[str, Any]:
-    from paragym.planners import RrtGaPlanner, RrtGaPolicy
-    from paragym.planners.rrt_ga import RrtGaSettings
-
-    return {"policy": {**init_defaults(RrtGaPolicy, planner=None), "arrival": RrtGaPolicy.ARRIVAL},
-            "planner": init_defaults(RrtGaPlanner, settings=RrtGaSettings(), seed="the episode's seed")}
-
-
-def _grid_path_params() -> dict[str, Any]:
-    from paragym.planners import GridPathPolicy
-    from paragym.planners.grid_path import GridPathPlanner
-
-    return {"policy": {**init_defaults(GridPathPolicy, planner=None), "arrival": GridPathPolicy.ARRIVAL},
-            "planner": init_defaults(GridPathPlanner)}
-
-
-def _polynomial_detour_params() -> dict[str, Any]:
-    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-
-    return {"planner": init_defaults(PolynomialDetourPlanner)}
-
-
-def _gradient_params() -> dict[str, Any]:
-    from paragym.planners.nullspace_gradient import GradientPolicy
-
-    return {"policy": init_defaults(GradientPolicy)}
-
-
-def _estimator_params(kind: str) -> Callable[[], dict[str, Any]]:
-    def params() -> dict[str, Any]:
-        from paragym.planners import encoder_correction as ec
-
-        return {"estimator": kind, "estimator_params": init_defaults(getattr(ec, kind)),
-                "policy": init_defaults(ec.EstimatorPolicy, estimator=kind)}
-    return params
-
-
-_BUILT_IN: tuple[tuple[str, str, Callable[[gym.Env, int], Any], str, str, Any], ...] = (
-    ("paragym/CaPaManCollisionFree-v0", "rrt-ga", _rrt_ga, "reference",
-     "RRT + GA on the joint matrix Theta (paper 000, eqs 1-5), followed at 2 deg per step", _rrt_ga_params),
-    ("paragym/CaPaManCollisionFree-v0", "grid-dijkstra", _grid_path, "other",
-     "shortest path on the free cells of Theta (Dijkstra); no GA, no clearance term", _grid_path_params),
-    ("paragym/CaPaManCollisionFree-v0", "zero", _zero, "floor", "stand still at T.P.1", None),
-    ("paragym/HybridSingularityFree-v0", "polynomial-detour", _polynomial_detour, "reference",
-     "7th-degree path + serial optimisation of Delta + detour via-poses (paper 002)", _polynomial_detour_params),
-    ("paragym/HybridSingularityFree-v0", "zero", _zero, "floor",
-     "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)", None),
-    ("paragym/Orthoglide2PRRKappa-v0", "gradient-c", _gradient, "reference",
-     "null-space gradient of kappa (paper 003, case c, eqs 9-10)", _gradient_params),
-    ("paragym/Orthoglide2PRRKappa-v0", "fixed-table-a", _fixed_table, "paper case",
-     "case (a): the table held still (at the env's start; see FixedTablePolicy)", None),
-    ("paragym/Orthoglide2PRRKappa-v0", "zero", _zero, "floor",
-     "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)", None),
-    ("paragym/MobileTripodOdometry-v0", "encoder-correction", _encoder_correction, "reference",
-     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection)",
-     _estimator_params("EncoderCorrection")),
-    ("paragym/MobileTripodOdometry-v0", "ukf-fusion", _ukf_fusion, "other",
-     "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper",
-     _estimator_params("FusionEstimator")),
-    ("paragym/MobileTripodOdometry-v0", "zero", _zero, "floor",
-     "= odometry only: no correction (paper 004's uncorrected estimate)", None),
-    ("paragym/CaPaManCollisionFree-v1", "grid-field", _grid_field, "other",
-     "grid-dijkstra's shortest free paths on Theta, followed from wherever the cranks are (DAgger's expert)",
-     _grid_field_params),
-    ("paragym/HybridSingularityFree-v2", "polynomial-detour", _polynomial_detour_margin, "reference",
-     "7th-degree path, serial optimisation of Delta, detour via poses (paper 002), strokes planned 1 mm inside "
-     "their limits where the path allows", _polynomial_detour_margin_params),
-    # v1 of the tripod acts through trust in the paper's correction: the reference is its test of the faulty unit
-    ("paragym/MobileTripodOdometry-v1", "encoder-correction", _encoder_trust, "reference",
-     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
-     _encoder_trust_params),
-    ("paragym/MobileTripodOdometry-v2", "encoder-correction", _encoder_trust, "reference",
-     "redundant leg encoders correct the odometry (paper 004, eqs 1-5, circle intersection), through v1's action",
-     _encoder_trust_params),
-)
-#: v1 id -> (v0 id, the v0 policies that play v1 unchanged: the CaPaMan's and the hybrid's v1 keep v0's action)
-_SAME_IN_V1 = {
-    "paragym/CaPaManCollisionFree-v1": ("paragym/CaPaManCollisionFree-v0", ("rrt-ga", "grid-dijkstra", "zero")),
-    "paragym/MobileTripodOdometry-v1": ("paragym/MobileTripodOdometry-v0", ("zero",)),
-    "paragym/HybridSingularityFree-v1": ("paragym/HybridSingularityFree-v0", ("polynomial-detour", "zero")),
-    "paragym/Orthoglide2PRRKappa-v1": ("paragym/Orthoglide2PRRKappa-v0", ("gradient-c", "fixed-table-a", "zero")),
-    "paragym/HybridSingularityFree-v2": ("paragym/HybridSingularityFree-v0", ("zero",)),
-    "paragym/MobileTripodOdometry-v2": ("paragym/MobileTripodOdometry-v0", ("zero",)),
-}
-_BUILT_IN += tuple((new, *row[1:]) for new, (old, names) in _SAME_IN_V1.items()
-                   for row in _BUILT_IN if row[0] == old and row[1] in names)
-
-for _env_id, _name, _factory, _kind, _doc, _params in _BUILT_IN:
-    register_policy(_env_id, _name, _factory, _kind, _doc, params=_params)
-for _env_id in paragym.ENVIRONMENTS:
-    register_policy(_env_id, "random", _random, "floor", "uniform random actions")

@@ -7,12 +7,14 @@ Found by name from any directory (:func:`shipped_models_dir`);
 
 from pathlib import Path
 
-from paragym.registry import ROWS
+from paragym import registry
 
-__all__ = ["SHARED_WITH", "shipped_models_dir", "shipped_models_folder"]
+__all__ = ["shipped_models_dir", "shipped_models_folder", "shared_with"]
 
-#: env id -> the env id whose shipped models it plays (:attr:`paragym.registry.EnvRow.models_from`)
-SHARED_WITH = {r.id: r.models_from for r in ROWS if r.models_from}
+
+def shared_with(env_id: str) -> str | None:
+    """The env id whose shipped models ``env_id`` plays (:attr:`paragym.registry.EnvRow.models_from`), or None."""
+    return registry.row(env_id).models_from
 
 
 def shipped_models_dir() -> Path:
@@ -22,6 +24,6 @@ def shipped_models_dir() -> Path:
 
 
 def shipped_models_folder(env_id: str) -> Path:
-    """The folder of ``env_id``'s shipped models (:data:`SHARED_WITH` read first)."""
-    source = SHARED_WITH.get(env_id, env_id)
+    """The folder of ``env_id``'s shipped models (those of :func:`shared_with` where it plays another's)."""
+    source = shared_with(env_id) or env_id
     return shipped_models_dir() / source.split("/", 1)[-1]

@@ -11,7 +11,8 @@ Importing ``paragym`` registers its environments with Gymnasium (one row per id 
 from gymnasium.envs.registration import register
 from gymnasium.envs.registration import registry as gym_registry
 
-from paragym.registry import ROWS, check_env_id
+from paragym import registry as _registry
+from paragym.registry import ROWS, EnvRow, check_env_id
 
 __version__ = "0.8.0"
 
@@ -21,9 +22,39 @@ ENVIRONMENTS: dict[str, tuple[str, int, str]] = {r.id: (r.entry_point, r.max_epi
 #: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
 VECTOR_ENTRY_POINTS: dict[str, str] = {r.id: r.vector_entry_point for r in ROWS if r.vector_entry_point}
 
-for _row in ROWS:
-    if _row.id not in gym_registry:
-        register(id=_row.id, entry_point=_row.entry_point, max_episode_steps=_row.max_episode_steps,
-                 vector_entry_point=_row.vector_entry_point)
 
-__all__ = ["ENVIRONMENTS", "VECTOR_ENTRY_POINTS", "check_env_id"]
+
+def register_env(row: EnvRow) -> EnvRow:
+    """Register an env id of :mod:`paragym.registry`'s form with paragym and Gymnasium: ``gym.make``,
+    the ``paragym`` command, the leaderboard and the docs find it. A task defined outside paragym
+    registers each of its ids with one row (its env classes and its bench module named in it);
+    ``docs/guides/adding-a-task.md`` is the recipe."""
+    _registry.add(row)
+    ENVIRONMENTS[row.id] = (row.entry_point, row.max_episode_steps, row.summary)
+    if row.vector_entry_point:
+        VECTOR_ENTRY_POINTS[row.id] = row.vector_entry_point
+    if row.id not in gym_registry:
+        register(id=row.id, entry_point=row.entry_point, max_episode_steps=row.max_episode_steps,
+                 vector_entry_point=row.vector_entry_point)
+    return row
+
+
+def _load_task_plugins() -> None:
+    """Import the modules of the entry-point group ``paragym.tasks``: tasks of other packages, which
+    register their rows on import (:func:`register_env`). One that fails to import is a warning."""
+    import warnings
+    from importlib.metadata import entry_points
+
+    for ep in entry_points(group="paragym.tasks"):
+        try:
+            ep.load()
+        except Exception as exc:  # noqa: BLE001 - another package's bug must not break paragym
+            warnings.warn(f"paragym: the task plugin {ep.name!r} ({ep.value}) failed to load: "
+                          f"{type(exc).__name__}: {exc}", RuntimeWarning, stacklevel=2)
+
+
+for _row in ROWS:
+    register_env(_row)
+_load_task_plugins()
+
+__all__ = ["ENVIRONMENTS", "VECTOR_ENTRY_POINTS", "check_env_id", "register_env"]

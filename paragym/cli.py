@@ -6,288 +6,19 @@ import argparse
 import os
 import sqlite3
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
-import numpy as np
 
 import paragym
 from paragym import registry
 from paragym.baselines import RandomPolicy, ZeroPolicy
-from paragym.rollout import Episode, run_episode
+from paragym.baselines.tasks import bench_of
+from paragym.rollout import run_episode
 
 __all__ = ["main"]
-
-
-def _capaman_plot(ep: Episode, path: Path) -> Path:
-    from paragym.plots import plot_capaman_episode
-
-    return plot_capaman_episode(ep, path)
-
-
-def _hybrid_plot(ep: Episode, path: Path) -> Path:
-    from paragym.plots import plot_hybrid_episode
-
-    return plot_hybrid_episode(ep, path)
-
-
-def _orthoglide_plot(ep: Episode, path: Path) -> Path:
-    from paragym.plots import plot_kappa_episode
-
-    return plot_kappa_episode(ep, path)
-
-
-def _tripod_plot(ep: Episode, path: Path) -> Path:
-    from paragym.plots import plot_tripod_estimates
-
-    true = np.array([i["true_units"] for i in ep.infos])
-    estimate = np.array([i["estimate"] for i in ep.infos])
-    odometry = np.array([i["odometry"] for i in ep.infos])
-    eta = np.array([i["eta"] for i in ep.infos])
-    t = np.array([i["t"] for i in ep.infos])
-    return plot_tripod_estimates(t, true, {"odometry": odometry, "policy's estimate": estimate}, eta, eta, 0, path,
-                                 f"{ep.infos[0]['scenario'].name}: final unit error {ep.infos[-1]['unit_error']:.3f} m")
-
-
-#: task (:attr:`paragym.registry.EnvRow.task`) -> (the name of the best available policy: the paper's method,
-#: picture writer)
-DEMOS: dict[str, tuple[str, Callable[[Episode, Path], Path]]] = {
-    "capaman": ("RRT + GA (paper 000)", _capaman_plot),
-    "hybrid": ("polynomial + serial + detour (paper 002)", _hybrid_plot),
-    "orthoglide": ("null-space gradient of kappa (paper 003, case c)", _orthoglide_plot),
-    "tripod": ("redundant-encoder correction (paper 004)", _tripod_plot),
-}
-
-
-def _reference(env: gym.Env, env_id: str, seed: int) -> Any:
-    """The env's reference policy (the paper's method), as the leaderboard runs it."""
-    from paragym.baselines.policies import policies_for
-
-    spec = next(s for s in policies_for(env_id).values() if s.kind == "reference")
-    return spec.factory(env, seed)
-
-
-def _plan_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    """RRT + GA on the env's scenario: stats, the Fig 3 picture against time, and a JSON."""
-    import json
-
-    import numpy as np
-
-    from paragym.mechanisms import capaman
-    from paragym.planners import RrtGaPlanner
-    from paragym.plots import plot_capaman_motion
-
-    obs, info = env.reset(seed=args.seed)
-    scenario = info["scenario"]
-    frame = env.render()
-    planner = RrtGaPlanner(seed=args.seed)
-    result = planner.solve(scenario)
-    planner.close()
-    traj = result.trajectory(args.dt)
-    t, alpha, _, _ = traj.sample(rate=200.0)
-    tips = capaman.tool_tip(capaman.forward(alpha, validate=False))
-    axis = np.array(scenario.obstacles[0].center[:2])
-    radius = np.hypot(*(tips[:, :2] - axis).T)
-    marks = traj.times[list(result.path.via_indices)]
-    stats = {
-        "scenario": scenario.name, "seed": args.seed,
-        "planning_seconds": result.timings, "fitness_J": result.fitness,
-        "initial_best_J": result.initial_best_fitness, "joint_path_length_rad": result.path.length,
-        "close_configurations": result.close_configurations, "min_clearance_m": result.min_clearance,
-        "tool_radius_about_obstacle_axis_m": [float(radius.min()), float(radius.max())],
-        "dt_s": traj.dt, "duration_s": traj.duration, "peak_joint_speed_rad_s": traj.peak_velocity,
-        "via_points_rad": result.path.waypoints.tolist(), "task_point_indices": list(result.path.via_indices),
-    }
-    title = (f"RRT + GA, {scenario.name} scenario: J = {result.fitness:.3f}, joint path "
-             f"{result.path.length:.2f} rad, {len(result.path.waypoints)} via points, dt = {traj.dt:.2f} s")
-    png = plot_capaman_motion(scenario, t, alpha, tips, marks, out / f"{stem}.png", title, frame=frame)
-    (out / f"{stem}.json").write_text(json.dumps(stats, indent=2))
-    print(f"planning {result.timings['total']:.2f} s (theta {result.timings['theta']:.2f}, rrt "
-          f"{result.timings['rrt']:.2f}, ga {result.timings['ga']:.2f}, pybullet check {result.timings['check']:.2f})")
-    print(f"fitness J {result.fitness:.3f} (RRT population best {result.initial_best_fitness:.3f}); joint path "
-          f"{result.path.length:.3f} rad; {result.close_configurations} configurations closer than delta")
-    print(f"min clearance {result.min_clearance * 1000:.1f} mm (PyBullet); tool tip {radius.min() * 1000:.1f}-"
-          f"{radius.max() * 1000:.1f} mm from the first obstacle's axis (paper: within 60 mm)")
-    print(f"trajectory: 21 via points, dt {traj.dt:.3f} s, {traj.duration:.2f} s, peak joint speed "
-          f"{traj.peak_velocity:.2f} rad/s")
-    print(f"wrote {png} and {out / (stem + '.json')}")
-    return 0
-
-
-def _validate_capaman(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    stem += f"_dt{args.dt:g}"
-    """Plan (RRT + GA), execute in the dynamic simulation, validate, report."""
-    import json
-    from dataclasses import asdict
-
-    from paragym.planners import RrtGaPlanner
-    from paragym.validation.capaman import validate_capaman
-    from paragym.validation.report import plot_report
-
-    obs, info = env.reset(seed=args.seed)
-    planner = RrtGaPlanner(seed=args.seed)
-    result = planner.solve(info["scenario"])
-    planner.close()
-    traj = result.trajectory(args.dt)
-    print(f"plan: J {result.fitness:.3f}, {len(result.path.waypoints)} via points, dt {traj.dt:.3f} s, "
-          f"{traj.duration:.2f} s; executing in the dynamic simulation ...")
-    val = validate_capaman(traj, seed=args.seed)
-    rep = val.report
-    print(f"execution: loop closure error at most {val.run.closure_error * 1000:.3f} mm; crank tracking error "
-          f"at most {np.degrees(np.abs(val.run.alpha - traj.position(val.run.t)).max()):.2f} deg")
-    print(f"eq 21 (direct formulas) against eq 17 (least squares), filtered a_H: largest gap {rep.eq21_gap:.2e} m/s^2")
-    print(rep.table())
-    title = f"{info['scenario'].name} scenario, dt = {traj.dt:.2f} s: {'PASS' if rep.passed else 'FAIL'}"
-    paths = plot_report(rep, out / stem, title)
-    (out / stem / "report.json").write_text(json.dumps({
-        "passed": rep.passed, "judged": rep.judged, "dt_s": traj.dt, "duration_s": traj.duration,
-        "closure_error_m": val.run.closure_error, "eq21_gap": rep.eq21_gap,
-        "tolerances": asdict(rep.tolerances), "components": [asdict(c) for c in rep.components]}, indent=2))
-    print(f"wrote {', '.join(str(p) for p in paths)} and {out / stem / 'report.json'}")
-    return 0 if rep.passed else 1
-
-
-def _plan_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    """Paper 002's planner on the env's scenario: figures, nominal vs planned."""
-    import json
-
-    from paragym.mechanisms import hybrid
-    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-    from paragym.plots import plot_hybrid_plan
-    from paragym.trajectories import nominal_path
-
-    obs, info = env.reset(seed=args.seed)
-    sc = info["scenario"]
-    g = sc.geometry
-    plan = PolynomialDetourPlanner(g).plan(np.array(sc.p0), np.array(sc.p1))
-    nominal = hybrid.solve(nominal_path(np.array(sc.p0), np.array(sc.p1))[1], 0.5, g, validate=False)
-    rows = (("nominal, Delta = 0.5", nominal.free, nominal.lengths, nominal.mu_hexapod, nominal.mu_tripod),
-            ("planned", plan.free, plan.lengths, plan.mu_hexapod, plan.mu_tripod))
-    print(f"{'':22s} {'singular/limit poses':>21s} {'strokes [mm]':>16s} {'min mu hexapod':>15s} "
-          f"{'min mu tripod':>14s}")
-    stats = {}
-    for name, free, lengths, mu_h, mu_t in rows:
-        print(f"{name:22s} {int((~free).sum()):>13d} of {len(free):<5d} {lengths.min() * 1000:7.1f}-"
-              f"{lengths.max() * 1000:6.1f} {mu_h.min():15.3f} {mu_t.min():14.3f}")
-        stats[name] = {"bad_poses": int((~free).sum()), "stroke_range_m": [float(lengths.min()), float(lengths.max())],
-                       "min_mu_hexapod": float(mu_h.min()), "min_mu_tripod": float(mu_t.min())}
-    methods = np.bincount(plan.method, minlength=3)
-    print(f"Delta {plan.delta.min():.2f}-{plan.delta.max():.2f}; samples: {methods[0]} nominal, {methods[1]} serial, "
-          f"{methods[2]} detour (largest offset {np.abs(plan.offsets).max() * 1000:.1f} mm); limits "
-          f"{g.l_min * 1000:.2f}-{g.l_max * 1000:.2f} mm, singular below {g.singularity_threshold}")
-    title = (f"paper 002 planner, {sc.name} scenario: {int((~plan.free).sum())} singular/limit poses "
-             f"(nominal at Delta = 0.5: {int((~nominal.free).sum())})")
-    png = plot_hybrid_plan(plan, out / f"{stem}.png", title, g.l_min, g.l_max, g.singularity_threshold)
-    (out / f"{stem}.json").write_text(json.dumps({"scenario": sc.name, "p0": sc.p0, "p1": sc.p1, **stats,
-                                                  "delta": plan.delta.tolist(), "offsets_m": plan.offsets.tolist(),
-                                                  "strokes_m": plan.lengths.tolist()}, indent=2))
-    print(f"wrote {png} and {out / (stem + '.json')}")
-    return 0
-
-
-def _validate_hybrid(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    stem += f"_{args.duration:g}s"
-    """Plan (paper 002), drive the nine actuators in the dynamic model, compare E, validate."""
-    import json
-    from dataclasses import asdict
-
-    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-    from paragym.validation.hybrid import validate_hybrid
-    from paragym.validation.report import plot_report
-
-    obs, info = env.reset(seed=args.seed)
-    sc = info["scenario"]
-    plan = PolynomialDetourPlanner(sc.geometry).plan(np.array(sc.p0), np.array(sc.p1))
-    print(f"plan: {int((~plan.free).sum())} singular/limit poses; executing the nine strokes over "
-          f"{args.duration:.1f} s in the dynamic simulation ...")
-    val = validate_hybrid(plan, args.duration, seed=args.seed)
-    rep = val.report
-    print(f"platform E against the plan: position error at most {val.position_error * 1000:.2f} mm, orientation "
-          f"{np.degrees(val.orientation_error):.3f} deg; ball-joint gaps at most {val.run.closure_error * 1000:.3f} mm")
-    print(rep.table())
-    paths = plot_report(rep, out / stem, f"hybrid, {sc.name} scenario, {args.duration:.1f} s: "
-                                         f"{'PASS' if rep.passed else 'FAIL'}")
-    (out / stem / "report.json").write_text(json.dumps({
-        "passed": rep.passed, "duration_s": args.duration, "position_error_m": val.position_error,
-        "orientation_error_rad": val.orientation_error, "closure_error_m": val.run.closure_error,
-        "components": [asdict(c) for c in rep.components]}, indent=2))
-    print(f"wrote {', '.join(str(p) for p in paths)} and {out / stem / 'report.json'}")
-    return 0 if rep.passed else 1
-
-
-def _plan_orthoglide(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    """Paper 003's three cases offline: kappa per case, against the pointwise best; Figs 5-13."""
-    import json
-    import time
-
-    from paragym.planners import nullspace_gradient as ng
-    from paragym.plots import plot_orthoglide_cases
-
-    obs, info = env.reset(seed=args.seed)
-    task, g = info["scenario"], env.unwrapped.geometry
-    cases = [ng.case_fixed_table(task, g)]
-    t0 = time.perf_counter()
-    cases.append(ng.case_least_norm(task, g))
-    cases.append(ng.case_gradient(task, g, start=cases[1]))
-    t_c = time.perf_counter() - t0  # case (c) starts from case (b)
-    optimum, _ = ng.pointwise_optimum(task, g)
-    print(f"{'case':36s} {'mean kappa':>10s} {'max kappa':>10s} {'worst at t':>11s}")
-    stats = {}
-    for c in cases:
-        print(f"{c.name:36s} {c.kappa.mean():10.3f} {c.kappa.max():10.3f} {c.t[np.argmax(c.kappa)]:9.2f} s")
-        stats[c.name] = {"mean_kappa": float(c.kappa.mean()), "max_kappa": float(c.kappa.max())}
-    print(f"{'best reachable at each point':36s} {optimum.mean():10.3f} {optimum.max():10.3f}")
-    print(f"case (c) within {100 * (cases[2].kappa / optimum - 1).max():.3f}% of the pointwise best; "
-          f"computed in about {t_c:.2f} s; geometry: theta1 {np.degrees(g.theta1):.0f} deg, table origin "
-          f"{g.table_origin} m, slider origins {g.slider2_origin}, {g.slider3_origin} m")
-    png = plot_orthoglide_cases(task, cases, optimum, g, out / f"{stem}.png")
-    (out / f"{stem}.json").write_text(json.dumps({"task": task.name, **stats, "optimum_mean": float(optimum.mean()),
-                                                  "optimum_max": float(optimum.max())}, indent=2))
-    print(f"wrote {png} and {out / (stem + '.json')}")
-    return 0
-
-
-def _plan_tripod(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    """Paper 004's drive with the three estimators side by side; Figs 8-10."""
-    import json
-
-    from paragym.planners.encoder_correction import EncoderCorrection, FusionEstimator, OdometryEstimator
-    from paragym.plots import plot_tripod_estimates
-    from paragym.sim.tripod_drive import TripodDrive
-
-    obs, info = env.reset(seed=args.seed)
-    scenario, g = info["scenario"], env.unwrapped.geometry
-    kinds = {"odometry": OdometryEstimator, "correction (paper)": EncoderCorrection, "fusion (UKF)": FusionEstimator}
-    tracks, stats = {}, {}
-    for name, kind in kinds.items():  # the same drive, noise and all, for every estimator
-        drive = TripodDrive(scenario, np.random.default_rng(args.seed), g)
-        est = kind(drive.odometry, g)
-        true, track, eta, eta_true, t = [drive.true.copy()], [est.estimate.copy()], [drive.eta], [drive.eta], [0.0]
-        for _ in range(drive.steps):
-            inc = drive.step()
-            measured = drive.encoders
-            est.update(inc, measured, drive.odometry[:, 2])
-            true.append(drive.true.copy())
-            track.append(est.estimate.copy())
-            eta.append(measured)
-            eta_true.append(drive.eta.copy())
-            t.append(drive.t)
-        true_a, track_a = np.array(true), np.array(track)
-        err = np.linalg.norm(track_a[:, :, :2] - true_a[:, :, :2], axis=2).max(axis=1)
-        tracks[name] = track_a
-        stats[name] = {"final_error_m": float(err[-1]), "max_error_m": float(err.max())}
-    print(f"{scenario.name}: {scenario.distance:.0f} m at {scenario.speed} m/s, {1 / drive.dt:.0f} Hz")
-    print(f"{'estimator':22s} {'final error':>12s} {'max error':>10s}   (largest of the three units)")
-    for name, st in stats.items():
-        print(f"{name:22s} {st['final_error_m'] * 100:10.2f} cm {st['max_error_m'] * 100:8.2f} cm")
-    unit = scenario.push[0] if scenario.push else int(np.argmax(np.abs(scenario.heading_error)))
-    png = plot_tripod_estimates(np.array(t), true_a, tracks, np.array(eta), np.array(eta_true), unit,
-                                out / f"{stem}.png", f"mobile tripod, {scenario.name}")
-    (out / f"{stem}.json").write_text(json.dumps({"scenario": scenario.name, **stats}, indent=2))
-    print(f"wrote {png} and {out / (stem + '.json')}")
-    return 0
 
 
 def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
@@ -296,11 +27,11 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
     import json
     from dataclasses import asdict
 
-    from paragym.baselines.policies import get_policy, policies_for
+    from paragym.baselines.policies import get_policy
     from paragym.validation.episode import validate_episode
     from paragym.validation.report import plot_report
 
-    name = args.policy or next(n for n, s in policies_for(env_id).items() if s.kind == "reference")
+    name = args.policy or bench_of(env_id).reference
     spec = get_policy(env_id, name, args.models)
     env = gym.make(env_id, scenario=_scenario(env_id, args), fidelity="dynamic")
     try:
@@ -333,17 +64,6 @@ def _scenario(env_id: str, args: argparse.Namespace) -> str:
     return args.scenario
 
 
-#: task -> the reference planner's offline run
-PLANS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
-    "capaman": _plan_capaman, "hybrid": _plan_hybrid, "orthoglide": _plan_orthoglide, "tripod": _plan_tripod,
-}
-
-#: task -> plan, execute (dynamic fidelity) and validate
-VALIDATIONS: dict[str, Callable[[gym.Env, argparse.Namespace, Path, str], int]] = {
-    "capaman": _validate_capaman, "hybrid": _validate_hybrid,
-}
-
-
 def _cmd_policies(args: argparse.Namespace) -> int:
     from paragym.baselines.policies import policies_for
 
@@ -354,45 +74,53 @@ def _cmd_policies(args: argparse.Namespace) -> int:
 
 
 def _cmd_envs(args: argparse.Namespace) -> int:
-    for env_id, (_, steps, doc) in paragym.ENVIRONMENTS.items():
-        print(f"{env_id:40s} {doc} [max {steps} steps]")
+    for r in registry.rows():
+        print(f"{r.id:40s} {r.summary} [max {r.max_episode_steps} steps]")
     return 0
 
 
 def _cmd_plan(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    task = registry.task_of(env_id)
-    if task not in PLANS:
-        raise ValueError(f"no offline planner for {env_id} yet")
+    plan = bench_of(env_id).plan
+    if plan is None:
+        raise ValueError(f"{env_id} has no offline planner (its task's bench names none)")
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     stem = env_id.split("/")[1] + f"_plan_{args.scenario}_seed{args.seed}"
     try:
-        return PLANS[task](env, args, out, stem)
+        return plan(env, args, out, stem)
     finally:
         env.close()
 
 
 def _cmd_validate(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
-    task = registry.task_of(env_id)
-    if args.policy is not None or task not in VALIDATIONS:  # a policy's executed episode
+    if bench_of(env_id).dynamics is None:
+        raise ValueError(f"{env_id} has no dynamic fidelity to execute and validate in (its task's bench names "
+                         f"no dynamics)")
+    validate_plan = bench_of(env_id).validate_plan
+    if args.policy is not None or validate_plan is None:  # a policy's executed episode
         return _validate_episode(env_id, args)
     env = gym.make(env_id, scenario=_scenario(env_id, args))
     out = Path(args.out)
     stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}"
     try:
-        return VALIDATIONS[task](env, args, out, stem)
+        return validate_plan(env, args, out, stem)
     finally:
         env.close()
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
+    from paragym.baselines.policies import get_policy
+
     env_id = paragym.check_env_id(args.env_id)
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
-    best_name, plot = DEMOS[registry.task_of(env_id)]
-    policy = {"best": lambda: _reference(env, env_id, args.seed),
+    bench = bench_of(env_id)
+    best_name, plot = bench.demo, bench.plot_episode
+    if plot is None:
+        from paragym.plots import plot_episode as plot
+    policy = {"best": lambda: get_policy(env_id, bench.reference).factory(env, args.seed),
               "random": lambda: RandomPolicy(env.action_space, args.seed),
               "zero": lambda: ZeroPolicy(env.action_space)}[args.policy]()
     name = best_name if args.policy == "best" else args.policy

@@ -16,7 +16,7 @@ from matplotlib.patches import Circle, Rectangle  # noqa: E402
 from paragym.rollout import Episode  # noqa: E402
 from paragym.sim.obstacles import Box, Cylinder  # noqa: E402
 
-__all__ = ["plot_capaman_episode", "plot_capaman_motion", "plot_hybrid_episode", "plot_hybrid_plan",
+__all__ = ["plot_capaman_episode", "plot_episode", "plot_capaman_motion", "plot_hybrid_episode", "plot_hybrid_plan",
            "plot_imitation_curve", "plot_kappa_episode", "plot_leaderboard", "plot_orthoglide_cases",
            "plot_training_curve"]
 
@@ -31,6 +31,23 @@ def _save(fig: Any, path: str | Path, title: str, dpi: int = 100,
     fig.savefig(out, dpi=dpi)
     plt.close(fig)
     return out
+
+
+def plot_episode(ep: Episode, path: str | Path, title: str = "") -> Path:
+    """Any task's episode: its first frame (when it has one) and its rewards against the step."""
+    frames = [f for f in ep.frames[:1] if f is not None]
+    fig, axes = plt.subplots(1, 1 + len(frames), figsize=(4.5 * (1 + len(frames)), 3.6))
+    axes = np.atleast_1d(axes)
+    if frames:
+        axes[0].imshow(frames[0])
+        axes[0].set_axis_off()
+    ax = axes[-1]
+    rewards = np.asarray(ep.rewards, float)
+    ax.plot(np.arange(1, len(rewards) + 1), rewards, label="reward")
+    ax.plot(np.arange(1, len(rewards) + 1), np.cumsum(rewards), label="return so far")
+    ax.set_xlabel("step")
+    ax.legend()
+    return _save(fig, path, title or f"{len(rewards)} steps, return {rewards.sum():.3f}, success {ep.success}")
 
 
 def plot_capaman_episode(ep: Episode, path: str | Path, title: str = "") -> Path:

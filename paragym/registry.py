@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "EnvRow", "check_env_id", "first_version", "row", "rows_of", "task_of"]
+__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "row", "rows", "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,8 @@ class EnvRow:
         models_from: the id whose shipped models this one plays: a later version whose default mode
             runs that id's episodes bit for bit where its rules do not end them sooner (tested); None:
             its own (``models/<Name>-v<N>/``).
+        bench: the module of the task's bench (``paragym.baselines.tasks``): what the CLI and the
+            leaderboard know of the task; None: ``paragym.baselines.tasks.<task>``.
     """
 
     id: str
@@ -43,6 +45,12 @@ class EnvRow:
     scenarios: tuple[str, ...]
     summary: str
     models_from: str | None = None
+    bench: str | None = None
+
+    @property
+    def bench_module(self) -> str:
+        """The module that defines the task's ``BENCH``."""
+        return self.bench or f"paragym.baselines.tasks.{self.task}"
 
     @property
     def name(self) -> str:
@@ -101,6 +109,25 @@ ROWS: tuple[EnvRow, ...] = (
 _BY_ID = {r.id: r for r in ROWS}
 
 
+def rows() -> tuple[EnvRow, ...]:
+    """Every registered row: paragym's own (:data:`ROWS`), then those added since (:func:`add`)."""
+    return tuple(_BY_ID.values())
+
+
+def add(new: EnvRow) -> EnvRow:
+    """Add a row: an env id of a task defined outside paragym (its env classes and its bench module,
+    :attr:`EnvRow.bench`). :func:`paragym.register` adds it and registers it with Gymnasium. A row
+    already added is left as it is; another row under the same id is a ValueError."""
+    if not isinstance(new, EnvRow):
+        raise TypeError(f"row must be a paragym.registry.EnvRow; got {type(new).__name__}")
+    if not new.id.startswith("paragym/") or "-v" not in new.id:
+        raise ValueError(f"row id must look like paragym/<Name>-v<N>; got {new.id!r}")
+    if _BY_ID.get(new.id, new) != new:
+        raise ValueError(f"{new.id} is registered already, with another row")
+    _BY_ID[new.id] = new
+    return new
+
+
 def check_env_id(env_id: str) -> str:
     """The full id of a registered paragym env (the ``paragym/`` prefix may be
     left out), or a ValueError listing the registered ids."""
@@ -124,7 +151,7 @@ def task_of(env_id: str) -> str:
 
 def rows_of(task: str) -> tuple[EnvRow, ...]:
     """The rows of ``task``, oldest version first."""
-    return tuple(sorted((r for r in ROWS if r.task == task), key=lambda r: r.version))
+    return tuple(sorted((r for r in rows() if r.task == task), key=lambda r: r.version))
 
 
 def first_version(env_id: str) -> str:

@@ -141,7 +141,7 @@ def test_summaries_rank_by_success_then_the_primary_metric():
 
 import paragym  # noqa: E402
 from paragym import registry  # noqa: E402
-from paragym.baselines.leaderboard import REFERENCE_SUCCESS  # noqa: E402
+from paragym.baselines.tasks import bench_of  # noqa: E402
 
 CAPAMAN, TRIPOD = "paragym/CaPaManCollisionFree-v0", "paragym/MobileTripodOdometry-v0"
 #: where learning works today: a learned agent beats both floors on return (README, LEADERBOARD.md)
@@ -152,7 +152,7 @@ LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
 @pytest.fixture(scope="module")
 def references(tmp_path_factory):
     """Reference, random and zero on evaluation seeds 0-1 x 10 episodes of every env."""
-    policies = sorted({name for name, _ in REFERENCE_SUCCESS.values()} | {"random", "zero"})
+    policies = sorted({bench_of(env).reference for env in paragym.ENVIRONMENTS} | {"random", "zero"})
     run = run_leaderboard(db=tmp_path_factory.mktemp("ref") / "r.sqlite", suite=EvalSuite("test", (0, 1), 10),
                           policies=policies, out=None, validate=False, progress=False, echo=lambda s: None,
                           executor="workers", workers=2)
@@ -161,7 +161,7 @@ def references(tmp_path_factory):
 
 @pytest.mark.parametrize("env_id", list(paragym.ENVIRONMENTS))
 def test_each_reference_meets_its_success_threshold_and_beats_the_floor(references, env_id):
-    name, threshold = REFERENCE_SUCCESS[env_id]
+    name, threshold = bench_of(env_id).reference, bench_of(env_id).reference_success
     rows = references[env_id]
     assert rows[name].success_rate >= threshold
     assert rows[name].return_mean > rows["random"].return_mean
@@ -171,7 +171,7 @@ def test_each_reference_meets_its_success_threshold_and_beats_the_floor(referenc
 @pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0", TRIPOD])
 def test_the_reference_ranks_first_where_the_paper_method_is_optimal(references, env_id):
     ranked = sorted(references[env_id].values(), key=lambda s: s.sort_key())
-    assert ranked[0].policy == REFERENCE_SUCCESS[env_id][0]
+    assert ranked[0].policy == bench_of(env_id).reference
 
 
 #: the ids with shipped models of their own: an id whose registry row plays another's (``models_from``: its

@@ -41,3 +41,26 @@ def test_the_tables_derived_from_the_registry_and_its_checks():
     assert registry.first_version("paragym/MobileTripodOdometry-v2") == "paragym/MobileTripodOdometry-v0"
     with pytest.raises(ValueError, match="unknown env id"):
         registry.row("paragym/Nope-v0")
+
+
+@pytest.mark.parametrize("row", registry.ROWS, ids=lambda r: r.name)
+def test_every_registered_id_has_a_complete_bench(row):
+    """What the CLI and the leaderboard know of a task comes from its bench (``paragym.baselines.tasks``);
+    the check names what a bench lacks for an id."""
+    from paragym.baselines.tasks import bench_of, missing
+
+    bench = bench_of(row.id)
+    assert bench.task == row.task
+    assert missing(bench, row.id) == []
+
+
+def test_an_incomplete_bench_is_named_part_by_part():
+    import dataclasses
+
+    from paragym.baselines.tasks import bench_of, missing
+
+    bench = dataclasses.replace(bench_of("paragym/CaPaManCollisionFree-v1"), reference="nobody",
+                                primary=("nothing", 2), reference_success=1.5)
+    said = " ".join(missing(bench, "paragym/CaPaManCollisionFree-v1"))
+    for part in ("'nothing'", "direction", "'nobody'", "success rate"):
+        assert part in said

@@ -1,0 +1,177 @@
+"""Everything the outer layers know of a task, in one bench module per task.
+
+The CLI, the leaderboard and the policies list look a task up here, through
+the registry row of an env id (:attr:`paragym.registry.EnvRow.bench`), and
+never tell tasks apart by name. A bench module defines ``BENCH``, a
+:class:`Bench`: the leaderboard's per-episode metrics, their columns, the
+metric that ranks after the success rate and the reference's expected
+success; the built-in policies and the ids they play; the physics settings
+of the leaderboard's dynamic episodes; and the CLI's adapters (the demo's
+picture, the reference planner's offline run, the validation of its plan).
+
+Adding a task is one bench module beside the env's own modules
+(``docs/guides/adding-a-task.md``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import importlib
+import inspect
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+
+from paragym import registry
+from paragym.rollout import Episode
+
+__all__ = ["Bench", "BuiltIn", "Column", "bench_of", "init_defaults", "missing", "random_factory", "tightest",
+           "zero_factory"]
+
+#: a policy factory: ``factory(env, seed) -> policy`` (:mod:`paragym.baselines.policies`)
+Factory = Callable[[gym.Env, int], Any]
+#: a CLI adapter: ``run(env, args, out, stem) -> exit code`` (the env made on the chosen scenario)
+Adapter = Callable[[gym.Env, argparse.Namespace, Path, str], int]
+
+
+@dataclass(frozen=True)
+class Column:
+    """A leaderboard column: a key of the task's metrics, its label and its number format."""
+
+    key: str
+    label: str
+    fmt: str = ".2f"
+
+
+@dataclass(frozen=True)
+class BuiltIn:
+    """A built-in policy of the task: its name, ``factory(env, seed)``, kind
+    (:data:`paragym.baselines.policies.KINDS`), description, parameters
+    (recorded in its producer) and the ids it plays (None: every id of the
+    task)."""
+
+    name: str
+    factory: Factory
+    kind: str
+    description: str
+    params: dict[str, Any] | Callable[[], dict[str, Any]] | None = None
+    ids: tuple[str, ...] | None = None
+
+    def plays(self, env_id: str) -> bool:
+        return self.ids is None or env_id in self.ids
+
+
+@dataclass(frozen=True)
+class Bench:
+    """One task's bench.
+
+    Attributes:
+        task: the task's name (:attr:`paragym.registry.EnvRow.task`).
+        metrics: ``metrics(episode) -> {key: value}``, the per-episode numbers the leaderboard averages.
+        columns: the metrics' columns, in table order.
+        primary: (key, +1 if higher is better else -1): ranks after the success rate; "return" is the return.
+        reference: the name of the paper's method among the policies.
+        reference_success: the success rate the tests hold the reference to on its first 20 episodes.
+        policies: the built-in policies (the floors "random" every task has are added for it).
+        dynamics: ``dynamics() -> settings``: the physics settings of the leaderboard's dynamic episodes
+            (the env's ``dynamics`` argument); None: the task has no dynamic fidelity.
+        demo: what ``paragym demo`` names the reference in its output.
+        plot_episode: ``plot_episode(episode, path) -> path``: the demo's picture; None: the episode's
+            first frame and its rewards (:func:`paragym.plots.plot_episode`).
+        plan: the reference planner's offline run (``paragym plan``); None: the task has none.
+        validate_plan: the CLI's plan-execute-validate of the reference plan (``paragym validate`` without
+            ``--policy``); None: ``paragym validate`` validates the reference policy's episode.
+        validated_plan: ``check(seed) -> (passed, summary)``, the leaderboard's KF validation of the
+            reference plan on the paper's case; None: not validated apart from the dynamic episodes.
+    """
+
+    task: str
+    metrics: Callable[[Episode], dict[str, float]]
+    columns: tuple[Column, ...]
+    primary: tuple[str, int]
+    reference: str
+    reference_success: float
+    policies: tuple[BuiltIn, ...]
+    dynamics: Callable[[], Any] | None
+    demo: str
+    plot_episode: Callable[[Episode, Path], Path] | None = None
+    plan: Adapter | None = None
+    validate_plan: Adapter | None = None
+    validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = field(default=None)
+
+    def label(self, key: str) -> str:
+        """The column label of metric ``key`` ("return" for the return)."""
+        return "return" if key == "return" else next(c.label for c in self.columns if c.key == key)
+
+    def fmt(self, key: str) -> str:
+        return next((c.fmt for c in self.columns if c.key == key), ".2f")
+
+
+def bench_of(env_id: str) -> Bench:
+    """The bench of ``env_id``'s task (its row's bench module's ``BENCH``)."""
+    module = importlib.import_module(registry.row(env_id).bench_module)
+    found = getattr(module, "BENCH", None)
+    if not isinstance(found, Bench):
+        raise TypeError(f"{module.__name__} must define BENCH, a paragym.baselines.tasks.Bench")
+    return found
+
+
+def missing(bench: Bench, env_id: str) -> list[str]:
+    """What ``bench`` lacks to serve ``env_id``: names of the missing parts (empty: complete)."""
+    out = []
+    keys = {c.key for c in bench.columns}
+    if bench.primary[0] != "return" and bench.primary[0] not in keys:
+        out.append(f"a column for the primary metric {bench.primary[0]!r}")
+    if bench.primary[1] not in (-1, 1):
+        out.append("the primary metric's direction (+1 or -1)")
+    names = [p.name for p in bench.policies if p.plays(env_id)]
+    if bench.reference not in names:
+        out.append(f"the reference policy {bench.reference!r} among the policies of {env_id}")
+    if len(names) != len(set(names)):
+        out.append(f"one policy per name on {env_id} (two play {sorted(n for n in names if names.count(n) > 1)})")
+    if not 0.0 <= bench.reference_success <= 1.0:
+        out.append("a reference success rate in [0, 1]")
+    if not callable(bench.metrics):
+        out.append("metrics (callable)")
+    for name in ("dynamics", "plot_episode", "plan", "validate_plan", "validated_plan"):
+        if getattr(bench, name) is not None and not callable(getattr(bench, name)):
+            out.append(f"{name} (callable or None)")
+    if bench.validated_plan is not None and bench.dynamics is None:
+        out.append("dynamics, which the KF validation of the reference plan runs under")
+    return out
+
+
+def init_defaults(cls: type, **overrides: Any) -> dict[str, Any]:
+    """The keyword defaults of ``cls.__init__`` (dataclasses as dicts), with
+    ``overrides``: a planner's parameters as its constructor sets them."""
+    out: dict[str, Any] = {}
+    for name, p in inspect.signature(cls.__init__).parameters.items():
+        if name != "self" and p.default is not inspect.Parameter.empty:
+            out[name] = p.default
+    out.update(overrides)
+    return {k: dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v for k, v in out.items()}
+
+
+def tightest(report: Any) -> str:
+    """The judged component of a validation report closest to its tolerance, as text."""
+    worst = max(report.components, key=lambda c: c.error_judged / c.tolerance)
+    return (f"tightest component {worst.name}: error {worst.error_judged:.3f} against tolerance "
+            f"{worst.tolerance:.3f}, correlation {worst.correlation:.2f}")
+
+
+def random_factory(env: gym.Env, seed: int) -> Any:
+    """Uniformly random actions: the floor every task has."""
+    from paragym.baselines.simple import RandomPolicy
+
+    return RandomPolicy(env.action_space, seed)
+
+
+def zero_factory(env: gym.Env, seed: int) -> Any:
+    """The zero action: a floor, and in three tasks one of the paper's cases."""
+    from paragym.baselines.simple import ZeroPolicy
+
+    return ZeroPolicy(env.action_space)

@@ -1,0 +1,133 @@
+"""The 2PRR Orthoglide's bench (paper 003): its leaderboard metrics, policies, physics settings and CLI adapters."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+from paragym.baselines.tasks import Bench, BuiltIn, Column, init_defaults, zero_factory
+from paragym.rollout import Episode
+from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+
+
+def metrics(ep: Episode) -> dict[str, float]:
+    kappa = np.array([i["kappa"] for i in ep.infos])
+    err = np.array([i["tracking_error"] for i in ep.infos])
+    ok = np.isfinite(kappa)
+    last = len(ep.infos[0]["scenario"].t) - 1
+    return {"mean_kappa": float(kappa[ok].mean()), "max_kappa": float(kappa[ok].max()),
+            "mean_tracking_error_mm": float(err.mean() * 1000), "max_tracking_error_mm": float(err.max() * 1000),
+            "path_completed": float(ep.infos[-1]["step"] / last)}
+
+
+def gradient(env: gym.Env, seed: int) -> Any:
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    return GradientPolicy(geometry=env.unwrapped.geometry)
+
+
+def gradient_params() -> dict[str, Any]:
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    return {"policy": init_defaults(GradientPolicy)}
+
+
+class FixedTablePolicy:
+    """Paper 003's case (a) in the env's null-space action: the null-space rate
+    that cancels the least-norm motion of the table (rho1), so the table
+    stays where the env put it. The paper's case (a) picks, offline, the
+    table position with the lowest mean kappa over the whole task; the env
+    starts at the optimum for the first point instead, and a policy cannot
+    move the start, so this is case (a) from the env's start."""
+
+    def __init__(self, env: gym.Env) -> None:
+        self.geometry = env.unwrapped.geometry
+        self.max_null_rate = env.unwrapped.max_null_rate
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.task = info["scenario"]
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        from paragym.mechanisms import orthoglide as og
+
+        k = min(info["step"], len(self.task.t) - 1)
+        r1 = float(info["rho"][0])
+        px, py = self.task.points[k]
+        j, _, n = og.jacobian_at(r1, px, py, self.geometry)
+        rate = og.least_norm(j, self.task.velocities[k])[0]
+        if abs(n[0, 0]) < 1e-9:
+            return np.zeros(1, np.float32)
+        return np.array([np.clip(-rate[0] / (self.max_null_rate * n[0, 0]), -1.0, 1.0)], np.float32)
+
+
+def fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
+    if env.unwrapped.action_mode != "null_space":
+        raise ValueError("the fixed-table policy acts in the env's null_space action mode")
+    return FixedTablePolicy(env)
+
+
+def plot_episode(ep: Episode, path: Path) -> Path:
+    from paragym.plots import plot_kappa_episode
+
+    return plot_kappa_episode(ep, path)
+
+
+def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
+    """Paper 003's three cases offline: kappa per case, against the pointwise best; Figs 5-13."""
+    import json
+    import time
+
+    from paragym.planners import nullspace_gradient as ng
+    from paragym.plots import plot_orthoglide_cases
+
+    obs, info = env.reset(seed=args.seed)
+    task, g = info["scenario"], env.unwrapped.geometry
+    cases = [ng.case_fixed_table(task, g)]
+    t0 = time.perf_counter()
+    cases.append(ng.case_least_norm(task, g))
+    cases.append(ng.case_gradient(task, g, start=cases[1]))
+    t_c = time.perf_counter() - t0  # case (c) starts from case (b)
+    optimum, _ = ng.pointwise_optimum(task, g)
+    print(f"{'case':36s} {'mean kappa':>10s} {'max kappa':>10s} {'worst at t':>11s}")
+    stats = {}
+    for c in cases:
+        print(f"{c.name:36s} {c.kappa.mean():10.3f} {c.kappa.max():10.3f} {c.t[np.argmax(c.kappa)]:9.2f} s")
+        stats[c.name] = {"mean_kappa": float(c.kappa.mean()), "max_kappa": float(c.kappa.max())}
+    print(f"{'best reachable at each point':36s} {optimum.mean():10.3f} {optimum.max():10.3f}")
+    print(f"case (c) within {100 * (cases[2].kappa / optimum - 1).max():.3f}% of the pointwise best; "
+          f"computed in about {t_c:.2f} s; geometry: theta1 {np.degrees(g.theta1):.0f} deg, table origin "
+          f"{g.table_origin} m, slider origins {g.slider2_origin}, {g.slider3_origin} m")
+    png = plot_orthoglide_cases(task, cases, optimum, g, out / f"{stem}.png")
+    (out / f"{stem}.json").write_text(json.dumps({"task": task.name, **stats, "optimum_mean": float(optimum.mean()),
+                                                  "optimum_max": float(optimum.max())}, indent=2))
+    print(f"wrote {png} and {out / (stem + '.json')}")
+    return 0
+
+
+BENCH = Bench(
+    task="orthoglide",
+    metrics=metrics,
+    columns=(Column("mean_kappa", "mean kappa", ".3f"), Column("max_kappa", "max kappa", ".2f"),
+             Column("mean_tracking_error_mm", "tracking error [mm]", ".2f"),
+             Column("max_tracking_error_mm", "max tracking error [mm]", ".2f"),
+             Column("path_completed", "path completed", ".2f")),
+    primary=("mean_kappa", -1),  # case (c) minimises kappa
+    reference="gradient-c",
+    reference_success=0.95,  # 1.00 over the full suite
+    policies=(
+        BuiltIn("gradient-c", gradient, "reference", "null-space gradient of kappa (paper 003, case c, eqs 9-10)",
+                gradient_params),
+        BuiltIn("fixed-table-a", fixed_table, "paper case",
+                "case (a): the table held still (at the env's start; see FixedTablePolicy)"),
+        BuiltIn("zero", zero_factory, "floor",
+                "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)"),
+    ),
+    dynamics=OrthoglideDynamics,  # the env's default
+    demo="null-space gradient of kappa (paper 003, case c)",
+    plot_episode=plot_episode,
+    plan=plan,
+)
