@@ -1,0 +1,97 @@
+"""One episode of the leaderboard, in whatever process the executor chooses: kinematic or dynamic."""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import gymnasium as gym
+
+from paragym import registry
+from paragym.baselines.leaderboard.suite import dynamic_kwargs, dynamic_producer, episode_seed
+from paragym.baselines.policies import PolicySpec
+from paragym.baselines.store import DynamicRow, EpisodeRow
+from paragym.baselines.tasks import bench_of, tightest
+from paragym.rollout import run_episode
+
+__all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job"]
+
+_ENVS: dict[str, gym.Env] = {}
+
+
+def _env(env_id: str) -> gym.Env:
+    """One env per id per process, kept: resets re-seed it completely. The
+    leaderboard ranks v0 beside v1 on purpose, so Gymnasium's warning that a
+    newer version exists is not repeated for every worker."""
+    if env_id not in _ENVS:
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=".*is out of date.*")
+            _ENVS[env_id] = gym.make(env_id)
+    return _ENVS[env_id]
+
+
+def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
+    """Run episode ``episode`` of evaluation seed ``seed`` of ``spec`` on its
+    env and measure it. A planner that finds no plan (PlanningError) leaves
+    the robot standing still for the episode, which is then scored as it
+    goes (metric ``policy_failed`` = 1)."""
+    from paragym.baselines.simple import ZeroPolicy
+    from paragym.planners.base import PlanningError
+
+    env = _env(spec.env_id)
+    s = episode_seed(seed, episode)
+    t0 = time.perf_counter()
+    policy = spec.factory(env, s)
+    failed = 0.0
+    try:
+        ep = run_episode(env, policy, seed=s)
+    except PlanningError:
+        failed = 1.0
+        ep = run_episode(env, ZeroPolicy(env.action_space), seed=s)
+    wall = time.perf_counter() - t0
+    metrics = bench_of(spec.env_id).metrics(ep)
+    metrics["policy_failed"] = failed
+    return EpisodeRow(spec.env_id, spec.name, seed, episode, spec.kind, ep.episode_return, len(ep.actions),
+                      ep.success, metrics, wall, producer=spec.producer())
+
+
+def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
+    """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
+    from reset seed ``seed`` in the dynamic fidelity (:func:`dynamic_kwargs`),
+    measure it as a kinematic episode is measured, and validate what it
+    executed against what it commanded (the accelerometers and the Kalman
+    filter: :func:`paragym.validation.episode.validate_episode`). A planner
+    that finds no plan stands still, as in :func:`evaluate_episode`."""
+    import warnings
+
+    from paragym.baselines.simple import ZeroPolicy
+    from paragym.planners.base import PlanningError
+    from paragym.validation.episode import validate_episode
+
+    arg = registry.row(spec.env_id).paper_scenario if scenario == "paper" else scenario
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*is out of date.*")
+        env = gym.make(spec.env_id, scenario=arg, **dynamic_kwargs(spec.env_id))
+    failed = 0.0
+    try:
+        try:
+            val = validate_episode(env, spec.factory(env, seed), seed=seed, sensor_seed=seed)
+        except PlanningError:
+            failed = 1.0
+            val = validate_episode(env, ZeroPolicy(env.action_space), seed=seed, sensor_seed=seed)
+    finally:
+        env.close()
+    metrics = bench_of(spec.env_id).metrics(val.episode)
+    metrics["policy_failed"] = failed
+    kf = {"worst": tightest(val.report), "position_error_mm": round(val.position_error * 1000, 3)}
+    return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
+                      kf, time.perf_counter() - t0, producer=dynamic_producer(spec))
+
+
+
+def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any) -> EpisodeRow | DynamicRow:
+    """One job of either kind: an episode (seed, episode) or a dynamic episode (scenario, seed)."""
+    return evaluate_episode(spec, a, b) if kind == "episode" else evaluate_dynamic(spec, a, b)

@@ -1,0 +1,174 @@
+"""The executors: each runs jobs and yields the finished rows as they come.
+
+``local`` runs them in this process, ``workers`` in a fork-started process
+pool on this machine, ``ray`` as Ray tasks, local or on a cluster. Workers
+die with their parent (:func:`die_with_parent`); a local Ray is reaped
+if its driver dies (:mod:`paragym.baselines.leaderboard.reaper`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from typing import Any
+
+from paragym.baselines.leaderboard import reaper
+from paragym.baselines.leaderboard.evaluate import evaluate_job
+from paragym.baselines.policies import PolicySpec
+from paragym.baselines.store import DynamicRow, EpisodeRow
+
+__all__ = ["EXECUTORS", "RUNNERS", "DynamicJob", "Job", "die_with_parent"]
+
+Job = tuple[PolicySpec, int, int]
+#: a dynamic-fidelity job: the spec, the scenario, the reset seed
+DynamicJob = tuple[PolicySpec, str, int]
+
+
+def _run_local(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+               kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+    for spec, a, b in jobs:
+        yield evaluate_job(kind, spec, a, b)
+
+
+def die_with_parent(parent: int) -> None:
+    """Make this process end when ``parent`` does, however it ends (SIGKILL
+    included): Linux's parent-death signal where there is one, and a watchdog
+    thread that polls the parent's pid everywhere (it also covers a parent
+    that died before the signal was armed)."""
+    import ctypes
+    import os
+    import signal
+    import sys
+    import threading
+
+    if sys.platform.startswith("linux"):
+        try:
+            ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+        except (OSError, AttributeError):
+            pass
+
+    def watch() -> None:
+        while True:
+            if os.getppid() != parent:
+                os._exit(1)
+            time.sleep(0.5)
+
+    if os.getppid() != parent:
+        os._exit(1)
+    threading.Thread(target=watch, name="paragym-parent-watchdog", daemon=True).start()
+
+
+def _init_worker(parent: int) -> None:
+    die_with_parent(parent)
+    try:
+        import torch
+
+        torch.set_num_threads(1)
+    except ImportError:
+        pass
+
+
+def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any
+                      ) -> EpisodeRow | DynamicRow:
+    from paragym.baselines.policies import get_policy
+
+    return evaluate_job(kind, get_policy(env_id, name, models_dir), a, b)
+
+
+def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+              kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+    """A fork-started process pool: workers inherit the policy registry, so
+    policies registered in the calling script work too. The workers die with
+    this process (:func:`die_with_parent`), and an interrupted run stops them
+    at once instead of waiting for their episodes."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    pool = ProcessPoolExecutor(workers, mp_context=mp.get_context("fork"), initializer=_init_worker,
+                               initargs=(os.getpid(),))
+    finished = False
+    try:
+        futures = [pool.submit(_evaluate_by_name, kind, spec.env_id, spec.name, models_dir, a, b)
+                   for spec, a, b in jobs]
+        for fut in as_completed(futures):
+            yield fut.result()
+        finished = True
+    finally:
+        if not finished:
+            for proc in list(getattr(pool, "_processes", {}).values()):
+                proc.terminate()
+        pool.shutdown(wait=finished, cancel_futures=True)
+
+
+def _run_ray(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
+             kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+    """Ray tasks (one per episode; the policy spec travels with the task,
+    pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
+    try:
+        import ray
+    except ImportError as exc:
+        raise ValueError("--executor ray needs Ray: pip install 'paragym[ray]'") from exc
+    started = not ray.is_initialized()
+    reaper_pid = None
+    pending: list[Any] = []
+    try:
+        if started:
+            kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
+            if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
+                reaper_pid = _start_reaper()
+            ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
+        remote = ray.remote(num_cpus=1)(evaluate_job)
+        pending = [remote.remote(kind, spec, a, b) for spec, a, b in jobs]
+        while pending:
+            done, pending = ray.wait(pending, num_returns=1)
+            try:
+                yield ray.get(done[0])
+            except ray.exceptions.RayTaskError as exc:  # the task's own error, without Ray's coloured traceback
+                cause = getattr(exc, "cause", None)
+                if isinstance(cause, ValueError):
+                    raise ValueError(str(cause)) from None
+                raise RuntimeError(f"a Ray task failed: {type(cause).__name__}: {cause}") from None
+    finally:
+        for ref in pending:
+            ray.cancel(ref)
+        if started:
+            ray.shutdown()
+        if reaper_pid is not None:
+            _stop_reaper(reaper_pid)
+
+
+
+def _start_reaper() -> int:
+    """Start :mod:`~paragym.baselines.leaderboard.reaper` (run as a file, so that it imports nothing of
+    paragym and starts in milliseconds), which ends the local Ray's processes (its head,
+    raylet, agents and workers: whatever descends from this process from now
+    on) if this process dies without shutting Ray down (SIGKILL): Ray's own
+    agents otherwise outlive their driver for minutes. Started before Ray, so
+    that it sees every process Ray starts. Returns its pid, to end it when
+    Ray was shut down normally."""
+    import os
+    import subprocess
+    import sys
+
+    proc = subprocess.Popen([sys.executable, reaper.__file__, str(os.getpid())], stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True, text=True)
+    pid = int(proc.stdout.readline())
+    proc.wait()
+    return pid
+
+
+def _stop_reaper(pid: int) -> None:
+    import os
+    import signal
+
+    try:
+        os.kill(pid, signal.SIGTERM)
+    except OSError:
+        pass
+
+
+EXECUTORS = ("local", "workers", "ray")
+
+#: executor -> ``run(jobs, workers, ray_address, models_dir, kind)``
+RUNNERS = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}

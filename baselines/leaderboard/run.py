@@ -1,0 +1,270 @@
+"""The leaderboard's run: choose the policies, plan the missing episodes, run them, validate, summarise, report."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import paragym
+from paragym import registry
+from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, DynamicJob, Job
+from paragym.baselines.leaderboard.render import terminal_table, write_reports
+from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
+from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, summarise
+from paragym.baselines.policies import PolicySpec, policies_for
+from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
+from paragym.baselines.tasks import bench_of
+from paragym.baselines.training import check_env_id, env_name
+
+__all__ = ["LeaderboardInterrupted", "LeaderboardRun", "run_leaderboard"]
+
+
+class LeaderboardInterrupted(KeyboardInterrupt):
+    """Ctrl-C (or SIGTERM in the CLI) during a run: what was saved by then."""
+
+    def __init__(self, saved: int, planned: int, db: Path) -> None:
+        super().__init__(f"interrupted: {saved} episodes saved in {db} ({planned - saved} of this run left); "
+                         f"run the same command again to continue from there")
+        self.saved, self.planned, self.db = saved, planned, db
+
+
+@dataclass
+class LeaderboardRun:
+    """What :func:`run_leaderboard` did and produced."""
+
+    summaries: dict[str, list[Summary]]
+    new_episodes: int
+    skipped_episodes: int
+    files: list[Path]
+    seconds: float
+
+
+def _select(env_ids: list[str] | None, policy_names: list[str] | None,
+            models_dir: Path | None) -> dict[str, dict[str, PolicySpec]]:
+    envs = [check_env_id(e) for e in env_ids] if env_ids else [r.id for r in registry.rows()]
+    chosen: dict[str, dict[str, PolicySpec]] = {}
+    for env in envs:
+        specs = policies_for(env, models_dir)
+        if policy_names:
+            chosen[env] = {n: specs[n] for n in policy_names if n in specs}
+        else:
+            chosen[env] = specs
+    if policy_names:
+        known = {n for env in envs for n in policies_for(env, models_dir)}
+        unknown = [n for n in policy_names if n not in known]
+        if unknown:
+            raise ValueError(f"unknown policy {', '.join(map(repr, unknown))}; known: {', '.join(sorted(known))}")
+    return chosen
+
+
+def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite = FULL, *,
+                    env_ids: list[str] | None = None, policies: list[str] | None = None,
+                    models_dir: str | Path | None = None, executor: str = "local", workers: int = 1,
+                    ray_address: str | None = None, out: str | Path | None = "results",
+                    markdown_path: str | Path | None = None, validate: bool = True, progress: bool = True,
+                    on_row: Callable[[EpisodeRow], None] | None = None, echo: Callable[[str], None] = print,
+                    ) -> LeaderboardRun:
+    """Evaluate what is missing from ``db`` for ``suite``, then write the
+    reports (to ``out``: ``LEADERBOARD.md`` unless ``markdown_path``,
+    ``leaderboard.csv``, ``<env>.png``; nothing written when ``out`` is None).
+    ``on_row`` sees each new row after it is stored. The shipped models
+    always take part; ``models_dir`` adds your own (``user-...``). An
+    episode is taken from ``db`` only when its stored row has the policy's
+    current producer (model hash, planner parameters); the others are run
+    again, and ``echo`` says so.
+
+    The steps: choose the policies (:func:`_select`), plan the missing
+    episodes (:func:`_plan`), run them with the executor (:func:`_execute`),
+    validate the reference plans (:func:`_validate_references`), summarise
+    (:func:`_summaries`) and write the reports (:func:`_write_reports`)."""
+    if executor not in EXECUTORS:
+        raise ValueError(f"unknown executor {executor!r}; known: {', '.join(EXECUTORS)}")
+    if not isinstance(workers, int) or workers < 1:
+        raise ValueError(f"workers must be a positive integer; got {workers!r}")
+    models = Path(models_dir) if models_dir is not None else None
+    chosen = _select(env_ids, policies, models)
+    out = _report_folder(out, markdown_path, env_ids, policies)
+    producers = {(env, name): spec.producer() for env, specs in chosen.items() for name, spec in specs.items()}
+    t0 = time.perf_counter()
+    with ResultStore(db) as store:
+        jobs, total = _plan(store, chosen, suite, producers, echo)
+        echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
+             f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
+             f"{store.path}; running {len(jobs)} with the {executor} executor")
+        _execute(store, jobs, executor, workers, ray_address, models, progress, on_row)
+        if validate and suite.dynamic:
+            dynamic_jobs = _plan_dynamic(store, chosen, suite, producers)
+            who = "" if suite.dynamic_all else ": the references, the other methods, each learned algorithm's seed 0"
+            echo(f"dynamic fidelity: {len(dynamic_jobs)} episodes to run ({len(suite.dynamic)} per policy{who}; "
+                 f"each with the KF validation of what it executed)")
+            _execute(store, dynamic_jobs, executor, workers, ray_address, models, progress, None, kind="dynamic")
+        if validate:
+            _validate_references(store, chosen, producers, echo)
+        all_summaries = _summaries(store, chosen, suite, producers)
+        files = write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
+    seconds = time.perf_counter() - t0
+    for env, ss in all_summaries.items():
+        echo(f"\n{env}\n{terminal_table(ss)}")
+    return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds)
+
+
+def _report_folder(out: str | Path | None, markdown_path: str | Path | None, env_ids: list[str] | None,
+                   policies: list[str] | None) -> Path | None:
+    """Where the reports go, checked writable before any episode runs: a
+    filtered run writes apart (``partial-<filter>``), so that it cannot be
+    taken for the full table."""
+    if out is None:
+        return None
+    partial = _partial_label(env_ids, policies)
+    folder = Path(out) / f"partial-{partial}" if partial else Path(out)
+    _check_writable(folder)
+    if markdown_path is not None:
+        _check_writable(Path(markdown_path).parent)
+    return folder
+
+
+def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+          producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> tuple[list[Job], int]:
+    """The episodes ``store`` lacks for the current producers (saying which
+    stored ones are run again), and how many episodes the suite has."""
+    done = store.done_keys()
+    jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
+            if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
+    _say_what_is_rerun(jobs, done, store.version, producers, echo)
+    return jobs, sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+
+
+def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+                  producers: dict[tuple[str, str], str]) -> list[DynamicJob]:
+    """The dynamic-fidelity episodes ``store`` lacks for the current producers
+    (the policy's and the physics settings: :func:`dynamic_producer`)."""
+    done = store.dynamic_keys()
+    made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
+    return [(spec, scenario, seed) for env, specs in chosen.items() if bench_of(env).dynamics is not None
+            for spec in specs.values() if suite.runs_dynamic(spec) for scenario, seed in suite.dynamic
+            if (spec.env_id, spec.name, scenario, seed, store.version, made[spec.env_id, spec.name]) not in done]
+
+
+def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,
+             models: Path | None, progress: bool, on_row: Callable[[EpisodeRow], None] | None,
+             kind: str = "episode") -> None:
+    """Run ``jobs`` with the executor, storing each row as it comes (Ctrl-C
+    keeps what is stored and stops the workers). ``kind``: "episode" or
+    "dynamic" (:data:`DynamicJob`)."""
+    from tqdm.auto import tqdm
+
+    run = RUNNERS[executor]
+    stream = run(jobs, workers, ray_address, str(models) if models is not None else None, kind)
+    saved = 0
+    try:
+        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
+            for row in stream:
+                if kind == "dynamic":
+                    store.add_dynamic(row)
+                else:
+                    store.add(row)
+                saved += 1
+                bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
+                bar.update()
+                if on_row is not None:
+                    on_row(row)
+    except KeyboardInterrupt:
+        stream.close()  # stops the workers now
+        raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
+
+
+def _validate_references(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]],
+                         producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> None:
+    """The KF validation of each validated reference plan that takes part and
+    has none stored for its producer (dynamic fidelity)."""
+    verdicts: dict[Any, tuple[bool, dict[str, Any]]] = {}  # v1 validates v0's plan: run each check once
+    for env in chosen:
+        bench = bench_of(env)
+        check, name = bench.validated_plan, bench.reference
+        producer = producers.get((env, name))
+        if check is not None and name in chosen[env] and store.validation(env, name, producer) is None:
+            if check not in verdicts:
+                echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
+                verdicts[check] = check(0)
+            passed, summary = verdicts[check]
+            store.set_validation(env, name, passed, summary, producer)
+
+
+def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+               producers: dict[tuple[str, str], str]) -> dict[str, list[Summary]]:
+    """The table of each env from the stored rows of the suite's episodes and
+    the current producers, with each policy's description."""
+    keys = set(suite.keys())
+    rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
+    all_summaries = summarise(rows, store)
+    wanted = set(suite.dynamic)
+    made = {key: dynamic_producer(chosen[key[0]][key[1]]) for key in producers}
+    dynamic: dict[tuple[str, str], list[DynamicRow]] = {}
+    for r in store.dynamic_rows():
+        if made.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted:
+            dynamic.setdefault((r.env, r.policy), []).append(r)
+    for env, ss in all_summaries.items():
+        for s in ss:
+            s.dynamic = dynamic_summary(dynamic.get((env, s.policy), []), suite)
+    for env, ss in all_summaries.items():
+        for s in ss:
+            s.description = chosen[env][s.policy].description
+    return all_summaries
+
+
+def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producers: dict[tuple[str, str], str],
+                       echo: Callable[[str], None]) -> None:
+    """One line per (env, policy) whose stored episodes came from another producer."""
+    stored: dict[tuple, list[str]] = {}
+    for key in done:
+        stored.setdefault(key[:5], []).append(key[5])
+    stale: dict[tuple[str, str], set[str]] = {}
+    for spec, s, k in jobs:
+        for old in stored.get((spec.env_id, spec.name, s, k, version), ()):
+            stale.setdefault((spec.env_id, spec.name), set()).add(old)
+    for (env, name), old in stale.items():
+        n = sum(1 for spec, _, _ in jobs if (spec.env_id, spec.name) == (env, name))
+        echo(f"{env_name(env)} {name}: the stored episodes were made by another producer "
+             f"({_short(next(iter(old)))} -> {_short(producers[env, name])}); re-running {n} of them")
+
+
+def _short(producer: str) -> str:
+    """A producer in a few characters: the model's hash, or a hash of the parameters."""
+    import hashlib
+    import json
+
+    try:
+        params = json.loads(producer).get("params", {})
+    except ValueError:
+        params = {}
+    if "model_sha256" in params:
+        return f"model sha256 {params['model_sha256'][:12]}"
+    return f"parameters {hashlib.sha256(producer.encode()).hexdigest()[:12]}"
+
+
+def _partial_label(env_ids: list[str] | None, policies: list[str] | None) -> str:
+    """'' for the full table; else a folder-safe name of the filter (and a short hash of it)."""
+    import hashlib
+    import re
+
+    if not env_ids and not policies:
+        return ""
+    parts = [env_name(e) for e in env_ids or []] + list(policies or [])
+    text = re.sub(r"[^\w.+-]+", "_", "_".join(parts))[:60]
+    return f"{text}-{hashlib.sha256('|'.join(parts).encode()).hexdigest()[:6]}"
+
+
+def _check_writable(folder: Path) -> None:
+    """Make ``folder`` and write a probe file in it now, so that a bad ``--out``
+    fails before any episode runs (a ValueError naming it)."""
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        probe = folder / ".paragym-write-check"
+        probe.write_text("")
+        probe.unlink()
+    except OSError as exc:
+        raise ValueError(f"cannot write the reports to {folder}: {exc.strerror or exc} (choose another --out)") from exc
+

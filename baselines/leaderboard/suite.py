@@ -1,0 +1,65 @@
+"""What the leaderboard evaluates: the suites, the episodes' seeds and the dynamic episodes' settings."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from typing import Any
+
+from paragym.baselines.policies import PolicySpec
+from paragym.baselines.tasks import bench_of
+
+__all__ = ["FULL", "QUICK", "EvalSuite", "dynamic_kwargs", "dynamic_producer", "episode_seed"]
+
+
+@dataclass(frozen=True)
+class EvalSuite:
+    """Which episodes are evaluated: ``episodes`` per evaluation seed, and
+    ``dynamic``: the episodes each policy also runs in the dynamic fidelity,
+    as (scenario, reset seed), "paper" being each env's paper case
+    (:data:`PAPER_SCENARIO`); ``dynamic_all``: whether every policy runs them
+    (the quick suite leaves out the floors and the learned seeds other than
+    0, to stay under two minutes)."""
+
+    name: str
+    seeds: tuple[int, ...]
+    episodes: int
+    dynamic: tuple[tuple[str, int], ...] = ()
+    dynamic_all: bool = True  # every policy runs the dynamic episodes (else: no floors, learned seed 0 only)
+
+    def runs_dynamic(self, spec: PolicySpec) -> bool:
+        """Whether ``spec`` runs the dynamic episodes in this suite."""
+        if self.dynamic_all:
+            return True
+        return spec.kind != "floor" and not (spec.kind == "learned" and not spec.name.endswith("seed0"))
+
+    def keys(self) -> list[tuple[int, int]]:
+        return [(s, k) for s in self.seeds for k in range(self.episodes)]
+
+
+FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))
+QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
+
+def dynamic_kwargs(env_id: str) -> dict[str, Any]:
+    """The env's arguments for the leaderboard's dynamic episodes, the
+    physics settings explicit (they are part of each row's producer,
+    :func:`dynamic_producer`): the task bench's (:attr:`paragym.baselines.tasks.Bench.dynamics`).
+    A ValueError for a task without a dynamic fidelity."""
+    settings = bench_of(env_id).dynamics
+    if settings is None:
+        raise ValueError(f"{env_id} has no dynamic fidelity (its task's bench names no dynamics)")
+    return {"fidelity": "dynamic", "dynamics": settings()}
+
+
+def dynamic_producer(spec: PolicySpec) -> str:
+    """What makes a dynamic row: the policy's producer and the physics settings it ran under (None: the task
+    has no dynamic fidelity, and no dynamic row)."""
+    settings = bench_of(spec.env_id).dynamics
+    return json.dumps({**json.loads(spec.producer()), "dynamics": None if settings is None else repr(settings())},
+                      sort_keys=True)
+
+
+def episode_seed(seed: int, episode: int) -> int:
+    """The env's reset seed (and the policy's seed) of episode ``episode`` of evaluation seed ``seed``."""
+    return 100_000 + 1_000 * seed + episode
+
