@@ -1,0 +1,201 @@
+"""The documentation site's generated pages: one page per env id, and the index of them.
+
+Each page is made from what the project already says, never written by hand: the env class's
+docstring (its sections ``## Description``, ``## Action Space`` ... ``## Version History``, the
+format Gymnasium's env pages use), the id's registry row (:mod:`paragym.registry`), the env's
+spaces, and its task's bench (:mod:`paragym.baselines.tasks`: the reference, the built-in
+policies, the leaderboard's metrics). A later version's docstring says what changed; where one
+of its sections reads "As vN", the page shows that version's section below it.
+
+``python docs/build.py`` writes the pages and builds the site; ``tests/test_docs.py`` fails when a
+committed page is not what this module writes now.
+"""
+
+from __future__ import annotations
+
+import importlib
+import inspect
+import re
+import warnings
+from pathlib import Path
+from typing import Any
+
+from paragym import registry
+
+__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "readme_env_table", "render_frame", "sections", "status",
+           "write_pages"]
+
+#: the sections of an env page, in order (Gymnasium's env pages use the same)
+SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
+            "Arguments", "Version History")
+
+
+def env_class(env_id: str) -> type:
+    """The single env's class of ``env_id`` (its registry row's entry point)."""
+    module, name = registry.row(env_id).entry_point.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def sections(cls: type) -> tuple[str, dict[str, str]]:
+    """A class docstring's summary (the text before its first ``## `` heading) and its sections by
+    heading; a heading that names several sections ("Starting State, Action Space") gives each of
+    them the same text."""
+    doc = inspect.cleandoc(cls.__dict__.get("__doc__") or "")
+    parts = re.split(r"^## +(.+?)\s*$", doc, flags=re.M)
+    found: dict[str, str] = {}
+    for heading, body in zip(parts[1::2], parts[2::2], strict=True):
+        for name in heading.split(","):
+            found[name.strip()] = body.strip()
+    return parts[0].strip(), found
+
+
+def _parent_id(cls: type) -> str | None:
+    """The env id of the nearest base class that is a registered env (the version ``cls`` extends)."""
+    by_class = {r.entry_point: r.id for r in registry.rows()}
+    for base in cls.__mro__[1:]:
+        key = f"{base.__module__}:{base.__qualname__}"
+        if key in by_class:
+            return by_class[key]
+    return None
+
+
+def _section(env_id: str, name: str) -> list[tuple[str, str]]:
+    """The text of section ``name`` for ``env_id``: (the id that says it, text), the id's own first; an
+    own text that begins "As v..." (or none) is followed by the section of the version it extends."""
+    cls = env_class(env_id)
+    _, own = sections(cls)
+    parent = _parent_id(cls)
+    out = [(env_id, own[name])] if name in own else []
+    if parent is not None and (not out or out[0][1].startswith("As v")):
+        out += _section(parent, name)
+    return out
+
+
+def status(env_id: str) -> str:
+    """"latest" for the newest version of its task, else "superseded by <id>"; then the fidelities it has."""
+    newest = registry.rows_of(registry.task_of(env_id))[-1].id
+    fidelities = "kinematic + dynamic" if "fidelity" in inspect.signature(env_class(env_id)).parameters \
+        else "kinematic"
+    return f"{'latest' if newest == env_id else f'superseded by `{newest}`'}; {fidelities}"
+
+
+def _rst(text: str) -> list[str]:
+    """A docstring's text (reStructuredText) inside a MyST page."""
+    return ["```{eval-rst}", text, "```"]
+
+
+def _space(space: Any) -> str:
+    return re.sub(r"\s+", " ", repr(space))
+
+
+def env_page(env_id: str, image: str | None = None) -> str:
+    """The MyST page of ``env_id``; ``image``: the path of its rendered frame, relative to the page."""
+    from paragym.baselines.tasks import bench_of
+
+    row = registry.row(env_id)
+    cls = env_class(env_id)
+    summary, own = sections(cls)
+    bench = bench_of(env_id)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import gymnasium as gym
+
+        env = gym.make(env_id)
+        action_space, observation_space = _space(env.action_space), _space(env.observation_space)
+        env.close()
+    lines = [f"# {row.name}", "", *_rst(summary), ""]
+    if image is not None:
+        lines += [f"```{{image}} {image}", f":alt: {row.name}, the paper's case after reset(seed=0)",
+                  ":width: 420px", "```", ""]
+    make, vector = f'`gym.make("{row.id}")`', "Gymnasium's `sync` and `async` modes"
+    if row.vector_entry_point:
+        vector = f'`gym.make_vec("{row.id}", num_envs=N, vectorization_mode="vector_entry_point")`'
+    lines += ["| | |", "|---|---|",
+              f"| id | `{row.id}` |",
+              f"| make | {make} |",
+              f"| vector env | {vector} |",
+              f"| status | {status(env_id)} |",
+              f"| action space | `{action_space}` |",
+              f"| observation space | `{observation_space}` |",
+              f"| episode length | at most {row.max_episode_steps} steps (`TimeLimit`) |",
+              f"| scenarios | {', '.join(f'`{s}`' for s in row.scenarios)}; the paper's case: `{row.paper_scenario}` |",
+              f"| task | `{row.task}` ({row.summary}) |",
+              f"| reference | `{bench.reference}` (`paragym demo {row.name}`) |",
+              ""]
+    why = [k for k in own if k.startswith("Why v")]
+    for name in why:
+        lines += [f"## {name}", "", *_rst(own[name]), ""]
+    for name in SECTIONS:
+        texts = _section(env_id, name)
+        if not texts:
+            continue
+        lines += [f"## {name}", ""]
+        for i, (source, text) in enumerate(texts):
+            if i:
+                lines += [f"*{name} of `{source}`:*", ""]
+            lines += [*_rst(text), ""]
+    lines += ["## On the leaderboard", "",
+              f"Ranked by success rate, then {bench.label(bench.primary[0])} "
+              f"({'higher' if bench.primary[1] > 0 else 'lower'} is better). Built-in policies "
+              f"(`paragym policies {row.name}` lists them with the shipped models):", "",
+              "| policy | kind | what it is |", "|---|---|---|"]
+    lines += [f"| `{p.name}` | {p.kind} | {p.description.replace('|', '/')} |"
+              for p in bench.policies if p.plays(env_id)]
+    lines += ["| `random` | floor | uniform random actions |", "",
+              "Per-episode metrics: " + ", ".join(f"{c.label} (`{c.key}`)" for c in bench.columns) + ".", ""]
+    return "\n".join(lines)
+
+
+def index_page() -> str:
+    """The env index: one row per registered id, with its status."""
+    lines = ["# Environments", "",
+             "One page per env id, generated from the env's docstring, its registry row and its task's bench "
+             "(`python docs/build.py`). Every version stays registered and unchanged.", "",
+             "| env id | status | what it is |", "|---|---|---|"]
+    lines += [f"| [`{r.id}`]({r.name}.md) | {status(r.id)} | {r.summary} |" for r in registry.rows()]
+    lines += ["", "```{toctree}", ":hidden:", "", *(r.name for r in registry.rows()), "```", ""]
+    return "\n".join(lines)
+
+
+def readme_env_table() -> str:
+    """The README's table of env ids (its status column from :func:`status`), between its markers."""
+    lines = ["| env id | status | what it is |", "|---|---|---|"]
+    lines += [f"| [`{r.id}`](docs/envs/{r.name}.md) | {status(r.id)} | {r.summary} |" for r in registry.rows()]
+    return "\n".join(lines)
+
+
+def render_frame(env_id: str, path: Path) -> Path:
+    """The paper's case of ``env_id`` after ``reset(seed=0)``, rendered to the PNG ``path``."""
+    import gymnasium as gym
+    from PIL import Image
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make(env_id, scenario=registry.row(env_id).paper_scenario, render_mode="rgb_array")
+        env.reset(seed=0)
+        frame = env.render()
+        env.close()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    Image.fromarray(frame).save(path)
+    return path
+
+
+def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | None = None) -> list[Path]:
+    """Write ``folder/index.md`` and a page per env id (``env_ids``: those only; default all), and with
+    ``images`` each id's frame to ``folder/images/<name>.png``; returns the files written."""
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for r in registry.rows():
+        if env_ids is not None and r.id not in env_ids:
+            continue
+        png = folder / "images" / f"{r.name}.png"
+        if images:
+            written.append(render_frame(r.id, png))
+        page = folder / f"{r.name}.md"
+        page.write_text(env_page(r.id, f"images/{r.name}.png"))
+        written.append(page)
+    index = folder / "index.md"
+    index.write_text(index_page())
+    written.append(index)
+    return written
