@@ -13,6 +13,7 @@ import pytest
 import paragym
 from paragym.envs.capaman import SWEEP_STEP, CaPaManCollisionFreeEnv
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim import occupancy
 
 IDS = sorted(paragym.ENVIRONMENTS)
@@ -110,7 +111,7 @@ def test_an_in_box_capaman_step_moves_no_point_further_than_the_grid_resolution(
 
     def world(a):
         c, q = capaman.part_frames(a, g, validate=False)
-        rot = capaman.quat_to_matrix(q.reshape(-1, 4)).reshape(len(a), -1, 3, 3)[:, clusters.part]
+        rot = quat_to_matrix(q.reshape(-1, 4)).reshape(len(a), -1, 3, 3)[:, clusters.part]
         return np.einsum("nmij,mj->nmi", rot, clusters.local) + c[:, clusters.part]
 
     worst = max(np.linalg.norm(world(a1[s:s + 100]) - world(a0[s:s + 100]), axis=-1).max()

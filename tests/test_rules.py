@@ -15,6 +15,7 @@ import pytest
 
 import paragym
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
 from paragym.sim.obstacles import Box
 from paragym.tasks.capaman import CaPaManScenario, paper_scenario
@@ -143,8 +144,8 @@ def test_loops_stay_closed_in_free_motion_over_the_whole_range(preset):
 def _flipped(scene: CaPaManDynamicScene) -> bool:
     """Whether a parallelogram has flipped: crank b no longer parallel to crank a (the dot of their axes < 0)."""
     for (body, a), (_, b) in zip(scene.motors, scene.cranks_b, strict=True):
-        za = capaman.quat_to_matrix(scene.sim.link_frame(body, a)[1])[:, 2]
-        zb = capaman.quat_to_matrix(scene.sim.link_frame(body, b)[1])[:, 2]
+        za = quat_to_matrix(scene.sim.link_frame(body, a)[1])[:, 2]
+        zb = quat_to_matrix(scene.sim.link_frame(body, b)[1])[:, 2]
         if za @ zb < 0:
             return True
     return False

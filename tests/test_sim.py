@@ -10,6 +10,7 @@ import pytest
 
 import paragym  # noqa: F401  (registers the envs)
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim import occupancy
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.client import PyBulletSim
@@ -167,7 +168,7 @@ def _clearance_at_every_point(alpha, grids, clusters, rows):
     """The grid's clearance with no block skipped: every cluster point of every
     part looked up, robot by robot."""
     centres, quats = capaman.part_frames(alpha, validate=False)
-    rot = capaman.quat_to_matrix(quats)
+    rot = quat_to_matrix(quats)
     value, part = [], []
     for j, g in enumerate(rows):
         v = _values_at(grids, g, centres[j, clusters.part], rot[j, clusters.part], clusters.local)
@@ -203,7 +204,7 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     # and the blocks skipped read the cap at every point
     parts, middles, radii, local = occupancy._blocks(clusters)
     centres, quats = capaman.part_frames(alpha, validate=False)
-    rot, f32 = capaman.quat_to_matrix(quats), np.float32
+    rot, f32 = quat_to_matrix(quats), np.float32
     reach = occupancy._reach(centres[:, parts].astype(f32), rot[:, parts].astype(f32), middles.astype(f32),
                              radii.astype(f32), grids.active_lo[rows, None].astype(f32),
                              grids.active_hi[rows, None].astype(f32))

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
 from paragym.trajectories import JointPath, JointTrajectory
 from paragym.validation.capaman import validate_capaman
@@ -18,7 +19,7 @@ def _tumbling(n: int = 400) -> RigidMotion:
     t = np.linspace(0, 2, n)
     w = np.column_stack([0.8 * np.sin(2 * t), 0.5 * np.cos(3 * t), 1.2 + 0.3 * t])
     al = np.column_stack([1.6 * np.cos(2 * t), -1.5 * np.sin(3 * t), np.full(n, 0.3)])
-    rot = np.stack([capaman.quat_to_matrix(np.array([np.sin(a / 2) * 0.6, 0.0, np.sin(a / 2) * 0.8,
+    rot = np.stack([quat_to_matrix(np.array([np.sin(a / 2) * 0.6, 0.0, np.sin(a / 2) * 0.8,
                                                       np.cos(a / 2)])) for a in t])
     acc = np.column_stack([np.sin(t), -np.cos(2 * t), 0.3 * t])
     zero = np.zeros((n, 3))

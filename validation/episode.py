@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from paragym.mechanisms.capaman import quat_to_matrix
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.rollout import Episode
 from paragym.trajectories import RigidMotion
 from paragym.validation.motion import pose_path_motion

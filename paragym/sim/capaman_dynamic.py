@@ -55,6 +55,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.capaman_model import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 from paragym.trajectories import JointTrajectory, RigidMotion
@@ -125,7 +126,7 @@ def _dynamic_links(g: capaman.CaPaManGeometry, d: CaPaManDynamics) -> list[LinkS
         links.append(replace(link, mass=masses.get(kind, 1e-3)))
         if kind == "rail":  # the slider runs along the rail (its local z, w_k)
             leg = link.name.split("_")[0]
-            slider = capaman.PartShape(f"{leg}_slider", "box", (0.012, 0.012, 0.012))
+            slider = PartShape(f"{leg}_slider", "box", (0.012, 0.012, 0.012))
             links.append(LinkSpec(f"{leg}_slider", link.name, "prismatic", axis=(0.0, 0.0, 1.0), shape=slider,
                                   rgba=(0.8, 0.8, 0.8, 1.0), mass=d.slider_mass))
     return links
@@ -210,15 +211,15 @@ class CaPaManDynamicScene:
         g = self.geometry
         frame = lambda joint: self.sim.link_frame(*joint)  # noqa: E731
         p_pos, p_orn = frame(self.plate)
-        rot = capaman.quat_to_matrix(p_orn)
+        rot = quat_to_matrix(p_orn)
         worst = 0.0
         for k in range(3):
             ball = p_pos + rot @ g.plate_points[k]
             worst = max(worst, float(np.linalg.norm(frame(self.sliders[k])[0] - ball)))
             b_pos, b_orn = frame(self.cranks_b[k])
             c_pos, c_orn = frame(self.couplers[k])
-            tip_b = b_pos + capaman.quat_to_matrix(b_orn)[:, 2] * g.a
-            end_c = c_pos + capaman.quat_to_matrix(c_orn)[:, 2] * g.c
+            tip_b = b_pos + quat_to_matrix(b_orn)[:, 2] * g.a
+            end_c = c_pos + quat_to_matrix(c_orn)[:, 2] * g.c
             worst = max(worst, float(np.linalg.norm(tip_b - end_c)))
         return worst
 
@@ -245,7 +246,7 @@ class CaPaManDynamicScene:
                 closure = max(closure, self.closure_error())
         acc = np.gradient(vel, d.time_step, axis=0)
         ang_acc = np.gradient(omega, d.time_step, axis=0)
-        return ExecutedMotion(t, pos, capaman.quat_to_matrix(orn), vel, omega, acc, ang_acc, alpha, closure)
+        return ExecutedMotion(t, pos, quat_to_matrix(orn), vel, omega, acc, ang_acc, alpha, closure)
 
     # --- the interface of CaPaManScene, for an environment in dynamic fidelity ------------
     def set_obstacles(self, obstacles: tuple) -> None:
@@ -286,7 +287,7 @@ class CaPaManDynamicScene:
     def tip(self) -> np.ndarray:
         """The tool tip now (m), from the plate's simulated pose."""
         pos, orn = self.sim.link_frame(*self.plate)
-        return pos - self.geometry.tool_length * capaman.quat_to_matrix(orn)[:, 2]
+        return pos - self.geometry.tool_length * quat_to_matrix(orn)[:, 2]
 
     def clearance(self) -> tuple[float, str | None]:
         """Signed distance (m) from the whole mechanism to the nearest obstacle, capped."""

@@ -16,6 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim
 from paragym.sim.obstacles import Cylinder, Obstacle
 
@@ -44,12 +45,12 @@ def capaman_links(geometry: capaman.CaPaManGeometry) -> list[LinkSpec]:
     g = geometry
     shapes = {s.name: s for s in capaman.part_shapes(g)}
     zhat = np.array([0.0, 0.0, 1.0])
-    rel_bar = tuple(capaman.matrix_to_quat(np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], float)))
-    rel_rail = tuple(capaman.matrix_to_quat(np.array([[0, 0, 1], [0, -1, 0], [1, 0, 0]], float)))
+    rel_bar = tuple(matrix_to_quat(np.array([[0, 1, 0], [0, 0, 1], [1, 0, 0]], float)))
+    rel_rail = tuple(matrix_to_quat(np.array([[0, 0, 1], [0, -1, 0], [1, 0, 0]], float)))
     links: list[LinkSpec] = []
     for k in range(3):
         e, u, w = g.e[k], g.u[k], g.w[k]
-        f0 = tuple(capaman.matrix_to_quat(np.column_stack([w, zhat, u])))
+        f0 = tuple(matrix_to_quat(np.column_stack([w, zhat, u])))
         leg = f"leg{k + 1}"
         for sign, crank in ((-1.0, "crank_a"), (1.0, "crank_b")):
             pivot = tuple(g.r_f * e + sign * (g.c / 2) * u)
@@ -147,7 +148,7 @@ class CaPaManScene:
         pos, quat = self.sim.link_frame(self.ROBOT, part)
         offset = {"crank_a": self.geometry.a / 2, "crank_b": self.geometry.a / 2,
                   "coupler": self.geometry.c / 2}.get(part.split("_", 1)[-1], 0.0)
-        rot = capaman.quat_to_matrix(quat)
+        rot = quat_to_matrix(quat)
         return pos + offset * rot[:, 2], quat
 
     def clearance(self) -> tuple[float, str | None]:

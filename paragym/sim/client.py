@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 import pybullet as pb
 
-from paragym.mechanisms.capaman import PartShape
+from paragym.mechanisms.geometry import PartShape
 from paragym.sim.obstacles import Cylinder, Obstacle
 
 __all__ = ["LinkSpec", "Motors", "PyBulletSim", "divides", "exact_time_step", "motors_of", "physics_steps"]

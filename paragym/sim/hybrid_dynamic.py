@@ -48,8 +48,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 from scipy.interpolate import PchipInterpolator
 
-from paragym.mechanisms import capaman, hybrid
-from paragym.mechanisms.capaman import PartShape
+from paragym.mechanisms import hybrid
+from paragym.mechanisms.geometry import PartShape, matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 
 __all__ = ["HybridDynamics", "HybridDynamicScene", "HybridRun"]
@@ -154,7 +154,7 @@ class HybridDynamicScene:
             z = direction / np.linalg.norm(direction)
             x = g.tripod_axes[j]
             frame = np.column_stack([x, np.cross(z, x), z])
-            qj = tuple(capaman.matrix_to_quat(frame))
+            qj = tuple(matrix_to_quat(frame))
             self._frames.append(qj)
             tripod.append([LinkSpec(f"t{j}_r", "A", "revolute", tuple(g.tripod_base[j]), qj, (1, 0, 0)),
                            LinkSpec(f"t{j}_p", f"t{j}_r", "prismatic", axis=(0, 0, 1), shape=rod,
@@ -206,7 +206,7 @@ class HybridDynamicScene:
         self.sim.reset_joint(joint[0], joint[1], value if isinstance(value, np.ndarray) else float(value))
 
     def _place(self, platform: tuple[str, int], floats: list[tuple[str, int]], t: np.ndarray) -> None:
-        self.sim.place_free(platform, floats, t[:3, 3], capaman.matrix_to_quat(t[:3, :3]))
+        self.sim.place_free(platform, floats, t[:3, 3], matrix_to_quat(t[:3, :3]))
 
     def reset(self, p: np.ndarray, delta: float) -> None:
         """Every joint where the kinematics has it for E displacement ``p`` at split ``delta``, at rest."""
@@ -219,14 +219,14 @@ class HybridDynamicScene:
         a_world = (t_a[:3, :3] @ g.platform_joints.T).T + t_a[:3, 3]
         for i in range(6):
             d = a_world[i] - g.base_joints[i]
-            local = capaman.quat_to_matrix(np.array(self._frames[i])).T @ (d / np.linalg.norm(d))
+            local = quat_to_matrix(np.array(self._frames[i])).T @ (d / np.linalg.norm(d))
             self._set(self.hex_v[i], np.arcsin(np.clip(local[0], -1, 1)))
             self._set(self.hex_u[i], np.arctan2(-local[1], local[2]))
             self._set(self.actuators[i], st.lengths[0, i])
         e_in_a = (t_t[:3, :3] @ g.tripod_top.T).T + t_t[:3, 3]
         for j in range(3):
             d = e_in_a[j] - g.tripod_base[j]
-            local = capaman.quat_to_matrix(np.array(self._frames[6 + j])).T @ (d / np.linalg.norm(d))
+            local = quat_to_matrix(np.array(self._frames[6 + j])).T @ (d / np.linalg.norm(d))
             self._set(self.tri_r[j], np.arctan2(-local[1], local[2]))
             self._set(self.actuators[6 + j], st.lengths[0, 6 + j])
         self._target = st.lengths[0].copy()
@@ -247,7 +247,7 @@ class HybridDynamicScene:
         for body, link in (self.a_platform, self.e_platform):
             pos, orn = self.sim.link_frame(body, link)
             t = np.eye(4)
-            t[:3, :3], t[:3, 3] = capaman.quat_to_matrix(orn), pos
+            t[:3, :3], t[:3, 3] = quat_to_matrix(orn), pos
             out.append(t)
         return out[0], out[1], self.sim.motor_positions(self.motors)
 
@@ -263,7 +263,7 @@ class HybridDynamicScene:
         for platform, joints, legs in ((self.a_platform, g.platform_joints, self.actuators[:6]),
                                        (self.e_platform, g.tripod_top, self.actuators[6:])):
             pos, orn = frame(platform)
-            rot = capaman.quat_to_matrix(orn)
+            rot = quat_to_matrix(orn)
             for leg, joint in zip(legs, joints, strict=True):
                 worst = max(worst, float(np.linalg.norm(frame(leg)[0] - (pos + rot @ joint))))
         return worst
@@ -293,7 +293,7 @@ class HybridDynamicScene:
             measured[i] = sim.motor_positions(self.motors)
             if i % 200 == 0:
                 closure = max(closure, self.closure_error())
-        return HybridRun(t, pos, capaman.quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),
+        return HybridRun(t, pos, quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),
                          np.gradient(omega, d.time_step, axis=0), a_pos, measured, closure)
 
     def close(self) -> None:

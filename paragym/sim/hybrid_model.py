@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from paragym.mechanisms import capaman, hybrid
-from paragym.mechanisms.capaman import PartShape
+from paragym.mechanisms import hybrid
+from paragym.mechanisms.geometry import PartShape, matrix_to_quat
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Cylinder
 
@@ -47,7 +47,7 @@ class HybridScene:
         each leg is a rod from joint to joint."""
         g = self.geometry
         for name, t in (("A", t_a), ("E", t_e)):
-            self.sim.place(name, t[:3, 3], capaman.matrix_to_quat(t[:3, :3]))
+            self.sim.place(name, t[:3, 3], matrix_to_quat(t[:3, :3]))
         a = t_a[:3, :3] @ g.platform_joints.T + t_a[:3, 3:4]
         ends = [(g.base_joints[i], a[:, i]) for i in range(6)]
         ta = t_a[:3, :3] @ g.tripod_base.T + t_a[:3, 3:4]

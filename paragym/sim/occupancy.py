@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim.obstacles import Box, Obstacle
 
 __all__ = ["ClusterPoints", "DistanceGrids", "OccupancyGrid", "cluster_points", "grid_clearance", "grid_collision",
@@ -112,7 +113,7 @@ class ClusterPoints:
         f32 = np.float32
         local = self.local[self.part == part]
         world = _place(local.astype(f32), centres[:, part].astype(f32),
-                       capaman.quat_to_matrix(quats[:, part]).astype(f32))
+                       quat_to_matrix(quats[:, part]).astype(f32))
         groups = _groups(local, 16)
         order = np.concatenate(groups)  # block after block
         world = np.stack([np.take(world[..., k], order, axis=1) for k in range(3)])
@@ -236,7 +237,7 @@ def grid_collision(alpha: np.ndarray, grid: OccupancyGrid, clusters: ClusterPoin
     for start in range(0, len(al), step):  # chunks of configurations, not single samples
         block = al[start:start + step]
         centres, quats = capaman.part_frames(block, geometry, validate=False)
-        rot = capaman.quat_to_matrix(quats)  # (n, parts, 3, 3)
+        rot = quat_to_matrix(quats)  # (n, parts, 3, 3)
         hit = np.zeros(len(block), bool)
         for p, local in by_part:  # a loop over the (at most 17) parts, each vectorised
             world = _place(local, centres[:, p], rot[:, p])
@@ -408,7 +409,7 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
     n = len(alpha)
     rows = np.arange(n) if rows is None else rows
     centres, quats = capaman.part_frames(alpha, geometry, pose, validate=False)
-    rot = capaman.quat_to_matrix(quats)  # (N, parts, 3, 3)
+    rot = quat_to_matrix(quats)  # (N, parts, 3, 3)
     parts, middles, radii, local = _blocks(clusters)
     cap = round(grids.cap / grids.unit)
     lo, hi = grids.active_lo[rows].astype(np.float32), grids.active_hi[rows].astype(np.float32)

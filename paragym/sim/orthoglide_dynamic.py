@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from paragym.mechanisms import orthoglide as og
-from paragym.mechanisms.capaman import PartShape, quat_to_matrix
+from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, exact_time_step
 from paragym.sim.obstacles import Box
 

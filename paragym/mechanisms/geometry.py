@@ -1,0 +1,67 @@
+"""Geometry every mechanism shares: rotations as (x, y, z, w) quaternions (PyBullet's order) and the
+rigid parts that the PyBullet scenes are built of."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["PartShape", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
+
+
+def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
+    """Hamilton product of (x, y, z, w) quaternions, broadcast over leading axes."""
+    x1, y1, z1, w1 = q1[..., 0], q1[..., 1], q1[..., 2], q1[..., 3]
+    x2, y2, z2, w2 = q2[..., 0], q2[..., 1], q2[..., 2], q2[..., 3]
+    return np.stack([
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+    ], axis=-1)
+
+
+def quat_to_matrix(q: np.ndarray) -> np.ndarray:
+    """Rotation matrices (..., 3, 3) of unit (x, y, z, w) quaternions (..., 4)."""
+    if q.ndim == 1 and q.dtype == np.float64:  # one (a simulated link's): the same sums in floats, 10x faster
+        x, y, z, w = (float(v) for v in q)
+        return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                         [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                         [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+    x, y, z, w = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack([
+        1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w),
+        2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
+        2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y),
+    ], axis=-1).reshape(q.shape[:-1] + (3, 3))
+
+
+def matrix_to_quat(m: np.ndarray) -> np.ndarray:
+    """(x, y, z, w) of one rotation matrix (used once per geometry, not in hot paths)."""
+    w = np.sqrt(max(0.0, 1.0 + np.trace(m))) / 2
+    if w > 1e-3:
+        return np.array([(m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
+                         (m[1, 0] - m[0, 1]) / (4 * w), w])
+    i = int(np.argmax(np.diag(m)))
+    j, k = (i + 1) % 3, (i + 2) % 3
+    v = np.sqrt(max(0.0, 1.0 + m[i, i] - m[j, j] - m[k, k])) / 2
+    q = np.empty(4)
+    q[i], q[j], q[k] = v, (m[j, i] + m[i, j]) / (4 * v), (m[k, i] + m[i, k]) / (4 * v)
+    q[3] = (m[k, j] - m[j, k]) / (4 * v)
+    return q
+
+
+@dataclass(frozen=True)
+class PartShape:
+    """A rigid part of the manipulator: a box or a cylinder about its local z.
+
+    ``half_extents`` (m) for a box; ``radius`` and ``length`` (m) for a
+    cylinder. Its pose comes from :func:`part_frames`.
+    """
+
+    name: str
+    kind: str  # "box", "cylinder" or "sphere" (``radius``)
+    half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    radius: float = 0.0
+    length: float = 0.0
