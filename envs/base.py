@@ -128,15 +128,15 @@ def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows:
 class ParagymEnv(gym.Env):
     """Shared ``reset``/``step``/``render``/``close``; tasks fill the hooks.
 
-    Hooks: ``_reset_task(options) -> info``, ``_apply_action(action)``,
-    ``_observe() -> obs``, ``_reward() -> float``, ``_terminated() -> bool``,
-    ``_info() -> dict``, ``_render_rgb() -> array``, ``_close()``; in dynamic
-    fidelity ``_body()``, ``commanded_pose()`` and ``step_duration()``, what
-    KF validation reads (:mod:`paragym.validation.episode`). Every
-    paragym env is the N = 1 case of its task's transition
-    (``paragym.tasks.*_step``): the defaults of the first four read
-    ``self.state`` and call the task's ``_start`` and ``_transition``, which
-    one mixin per task gives the single env and the vector env alike.
+    Every paragym env is the N = 1 case of its task's transition
+    (``paragym.tasks.*_step``): ``reset`` calls the task's ``_start`` and
+    ``step`` its ``_transition``, which one mixin per task gives the single
+    env and the vector env alike, and both read the observation, reward and
+    termination from ``self.state``. A task fills ``_info() -> dict``,
+    ``_render_rgb() -> array`` and ``_close()``; ``_ended()`` says whether a
+    step now would run past the episode's end; in dynamic fidelity
+    ``_body()``, ``commanded_pose()`` and ``step_duration()`` are what KF
+    validation reads (:mod:`paragym.validation.episode`).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 25}
@@ -153,15 +153,18 @@ class ParagymEnv(gym.Env):
         check_seed(seed)
         options = check_options(options)
         super().reset(seed=seed)
-        info = self._reset_task(options)
-        return self._observe(), info
+        scenarios = self._start(_FIRST, [self.np_random], options)
+        info = self._info()
+        info["scenario"] = scenarios[0]
+        return self.state.obs[0].copy(), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        self._apply_action(self._check_action(action))
-        obs = self._observe()
-        reward = self._reward()
-        terminated = self._terminated()
-        return obs, reward, terminated, False, self._info()
+        action = check_action(action, self.action_space)
+        if self._ended():
+            raise RuntimeError("the episode has ended: call reset()")
+        self._transition(action[None], _ONE)
+        s = self.state
+        return s.obs[0].copy(), float(s.reward[0]), bool(s.terminated[0]), False, self._info()
 
     def render(self) -> np.ndarray | None:
         if self.render_mode == "rgb_array":
@@ -173,25 +176,10 @@ class ParagymEnv(gym.Env):
     def close(self) -> None:
         self._close()
 
-    # --- shared input check ---------------------------------------------------------------
-    def _check_action(self, action: np.ndarray) -> np.ndarray:
-        return check_action(action, self.action_space)
-
-    # --- hooks: the defaults serve an env that is a shell over a task's transition ----------
+    # --- the task's state and hooks ------------------------------------------------------------
     #: the task's state of one robot (N = 1) and the transition's parameters (paragym.tasks.*_step)
     state: Any = None
     params: Any = None
-
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
-        scenarios = self._start(_FIRST, [self.np_random], options)
-        info = self._info()
-        info["scenario"] = scenarios[0]
-        return info
-
-    def _apply_action(self, action: np.ndarray) -> None:
-        if self._ended():
-            raise RuntimeError("the episode has ended: call reset()")
-        self._transition(action[None], _ONE)
 
     def _ended(self) -> bool:
         """Whether a step now would run past the episode's end (then it raises)."""
@@ -201,15 +189,6 @@ class ParagymEnv(gym.Env):
     def scenario(self) -> Any:
         """The episode's scenario (``info["scenario"]`` of the last reset)."""
         return self.state.scenarios[0]
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs[0].copy()
-
-    def _reward(self) -> float:
-        return float(self.state.reward[0])
-
-    def _terminated(self) -> bool:
-        return bool(self.state.terminated[0])
 
     def _info(self) -> dict[str, Any]:
         raise NotImplementedError

@@ -207,9 +207,9 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
                 "orientation_error": 0.0 if self.world is None else self.world.orientation_error,
                 "failure": self._failure}
 
-    def _reset_task(self, options: dict[str, Any]) -> dict[str, Any]:
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         self._failure = None
-        return super()._reset_task(options)
+        return super()._start(rows, rngs, options)
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
         super()._transition(actions, active)

@@ -42,14 +42,14 @@ __all__ = ["ParagymVectorEnv"]
 class ParagymVectorEnv(VectorEnv):
     """Shared reset/step/render; tasks fill the hooks.
 
-    Hooks (``rows`` are integer indices of robots): ``_reset_rows(rows, options)``,
-    ``_apply(actions, active)`` (``active``: the boolean mask of robots that step),
-    ``_observe() -> (N, obs)``, ``_reward() -> (N,)``, ``_terminated() -> (N,)``,
-    ``_infos() -> dict of (N,) arrays``, ``_load_single(i)`` (put robot i's state
-    into ``self.single_env`` for rendering). The defaults of the first five
-    read ``self.state`` (the task's state of N robots, ``paragym.tasks.*_step``)
-    and call the task's ``_start`` and ``_transition``, the same methods the
-    single env calls (one mixin per task gives both).
+    ``reset`` and ``step`` call the task's ``_start(rows, rngs, options)`` and
+    ``_transition(actions, active)`` (``rows``: integer indices of robots;
+    ``active``: the boolean mask of robots that step), the same methods the
+    single env calls (one mixin per task gives both), and read the
+    observations, rewards and terminations from ``self.state`` (the task's
+    state of N robots, ``paragym.tasks.*_step``). A task fills
+    ``_infos() -> dict of (N,) arrays`` and ``_load_single(i)`` (put robot
+    i's state into ``self.single_env`` for rendering).
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
@@ -115,7 +115,7 @@ class ParagymVectorEnv(VectorEnv):
             if seeds[i] is not None or self._rngs[i] is None:
                 self._rngs[i], _ = seeding.np_random(seeds[i])
         try:
-            self._reset_rows(rows, options)
+            self._start(rows, [self._rngs[i] for i in rows], options)
         except BaseException:
             for i, rng in zip(rows, saved, strict=True):  # a refused scenario leaves the generators as they were
                 self._rngs[i] = rng
@@ -123,18 +123,19 @@ class ParagymVectorEnv(VectorEnv):
         self._elapsed[rows] = 0
         self._autoreset[rows] = False
         self._started = True
-        return self._observe(), self._infos()
+        return self.state.obs.copy(), self._infos()
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         if not self._started:
             raise RuntimeError("call reset() before step()")
-        actions = self._check_actions(actions)
+        actions = check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
         resetting = np.flatnonzero(self._autoreset)
         active = ~self._autoreset
-        self._apply(actions, active)
+        self._transition(actions, active)
         if resetting.size:
-            self._reset_rows(resetting, {})
-        obs, reward, terminated = self._observe(), self._reward(), self._terminated()
+            self._start(resetting, [self._rngs[i] for i in resetting], {})
+        s = self.state
+        obs, reward, terminated = s.obs.copy(), s.reward.copy(), s.terminated.copy()
         self._elapsed += active
         self._elapsed[resetting] = 0
         truncated = (self._elapsed >= self.max_episode_steps if self.max_episode_steps is not None
@@ -151,10 +152,10 @@ class ParagymVectorEnv(VectorEnv):
         expects. Returns their indices and their first observations."""
         rows = np.flatnonzero(self._autoreset)
         if rows.size:
-            self._reset_rows(rows, {})
+            self._start(rows, [self._rngs[i] for i in rows], {})
             self._elapsed[rows] = 0
             self._autoreset[rows] = False
-        return rows, self._observe()[rows]
+        return rows, self.state.obs[rows].copy()
 
     def render(self) -> np.ndarray | None:
         """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
@@ -166,26 +167,7 @@ class ParagymVectorEnv(VectorEnv):
     def close_extras(self, **kwargs: Any) -> None:
         self.single_env.close()
 
-    # --- input check --------------------------------------------------------------------
-    def _check_actions(self, actions: np.ndarray) -> np.ndarray:
-        return check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
-
-    # --- hooks: the defaults serve a vector env over a task's transition -------------------
-    def _reset_rows(self, rows: np.ndarray, options: dict[str, Any]) -> None:
-        self._start(rows, [self._rngs[i] for i in rows], options)
-
-    def _apply(self, actions: np.ndarray, active: np.ndarray) -> None:
-        self._transition(actions, active)
-
-    def _observe(self) -> np.ndarray:
-        return self.state.obs.copy()
-
-    def _reward(self) -> np.ndarray:
-        return self.state.reward.copy()
-
-    def _terminated(self) -> np.ndarray:
-        return self.state.terminated.copy()
-
+    # --- the task's hooks ------------------------------------------------------------------
     def _infos(self) -> dict[str, Any]:
         return {}
 
