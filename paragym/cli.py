@@ -1,4 +1,8 @@
-"""The ``paragym`` command: ``paragym envs``, ``paragym demo ENV_ID``."""
+"""The ``paragym`` command: ``paragym envs``, ``paragym demo ENV_ID`` and the rest (``paragym --help``).
+
+Generic over the tasks: an env id's registry row (:mod:`paragym.registry`) and its task's bench
+(:mod:`paragym.baselines.tasks`) say what each command does with it.
+"""
 
 from __future__ import annotations
 
@@ -247,8 +251,8 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
     return 0
 
 
-SCENARIO_HELP = ("the paper's case by default ('paper'; the mobile tripod: 'push'), or 'random'; the mobile tripod "
-                 "also initial_heading, random_slip, rough_terrain")
+SCENARIO_HELP = ("the env's paper case by default, or another of its scenarios: 'random' and the task's own "
+                 "(each id's page in the docs; for the mobile tripod, whose paper has three, the default is 'push')")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -281,7 +285,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(func=_cmd_plan)
     p = sub.add_parser("validate", help="execute in the dynamic simulation and validate with the accelerometer "
                                         "array and the Kalman filter: a policy's episode (--policy), or the "
-                                        "CaPaMan's and the hybrid's plan; print the report, save Figs 8-9")
+                                        "reference plan where the task's bench has one; print the report, save "
+                                        "Figs 8-9")
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
     p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario, planner and sensor-noise seed")
@@ -290,8 +295,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--duration", type=float, default=2.0, help="hybrid: seconds for the whole path")
     p.add_argument("--policy", default=None,
                    help="validate this policy's episode (a name of `paragym policies ENV`: the reference, a shipped "
-                        "model, user-<algo>-seed<N> with --models); without it the CaPaMan and the hybrid validate "
-                        "their reference plan, the 2PRR and the tripod their reference policy's episode")
+                        "model, user-<algo>-seed<N> with --models); without it, the reference plan where the task "
+                        "has one (the CaPaMan, the hybrid), else the reference policy's episode")
     p.add_argument("--models", default=None, help="folder of your own models (for --policy user-...)")
     p.add_argument("--out", default="runs/validate", help="folder for the pictures and the JSON report")
     p.set_defaults(func=_cmd_validate)
