@@ -23,16 +23,6 @@ to its own random coefficient redrawn every second, down to
 terrain's bumps, and the push scenario is an external force on one unit,
 toward the robot's centre, for 0.1 s at its time.
 
-How much slip the contact makes is measured, not assumed. On the paper's
-drives the dynamic model agrees with the kinematic one where the
-disturbance is physical: the misaligned unit's 0.69 m, the push's 2.6 cm, the
-bumps. A slippery floor at steady speed makes little slip: the
-``random_slip`` drive (each unit's friction redrawn in 0.25-0.9 every
-second) ends with odometry 5-7 mm off, as on a dry floor, where the kinematic
-model's random 1 cm/s slip ends 2-13 mm off. Below a friction of about 0.3
-the floor cannot carry the legs' outward thrust, and the units slide out
-(the leg encoders see it; odometry does not).
-
 What the env reads is what the robot would: odometry integrates each unit's
 wheel encoders (the mean of its two wheels' travel) along the heading it
 believes; eta comes from the leg encoders (the task adds the encoders'
@@ -42,34 +32,18 @@ positions, dropped by the units' height onto the ground.
 Masses, the wheels' torque limit, friction and the heading gain are
 assumptions (paper 004 gives none), in :class:`TripodDynamics`. The units
 are heavy (25 kg) so that their wheels' friction carries the legs' outward
-thrust; the push force, 14,000 N per metre of the scenario's depth (350 N
-for the paper's 2.5 cm), was calibrated so that the pushed unit ends 2.6 cm
-from where it would have been. The response is steep, because the wheels'
-friction must be overcome first: 2,400 N/m moves nothing, 13,000 N/m 2.1 cm,
-16,000 N/m 3.9 cm and 24,000 N/m 15 cm.
+thrust; the push is 14,000 N per metre of the scenario's depth (350 N for
+the paper's 2.5 cm), calibrated so that the pushed unit ends 2.6 cm from
+where it would have been.
 
-The spherical joints are joints of the tree, not constraints: the plate, its
-legs and the units are one multibody, and the chain closes through the
-units' wheels on the ground. A first model with the units as separate bodies
-tied to the legs by point-to-point constraints stepped at half the speed.
-The wheel servos follow angle references that advance at the commanded
-rates (position and velocity gains): with velocity motors alone PyBullet's
-solver let the units creep under the legs' thrust, by 1.8 cm per 10 s. At a
-5 ms step and 30 solver iterations, the paper's initial-heading drive (20 m)
-ends within 5 mm of a 2 ms, 100-iteration run, and its misaligned unit
-drifts 0.697 m sideways where the kinematic model says 0.698 m
-(``tests/test_dynamic_fidelity.py`` checks both). About 440 env steps/s.
-
-Twice PandaReach-v3's steps/s (the benchmark's goal for the dynamic
-fidelity) is out of this model's reach in PyBullet at a 5 ms step: the ten
-physics steps of a 0.05 s control period alone allow 0.8x at these
-settings, and 1.2-1.6x with the solver cut to one iteration
-(``benchmarks/dynamic_floor.py``, which alternates with the anchor). A 10 ms step let
-the wheels creep 1.5 cm in 4 m. Cutting the robot into four multibodies (the plate with its legs, and
-each unit with its wheels, tied by ball joints), as the CaPaMan and the
-hybrid are in their "split" layouts, ran 1.35x faster but let a slow,
-straight drive's odometry err by 11.5 mm in 4 m where this tree's errs by
-8.4 mm, so it was not kept.
+The contract, checked by ``tests/test_dynamic_fidelity.py``: on the paper's
+drives the dynamic model agrees with the kinematic one where the
+disturbance is physical (the misaligned unit's 0.69 m sideways, the push's
+2.6 cm, the bumps), and at the default settings (a 5 ms step, 30 solver
+iterations) the initial-heading drive ends within 5 mm of a 2 ms,
+100-iteration run. How the model was calibrated and the designs that were
+measured and not kept are in the docs (``docs/guides/dynamics.md``, "The
+mobile tripod's model").
 """
 
 from __future__ import annotations
