@@ -47,7 +47,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import Protocol
+from typing import NamedTuple, Protocol
 
 import numpy as np
 from numba import njit
@@ -82,6 +82,25 @@ LOOKAHEAD = 3 * DEG
 LENGTH_SCALE = 5.0
 
 
+
+class KernelArgs(NamedTuple):
+    """The parameters the step's kernels read, by name (numba compiles a NamedTuple of floats): the action's
+    scale (rad), the reach tolerance (rad), delta (m) and beta, the reward's weights, the clearance cap (m),
+    the joint range (rad) and v1's time penalty."""
+
+    max_joint_step: float
+    reach_tolerance: float
+    delta: float
+    beta: float
+    w_length: float
+    w_progress: float
+    reach_bonus: float
+    collision_penalty: float
+    clearance_cap: float
+    alpha_min: float
+    alpha_max: float
+    time_penalty: float
+
 @dataclass(frozen=True)
 class CaPaManParams:
     """The env's arguments that shape the transition (see the env's docstring)."""
@@ -109,12 +128,13 @@ class CaPaManParams:
         return max(1, math.ceil(self.max_joint_step / SWEEP_STEP - 1e-9))
 
     @cached_property
-    def kernel_args(self) -> np.ndarray:
-        """The numbers :func:`_finish_kernel` and :func:`_command` take (made once)."""
+    def kernel_args(self) -> KernelArgs:
+        """The numbers :func:`_finish_kernel` and :func:`_command` take, by name (made once)."""
         g = self.geometry
-        return np.array([self.max_joint_step, self.reach_tolerance, self.delta, self.beta, self.w_length,
-                         self.w_progress, self.reach_bonus, self.collision_penalty, self.clearance_cap,
-                         g.alpha_min, g.alpha_max, self.time_penalty])
+        return KernelArgs(float(self.max_joint_step), float(self.reach_tolerance), float(self.delta),
+                          float(self.beta), float(self.w_length), float(self.w_progress), float(self.reach_bonus),
+                          float(self.collision_penalty), float(self.clearance_cap), float(g.alpha_min),
+                          float(g.alpha_max), float(self.time_penalty))
 
 
 @dataclass
@@ -346,7 +366,7 @@ def _command(command, actions, p):
     out = np.empty_like(command)
     for i in range(command.shape[0]):
         for c in range(3):
-            out[i, c] = min(p[10], max(p[9], command[i, c] + actions[i, c] * p[0]))
+            out[i, c] = min(p.alpha_max, max(p.alpha_min, command[i, c] + actions[i, c] * p.max_joint_step))
     return out
 
 
@@ -358,7 +378,7 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
     ``p``: max_joint_step, reach_tolerance, delta, beta, w_length, w_progress,
     reach_bonus, collision_penalty, clearance_cap, alpha_min, alpha_max, time_penalty."""
     n_tour = len(tour)
-    mid, half = (p[10] + p[9]) / 2, (p[10] - p[9]) / 2
+    mid, half = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2
     for i in range(alpha.shape[0]):
         if not rows[i]:
             continue
@@ -372,18 +392,18 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
             a0, a1, a2 = tp[i, t, 0] - alpha[i, 0], tp[i, t, 1] - alpha[i, 1], tp[i, t, 2] - alpha[i, 2]
             after = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
             progress[i] = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2) - after
-            just_reached[i] = after <= p[1] and not collision
+            just_reached[i] = after <= p.reach_tolerance and not collision
             if just_reached[i]:
                 reached[i] += 1
-        r = -p[4] * step_length[i] + p[5] * progress[i]
+        r = -p.w_length * step_length[i] + p.w_progress * progress[i]
         if move:
-            r -= p[11]
-        if clearance[i] < p[2]:
-            r -= p[3]
+            r -= p.time_penalty
+        if clearance[i] < p.delta:
+            r -= p.beta
         if just_reached[i]:
-            r += p[6]
+            r += p.reach_bonus
         if collision:
-            r -= p[7]
+            r -= p.collision_penalty
         reward[i] = r
         terminated[i] = collision or reached[i] >= n_tour
         # observation: cranks, tip, target T.P. and T.C., obstacles, clearance, progress
@@ -395,7 +415,7 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
             obs[i, 9 + c] = tc[i, t, c]
         for c in range(code.shape[1]):
             obs[i, 12 + c] = code[i, c]
-        obs[i, 12 + code.shape[1]] = max(clearance[i], -p[8])
+        obs[i, 12 + code.shape[1]] = max(clearance[i], -p.clearance_cap)
         obs[i, 13 + code.shape[1]] = reached[i] / n_tour
 
 
@@ -403,7 +423,7 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
 def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, rows, p, tour):
     """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
     n_tour = len(tour)
-    mid, half, cap = (p[10] + p[9]) / 2, (p[10] - p[9]) / 2, p[8]
+    mid, half, cap = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2, p.clearance_cap
     m = code.shape[1] // 8
     for i in range(alpha.shape[0]):
         if not rows[i]:

@@ -46,7 +46,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -64,6 +64,23 @@ OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
 #: stroke excess with the excess's change one Delta step up and down (3)
 OBS_SIZE_V1 = OBS_SIZE + 6 + 9 + 2 + 3
 
+
+
+class Weights(NamedTuple):
+    """The numbers the step's kernel reads, by name (numba compiles a NamedTuple of floats): the action's
+    scales (Delta per step, j_bar in m), the reward's weights, the stroke limits (m), the singularity
+    threshold and v1's end-shaping weight."""
+
+    max_delta_step: float
+    j_bar: float
+    w_offset: float
+    w_delta: float
+    w_singular: float
+    w_limit: float
+    l_min: float
+    l_max: float
+    singularity_threshold: float
+    w_end: float
 
 @dataclass(frozen=True)
 class HybridParams:
@@ -89,8 +106,9 @@ class HybridParams:
     def kernel_args(self) -> tuple:
         """The numbers the kernel takes (made once: a step must not rebuild them)."""
         g = self.geometry
-        weights = np.array([self.max_delta_step, self.j_bar, self.w_offset, self.w_delta, self.w_singular,
-                            self.w_limit, g.l_min, g.l_max, g.singularity_threshold, self.w_end])
+        weights = Weights(float(self.max_delta_step), float(self.j_bar), float(self.w_offset), float(self.w_delta),
+                          float(self.w_singular), float(self.w_limit), float(g.l_min), float(g.l_max),
+                          float(g.singularity_threshold), float(self.w_end))
         return (*hybrid.kernel_consts(g), weights, POSE_SCALE)
 
 
@@ -254,12 +272,12 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
             continue
         if stage != 2:
             if move and k[i] < last:
-                new = min(1.0, max(0.0, delta[i] + actions[i, 0] * w[0]))
+                new = min(1.0, max(0.0, delta[i] + actions[i, 0] * w.max_delta_step))
                 d_delta[i] = new - delta[i]
                 delta[i] = new
                 k[i] += 1
                 for c in range(3):
-                    offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w[1]
+                    offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w.j_bar
             for c in range(6):
                 pose[i, c] = nominal[i, k[i], c] + (offset[i, c] if c < 3 else 0.0)
             mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home,
@@ -268,16 +286,17 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
                 continue
         out = 0
         for c in range(9):
-            if lengths[i, c] < w[6] or lengths[i, c] > w[7]:
+            if lengths[i, c] < w.l_min or lengths[i, c] > w.l_max:
                 out += 1
         within[i] = out == 0
-        free[i] = within[i] and mu_h[i] >= w[8] and mu_t[i] >= w[8]
+        free[i] = within[i] and mu_h[i] >= w.singularity_threshold and mu_t[i] >= w.singularity_threshold
         all_free[i] = all_free[i] and free[i]
         terminated[i] = k[i] >= last
-        thr = 2 * w[8]
+        thr = 2 * w.singularity_threshold
         close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr
         norm = math.sqrt(offset[i, 0] * offset[i, 0] + offset[i, 1] * offset[i, 1] + offset[i, 2] * offset[i, 2])
-        reward[i] = -w[2] * norm / w[1] - w[3] * abs(d_delta[i]) / w[0] - w[4] * close - w[5] * out
+        reward[i] = (-w.w_offset * norm / w.j_bar - w.w_delta * abs(d_delta[i]) / w.max_delta_step
+                     - w.w_singular * close - w.w_limit * out)
         # observation: u, the nominal pose now and next, Delta, the strokes, both measures, the offset
         nxt = min(k[i] + 1, last)
         row[0] = u[k[i]]
@@ -286,26 +305,26 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
             row[7 + c] = nominal[i, nxt, c] / scale[c]
         row[13] = delta[i]
         for c in range(9):
-            row[14 + c] = 2 * (lengths[i, c] - w[6]) / (w[7] - w[6]) - 1
+            row[14 + c] = 2 * (lengths[i, c] - w.l_min) / (w.l_max - w.l_min) - 1
         row[23], row[24] = mu_h[i], mu_t[i]
         for c in range(3):
-            row[25 + c] = offset[i, c] / w[1]
+            row[25 + c] = offset[i, c] / w.j_bar
         if version == 1:  # where the path ends: P1 solved at the current split, its excess, the shaping
             mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
                                                 pinv_t, home, sc, True, end_lengths, work)
             excess = _excess(end_lengths, w)
             new_phi = 0.0 if terminated[i] else -excess
             if move:
-                reward[i] += w[9] * (new_phi - phi[i])
+                reward[i] += w.w_end * (new_phi - phi[i])
             phi[i] = new_phi
             for c in range(6):
                 row[28 + c] = nominal[i, last, c] / scale[c]
             for c in range(9):
-                row[34 + c] = 2 * (end_lengths[c] - w[6]) / (w[7] - w[6]) - 1
+                row[34 + c] = 2 * (end_lengths[c] - w.l_min) / (w.l_max - w.l_min) - 1
             row[43], row[44] = mu_h_end, mu_t_end
             row[45] = 10 * excess
             for j, sign in ((46, 1.0), (47, -1.0)):
-                moved = min(1.0, max(0.0, delta[i] + sign * w[0]))
+                moved = min(1.0, max(0.0, delta[i] + sign * w.max_delta_step))
                 hybrid.k_solve(nominal[i, last], moved, base, plat, top, axes, tri_base, pinv_t, home, sc, False,
                                end_lengths, work)
                 row[j] = 100 * (_excess(end_lengths, w) - excess)
@@ -318,6 +337,6 @@ def _excess(lengths, w):
     """How far the nine strokes are beyond their limits, summed, in units of half the stroke range."""
     total = 0.0
     for c in range(9):
-        x = 2 * (lengths[c] - w[6]) / (w[7] - w[6]) - 1
+        x = 2 * (lengths[c] - w.l_min) / (w.l_max - w.l_min) - 1
         total += max(0.0, abs(x) - 1.0)
     return total
