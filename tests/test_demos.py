@@ -11,6 +11,7 @@ import pytest
 minari = pytest.importorskip("minari")
 pytest.importorskip("jax")  # Minari's DataCollector needs it (the 'demos' extra)
 
+from paragym import registry  # noqa: E402
 from paragym.baselines.demos import AUTHOR, dataset_id_for, demo_seed, record_demos  # noqa: E402
 
 ENV = "paragym/MobileTripodOdometry-v1"
@@ -106,3 +107,13 @@ def test_demos_skip_a_scenario_the_planner_cannot_solve(datasets: Path, monkeypa
     data = record_demos("paragym/CaPaManCollisionFree-v1", 1)
     assert data.total_episodes == 1
     assert "but [100002] (no plan found)" in data.storage.metadata["description"]
+
+
+@pytest.mark.parametrize("env_id", [r.id for r in registry.ROWS])
+def test_the_demos_command_records_every_registered_id(env_id: str, datasets: Path, capsys: pytest.CaptureFixture):
+    """``paragym demos`` dispatches the same way for every id, v1 and v2 included (one zero-policy episode)."""
+    from paragym.cli import main
+
+    assert main(["demos", env_id.split("/")[1], "--episodes", "1", "--policy", "zero", "--no-progress"]) == 0
+    assert "1 episodes" in capsys.readouterr().out
+    assert minari.load_dataset(dataset_id_for(env_id, "zero")).total_episodes == 1
