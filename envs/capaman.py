@@ -24,7 +24,7 @@ from paragym.tasks.capaman import TOUR, CaPaManScenario, draw_scenario, resolve_
 from paragym.tasks.capaman_step import (
     SWEEP_STEP,
     CaPaManParams,
-    CaPaManTaskState,
+    CaPaManState,
     DynamicWorld,
     GridWorld,
     SceneWorld,
@@ -39,12 +39,12 @@ __all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeV1Env",
 class _CaPaManTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 
-    state: CaPaManTaskState
+    state: CaPaManState
     params: CaPaManParams
     world: Any
 
-    def new_state(self, n: int) -> CaPaManTaskState:
-        return CaPaManTaskState.empty(n, self.params.obs_size)
+    def new_state(self, n: int) -> CaPaManState:
+        return CaPaManState.empty(n, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         choice = resolve_capaman(options.get("scenario", self.scenario_arg))

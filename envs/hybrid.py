@@ -19,31 +19,31 @@ from paragym.mechanisms import hybrid
 from paragym.sim.client import physics_steps
 from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene
 from paragym.tasks import hybrid_step as task_step
-from paragym.tasks.base import BROKEN_GAP
+from paragym.tasks.base import BROKEN_GAP, renamed
 from paragym.tasks.hybrid import (
     HybridScenario,
     draw_scenarios,
-    hybrid_paper_scenario,
-    hybrid_random_scenario,
-    hybrid_random_scenarios,
+    paper_scenario,
+    random_scenario,
+    random_scenarios,
     resolve_hybrid,
 )
-from paragym.tasks.hybrid_step import HybridParams, HybridTaskState
+from paragym.tasks.hybrid_step import HybridParams, HybridState
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
            "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",
-           "HybridSingularityFreeVectorEnv", "hybrid_paper_scenario",
-           "hybrid_random_scenario", "hybrid_random_scenarios"]
+           "HybridSingularityFreeVectorEnv", "paper_scenario",
+           "random_scenario", "random_scenarios"]
 
 
 class _HybridTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 
-    state: HybridTaskState
+    state: HybridState
     params: HybridParams
 
-    def new_state(self, n: int) -> HybridTaskState:
-        return HybridTaskState.empty(n, self.params.tau, self.params.obs_size)
+    def new_state(self, n: int) -> HybridState:
+        return HybridState.empty(n, self.params.tau, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), rngs, self.geometry)
@@ -386,3 +386,10 @@ class HybridSingularityFreeV2VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeV2Env` stepped together (kinematic: v1's)."""
 
     single_class = HybridSingularityFreeV2Env
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {
+    "hybrid_paper_scenario": "paper_scenario",
+    "hybrid_random_scenario": "random_scenario",
+    "hybrid_random_scenarios": "random_scenarios",
+})

@@ -20,8 +20,8 @@ from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.client import physics_steps
 from paragym.sim.tripod_dynamic import TripodDynamics
 from paragym.tasks import mobile_tripod_step as task_step
-from paragym.tasks.mobile_tripod import DriveScenario, draw_drive, drive_scenario, resolve_drive
-from paragym.tasks.mobile_tripod_step import TripodParams, TripodTaskState
+from paragym.tasks.mobile_tripod import TripodScenario, draw_drive, drive_scenario, resolve_drive
+from paragym.tasks.mobile_tripod_step import TripodParams, TripodState
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripodOdometryV1VectorEnv",
            "MobileTripodOdometryV2Env", "MobileTripodOdometryV2VectorEnv", "MobileTripodOdometryVectorEnv",
@@ -31,11 +31,11 @@ __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripod
 class _TripodTask:
     """The task's hooks, the same for the single env (N = 1) and the vector env."""
 
-    state: TripodTaskState
+    state: TripodState
     params: TripodParams
 
-    def new_state(self, n: int) -> TripodTaskState:
-        return TripodTaskState.empty(n, self.params.obs_size)
+    def new_state(self, n: int) -> TripodState:
+        return TripodState.empty(n, self.params.obs_size)
 
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         choice = resolve_drive(options.get("scenario", self.scenario_arg))
@@ -131,7 +131,7 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
     #: v2's rules: a folded mechanism ends the episode; a physics step that does not divide the sample is refused
     _v2_rules = False
 
-    def __init__(self, scenario: str | DriveScenario = "random", render_mode: str | None = None,
+    def __init__(self, scenario: str | TripodScenario = "random", render_mode: str | None = None,
                  encoder_noise: float = math.radians(1.0), max_correction: float = 0.05,
                  success_error: float = 0.05, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY,
                  trust_rate: float | None = None, relative_reward: bool | None = None, fidelity: str = "kinematic",

@@ -19,12 +19,13 @@ from paragym.mechanisms import orthoglide as og
 from paragym.sim.client import divides, physics_steps
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics, OrthoglideDynamicScene
 from paragym.tasks import orthoglide_step as task_step
-from paragym.tasks.orthoglide import draw_tasks, orthoglide_random_task, orthoglide_random_tasks, resolve_task
+from paragym.tasks.base import renamed
+from paragym.tasks.orthoglide import draw_tasks, random_scenario, random_scenarios, resolve_task
 from paragym.tasks.orthoglide_step import KAPPA_LIMIT, OBS_SIZE, OrthoglideParams, OrthoglideState
 
 __all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
-           "Orthoglide2PRRKappaVectorEnv", "orthoglide_random_task",
-           "orthoglide_random_tasks"]
+           "Orthoglide2PRRKappaVectorEnv", "random_scenario",
+           "random_scenarios"]
 
 
 class _OrthoglideTask:
@@ -182,7 +183,7 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
 
     @property
     def task(self) -> Any:
-        """The episode's path (:class:`paragym.tasks.orthoglide.Task`)."""
+        """The episode's path (:class:`paragym.tasks.orthoglide.OrthoglideScenario`)."""
         return self.state.scenarios[0]
 
     def _ended(self) -> bool:
@@ -305,3 +306,6 @@ class Orthoglide2PRRKappaV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
     """``num_envs`` copies of :class:`Orthoglide2PRRKappaV1Env` stepped together."""
 
     single_class = Orthoglide2PRRKappaV1Env
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"orthoglide_random_task": "random_scenario"})

@@ -14,7 +14,7 @@
   null space of J is one-dimensional (n), so ``(I - J^+ J) z' = (n . z') n``;
   all path points iterate together, each stopping on its own.
 
-A task is a path in the table frame sampled on a time grid: :class:`Task`.
+A task is a path in the table frame sampled on a time grid: :class:`OrthoglideScenario`.
 """
 
 from __future__ import annotations
@@ -26,10 +26,11 @@ import numpy as np
 
 from paragym.mechanisms import orthoglide as og
 from paragym.planners.base import PlanningError
-from paragym.tasks.orthoglide import Task, paper_task
+from paragym.tasks.base import renamed
+from paragym.tasks.orthoglide import OrthoglideScenario, paper_scenario
 
-__all__ = ["CaseResult", "GradientPolicy", "Task", "case_fixed_table", "case_gradient", "case_least_norm",
-           "paper_task", "pointwise_optimum"]
+__all__ = ["CaseResult", "GradientPolicy", "OrthoglideScenario", "case_fixed_table", "case_gradient", "case_least_norm",
+           "paper_scenario", "pointwise_optimum"]
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ def _admissible(rho1: np.ndarray, points: np.ndarray, g: og.OrthoglideGeometry) 
     return rho, ok & og.within_limits(rho, g)
 
 
-def pointwise_optimum(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+def pointwise_optimum(task: OrthoglideScenario, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                       samples: int = 2001) -> tuple[np.ndarray, np.ndarray]:
     """For every path point, the lowest kappa over the admissible table
     positions (a brute-force sweep of rho1) and the rho1 that gives it."""
@@ -62,7 +63,7 @@ def pointwise_optimum(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_G
     return kap[np.arange(k), best], r1[best]
 
 
-def case_fixed_table(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+def case_fixed_table(task: OrthoglideScenario, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                      samples: int = 401) -> CaseResult:
     """Case (a): the best constant table position for the task."""
     r1 = np.linspace(geometry.rho_min[0], geometry.rho_max[0], samples)
@@ -77,10 +78,11 @@ def case_fixed_table(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     return CaseResult("(a) fixed table", task.t, rho.reshape(n, k, 3)[best], kap[best])
 
 
-def case_least_norm(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> CaseResult:
+def case_least_norm(task: OrthoglideScenario, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> CaseResult:
     """Case (b): rho_dot = J^+ t_dot from the optimal initial configuration
     (midpoint integration of the table; rho2, rho3 by inverse kinematics)."""
-    _, r1_opt = pointwise_optimum(Task(task.name, task.t[:1], task.points[:1], task.velocities[:1]), geometry)
+    first = OrthoglideScenario(task.name, task.t[:1], task.points[:1], task.velocities[:1])
+    _, r1_opt = pointwise_optimum(first, geometry)
     r1 = float(r1_opt[0])
     out = np.empty((len(task.t), 3))
     for i in range(len(task.t)):  # an integration: each step needs the last
@@ -99,7 +101,7 @@ def case_least_norm(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEO
     return CaseResult("(b) least norm", task.t, out, og.kappa(out, geometry))
 
 
-def case_gradient(task: Task, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, step: float = 0.05,
+def case_gradient(task: OrthoglideScenario, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, step: float = 0.05,
                   max_iter: int = 300, start: CaseResult | None = None) -> CaseResult:
     """Case (c): at every path point, null-space steps along -grad kappa
     (eqs 9-10) while kappa decreases, halving the step when it does not;
@@ -142,3 +144,6 @@ class GradientPolicy:
         rho = np.asarray(info["rho"])[None]
         slope = float(np.sum(og.null_direction(rho, self.geometry) * og.kappa_gradient(rho, self.geometry)))
         return np.array([np.clip(-self.gain * slope, -1.0, 1.0)], np.float32)
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"Task": "OrthoglideScenario", "paper_task": "paper_scenario"})

@@ -10,8 +10,8 @@ import paragym
 from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.mobile_tripod import DriveScenario
-from paragym.tasks.orthoglide import Task
+from paragym.tasks.mobile_tripod import TripodScenario
+from paragym.tasks.orthoglide import OrthoglideScenario
 
 IDS = sorted(paragym.ENVIRONMENTS)
 HYBRID, ORTHO, TRIPOD = ("paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
@@ -73,14 +73,14 @@ _NAN_HYBRID = HybridScenario("nan", (0.0,) * 6, (np.nan, 0, 0, 0, 0, 0))
 _HIGH_HYBRID = HybridScenario("high", (0, 0, 0.3, 0, 0, 0), (0, 0, 0.3, 0, 0, 0))  # refused by the single env
 BAD = {
     HYBRID: [None, 5, "moon", _NAN_HYBRID, _HIGH_HYBRID, HybridScenario("short", (0.0,) * 5, (0.0,) * 6)],
-    ORTHO: [None, 5, "moon", Task("nan", np.linspace(0, 1, 5), np.full((5, 2), np.nan), np.zeros((5, 2))),
-            Task("far", np.linspace(0, 1, 5), np.full((5, 2), 9.0), np.zeros((5, 2))),
-            Task("back", np.array([0.0, 1.0, 0.5]), np.full((3, 2), 0.5), np.zeros((3, 2)))],
-    TRIPOD: [None, 5, "moon", DriveScenario("stop", speed=0.0), DriveScenario("nan", heading=np.nan),
-             DriveScenario("unit 5", push=(5, 3.0, 0.02)), DriveScenario("late", push=(0, 1e6, 0.02)),
-             DriveScenario("two", heading_error=(0.1, 0.2)), DriveScenario("slip", slip=-1.0),
-             DriveScenario("flat", terrain=Terrain(((0.0, 0.0, 0.1, 0.0),))),
-             DriveScenario("text", speed="fast"), DriveScenario("endless", speed=1e-9)],
+    ORTHO: [None, 5, "moon", OrthoglideScenario("nan", np.linspace(0, 1, 5), np.full((5, 2), np.nan), np.zeros((5, 2))),
+            OrthoglideScenario("far", np.linspace(0, 1, 5), np.full((5, 2), 9.0), np.zeros((5, 2))),
+            OrthoglideScenario("back", np.array([0.0, 1.0, 0.5]), np.full((3, 2), 0.5), np.zeros((3, 2)))],
+    TRIPOD: [None, 5, "moon", TripodScenario("stop", speed=0.0), TripodScenario("nan", heading=np.nan),
+             TripodScenario("unit 5", push=(5, 3.0, 0.02)), TripodScenario("late", push=(0, 1e6, 0.02)),
+             TripodScenario("two", heading_error=(0.1, 0.2)), TripodScenario("slip", slip=-1.0),
+             TripodScenario("flat", terrain=Terrain(((0.0, 0.0, 0.1, 0.0),))),
+             TripodScenario("text", speed="fast"), TripodScenario("endless", speed=1e-9)],
     "paragym/CaPaManCollisionFree-v0": [None, 5, "moon"],
 }
 BAD.update({r.id: BAD[registry.first_version(r.id)] for r in registry.ROWS})  # later versions: the first's scenarios
@@ -101,7 +101,7 @@ def test_bad_scenarios_are_refused_at_reset_by_single_and_vector_env_alike(env_i
 
 
 def test_a_good_custom_drive_runs_to_its_end_with_finite_numbers():
-    env = gym.make(TRIPOD, scenario=DriveScenario("mine", speed=1.0, distance=5.0, push=(2, 2.0, 0.02),
+    env = gym.make(TRIPOD, scenario=TripodScenario("mine", speed=1.0, distance=5.0, push=(2, 2.0, 0.02),
                                                   heading_error=(0.0, 0.01, 0.0)))
     obs, _ = env.reset(seed=0)
     done = False

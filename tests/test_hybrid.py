@@ -12,7 +12,7 @@ from paragym.mechanisms import hybrid
 from paragym.planners import PlanningError
 from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
 from paragym.rollout import run_episode
-from paragym.tasks.hybrid import HybridScenario, hybrid_paper_scenario
+from paragym.tasks.hybrid import HybridScenario, paper_scenario
 from paragym.trajectories import nominal_path
 
 G = hybrid.DEFAULT_GEOMETRY
@@ -88,7 +88,7 @@ def test_nominal_polynomial_is_rest_to_rest():
 
 
 def test_paper_plan_is_free_serial_only_and_smooth():
-    sc = hybrid_paper_scenario()
+    sc = paper_scenario()
     plan = PolynomialDetourPlanner().plan(np.array(sc.p0), np.array(sc.p1))
     assert (~plan.nominal_free).sum() > 0  # the nominal path at Delta = 0.5 leaves the limits ...
     assert plan.free.all()  # ... the plan does not
@@ -141,7 +141,7 @@ def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
     from paragym.sim.hybrid_dynamic import HybridDynamics
     from paragym.validation.hybrid import validate_hybrid
 
-    sc = hybrid_paper_scenario()
+    sc = paper_scenario()
     plan = PolynomialDetourPlanner().plan(np.array(sc.p0), np.array(sc.p1))
     good = validate_hybrid(plan, duration=2.0)
     assert good.position_error < 1e-3 and good.orientation_error < np.radians(0.2)  # 1 mm, 0.2 deg
@@ -224,8 +224,8 @@ def test_the_measures_are_the_smallest_singular_values():
 
 
 def test_random_scenarios_in_a_batch_equal_one_at_a_time():
-    from paragym.tasks.hybrid import hybrid_random_scenario, hybrid_random_scenarios
+    from paragym.tasks.hybrid import random_scenario, random_scenarios
 
-    together = hybrid_random_scenarios([np.random.default_rng(s) for s in range(24)])
-    alone = [hybrid_random_scenario(np.random.default_rng(s)) for s in range(24)]
+    together = random_scenarios([np.random.default_rng(s) for s in range(24)])
+    alone = [random_scenario(np.random.default_rng(s)) for s in range(24)]
     assert together == alone

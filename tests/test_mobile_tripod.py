@@ -61,10 +61,10 @@ def test_the_90_ft_example():
     plate's yaw error depends on the legs' angle, which the paper does not give: 3.6 deg with the
     legs starting at 40 deg and the drive along x (the paper: 2.62 deg)."""
     from paragym.sim.tripod_drive import TripodDrive
-    from paragym.tasks.mobile_tripod import DriveScenario
+    from paragym.tasks.mobile_tripod import TripodScenario
 
     for heading in (0.0, math.radians(60)):
-        sc = DriveScenario("90 ft", distance=90 * mt.FOOT, heading=heading,
+        sc = TripodScenario("90 ft", distance=90 * mt.FOOT, heading=heading,
                            heading_error=(math.radians(1), 0.0, 0.0))
         drive = TripodDrive(sc, np.random.default_rng(0), encoder_noise=0.0)
         for _ in range(drive.steps):

@@ -102,11 +102,11 @@ def test_the_point_and_the_joint_parametrisations_agree():
 
 def test_task_generation_in_batches_equals_one_at_a_time():
     from paragym.planners import nullspace_gradient as ng
-    from paragym.tasks.orthoglide import orthoglide_random_task, orthoglide_random_tasks, servable, start_table_position
+    from paragym.tasks.orthoglide import random_scenario, random_scenarios, servable, start_table_position
 
-    together = orthoglide_random_tasks([np.random.default_rng(s) for s in range(12)])
+    together = random_scenarios([np.random.default_rng(s) for s in range(12)])
     for s, task in enumerate(together):
-        alone = orthoglide_random_task(np.random.default_rng(s))
+        alone = random_scenario(np.random.default_rng(s))
         assert task.name == alone.name
         np.testing.assert_array_equal(task.points, alone.points)
     # servable tries every tenth table position first: the same answer as the full sweep
@@ -120,7 +120,8 @@ def test_task_generation_in_batches_equals_one_at_a_time():
     # the start configuration: the optimum of the 401-position sweep, as the planner finds it
     first = np.array([t.points[0] for t in together])
     kap, r1 = start_table_position(first)
-    ref_kap, ref_r1 = ng.pointwise_optimum(ng.Task("first", np.zeros(len(first)), first, first), samples=401)
+    ref_kap, ref_r1 = ng.pointwise_optimum(ng.OrthoglideScenario("first", np.zeros(len(first)), first, first),
+                                           samples=401)
     np.testing.assert_allclose(kap, ref_kap, rtol=1e-10)
     np.testing.assert_allclose(r1, ref_r1, atol=1e-12)
 
@@ -128,7 +129,7 @@ def test_task_generation_in_batches_equals_one_at_a_time():
 def test_the_papers_three_cases():
     from paragym.planners import nullspace_gradient as ng
 
-    task = ng.paper_task()
+    task = ng.paper_scenario()
     a, b = ng.case_fixed_table(task), ng.case_least_norm(task)
     c = ng.case_gradient(task, start=b)
     assert c.kappa.mean() <= b.kappa.mean() < a.kappa.mean()
@@ -147,7 +148,7 @@ def test_env_policies_and_modes():
 
     import paragym  # noqa: F401
     from paragym.baselines import ZeroPolicy
-    from paragym.planners.nullspace_gradient import GradientPolicy, Task
+    from paragym.planners.nullspace_gradient import GradientPolicy, OrthoglideScenario
     from paragym.rollout import run_episode
 
     env = gym.make("paragym/Orthoglide2PRRKappa-v0", scenario="paper")
@@ -162,7 +163,7 @@ def test_env_policies_and_modes():
     obs, info = joint.reset(seed=0)
     obs, r, term, trunc, info = joint.step(np.zeros(3, np.float32))
     assert info["tracking_error"] > 0  # standing still leaves the moving path point behind
-    far = Task("far", np.array([0.0, 0.01]), np.array([[3.0, 3.0], [3.0, 3.0]]), np.zeros((2, 2)))
+    far = OrthoglideScenario("far", np.array([0.0, 0.01]), np.array([[3.0, 3.0], [3.0, 3.0]]), np.zeros((2, 2)))
     with pytest.raises(ValueError, match="reachable"):
         gym.make("paragym/Orthoglide2PRRKappa-v0", scenario=far).reset(seed=0)
     with pytest.raises(ValueError, match="action_mode"):

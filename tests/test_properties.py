@@ -19,8 +19,8 @@ import paragym
 from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.mobile_tripod import DriveScenario
-from paragym.tasks.orthoglide import Task, circle_task
+from paragym.tasks.mobile_tripod import TripodScenario
+from paragym.tasks.orthoglide import OrthoglideScenario, circle_task
 
 IDS = sorted(paragym.ENVIRONMENTS)
 SCENARIOS = {r.id: ["random", *(n for n in r.scenarios if n != "random")] for r in registry.ROWS}
@@ -123,7 +123,7 @@ def test_custom_hybrid_scenarios_are_refused_at_reset_or_run(p0, p1):
                                                    max_size=3))
 def test_custom_drives_are_refused_at_reset_or_run(speed, distance, heading, error, push, slip, bumps):
     env = _env("paragym/MobileTripodOdometry-v0")
-    scenario = DriveScenario("d", speed=speed, distance=distance, heading=heading, heading_error=tuple(error),
+    scenario = TripodScenario("d", speed=speed, distance=distance, heading=heading, heading_error=tuple(error),
                              push=push, slip=slip, terrain=Terrain(tuple(bumps)))
     _refused_or_runs(env, scenario, steps=40)
 
@@ -135,7 +135,7 @@ def test_custom_orthoglide_tasks_are_refused_at_reset_or_run(cx, cy, r, duration
     env = _env("paragym/Orthoglide2PRRKappa-v0")
     task = circle_task((cx, cy), r, duration, steps=100)
     if broken:
-        task = Task("broken", task.t[::-1], task.points, task.velocities)
+        task = OrthoglideScenario("broken", task.t[::-1], task.points, task.velocities)
     _refused_or_runs(env, task)
 
 

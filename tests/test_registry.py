@@ -64,3 +64,30 @@ def test_an_incomplete_bench_is_named_part_by_part():
     said = " ".join(missing(bench, "paragym/CaPaManCollisionFree-v1"))
     for part in ("'nothing'", "direction", "'nobody'", "success rate"):
         assert part in said
+
+
+def test_every_task_module_speaks_one_vocabulary_and_answers_to_its_old_names():
+    """Each task's scenario module has ``<Task>Scenario``, ``paper_scenario()`` and ``random_scenario(rng, ...)``,
+    its step module ``<Task>State`` and ``<Task>Params``; the names of before 0.9 still work, with a warning."""
+    import importlib
+    import warnings
+
+    import numpy as np
+
+    modules = {"capaman": ("capaman", "CaPaMan"), "hybrid": ("hybrid", "Hybrid"),
+               "orthoglide": ("orthoglide", "Orthoglide"), "tripod": ("mobile_tripod", "Tripod")}
+    for task, (module, prefix) in modules.items():
+        scenarios, step = (importlib.import_module(f"paragym.tasks.{module}{s}") for s in ("", "_step"))
+        assert isinstance(scenarios.paper_scenario(), getattr(scenarios, f"{prefix}Scenario")), task
+        assert callable(scenarios.random_scenario) and hasattr(step, f"{prefix}State") and \
+            hasattr(step, f"{prefix}Params"), task
+    from paragym.tasks import mobile_tripod, orthoglide
+
+    assert isinstance(mobile_tripod.random_scenario(np.random.default_rng(0)), mobile_tripod.TripodScenario)
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        assert orthoglide.Task is orthoglide.OrthoglideScenario
+        assert mobile_tripod.DriveScenario is mobile_tripod.TripodScenario
+    assert len(said) == 2 and all(w.category is DeprecationWarning for w in said)
+    with pytest.raises(AttributeError):
+        orthoglide.Nope  # noqa: B018

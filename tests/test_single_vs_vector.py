@@ -19,7 +19,7 @@ from paragym.sim.obstacles import Box, Cylinder
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.capaman import CaPaManScenario
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.mobile_tripod import DriveScenario
+from paragym.tasks.mobile_tripod import TripodScenario
 from paragym.tasks.orthoglide import circle_task
 
 SETTINGS = dict(deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=False)
@@ -115,7 +115,7 @@ def test_mobile_tripod(speed, distance, heading, error, unit, push, slip, bumps,
     errors[unit] = error
     if push is not None:
         push = (push[0], push[1] * distance / speed, push[2])
-    scenario = DriveScenario("d", speed=speed, distance=distance, heading=heading, heading_error=tuple(errors),
+    scenario = TripodScenario("d", speed=speed, distance=distance, heading=heading, heading_error=tuple(errors),
                              push=push, slip=slip, terrain=Terrain(tuple(bumps)))
     _same_run(f"paragym/MobileTripodOdometry-{version}", scenario,
               data.draw(_actions(6 if version == "v0" else 3, 80)), seed)

@@ -131,10 +131,10 @@ def validate_plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) 
 
 def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-    from paragym.tasks.hybrid import hybrid_paper_scenario
+    from paragym.tasks.hybrid import paper_scenario
     from paragym.validation.hybrid import validate_hybrid
 
-    sc = hybrid_paper_scenario()
+    sc = paper_scenario()
     plan = PolynomialDetourPlanner(sc.geometry).plan(np.array(sc.p0), np.array(sc.p1))
     val = validate_hybrid(plan, 2.0, seed=seed)
     return val.report.passed, {"text": f"paper 002 plan over 2 s executed by the stage dynamics, accelerometers + "

@@ -143,7 +143,7 @@ class DriveState:
     def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
               encoder_noise: float, eta0: float = math.radians(40.0)) -> None:
         """Start drive ``i`` on ``scenario`` (a checked
-        :class:`paragym.tasks.mobile_tripod.DriveScenario`) at rest, the legs
+        :class:`paragym.tasks.mobile_tripod.TripodScenario`) at rest, the legs
         at ``eta0``, drawing its random numbers from ``rng``: the encoder noise
         of every sample, then (with slip) the slip angles and speeds of every step."""
         steps = int(round(scenario.duration / self.dt))
@@ -234,7 +234,7 @@ class TripodDrive:
     odometric increments (3, 2) of the units.
 
     Args:
-        scenario: a :class:`paragym.tasks.mobile_tripod.DriveScenario`.
+        scenario: a :class:`paragym.tasks.mobile_tripod.TripodScenario`.
         rng: the generator of the drive's random numbers.
         geometry: the tripod's legs and plate.
         eta0: the legs' angle at rest (rad).

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-__all__ = ["BROKEN_GAP", "resolve_scenario"]
+__all__ = ["BROKEN_GAP", "renamed", "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -34,3 +34,20 @@ def resolve_scenario(choice: Any, names: tuple[str, ...], custom: type[S],
 #: a loop of a closed chain open by more than this (m) in dynamic fidelity is a broken mechanism: the episode ends
 #: as a failure ("broken") in the ids whose rules say so (the presets hold their loops within 1 mm under contact)
 BROKEN_GAP = 0.005
+
+
+def renamed(module: str, old_to_new: dict[str, str]) -> Callable[[str], Any]:
+    """A module ``__getattr__`` that still answers to the names of before paragym 0.9 (``old_to_new``) with
+    a DeprecationWarning naming the new one: the tasks share one vocabulary now (``<Task>Scenario``,
+    ``<Task>State``, ``paper_scenario()``, ``random_scenario(rng)``)."""
+    import sys
+    import warnings
+
+    def __getattr__(name: str) -> Any:
+        if name in old_to_new:
+            warnings.warn(f"{module}.{name} is {module}.{old_to_new[name]} since paragym 0.9", DeprecationWarning,
+                          stacklevel=2)
+            return getattr(sys.modules[module], old_to_new[name])
+        raise AttributeError(f"module {module!r} has no attribute {name!r}")
+
+    return __getattr__

@@ -1,6 +1,6 @@
 """The CaPaMan task's transition, written once over N robots (paper 000).
 
-The state of N robots is a dataclass of arrays (:class:`CaPaManTaskState`);
+The state of N robots is a dataclass of arrays (:class:`CaPaManState`);
 :func:`reset` puts the chosen rows at T.P.1 of their scenarios and
 :func:`step` moves the active rows. Where the parts are and how far they
 are from the obstacles is the *world*'s answer, one of three:
@@ -57,12 +57,12 @@ from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_model import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
-from paragym.tasks.base import BROKEN_GAP
+from paragym.tasks.base import BROKEN_GAP, renamed
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
 from paragym.units import DEG
 
 __all__ = ["LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "SWEEP_STEP",
-           "CaPaManParams", "CaPaManTaskState", "DynamicWorld", "GridWorld", "SceneWorld",
+           "CaPaManParams", "CaPaManState", "DynamicWorld", "GridWorld", "SceneWorld",
            "World", "reset", "step"]
 
 #: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
@@ -138,7 +138,7 @@ class CaPaManParams:
 
 
 @dataclass
-class CaPaManTaskState:
+class CaPaManState:
     """N robots: task points T.P. and task configurations T.C. (N, 3, 3), the
     obstacles' encoding, crank angles, command and tool tip (N, 3), the tour's
     progress, path length, last step's length and progress, the clearance
@@ -165,7 +165,7 @@ class CaPaManTaskState:
     scenarios: list[CaPaManScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> CaPaManTaskState:
+    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> CaPaManState:
         z = np.zeros
         return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
@@ -254,7 +254,7 @@ class DynamicWorld(SceneWorld):
         return np.array([clearance]), self.scene.tip[None], [near]
 
 
-def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,
+def reset(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,
           scenarios: list[CaPaManScenario], probe: World | None = None) -> None:
     """Start ``rows`` at T.P.1 of their (checked) ``scenarios``. ``probe``:
     the kinematic world of v1's look-ahead when ``world`` is the dynamics."""
@@ -282,7 +282,7 @@ def reset(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np
     _finish(state, params, mask, state.alpha, False)
 
 
-def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: np.ndarray,
+def step(state: CaPaManState, params: CaPaManParams, world: World, actions: np.ndarray,
          active: np.ndarray, probe: World | None = None) -> None:
     """Move the ``active`` robots (N,) with ``actions`` (N, 3) inside the Box
     (the env clips). ``probe``: as in :func:`reset`."""
@@ -316,7 +316,7 @@ def step(state: CaPaManTaskState, params: CaPaManParams, world: World, actions: 
         state.reward[0] -= params.collision_penalty
 
 
-def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, rows: np.ndarray,
+def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,
                 pose_back: bool = True) -> None:
     """v1: the change of each robot's clearance if one crank alone moved
     :data:`LOOKAHEAD` further (inside the joint range), for the robots whose
@@ -343,14 +343,14 @@ def _look_ahead(state: CaPaManTaskState, params: CaPaManParams, world: World, ro
         world.place(near, state.alpha[near])
 
 
-def _place(state: CaPaManTaskState, world: World, rows: np.ndarray, alpha: np.ndarray) -> None:
+def _place(state: CaPaManState, world: World, rows: np.ndarray, alpha: np.ndarray) -> None:
     clearance, tip, near = world.place(rows, alpha)
     state.clearance[rows], state.tip[rows] = clearance, tip
     for i, part in zip(rows.tolist(), near, strict=True):
         state.near[i] = part
 
 
-def _finish(state: CaPaManTaskState, params: CaPaManParams, rows: np.ndarray, old: np.ndarray, move: bool) -> None:
+def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: np.ndarray, move: bool) -> None:
     s = state
     _finish_kernel(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.path_length, s.step_length, s.progress,
                    s.just_reached, s.clearance, s.terminated, s.obs, s.reward, old, rows, move, params.kernel_args,
@@ -448,3 +448,6 @@ def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, ro
         for c in range(3):
             obs[i, b + 1 + c] = min(1.0, max(-1.0, lookahead[i, c] / cap))
         obs[i, b + 4] = reached[i] / n_tour
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"CaPaManTaskState": "CaPaManState"})

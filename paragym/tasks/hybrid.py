@@ -13,11 +13,11 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import hybrid
-from paragym.tasks.base import resolve_scenario
+from paragym.tasks.base import renamed, resolve_scenario
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
-__all__ = ["SCENARIOS", "HybridScenario", "hybrid_paper_scenario", "hybrid_random_scenario", "hybrid_random_scenarios",
+__all__ = ["SCENARIOS", "HybridScenario", "paper_scenario", "random_scenario", "random_scenarios",
            "draw_scenarios", "nominal_rows", "resolve_hybrid"]
 
 SCENARIOS = ("paper", "random")
@@ -34,7 +34,7 @@ class HybridScenario:
     seed: int | None = None
 
 
-def hybrid_paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> HybridScenario:
+def paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> HybridScenario:
     """Paper 002's example: P0 = [10, 10, 10, 0, 0, 0], P1 = [100, 80, 110, 0.15, 0.25, 0] (mm, rad)."""
     p0 = (10 * MM, 10 * MM, 10 * MM, 0.0, 0.0, 0.0)
     p1 = (100 * MM, 80 * MM, 110 * MM, 0.15, 0.25, 0.0)
@@ -70,7 +70,7 @@ def _some_split(p: np.ndarray, test: Any, passed: np.ndarray | None = None, at_o
 def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry: hybrid.HybridGeometry,
                      chunk: int = 256) -> np.ndarray:
     """Which candidate pairs (C, 6) + (C, 6) pass the checks of
-    :func:`hybrid_random_scenarios` after the screen (``hard`` (C,): must
+    :func:`random_scenarios` after the screen (``hard`` (C,): must
     the nominal path at Delta = 0.5 fail on its every fourth sample). The
     checks run stage by stage on the survivors, ``chunk`` pairs at a time."""
     def limits(p: np.ndarray, d: np.ndarray) -> np.ndarray:
@@ -96,9 +96,9 @@ def _candidates_pass(p0: np.ndarray, p1: np.ndarray, hard: np.ndarray, geometry:
     return out
 
 
-def hybrid_random_scenarios(rngs: list[np.random.Generator],
-                            geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, hard_share: float = 0.5,
-                            max_tries: int = 2000) -> list[HybridScenario]:
+def random_scenarios(rngs: list[np.random.Generator],
+                     geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, hard_share: float = 0.5,
+                     max_tries: int = 2000) -> list[HybridScenario]:
     """One seeded pair of poses per generator: P0 singularity-free within
     limits at the starting split Delta = 0.5, P1 at some Delta; x, y in
     +-100 mm, z in 0-120 mm, roll and pitch in +-0.3 rad, yaw in +-0.4 rad.
@@ -149,10 +149,10 @@ def hybrid_random_scenarios(rngs: list[np.random.Generator],
     return out  # type: ignore[return-value]
 
 
-def hybrid_random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
-                           hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
-    """:func:`hybrid_random_scenarios` for one generator."""
-    return hybrid_random_scenarios([rng], geometry, hard_share, max_tries)[0]
+def random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                    hard_share: float = 0.5, max_tries: int = 2000) -> HybridScenario:
+    """:func:`random_scenarios` for one generator."""
+    return random_scenarios([rng], geometry, hard_share, max_tries)[0]
 
 
 @lru_cache(maxsize=4)
@@ -200,5 +200,12 @@ def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
     custom one once :func:`resolve_hybrid` accepts it."""
     choice = resolve_hybrid(choice)
     if choice == "random":
-        return hybrid_random_scenarios(rngs, geometry)
-    return [hybrid_paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)
+        return random_scenarios(rngs, geometry)
+    return [paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {
+    "hybrid_paper_scenario": "paper_scenario",
+    "hybrid_random_scenario": "random_scenario",
+    "hybrid_random_scenarios": "random_scenarios",
+})

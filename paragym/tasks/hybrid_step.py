@@ -1,6 +1,6 @@
 """The hybrid task's transition, written once over N robots (paper 002).
 
-The state of N robots is a dataclass of arrays (:class:`HybridTaskState`);
+The state of N robots is a dataclass of arrays (:class:`HybridState`);
 :func:`reset` starts the chosen rows on their scenarios' nominal paths and
 :func:`step` moves the active rows one sample on. Both end in one numba
 kernel that solves the robot with the mechanism's own kernel
@@ -52,10 +52,11 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import hybrid
+from paragym.tasks.base import renamed
 from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.trajectories import nominal_path
 
-__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "DynamicWorld", "HybridParams", "HybridTaskState", "reset",
+__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "DynamicWorld", "HybridParams", "HybridState", "reset",
            "step"]
 
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
@@ -113,7 +114,7 @@ class HybridParams:
 
 
 @dataclass
-class HybridTaskState:
+class HybridState:
     """N robots: where they are on their nominal paths (``u`` (K,) is shared:
     every path has the same samples), the split, the offset, what the last
     solve found, and the observation and reward of their last step."""
@@ -138,7 +139,7 @@ class HybridTaskState:
     scenarios: list[HybridScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, tau: float, obs_size: int = OBS_SIZE) -> HybridTaskState:
+    def empty(cls, n: int, tau: float, obs_size: int = OBS_SIZE) -> HybridState:
         u = nominal_path(np.zeros(6), np.zeros(6), tau)[0]
         return cls(u=u, nominal=np.zeros((n, len(u), 6)), k=np.zeros(n, np.int64), delta=np.full(n, 0.5),
                    d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
@@ -147,7 +148,7 @@ class HybridTaskState:
                    reward=np.zeros(n), phi=np.zeros(n), scenarios=[None] * n)
 
 
-def reset(state: HybridTaskState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
+def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
     """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.hybrid.resolve_hybrid`)
     at u = 0, Delta = 0.5, no offset; then solve them."""
     for i, scenario in zip(rows, scenarios, strict=True):
@@ -162,7 +163,7 @@ def reset(state: HybridTaskState, params: HybridParams, rows: np.ndarray, scenar
     _advance(state, params, np.zeros((len(state.k), 4)), mask, False)
 
 
-def step(state: HybridTaskState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
+def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
          world: DynamicWorld | None = None) -> None:
     """Move the ``active`` robots (N,) one sample on with ``actions`` (N, 4)
     inside the Box (the env clips), and solve them. ``world``: the dynamics
@@ -214,13 +215,13 @@ class DynamicWorld:
         self.command = np.zeros(6)
         self._work = np.empty((5, 6, 6))
 
-    def reset(self, state: HybridTaskState) -> None:
+    def reset(self, state: HybridState) -> None:
         """Put the simulated robot at the state's (solved) start pose, at rest."""
         self.scene.reset(state.pose[0], float(state.delta[0]))
         self.tracked[0], self.tracking_error, self.orientation_error, self.broken = True, 0.0, 0.0, False
         self.command = state.pose[0].copy()
 
-    def move(self, state: HybridTaskState) -> None:
+    def move(self, state: HybridState) -> None:
         """Drive to the commanded strokes (``state.lengths``) and measure."""
         g = self.scene.geometry
         self.command = state.pose[0].copy()
@@ -243,7 +244,7 @@ class DynamicWorld:
         self.broken = self.broken_gap is not None and self.scene.closure_error() > self.broken_gap
 
 
-def _advance(state: HybridTaskState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
+def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     s = state
     _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
@@ -340,3 +341,6 @@ def _excess(lengths, w):
         x = 2 * (lengths[c] - w.l_min) / (w.l_max - w.l_min) - 1
         total += max(0.0, abs(x) - 1.0)
     return total
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"HybridTaskState": "HybridState"})

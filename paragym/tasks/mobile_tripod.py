@@ -1,6 +1,6 @@
 """The mobile tripod's drives (paper 004, section 4): the paper's named disturbances and random mixtures.
 
-A :class:`DriveScenario` is the straight drive the tripod makes and what
+A :class:`TripodScenario` is the straight drive the tripod makes and what
 disturbs it. Used by the env, the vector env, the planner and the CLI alike.
 """
 
@@ -13,9 +13,10 @@ from typing import Any
 import numpy as np
 
 from paragym.sim.tripod_drive import Terrain
-from paragym.tasks.base import resolve_scenario
+from paragym.tasks.base import renamed, resolve_scenario
 
-__all__ = ["SCENARIOS", "DriveScenario", "draw_drive", "drive_scenario", "resolve_drive", "validate_drive_scenario"]
+__all__ = ["SCENARIOS", "TripodScenario", "draw_drive", "drive_scenario",
+           "paper_scenario", "random_scenario", "resolve_drive", "validate_drive_scenario"]
 
 #: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
 MAX_SAMPLES = 10_000_000
@@ -24,7 +25,7 @@ SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random"
 
 
 @dataclass(frozen=True)
-class DriveScenario:
+class TripodScenario:
     """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
 
     ``heading_error`` (3,) rad: each unit's true heading minus the one it
@@ -48,7 +49,7 @@ class DriveScenario:
         return self.distance / self.speed
 
 
-def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt: float = 0.05) -> DriveScenario:
+def validate_drive_scenario(scenario: TripodScenario, name: str = "scenario", dt: float = 0.05) -> TripodScenario:
     """Refuse (ValueError/TypeError naming the field) a drive that could not be
     simulated: non-finite or non-positive speed or distance, a drive shorter
     than one sample or longer than :data:`MAX_SAMPLES`, heading errors that are not three finite angles within
@@ -56,8 +57,8 @@ def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt:
     drive, a negative or non-finite slip, terrain bumps that are not
     (x, y, height, radius) with a radius of at least 1 mm (a thinner one
     underflows the Gaussian) and a height within +-0.5 m."""
-    if not isinstance(scenario, DriveScenario):
-        raise TypeError(f"{name} must be a DriveScenario; got {type(scenario).__name__}")
+    if not isinstance(scenario, TripodScenario):
+        raise TypeError(f"{name} must be a TripodScenario; got {type(scenario).__name__}")
 
     def real(value: Any, what: str) -> float:
         if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
@@ -109,20 +110,20 @@ def validate_drive_scenario(scenario: DriveScenario, name: str = "scenario", dt:
 
 
 
-def drive_scenario(name: str, rng: np.random.Generator) -> DriveScenario:
+def drive_scenario(name: str, rng: np.random.Generator) -> TripodScenario:
     """The paper's named drives (section 4) and seeded random mixtures."""
-    resolve_scenario(name, SCENARIOS, DriveScenario)  # an unknown name: the one message
+    resolve_scenario(name, SCENARIOS, TripodScenario)  # an unknown name: the one message
     if name == "initial_heading":  # a 2 deg initial heading error on one unit; 20 m at 0.66 m/s
-        return DriveScenario(name, heading_error=(math.radians(2.0), 0.0, 0.0))
+        return TripodScenario(name, heading_error=(math.radians(2.0), 0.0, 0.0))
     if name == "push":  # unit 1 pushed 2.5 cm toward the centre at t = 15 s
-        return DriveScenario(name, push=(0, 15.0, 0.025))
+        return TripodScenario(name, push=(0, 15.0, 0.025))
     if name == "random_slip":  # random odometric errors up to 1 cm/s on all three units at once
-        return DriveScenario(name, slip=0.01)
+        return TripodScenario(name, slip=0.01)
     if name == "rough_terrain":  # bumps and holes on the way
         bumps = tuple((float(x), float(y), float(h), 0.4) for x, y, h in
                       zip(np.linspace(2, 18, 8), rng.uniform(-1.5, 1.5, 8), rng.choice([-1, 1], 8) * 0.08,
                           strict=True))
-        return DriveScenario(name, terrain=Terrain(bumps))
+        return TripodScenario(name, terrain=Terrain(bumps))
     # "random": a seeded mixture of every disturbance
     errors = np.zeros(3)
     errors[rng.integers(3)] = math.radians(rng.uniform(-2, 2))
@@ -130,18 +131,31 @@ def drive_scenario(name: str, rng: np.random.Generator) -> DriveScenario:
         if rng.random() < 0.5 else None
     bumps = tuple((float(rng.uniform(2, 18)), float(rng.uniform(-2, 2)), float(rng.choice([-1, 1]) * 0.06), 0.4)
                   for _ in range(int(rng.integers(0, 5))))
-    return DriveScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
+    return TripodScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
                          push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
 
 
-def resolve_drive(choice: Any) -> str | DriveScenario:
+def paper_scenario() -> TripodScenario:
+    """The benchmark's paper case: paper 004's scenario 2, the push (its three drives have no single one)."""
+    return drive_scenario("push", np.random.default_rng(0))  # the push draws nothing
+
+
+def random_scenario(rng: np.random.Generator) -> TripodScenario:
+    """A seeded random mixture of every disturbance: heading error, push, slip and bumps."""
+    return drive_scenario("random", rng)
+
+
+def resolve_drive(choice: Any) -> str | TripodScenario:
     """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
-    a name of :data:`SCENARIOS` or a :class:`DriveScenario` that can run."""
-    return resolve_scenario(choice, SCENARIOS, DriveScenario, validate_drive_scenario)
+    a name of :data:`SCENARIOS` or a :class:`TripodScenario` that can run."""
+    return resolve_scenario(choice, SCENARIOS, TripodScenario, validate_drive_scenario)
 
 
-def draw_drive(choice: Any, rng: np.random.Generator) -> DriveScenario:
+def draw_drive(choice: Any, rng: np.random.Generator) -> TripodScenario:
     """An episode's drive (single env, vector env and CLI alike): a named or
     random one drawn from ``rng``, or the custom one once checked."""
     choice = resolve_drive(choice)
     return drive_scenario(choice, rng) if isinstance(choice, str) else choice
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"DriveScenario": "TripodScenario"})

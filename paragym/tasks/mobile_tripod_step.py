@@ -1,6 +1,6 @@
 """The mobile tripod task's transition, written once over N robots (paper 004).
 
-The state of N robots (:class:`TripodTaskState`) is their drives
+The state of N robots (:class:`TripodState`) is their drives
 (:class:`paragym.sim.tripod_drive.DriveState`) and the agent's estimates.
 :func:`reset` starts the chosen rows' drives and :func:`step` advances the
 active rows one sample, in one numba kernel that runs the drive's physics
@@ -43,10 +43,11 @@ from numba import njit
 from paragym.mechanisms import mobile_tripod as mt
 from paragym.sim.client import physics_steps
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
-from paragym.tasks.mobile_tripod import DriveScenario
+from paragym.tasks.base import renamed
+from paragym.tasks.mobile_tripod import TripodScenario
 
 __all__ = ["DynamicWorld", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE",
-           "TripodParams", "TripodTaskState", "reset", "step"]
+           "TripodParams", "TripodState", "reset", "step"]
 
 OBS_SIZE = 9 + 3 + 3 + 6
 POS_SCALE = 10.0  # m per observation unit
@@ -82,7 +83,7 @@ class TripodParams:
 
 
 @dataclass
-class TripodTaskState:
+class TripodState:
     """N robots: their drives, the agent's estimates of the units (N, 3, 3),
     the encoders' readings now and at the last sample (N, 3), the smoothed
     encoder distances (N, 3; v1), the errors, and the observation and reward
@@ -102,18 +103,18 @@ class TripodTaskState:
     folded: np.ndarray
 
     @classmethod
-    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> TripodTaskState:
+    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> TripodState:
         return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
                    last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
                    plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
                    reward=np.zeros(n), folded=np.zeros(n, bool))
 
     @property
-    def scenarios(self) -> list[DriveScenario | None]:
+    def scenarios(self) -> list[TripodScenario | None]:
         return self.drive.scenarios
 
 
-def reset(state: TripodTaskState, params: TripodParams, rows: np.ndarray, scenarios: list[DriveScenario],
+def reset(state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
           rngs: list[np.random.Generator]) -> None:
     """Start ``rows`` on checked ``scenarios`` (:func:`paragym.tasks.mobile_tripod.draw_drive`),
     each drawing its drive's random numbers from its generator; every estimate
@@ -129,7 +130,7 @@ def reset(state: TripodTaskState, params: TripodParams, rows: np.ndarray, scenar
     state.last_eta[rows] = state.eta[rows]
 
 
-def step(state: TripodTaskState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
+def step(state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
          world: DynamicWorld | None = None) -> None:
     """Advance the ``active`` robots (N,) one sample with ``actions`` inside
     the Box (the env clips): corrections (N, 6) in v0, trust in the paper's
@@ -174,7 +175,7 @@ class DynamicWorld:
         self.increment = np.zeros((1, 3, 2))
         self._push_left = 0
 
-    def reset(self, state: TripodTaskState) -> None:
+    def reset(self, state: TripodState) -> None:
         """Build the scene for the drive's terrain (kept when it is the same) and put the robot at its start."""
         from paragym.sim.tripod_dynamic import TripodDynamicScene
 
@@ -194,7 +195,7 @@ class DynamicWorld:
         self._push_left = 0
         self.increment[:] = 0.0
 
-    def move(self, state: TripodTaskState) -> np.ndarray:
+    def move(self, state: TripodState) -> np.ndarray:
         """Advance the drive one sample if it has not ended; returns which robots moved (1,)."""
         d, dyn = state.drive, self.dynamics
         if d.k[0] >= d.steps[0]:
@@ -238,7 +239,7 @@ _NONE = np.zeros(0, bool)
 _NO_INCREMENT = np.zeros((0, 3, 2))
 
 
-def _advance(state: TripodTaskState, params: TripodParams, actions: np.ndarray, rows: np.ndarray,
+def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, moved: np.ndarray = _NONE, increment: np.ndarray = _NO_INCREMENT) -> None:
     """``moved`` and ``increment``: a dynamic world advanced the drives already (which of them, and each
     unit's odometric increment (N, 3, 2)); empty, the kernel advances them (:func:`k_drive_step`)."""
@@ -367,3 +368,6 @@ def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate
         row[12] = k[i] / max(steps[i], 1)
         for c in range(OBS_SIZE_V1):
             obs[i, c] = min(100.0, max(-100.0, row[c]))
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {"TripodTaskState": "TripodState"})

@@ -1,6 +1,6 @@
 """The Orthoglide task's scenarios (paper 003): paths in the table frame, the paper's circle, random paths.
 
-A :class:`Task` is the path the tool follows; the paper's case is the 0.8 m
+A :class:`OrthoglideScenario` is the path the tool follows; the paper's case is the 0.8 m
 circle of section 6; random tasks are seeded circles, ellipses and lines that
 an admissible table position serves. Used by the env, the vector env, the
 planner and the CLI alike.
@@ -14,16 +14,16 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import orthoglide as og
-from paragym.tasks.base import resolve_scenario
+from paragym.tasks.base import renamed, resolve_scenario
 
-__all__ = ["SCENARIOS", "Task", "circle_task", "draw_tasks", "orthoglide_random_task", "orthoglide_random_tasks",
-           "paper_task", "resolve_task", "servable", "start_table_position"]
+__all__ = ["SCENARIOS", "OrthoglideScenario", "circle_task", "draw_tasks", "random_scenario", "random_scenarios",
+           "paper_scenario", "resolve_task", "servable", "start_table_position"]
 
 SCENARIOS = ("paper", "random")
 
 
 @dataclass(frozen=True)
-class Task:
+class OrthoglideScenario:
     """A path in the table frame: times (K,) s, points (K, 2) m, velocities (K, 2) m/s."""
 
     name: str
@@ -33,17 +33,17 @@ class Task:
 
 
 def circle_task(centre: tuple[float, float], radius: float, duration: float = 10.0, start: float = 0.0,
-                steps: int = 1000, name: str = "circle") -> Task:
+                steps: int = 1000, name: str = "circle") -> OrthoglideScenario:
     """A circle run once counter-clockwise from angle ``start`` (rad) in ``duration`` s."""
     t = np.linspace(0.0, duration, steps + 1)
     w = 2 * np.pi / duration
     ang = start + w * t
     pts = np.asarray(centre) + radius * np.stack([np.cos(ang), np.sin(ang)], 1)
     vel = radius * w * np.stack([-np.sin(ang), np.cos(ang)], 1)
-    return Task(name, t, pts, vel)
+    return OrthoglideScenario(name, t, pts, vel)
 
 
-def paper_task() -> Task:
+def paper_scenario() -> OrthoglideScenario:
     """Paper 003, section 6: a 0.8 m circle centred at (0.1, 0.55) m in the
     table frame, in 10 s. The paper does not say where the circle starts; it
     starts here where the fixed table's worst kappa falls near t = 2.2 s, as
@@ -131,14 +131,14 @@ def _path(kind: int, q: list[float], step: int = 1) -> tuple[np.ndarray, np.ndar
     return pts, vel
 
 
-def orthoglide_random_tasks(rngs: list[np.random.Generator],
-                            geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, max_tries: int = 100) -> list[Task]:
+def random_scenarios(rngs: list[np.random.Generator], geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                     max_tries: int = 100) -> list[OrthoglideScenario]:
     """One seeded circle, ellipse or line (10 s) per generator, each drawn
     until some admissible table position serves every tenth point (a sweep of
     101 table positions, :func:`servable`). Each generator draws exactly what
     it would alone (a candidate, then the test); the candidates of all
     pending generators are tested in one batch."""
-    tasks: list[Task] = [None] * len(rngs)
+    tasks: list[OrthoglideScenario] = [None] * len(rngs)
     pending = np.arange(len(rngs))
     for _ in range(max_tries):
         if not pending.size:
@@ -148,15 +148,15 @@ def orthoglide_random_tasks(rngs: list[np.random.Generator],
         ok = servable(every_tenth, geometry).reshape(len(drawn), -1).all(axis=1)
         for j in np.flatnonzero(ok):
             kind, q = drawn[j]
-            tasks[pending[j]] = Task(_KINDS[kind], _TIMES, *_path(kind, q))
+            tasks[pending[j]] = OrthoglideScenario(_KINDS[kind], _TIMES, *_path(kind, q))
         pending = pending[~ok]
     raise RuntimeError(f"no reachable random path in {max_tries} tries")
 
 
-def orthoglide_random_task(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
-                           max_tries: int = 100) -> Task:
-    """:func:`orthoglide_random_tasks` for one generator."""
-    return orthoglide_random_tasks([rng], geometry, max_tries)[0]
+def random_scenario(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                    max_tries: int = 100) -> OrthoglideScenario:
+    """:func:`random_scenarios` for one generator."""
+    return random_scenarios([rng], geometry, max_tries)[0]
 
 
 def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
@@ -181,7 +181,7 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
     return kap, r1[best]
 
 
-def _validate(choice: Task, geometry: og.OrthoglideGeometry) -> None:
+def _validate(choice: OrthoglideScenario, geometry: og.OrthoglideGeometry) -> None:
     """A custom task that can run: finite, increasing times (at least two)
     with points and velocities (K, 2), whose first point the manipulator
     reaches."""
@@ -203,18 +203,26 @@ def _validate(choice: Task, geometry: og.OrthoglideGeometry) -> None:
         raise ValueError("scenario's first point is outside the reachable set")
 
 
-def resolve_task(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> str | Task:
+def resolve_task(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> str | OrthoglideScenario:
     """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
-    "paper", "random", or a :class:`Task` that can run."""
-    return resolve_scenario(choice, SCENARIOS, Task, lambda task: _validate(task, geometry))
+    "paper", "random", or a :class:`OrthoglideScenario` that can run."""
+    return resolve_scenario(choice, SCENARIOS, OrthoglideScenario, lambda task: _validate(task, geometry))
 
 
 def draw_tasks(choice: Any, rngs: list[np.random.Generator],
-               geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> list[Task]:
+               geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> list[OrthoglideScenario]:
     """One episode's task per generator (single env, vector env and CLI
     alike): the paper's circle, random paths drawn from the generators, or
     the custom task once :func:`resolve_task` accepts it."""
     choice = resolve_task(choice, geometry)
     if choice == "random":
-        return orthoglide_random_tasks(rngs, geometry)
-    return [paper_task() if choice == "paper" else choice] * len(rngs)
+        return random_scenarios(rngs, geometry)
+    return [paper_scenario() if choice == "paper" else choice] * len(rngs)
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = renamed(__name__, {
+    "Task": "OrthoglideScenario",
+    "paper_task": "paper_scenario",
+    "orthoglide_random_task": "random_scenario",
+    "orthoglide_random_tasks": "random_scenarios",
+})

@@ -34,7 +34,7 @@ from numba import njit
 
 from paragym.mechanisms import orthoglide as og
 from paragym.tasks.base import BROKEN_GAP
-from paragym.tasks.orthoglide import Task, start_table_position
+from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 
 __all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState",
            "reset", "step"]
@@ -94,7 +94,7 @@ class OrthoglideState:
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
-    scenarios: list[Task | None] = field(default_factory=list)
+    scenarios: list[OrthoglideScenario | None] = field(default_factory=list)
 
     @classmethod
     def empty(cls, n: int, points: int = 2) -> OrthoglideState:
@@ -113,7 +113,7 @@ class OrthoglideState:
             self.dt = np.pad(self.dt, ((0, 0), (0, extra)))
 
 
-def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, tasks: list[Task]) -> None:
+def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, tasks: list[OrthoglideScenario]) -> None:
     """Start ``rows`` on ``tasks`` (checked ones: :func:`paragym.tasks.orthoglide.draw_tasks`):
     at the admissible table position with the lowest kappa at the first path
     point, the sliders by inverse kinematics; then evaluate them."""
