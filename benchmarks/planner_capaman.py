@@ -31,7 +31,7 @@ from tqdm import tqdm
 
 from paragym.planners import PlanningError, RrtGaPlanner
 from paragym.planners.rrt_ga import LEG_INTERVALS, JointSpaceModel
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman import paper_scenario, random_scenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG

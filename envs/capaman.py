@@ -17,7 +17,7 @@ from paragym.envs.base import ParagymEnv, check_control_period, pose6
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.mechanisms import capaman
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
 from paragym.tasks import capaman_step as task_step
 from paragym.tasks.capaman import TOUR, CaPaManScenario, draw_scenario, resolve_capaman

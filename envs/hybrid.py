@@ -248,7 +248,7 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
             self._render_rgb()
 
     def _render_rgb(self) -> np.ndarray:
-        from paragym.sim.hybrid_model import HybridScene
+        from paragym.sim.hybrid_scene import HybridScene
 
         if self.world is not None:  # the simulated robot, not the command
             return self.world.scene.render()

@@ -227,7 +227,7 @@ class MobileTripodOdometryEnv(_TripodTask, ParagymEnv):
             self.world.close()
 
     def _render_rgb(self) -> np.ndarray:
-        from paragym.sim.tripod_model import TripodScene
+        from paragym.sim.tripod_scene import TripodScene
 
         if self.world is not None:  # the simulated robot, not the kinematic model
             return self.world.scene.render()

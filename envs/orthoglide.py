@@ -221,7 +221,7 @@ class Orthoglide2PRRKappaEnv(_OrthoglideTask, ParagymEnv):
             self._render_rgb()
 
     def _render_rgb(self) -> np.ndarray:
-        from paragym.sim.orthoglide_model import OrthoglideScene
+        from paragym.sim.orthoglide_scene import OrthoglideScene
 
         if self.world is not None:  # the simulated mechanism, not the command
             return self.world.scene.render()

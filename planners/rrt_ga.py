@@ -46,7 +46,7 @@ from scipy import ndimage
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.sim import occupancy
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman import CaPaManScenario, validate_scenario
 from paragym.trajectories import JointPath, JointTrajectory
 from paragym.units import DEG

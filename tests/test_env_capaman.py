@@ -14,7 +14,7 @@ from paragym.envs import CaPaManScenario
 from paragym.mechanisms import capaman
 from paragym.planners import GridPathPolicy
 from paragym.rollout import run_episode
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Cylinder
 from paragym.tasks.capaman import paper_scenario
 

@@ -5,7 +5,7 @@ import pytest
 
 from paragym.planners import GridPathPlanner, PlanningError, Policy
 from paragym.planners.grid_path import GridPathPolicy
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box
 from paragym.tasks.capaman import CaPaManScenario, paper_scenario
 

@@ -12,7 +12,7 @@ from paragym.mechanisms import capaman
 from paragym.planners import PlanningError, RrtGaPlanner, RrtGaPolicy, RrtGaSettings
 from paragym.planners.rrt_ga import fitness
 from paragym.rollout import run_episode
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder
 from paragym.tasks.capaman import CaPaManScenario, paper_scenario
 from paragym.trajectories import JointPath, JointTrajectory

@@ -12,7 +12,7 @@ import paragym  # noqa: F401  (registers the envs)
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim import occupancy
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box
 from paragym.tasks.capaman import paper_scenario, random_scenario

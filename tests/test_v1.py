@@ -9,7 +9,7 @@ import pytest
 import paragym  # noqa: F401
 from paragym.baselines.policies import get_policy
 from paragym.mechanisms import capaman, hybrid
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman_step import LOOKAHEAD
 from paragym.units import DEG
 

@@ -1,6 +1,6 @@
 """The CaPaMan in PyBullet, dynamic fidelity: the closed chain under motors.
 
-The kinematic tree of :func:`paragym.sim.capaman_model.capaman_links` gets
+The kinematic tree of :func:`paragym.sim.capaman_scene.capaman_links` gets
 masses, a slider on each rail (the prismatic joint s_k, passive), and the
 loop closures as PyBullet point-to-point constraints: each parallelogram's
 crank b tip to its coupler's far end, and each slider to its ball joint p_k on
@@ -56,7 +56,7 @@ import numpy as np
 
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
-from paragym.sim.capaman_model import capaman_links
+from paragym.sim.capaman_scene import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 from paragym.trajectories import JointTrajectory, RigidMotion
 

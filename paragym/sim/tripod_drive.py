@@ -12,7 +12,7 @@ drive's random numbers (the encoder noise of every sample, the slip of
 every step) are drawn when it starts, in a fixed order, so that a drive
 depends only on its generator's state. The terrain is flat or bumpy (a sum
 of Gaussian bumps and holes); PyBullet draws it as a heightfield with the
-robot (:class:`paragym.sim.tripod_model.TripodScene`).
+robot (:class:`paragym.sim.tripod_scene.TripodScene`).
 
 The physics of one sample is written once, as a numba kernel over one robot
 of a :class:`DriveState` of N drives (:func:`k_drive_step`); the task's step

@@ -30,7 +30,7 @@ from scipy import ndimage
 
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder, Obstacle
 from paragym.tasks.base import resolve_scenario
 from paragym.units import DEG

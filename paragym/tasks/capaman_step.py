@@ -55,7 +55,7 @@ from numba import njit
 from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
-from paragym.sim.capaman_model import CaPaManScene
+from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import ENCODING_SIZE
 from paragym.tasks.base import BROKEN_GAP, renamed
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
