@@ -222,9 +222,12 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
                                     self.w_progress, self.reach_bonus, self.collision_penalty, float(clearance_cap),
                                     geometry, self.version, self.time_penalty)
         self.observation_space = spaces.Box(-1.0, 1.0, (self.params.obs_size,), np.float32)
-        if fidelity == "kinematic":
+        if fidelity == "kinematic" and collision == "grid":  # the scene that checks scenarios comes when asked
+            self.scene: CaPaManScene | CaPaManDynamicScene | None = None
+            self.world = GridWorld(1, geometry, clearance_cap)
+        elif fidelity == "kinematic":
             self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
-            self.world = GridWorld(1, geometry, clearance_cap) if collision == "grid" else SceneWorld(self.scene)
+            self.world = SceneWorld(self.scene)
         else:
             check_control_period(self.control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
             self.scene = CaPaManDynamicScene(geometry, dynamics, gui=render_mode == "human",
@@ -236,7 +239,11 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
 
     def _checker(self) -> CaPaManScene:
         """The kinematic scene that generates and checks scenarios (the env's
-        own in kinematic fidelity; a second, kinematic one in dynamic fidelity)."""
+        own in kinematic fidelity, built on first use where the grid checks
+        collisions; a second, kinematic one in dynamic fidelity)."""
+        if self.scene is None:
+            self.scene = CaPaManScene(self.geometry, gui=self.render_mode == "human",
+                                      clearance_cap=self.params.clearance_cap)
         if isinstance(self.scene, CaPaManScene):
             return self.scene
         if self._scenario_scene is None:
@@ -283,11 +290,12 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
 
     def _render_rgb(self) -> np.ndarray:
         if self.collision == "grid":  # the scene is not posed by the steps
-            self.scene.set_configuration(self.state.alpha[0])
+            self._checker().set_configuration(self.state.alpha[0])
         return self.scene.render()
 
     def _close(self) -> None:
-        self.scene.close()
+        if self.scene is not None:
+            self.scene.close()
         if self._scenario_scene is not None:
             self._scenario_scene.close()
 
@@ -351,9 +359,12 @@ class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
     ``collision="grid"`` stepped together: the same transition
     (:mod:`paragym.tasks.capaman_step`) over N robots, with paper 000's grid
     test (Psi as signed distances, the cluster points of eq 2) for all of
-    them at once. Scenarios are generated (and checked) by the single env's
-    PyBullet scene, robot by robot, at reset. Keyword arguments are the
-    single env's (``collision`` is "grid"; ``fidelity`` is "kinematic")."""
+    them at once. Scenarios are generated (and checked) by a kinematic
+    PyBullet scene of its own, robot by robot, at reset; the same scene draws
+    robot ``render_index``. Keyword arguments are the single env's
+    (``collision`` is "grid"; ``fidelity`` is "kinematic"), which checks them
+    and derives the parameters (built with the grid, it builds no PyBullet
+    scene)."""
 
     single_class = CaPaManCollisionFreeEnv
 
@@ -365,9 +376,27 @@ class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
         kwargs.update(collision="grid", fidelity="kinematic")
         super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
         self.world = GridWorld(self.num_envs, self.geometry, self.params.clearance_cap)
+        self._scene: CaPaManScene | None = None
 
     def _checker(self) -> CaPaManScene:
-        return self.single_env._checker()
+        """The kinematic scene that checks every robot's scenario and draws robot ``render_index``."""
+        if self._scene is None:
+            self._scene = CaPaManScene(self.geometry, clearance_cap=self.params.clearance_cap)
+        return self._scene
+
+    def render(self) -> np.ndarray | None:
+        """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
+        if self.render_mode != "rgb_array":
+            return None
+        i, scene = self.render_index, self._checker()
+        scene.set_obstacles(self.state.scenarios[i].obstacles)
+        scene.set_configuration(self.state.alpha[i])
+        return scene.render()
+
+    def close_extras(self, **kwargs: Any) -> None:
+        super().close_extras(**kwargs)
+        if self._scene is not None:
+            self._scene.close()
 
     def _infos(self) -> dict[str, Any]:
         s = self.state
@@ -375,10 +404,6 @@ class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
         return self._for_every_robot(clearance=s.clearance.copy(), collision=collision,
                                      is_success=(s.reached >= 3) & ~collision)
 
-    def _load_single(self, i: int) -> None:
-        e = self.single_env
-        e.scene.set_obstacles(self.state.scenarios[i].obstacles)
-        e.state.alpha[0] = self.state.alpha[i]
 
 
 class CaPaManCollisionFreeV1VectorEnv(CaPaManCollisionFreeVectorEnv):

@@ -183,3 +183,30 @@ def test_the_sb3_adapter_reports_success_at_an_episode_end():
             if dones.any():
                 break
         assert dones.all() and [i.get("is_success") for i in infos] == want, scenario
+
+
+def test_a_native_vector_env_builds_no_pybullet_scene_until_it_needs_one():
+    """The vector env takes its parameters from the single env's argument checks, which build no PyBullet scene
+    in the kinematic fidelity; the CaPaMan's own checker scene comes at the first reset, and draws as the single
+    env draws."""
+    import warnings
+
+    from paragym import registry
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for task in sorted({r.task for r in registry.ROWS}):
+            venv = gym.make_vec(registry.rows_of(task)[-1].id, num_envs=2, vectorization_mode="vector_entry_point",
+                                render_mode="rgb_array").unwrapped
+            one = venv.single_env
+            assert getattr(one, "scene", None) is None and one._render_scene is None, task
+            assert getattr(venv, "_scene", None) is None, task
+            venv.close()
+        venv = gym.make_vec("paragym/CaPaManCollisionFree-v1", num_envs=2, vectorization_mode="vector_entry_point",
+                            render_mode="rgb_array")
+        venv.reset(seed=4)
+        single = gym.make("paragym/CaPaManCollisionFree-v1", collision="grid", render_mode="rgb_array")
+        single.reset(seed=4)
+        np.testing.assert_array_equal(venv.render(), single.render())
+        venv.close()
+        single.close()
