@@ -13,3 +13,27 @@ def paper_result():
     result = planner.solve(paper_scenario())
     planner.close()
     return result
+
+
+@pytest.fixture(scope="session")
+def shared_folder(tmp_path_factory):
+    """A folder every xdist worker of this session sees, and a lock on it: a worker that finds there what
+    another stored (a leaderboard database, which runs only the episodes it lacks) does not run it again."""
+    import contextlib
+    import fcntl
+    import os
+
+    base = tmp_path_factory.getbasetemp()
+    folder = (base.parent if os.environ.get("PYTEST_XDIST_WORKER") else base) / "shared"
+    folder.mkdir(exist_ok=True)
+
+    @contextlib.contextmanager
+    def locked(name: str):
+        with open(folder / f"{name}.lock", "w") as handle:
+            fcntl.flock(handle, fcntl.LOCK_EX)
+            try:
+                yield folder / name
+            finally:
+                fcntl.flock(handle, fcntl.LOCK_UN)
+
+    return locked

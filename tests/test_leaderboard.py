@@ -150,12 +150,13 @@ LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
 
 
 @pytest.fixture(scope="module")
-def references(tmp_path_factory):
-    """Reference, random and zero on evaluation seeds 0-1 x 10 episodes of every env."""
+def references(shared_folder):
+    """Reference, random and zero on evaluation seeds 0-1 x 10 episodes of every env (run by one xdist worker;
+    the others read its database, where every episode is already stored)."""
     policies = sorted({bench_of(env).reference for env in paragym.ENVIRONMENTS} | {"random", "zero"})
-    run = run_leaderboard(db=tmp_path_factory.mktemp("ref") / "r.sqlite", suite=EvalSuite("test", (0, 1), 10),
-                          policies=policies, out=None, validate=False, progress=False, echo=lambda s: None,
-                          executor="workers", workers=2)
+    with shared_folder("references.sqlite") as db:
+        run = run_leaderboard(db=db, suite=EvalSuite("test", (0, 1), 10), policies=policies, out=None,
+                              validate=False, progress=False, echo=lambda s: None, executor="workers", workers=2)
     return {env: {s.policy: s for s in ss} for env, ss in run.summaries.items()}
 
 
@@ -180,11 +181,12 @@ OWN_MODELS = [r.id for r in registry.ROWS if r.models_from is None]
 
 
 @pytest.fixture(scope="module")
-def learned(tmp_path_factory):
-    """Every shipped model, random and zero on evaluation seed 0 x 5 episodes."""
-    run = run_leaderboard(db=tmp_path_factory.mktemp("learned") / "l.sqlite", suite=EvalSuite("test", (0,), 5),
-                          out=None, validate=False, progress=False, echo=lambda s: None, executor="workers",
-                          workers=2, policies=None, env_ids=OWN_MODELS)
+def learned(shared_folder):
+    """Every shipped model, random and zero on evaluation seed 0 x 5 episodes (run once per session, as
+    :func:`references`)."""
+    with shared_folder("learned.sqlite") as db:
+        run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 5), out=None, validate=False, progress=False,
+                              echo=lambda s: None, executor="workers", workers=2, policies=None, env_ids=OWN_MODELS)
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
