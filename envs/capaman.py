@@ -50,11 +50,11 @@ class _CaPaManTask:
         choice = resolve_capaman(options.get("scenario", self.scenario_arg))
         checker = self._checker()
         scenarios = [draw_scenario(choice, rng, checker, _clusters(self.geometry)) for rng in rngs]
-        task_step.reset(self.state, self.params, self.world, rows, scenarios, self._probe())
+        task_step.reset(self.state, self.params, rows, scenarios, self.world, self._probe())
         return scenarios
 
     def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, self.world, actions, active, self._probe())
+        task_step.step(self.state, self.params, actions, active, self.world, self._probe())
 
     def _probe(self) -> Any:
         """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""

@@ -254,8 +254,8 @@ class DynamicWorld(SceneWorld):
         return np.array([clearance]), self.scene.tip[None], [near]
 
 
-def reset(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,
-          scenarios: list[CaPaManScenario], probe: World | None = None) -> None:
+def reset(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
+          world: World, probe: World | None = None) -> None:
     """Start ``rows`` at T.P.1 of their (checked) ``scenarios``. ``probe``:
     the kinematic world of v1's look-ahead when ``world`` is the dynamics."""
     g = params.geometry
@@ -282,8 +282,8 @@ def reset(state: CaPaManState, params: CaPaManParams, world: World, rows: np.nda
     _finish(state, params, mask, state.alpha, False)
 
 
-def step(state: CaPaManState, params: CaPaManParams, world: World, actions: np.ndarray,
-         active: np.ndarray, probe: World | None = None) -> None:
+def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active: np.ndarray, world: World,
+         probe: World | None = None) -> None:
     """Move the ``active`` robots (N,) with ``actions`` (N, 3) inside the Box
     (the env clips). ``probe``: as in :func:`reset`."""
     every = bool(active.all())

@@ -113,16 +113,17 @@ class OrthoglideState:
             self.dt = np.pad(self.dt, ((0, 0), (0, extra)))
 
 
-def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray, tasks: list[OrthoglideScenario]) -> None:
-    """Start ``rows`` on ``tasks`` (checked ones: :func:`paragym.tasks.orthoglide.draw_tasks`):
+def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
+          scenarios: list[OrthoglideScenario]) -> None:
+    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.orthoglide.draw_tasks`):
     at the admissible table position with the lowest kappa at the first path
     point, the sliders by inverse kinematics; then evaluate them."""
-    first = np.array([t.points[0] for t in tasks])
+    first = np.array([t.points[0] for t in scenarios])
     kap, r1 = start_table_position(first, params.geometry)
     if not np.all(np.isfinite(kap)):
         raise ValueError("scenario's first point is outside the reachable set")
-    state._room(max(len(t.t) for t in tasks))
-    for i, task in zip(rows, tasks, strict=True):
+    state._room(max(len(t.t) for t in scenarios))
+    for i, task in zip(rows, scenarios, strict=True):
         m = len(task.t)
         state.path[i, :m, :2], state.path[i, :m, 2:] = task.points, task.velocities
         state.dt[i, :m - 1] = np.diff(task.t)
