@@ -79,3 +79,17 @@ def test_the_snippet_runs_on_its_own(name, code, tmp_path, monkeypatch):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         exec(compile(code, name, "exec"), {"__name__": "__snippet__"})
+
+
+def test_no_source_of_the_site_is_ignored_by_git():
+    """A page git ignores builds here and is missing from every clone (docs/results/ once was, under the
+    leaderboard's 'results/' rule)."""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout")
+    files = [str(p.relative_to(ROOT)) for p in DOCS.rglob("*") if p.is_file() and "_build" not in p.parts
+             and "__pycache__" not in p.parts]
+    ignored = subprocess.run(["git", "check-ignore", *files], cwd=ROOT, capture_output=True, text=True).stdout
+    assert ignored.split() == []
