@@ -93,3 +93,30 @@ def test_rgb_array_draws_the_simulated_state_not_the_command():
     scene.reset(commanded, float(state.delta[0]))  # pose the commanded state (the zero action: no offset)
     assert np.abs(drawn.astype(int) - env.render().astype(int)).sum() > 0
     env.close()
+
+
+_DRAWING = """
+from paragym.sim.client import PyBulletSim
+from paragym.sim.obstacles import Box
+sim = PyBulletSim(gui=True)
+seen = [sim._drawing]
+sim.add_static("box", Box((0.0, 0.0, 0.1), (0.05, 0.05, 0.05)))
+seen.append(sim._drawing)
+sim.step()
+seen.append(sim._drawing)
+sim.add_static("box2", Box((0.2, 0.0, 0.1), (0.05, 0.05, 0.05)))
+seen.append(sim._drawing)
+sim.place("box2", (0.3, 0.0, 0.1), (0.0, 0.0, 0.0, 1.0))
+seen.append(sim._drawing)
+sim.close()
+print(seen)
+"""
+
+
+def test_the_gui_does_not_draw_while_bodies_are_made(display):
+    """A GUI that drew after every body made the tripod's first reset take 14 s (2 s without): bodies are made
+    with drawing off, and the first step or pose turns it back on."""
+    out = subprocess.run([sys.executable, "-c", _DRAWING], env={**os.environ, "DISPLAY": display},
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip().splitlines()[-1] == "[False, False, True, False, True]"
