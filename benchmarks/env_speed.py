@@ -19,7 +19,7 @@ development machine the anchor alone moved between 406 and 708 steps/s from
 one run to the next, and a ratio of two measurements taken seconds apart
 moved with it.
 
-    python benchmarks/env_speed.py [--seconds 5] [--dynamic-only]
+    python benchmarks/env_speed.py [--seconds 5] [--dynamic-only] [--env ID ...]
 """
 
 from __future__ import annotations
@@ -89,7 +89,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seconds", type=float, default=5.0, help="duration of each measurement")
     parser.add_argument("--dynamic-only", action="store_true", help="measure the anchor and the dynamic rows only")
+    parser.add_argument("--env", action="append", default=None,
+                        help="only this env id's rows (repeatable; the 'paragym/' may be omitted)")
     args = parser.parse_args()
+    only = None if args.env is None else {registry.check_env_id(e) for e in args.env}
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {sorted(os.sched_getaffinity(0))[0]})  # one core
     rows = []
@@ -105,6 +108,8 @@ def main() -> None:
         print("panda-gym is not installed: no anchor (pip install panda-gym to add it)")
     warnings.filterwarnings("ignore", message=".*is out of date.*")  # v0 is measured beside v1 on purpose
     for env_id in () if args.dynamic_only else paragym.ENVIRONMENTS:
+        if only is not None and env_id not in only:
+            continue
         for scenario in ("random", registry.row(env_id).paper_scenario):
             env = gym.make(env_id, scenario=scenario)
             sps = steps_per_second(env, args.seconds)
@@ -115,6 +120,8 @@ def main() -> None:
 
     presets = {"CaPaManDynamics": capaman_dynamic.CaPaManDynamics, "HybridDynamics": hybrid_dynamic.HybridDynamics}
     for env_id, label, preset in DYNAMIC:
+        if only is not None and env_id not in only:
+            continue
         kwargs = {}
         if preset is not None:
             cls, method = preset.split(".")

@@ -13,9 +13,14 @@ def _run(*args: str) -> str:
     return res.stdout
 
 
-def test_env_speed_prints_a_row_per_env():
-    out = _run("benchmarks/env_speed.py", "--seconds", "0.3")
-    assert "paragym/CaPaManCollisionFree-v0" in out and "steps/s" in out
+def test_env_speed_prints_its_rows():
+    """One env's rows, kinematic and dynamic (the whole table is the same code over every id)."""
+    out = _run("benchmarks/env_speed.py", "--seconds", "0.3", "--env", "Orthoglide2PRRKappa-v0")
+    rows = [ln for ln in out.splitlines() if ln.startswith("paragym/")]
+    assert [r.split()[:2] for r in rows] == [["paragym/Orthoglide2PRRKappa-v0", "random"],
+                                              ["paragym/Orthoglide2PRRKappa-v0", "paper"],
+                                              ["paragym/Orthoglide2PRRKappa-v0", "dynamic"]], out
+    assert "steps/s" in out
 
 
 def test_dynamic_floor_prints_both_ceilings_for_every_dynamic_row():
