@@ -20,7 +20,7 @@ import dataclasses
 import importlib
 import inspect
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -76,7 +76,7 @@ class Bench:
         primary: (key, +1 if higher is better else -1): ranks after the success rate; "return" is the return.
         reference: the name of the paper's method among the policies.
         reference_success: the success rate the tests hold the reference to on its first 20 episodes.
-        policies: the built-in policies (the floors "random" every task has are added for it).
+        policies: the built-in policies (the floor "random", which every task has, is added to them).
         dynamics: ``dynamics() -> settings``: the physics settings of the leaderboard's dynamic episodes
             (the env's ``dynamics`` argument); None: the task has no dynamic fidelity.
         demo: what ``paragym demo`` names the reference in its output.
@@ -101,7 +101,7 @@ class Bench:
     plot_episode: Callable[[Episode, Path], Path] | None = None
     plan: Adapter | None = None
     validate_plan: Adapter | None = None
-    validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = field(default=None)
+    validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = None
 
     def label(self, key: str) -> str:
         """The column label of metric ``key`` ("return" for the return)."""
