@@ -213,8 +213,10 @@ class _LearnedFactory:
         return LearnedPolicy(model)
 
 
-def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[str, PolicySpec]:
-    folder = shipped_models_folder(env_id) if origin == "shipped" else models_dir / env_name(env_id)
+def _learned(env_id: str, models_dir: Path | None, prefix: str, origin: str) -> dict[str, PolicySpec]:
+    """The models of ``env_id`` in ``models_dir`` (None: the shipped ones, named in descriptions by their path in
+    the package, ``models/<env>/<file>``, the same on every machine; yours by the path you gave)."""
+    folder = shipped_models_folder(env_id) if models_dir is None else models_dir / env_name(env_id)
     if origin == "shipped" and shared_with(env_id):
         origin += f" (trained on {shared_with(env_id)}, whose episodes this id's default mode runs bit for bit)"
     found = {}
@@ -223,8 +225,9 @@ def _learned(env_id: str, models_dir: Path, prefix: str, origin: str) -> dict[st
         if m:
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)
+            shown = path.relative_to(shipped_models_dir().parent) if models_dir is None else path
             found[name] = PolicySpec(env_id, name, _LearnedFactory(str(path), sha), "learned",
-                                     f"{_what_trained(path, m[1])}, training seed {m[2]}, {origin}: {path}",
+                                     f"{_what_trained(path, m[1])}, training seed {m[2]}, {origin}: {shown}",
                                      {"model_sha256": sha})
     return found
 
@@ -253,7 +256,7 @@ def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str,
     ``user-<algo>-seed<N>``), in table order. A ``models_dir`` that does not
     exist is an error, not an empty list."""
     env_id = check_env_id(env_id)
-    learned = _learned(env_id, shipped_models_dir(), "", "shipped")
+    learned = _learned(env_id, None, "", "shipped")
     if models_dir is not None:
         folder = Path(models_dir)
         if not folder.is_dir():

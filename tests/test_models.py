@@ -164,3 +164,15 @@ def test_a_models_folder_that_does_not_exist_is_an_error(tmp_path, capsys):
     assert not (tmp_path / "a.sqlite").exists()
 
 
+
+
+def test_a_shipped_model_is_described_by_its_path_in_the_package():
+    """Descriptions end up in committed tables: a shipped model is named ``models/<env>/<file>``, the same on
+    every machine, never by this machine's absolute path."""
+    from paragym import registry
+
+    for row in registry.ROWS:
+        for spec in policies_for(row.id).values():
+            if spec.kind == "learned":
+                path = spec.description.rsplit(": ", 1)[1]
+                assert path.startswith("models/") and not path.startswith("/"), spec.description
