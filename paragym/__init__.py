@@ -14,7 +14,7 @@ from gymnasium.envs.registration import registry as gym_registry
 from paragym import registry as _registry
 from paragym.registry import ROWS, EnvRow, check_env_id
 
-__version__ = "0.8.0"
+__version__ = "0.9.0"
 
 #: env id -> (entry point, max episode steps, one-line description), from :mod:`paragym.registry`
 ENVIRONMENTS: dict[str, tuple[str, int, str]] = {r.id: (r.entry_point, r.max_episode_steps, r.summary) for r in ROWS}
