@@ -25,7 +25,6 @@ SHA-256 for a learned policy, the planner's parameters for a planner.
 from __future__ import annotations
 
 import hashlib
-import inspect
 import json
 import re
 from collections.abc import Callable
@@ -36,7 +35,9 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+import yaml
 
+from paragym.baselines.agents import identity
 from paragym.baselines.tasks import bench_of, init_defaults, random_factory
 from paragym.baselines.training import check_env_id, env_name, load_model
 from paragym.models import shared_with, shipped_models_dir, shipped_models_folder
@@ -62,12 +63,11 @@ class PolicySpec:
     def producer(self) -> str:
         """What makes this policy's actions, as canonical JSON: the factory's
         qualified name and the parameters (for a learned policy, the model
-        file's SHA-256). Two rows with different producers are never mixed."""
-        f = self.factory
-        code = f if inspect.isfunction(f) or inspect.ismethod(f) else type(f)
+        file's SHA-256), and for an agent from outside paragym the SHA-256 of
+        the source that defines it (:func:`paragym.baselines.agents.identity`).
+        Two rows with different producers are never mixed."""
         params = self.params() if callable(self.params) else (self.params or {})
-        return json.dumps({"policy": f"{code.__module__}.{code.__qualname__}", "params": params},
-                          sort_keys=True, default=repr)
+        return json.dumps(identity(self.factory, params), sort_keys=True, default=repr)
 
 
 #: env id -> the policies registered in this process (:func:`register_policy`), beside the built-in ones
@@ -232,6 +232,55 @@ def _learned(env_id: str, models_dir: Path | None, prefix: str, origin: str) -> 
     return found
 
 
+class _ZooLoader(yaml.SafeLoader):
+    """YAML's safe loader, and rl-zoo's ordered mappings (``!!python/object/apply:collections.OrderedDict``,
+    which it writes in config.yml and args.yml) read as plain lists of pairs: no Python object is built."""
+
+
+_ZooLoader.add_constructor("tag:yaml.org,2002:python/object/apply:collections.OrderedDict",
+                           lambda loader, node: dict(loader.construct_sequence(node, deep=True)[0]))
+
+
+def zoo_config(run: Path, name: str) -> dict[str, Any]:
+    """The hyper-parameters rl-zoo saved for the run in folder ``run`` (``<run>/<env>/config.yml``; {} when it
+    has none)."""
+    path = run / name / "config.yml"
+    if not path.is_file():
+        return {}
+    try:
+        found = yaml.load(path.read_text(), Loader=_ZooLoader)  # noqa: S506 - a SafeLoader subclass
+    except yaml.YAMLError as exc:
+        raise ValueError(f"cannot read rl-zoo's {path}: {exc}") from exc
+    return dict(found) if isinstance(found, (dict, list)) else {}
+
+
+def _zoo_learned(env_id: str, folder: Path) -> dict[str, PolicySpec]:
+    """The models rl-baselines3-zoo trained on ``env_id`` in its log folder ``folder`` (``<algo>/<env>_<run>/
+    <env>.zip``, the env id with "/" as "-"), named ``user-<algo>-zoo<run>``. A run whose observations were
+    normalised cannot be replayed from its model alone (the statistics are a pickle, which paragym does not
+    load): it is refused with a message."""
+    name = env_id.replace("/", "-")
+    found = {}
+    for path in sorted(folder.glob(f"*/{name}_*/{name}.zip")):
+        run, algo = path.parent, path.parent.parent.name.lower()
+        m = re.fullmatch(re.escape(name) + r"_(\d+)", run.name)
+        if not m or algo not in ("ppo", "sac", "td3", "tqc"):
+            continue
+        config = zoo_config(run, name)
+        normalize = str(config.get("normalize", ""))
+        if "norm_obs': True" in normalize or normalize == "True" or config.get("normalize") is True:
+            raise ValueError(f"{path}: rl-zoo normalised its observations (normalize: {config['normalize']}); "
+                             f"its policy needs the statistics in vecnormalize.pkl, a pickle paragym does not load. "
+                             f"Train with normalize: \"{{'norm_obs': False, 'norm_reward': True}}\" (the shipped "
+                             f"hyper-parameters)")
+        sha = _sha256(path)
+        label = f"user-{algo}-zoo{m[1]}"
+        found[label] = PolicySpec(env_id, label, _LearnedFactory(str(path), sha), "learned",
+                                  f"{algo.upper()} trained by rl-baselines3-zoo (run {m[1]}), trained by you: {path}",
+                                  {"model_sha256": sha})
+    return found
+
+
 def _what_trained(path: Path, algo: str) -> str:
     """How a model was made, from its JSON beside it (when there is one): the
     dataset a clone learned from, the clone a PPO run started from."""
@@ -252,8 +301,9 @@ def _what_trained(path: Path, algo: str) -> str:
 
 def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str, PolicySpec]:
     """Every policy of ``env_id``: the registered ones, the shipped models and,
-    when ``models_dir`` is given, your own models under it (named
-    ``user-<algo>-seed<N>``), in table order. A ``models_dir`` that does not
+    when ``models_dir`` is given, your own models under it: ``paragym
+    train``'s (named ``user-<algo>-seed<N>``) and rl-baselines3-zoo's runs
+    when it is a zoo log folder (``user-<algo>-zoo<run>``), in table order. A ``models_dir`` that does not
     exist is an error, not an empty list."""
     env_id = check_env_id(env_id)
     learned = _learned(env_id, None, "", "shipped")
@@ -264,6 +314,7 @@ def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str,
                              f"to runs/models by default)")
         if folder.resolve() != shipped_models_dir().resolve():
             learned.update(_learned(env_id, folder, "user-", "trained by you"))
+            learned.update(_zoo_learned(env_id, folder))
     specs = {**_built_in(env_id), **_REGISTRY.get(env_id, {}), **learned}
     return dict(sorted(specs.items(), key=lambda kv: (KINDS.index(kv[1].kind), kv[0])))
 

@@ -240,6 +240,8 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
 
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
+    for text in args.agent or []:
+        _register_agent(text, args.env)
 
     run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env, policies=args.policy,
                           models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
@@ -249,6 +251,24 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
     print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; {run.seconds:.0f} s")
     print("wrote " + ", ".join(str(p) for p in run.files))
     return 0
+
+
+def _register_agent(text: str, env_ids: list[str] | None) -> None:
+    """``--agent [NAME=]FILE.py:ATTR`` (or ``module:attr``): register it for the envs of ``--env``, else for the
+    ids its ``env_ids`` attribute names."""
+    from paragym.baselines.agents import AgentFile, identity, load_agent
+    from paragym.baselines.policies import register_policy
+
+    name, factory = load_agent(text)
+    envs = env_ids or getattr(factory.target if isinstance(factory, AgentFile) else factory, "env_ids", None)
+    if not envs:
+        raise ValueError(f"--agent {text!r}: name the envs it plays with --env (or give {name} an env_ids "
+                         f"attribute listing them)")
+    made = identity(factory)
+    where = made["policy"]
+    for env_id in [envs] if isinstance(envs, str) else envs:
+        register_policy(env_id, name, factory, "user",
+                        f"your agent {where} (source sha256 {made.get('source_sha256', '?')[:12]})")
 
 
 SCENARIO_HELP = ("the env's paper case by default, or another of its scenarios: 'random' and the task's own "
@@ -347,8 +367,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", action="append", help="only this env (repeatable)")
     p.add_argument("--policy", action="append", help="only this policy name (repeatable)")
     p.add_argument("--models", default=None,
-                   help="also rank the models you trained in this folder (as user-<algo>-seed<N>; the shipped "
-                        "models always take part)")
+                   help="also rank the models you trained in this folder: paragym train's (as user-<algo>-seed<N>) "
+                        "or rl-baselines3-zoo's log folder (as user-<algo>-zoo<run>); the shipped models always "
+                        "take part")
+    p.add_argument("--agent", action="append", metavar="[NAME=]FILE.py:FACTORY",
+                   help="rank your agent: a factory(env, seed) in a Python file (or module:attr) whose policy has "
+                        "reset(obs, info) and act(obs, info); it plays the --env ids (or those its env_ids "
+                        "attribute lists); named FACTORY unless NAME= is given (repeatable)")
     p.add_argument("--executor", choices=("local", "workers", "ray"), default="local")
     p.add_argument("--workers", type=int, default=min(4, os.cpu_count() or 1),
                    help="processes (a local pool; 1: in this process) or Ray CPUs (default: the cores, at most 4)")

@@ -32,9 +32,9 @@ def _env(env_id: str) -> gym.Env:
     return _ENVS[env_id]
 
 
-def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
+def evaluate_episode(spec: PolicySpec, seed: int, episode: int, producer: str | None = None) -> EpisodeRow:
     """Run episode ``episode`` of evaluation seed ``seed`` of ``spec`` on its
-    env and measure it. A planner that finds no plan (PlanningError) leaves
+    env and measure it; the row records ``producer`` (default: the spec's). A planner that finds no plan (PlanningError) leaves
     the robot standing still for the episode, which is then scored as it
     goes (metric ``policy_failed`` = 1)."""
     from paragym.baselines.simple import ZeroPolicy
@@ -54,10 +54,10 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int) -> EpisodeRow:
     metrics = bench_of(spec.env_id).metrics(ep)
     metrics["policy_failed"] = failed
     return EpisodeRow(spec.env_id, spec.name, seed, episode, spec.kind, ep.episode_return, len(ep.actions),
-                      ep.success, metrics, wall, producer=spec.producer())
+                      ep.success, metrics, wall, producer=spec.producer() if producer is None else producer)
 
 
-def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
+def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str | None = None) -> DynamicRow:
     """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
     from reset seed ``seed`` in the dynamic fidelity (:func:`dynamic_kwargs`),
     measure it as a kinematic episode is measured, and validate what it
@@ -88,10 +88,10 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int) -> DynamicRow:
     metrics["policy_failed"] = failed
     kf = {"worst": tightest(val.report), "position_error_mm": round(val.position_error * 1000, 3)}
     return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
-                      kf, time.perf_counter() - t0, producer=dynamic_producer(spec))
+                      kf, time.perf_counter() - t0, producer=dynamic_producer(spec) if producer is None else producer)
 
 
 
-def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any) -> EpisodeRow | DynamicRow:
+def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any, producer: str | None = None) -> EpisodeRow | DynamicRow:
     """One job of either kind: an episode (seed, episode) or a dynamic episode (scenario, seed)."""
-    return evaluate_episode(spec, a, b) if kind == "episode" else evaluate_dynamic(spec, a, b)
+    return evaluate_episode(spec, a, b, producer) if kind == "episode" else evaluate_dynamic(spec, a, b, producer)

@@ -19,15 +19,17 @@ from paragym.baselines.store import DynamicRow, EpisodeRow
 
 __all__ = ["EXECUTORS", "RUNNERS", "DynamicJob", "Job", "die_with_parent"]
 
-Job = tuple[PolicySpec, int, int]
-#: a dynamic-fidelity job: the spec, the scenario, the reset seed
-DynamicJob = tuple[PolicySpec, str, int]
+#: an episode's job: the spec, the evaluation seed, the episode, and the producer its row records (computed once,
+#: by the run that planned the job: a worker never recomputes what identifies the policy)
+Job = tuple[PolicySpec, int, int, str]
+#: a dynamic-fidelity job: the spec, the scenario, the reset seed, the producer
+DynamicJob = tuple[PolicySpec, str, int, str]
 
 
 def _run_local(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
                kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
-    for spec, a, b in jobs:
-        yield evaluate_job(kind, spec, a, b)
+    for spec, a, b, made in jobs:
+        yield evaluate_job(kind, spec, a, b, made)
 
 
 def die_with_parent(parent: int) -> None:
@@ -68,11 +70,11 @@ def _init_worker(parent: int) -> None:
         pass
 
 
-def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any
+def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any, made: str
                       ) -> EpisodeRow | DynamicRow:
     from paragym.baselines.policies import get_policy
 
-    return evaluate_job(kind, get_policy(env_id, name, models_dir), a, b)
+    return evaluate_job(kind, get_policy(env_id, name, models_dir), a, b, made)
 
 
 def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
@@ -89,8 +91,8 @@ def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir
                                initargs=(os.getpid(),))
     finished = False
     try:
-        futures = [pool.submit(_evaluate_by_name, kind, spec.env_id, spec.name, models_dir, a, b)
-                   for spec, a, b in jobs]
+        futures = [pool.submit(_evaluate_by_name, kind, spec.env_id, spec.name, models_dir, a, b, made)
+                   for spec, a, b, made in jobs]
         for fut in as_completed(futures):
             yield fut.result()
         finished = True
@@ -119,7 +121,7 @@ def _run_ray(jobs: list[Any], workers: int, ray_address: str | None, models_dir:
                 reaper_pid = _start_reaper()
             ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
         remote = ray.remote(num_cpus=1)(evaluate_job)
-        pending = [remote.remote(kind, spec, a, b) for spec, a, b in jobs]
+        pending = [remote.remote(kind, spec, a, b, made) for spec, a, b, made in jobs]
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             try:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -10,6 +11,7 @@ from typing import Any
 
 import paragym
 from paragym import registry
+from paragym.baselines.agents import unreadable
 from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, DynamicJob, Job
 from paragym.baselines.leaderboard.render import terminal_table, write_reports
 from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
@@ -131,9 +133,14 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
     """The episodes ``store`` lacks for the current producers (saying which
     stored ones are run again), and how many episodes the suite has."""
     done = store.done_keys()
-    jobs = [(spec, s, k) for specs in chosen.values() for spec in specs.values() for s, k in suite.keys()
+    jobs = [(spec, s, k, producers[spec.env_id, spec.name]) for specs in chosen.values() for spec in specs.values()
+            for s, k in suite.keys()
             if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
     _say_what_is_rerun(jobs, done, store.version, producers, echo)
+    for (env, name), made in producers.items():
+        if unreadable(json.loads(made)):
+            echo(f"{env_name(env)} {name}: its source cannot be read (defined in an interactive session?), so "
+                 f"nothing identifies its code: its stored rows are never reused, and its episodes run every time")
     return jobs, sum(len(specs) for specs in chosen.values()) * len(suite.keys())
 
 
@@ -143,8 +150,9 @@ def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], 
     (the policy's and the physics settings: :func:`dynamic_producer`)."""
     done = store.dynamic_keys()
     made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
-    return [(spec, scenario, seed) for env, specs in chosen.items() if bench_of(env).dynamics is not None
-            for spec in specs.values() if suite.runs_dynamic(spec) for scenario, seed in suite.dynamic
+    return [(spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
+            if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
+            for scenario, seed in suite.dynamic
             if (spec.env_id, spec.name, scenario, seed, store.version, made[spec.env_id, spec.name]) not in done]
 
 
@@ -222,27 +230,31 @@ def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producer
     for key in done:
         stored.setdefault(key[:5], []).append(key[5])
     stale: dict[tuple[str, str], set[str]] = {}
-    for spec, s, k in jobs:
+    for spec, s, k, _ in jobs:
         for old in stored.get((spec.env_id, spec.name, s, k, version), ()):
             stale.setdefault((spec.env_id, spec.name), set()).add(old)
     for (env, name), old in stale.items():
-        n = sum(1 for spec, _, _ in jobs if (spec.env_id, spec.name) == (env, name))
+        n = sum(1 for spec, *_ in jobs if (spec.env_id, spec.name) == (env, name))
         echo(f"{env_name(env)} {name}: the stored episodes were made by another producer "
              f"({_short(next(iter(old)))} -> {_short(producers[env, name])}); re-running {n} of them")
 
 
 def _short(producer: str) -> str:
-    """A producer in a few characters: the model's hash, or a hash of the parameters."""
+    """A producer in a few characters: the model's hash, the agent's source hash (and its parameters' where they
+    are not all of it), or a hash of the parameters."""
     import hashlib
-    import json
 
     try:
-        params = json.loads(producer).get("params", {})
+        made = json.loads(producer)
     except ValueError:
-        params = {}
+        made = {}
+    params = made.get("params", {}) if isinstance(made, dict) else {}
     if "model_sha256" in params:
         return f"model sha256 {params['model_sha256'][:12]}"
-    return f"parameters {hashlib.sha256(producer.encode()).hexdigest()[:12]}"
+    said = f"parameters {hashlib.sha256(json.dumps(params, sort_keys=True).encode()).hexdigest()[:12]}"
+    if made.get("source_sha256"):
+        return f"{made.get('policy')}, source sha256 {made['source_sha256'][:12]}, {said}"
+    return f"{made.get('policy', '?')}, {said}"
 
 
 def _partial_label(env_ids: list[str] | None, policies: list[str] | None) -> str:
