@@ -34,9 +34,10 @@ def _env(env_id: str) -> gym.Env:
 
 def evaluate_episode(spec: PolicySpec, seed: int, episode: int, producer: str | None = None) -> EpisodeRow:
     """Run episode ``episode`` of evaluation seed ``seed`` of ``spec`` on its
-    env and measure it; the row records ``producer`` (default: the spec's). A planner that finds no plan (PlanningError) leaves
-    the robot standing still for the episode, which is then scored as it
-    goes (metric ``policy_failed`` = 1)."""
+    env and measure it; the row records ``producer`` (default: the spec's).
+    A planner that finds no plan (PlanningError) leaves the robot standing
+    still for the episode, which is then scored as it goes (metric
+    ``policy_failed`` = 1)."""
     from paragym.baselines.simple import ZeroPolicy
     from paragym.planners.base import PlanningError
 
