@@ -16,6 +16,7 @@ import pytest
 if importlib.util.find_spec("rl_zoo3") is None:
     pytest.skip("rl_zoo3 is not installed (the zoo extra)", allow_module_level=True)
 
+from paragym.baselines.policies import policies_for  # noqa: E402
 from paragym.baselines.training import load_model  # noqa: E402
 
 CASES = [  # (algo, env id, overrides that keep it to a few hundred steps)
@@ -37,5 +38,25 @@ def test_rl_zoo_trains_from_the_shipped_file(tmp_path: Path, algo: str, env_id: 
     name = env_id.replace("/", "-")
     model = tmp_path / algo / f"{name}_1" / f"{name}.zip"
     assert model.is_file(), done.stdout[-2000:]
-    loaded = load_model(model, algo)  # paragym reads what rl-zoo wrote, without unpickling
-    assert loaded.num_timesteps >= 300
+    loaded = load_model(model)  # paragym reads what rl-zoo wrote, without unpickling and without algo=
+    assert loaded.num_timesteps >= 300 and type(loaded).__name__.lower() == algo
+    spec = policies_for(env_id, tmp_path)[f"user-{algo}-zoo1"]  # --models takes rl-zoo's log folder
+    assert spec.kind == "learned" and "rl-baselines3-zoo" in spec.description
+    if env_id.endswith("Orthoglide2PRRKappa-v0"):  # and the leaderboard ranks it from the command line
+        cmd = [sys.executable, "-m", "paragym.cli", "leaderboard", "--quick", "--env", env_id, "--models",
+               str(tmp_path), "--policy", "user-ppo-zoo1", "--no-validation", "--no-progress", "--workers", "1",
+               "--db", str(tmp_path / "db.sqlite"), "--out", str(tmp_path / "out")]
+        done = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=tmp_path)
+        assert done.returncode == 0, done.stderr[-2000:]
+        assert "user-ppo-zoo1" in next((tmp_path / "out").rglob("LEADERBOARD.md")).read_text()
+
+
+def test_zoo_normalised_observations_are_refused(tmp_path: Path) -> None:
+    name = "paragym-Orthoglide2PRRKappa-v0"
+    run = tmp_path / "ppo" / f"{name}_3"
+    (run / name).mkdir(parents=True)
+    (run / f"{name}.zip").write_bytes(b"not read")
+    (run / name / "config.yml").write_text("!!python/object/apply:collections.OrderedDict\n- - - normalize\n"
+                                          "    - \"{'norm_obs': True, 'norm_reward': True}\"\n")
+    with pytest.raises(ValueError, match="vecnormalize.pkl"):
+        policies_for("paragym/Orthoglide2PRRKappa-v0", tmp_path)
