@@ -29,6 +29,7 @@ import numpy as np
 
 import paragym
 from paragym.baselines.policies import policies_for
+from paragym.baselines.stats import BOOTSTRAP_REPS, bootstrap_mean_ci
 from paragym.baselines.store import ResultStore
 from paragym.baselines.training import env_name
 from paragym.models import shipped_models_dir, shipped_models_folder
@@ -36,8 +37,6 @@ from paragym.models import shipped_models_dir, shipped_models_folder
 __all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalized_scores", "task_scores",
            "write_report"]
 
-CONFIDENCE = 0.95
-BOOTSTRAP_REPS = 2000
 
 
 def latest_versions() -> list[str]:
@@ -48,18 +47,6 @@ def latest_versions() -> list[str]:
         if task not in newest or int(version) > int(newest[task].rsplit("-v", 1)[1]):
             newest[task] = env_id
     return list(newest.values())
-
-
-def bootstrap_mean_ci(values: np.ndarray, rng: np.random.Generator, reps: int = BOOTSTRAP_REPS
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The mean over the first axis (runs) of ``values`` (runs, points) and
-    the percentile bootstrap's 95 % interval of that mean, runs resampled."""
-    values = np.asarray(values, float)
-    n = len(values)
-    picks = rng.integers(0, n, (reps, n))
-    means = values[picks].mean(axis=1)  # (reps, points)
-    tail = (1 - CONFIDENCE) / 2 * 100
-    return values.mean(axis=0), np.percentile(means, tail, axis=0), np.percentile(means, 100 - tail, axis=0)
 
 
 def _runs(models_dirs: list[Path]) -> dict[str, dict[str, list[dict[str, Any]]]]:

@@ -248,7 +248,8 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
                           else args.executor, workers=args.workers, ray_address=args.ray_address, out=args.out,
                           markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress,
                           on_row=still_asked)
-    print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; {run.seconds:.0f} s")
+    print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; in dynamic fidelity "
+          f"{run.new_dynamic} run, {run.skipped_dynamic} taken; {run.seconds:.0f} s")
     print("wrote " + ", ".join(str(p) for p in run.files))
     return 0
 

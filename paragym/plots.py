@@ -353,7 +353,8 @@ def plot_imitation_curve(algo: str, curve: dict[str, list[float]], path: str | P
 def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str | Path, title: str = "",
                      higher_is_better: bool = False) -> Path:
     """One env's leaderboard as three bar panels, in rank order: success
-    rate, return (mean +- std over episodes), and the env's primary metric
+    rate and mean return with their 95 % intervals (``success_ci``,
+    ``return_ci`` of each summary), and the env's primary metric
     (which way is better written on its axis; its axis starts near the
     smallest value, not at 0, when the values differ by little). Bar
     colours are the policy kinds, in a legend."""
@@ -363,9 +364,16 @@ def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str |
     colours = {"reference": "C3", "paper case": "C1", "other": "C4", "learned": "C0", "floor": "0.6", "user": "C2"}
     col = [colours.get(s.kind, "C2") for s in summaries]
     y = np.arange(len(names))
-    panels = [("success rate (higher is better)", np.array([s.success_rate for s in summaries]), None),
-              ("return, mean +- std (higher is better)", np.array([s.return_mean for s in summaries]),
-               [s.return_std for s in summaries])]
+    def whiskers(values: np.ndarray, cis: list[tuple[float, float]]) -> np.ndarray:
+        lo, hi = np.array(cis, float).T
+        return np.nan_to_num(np.vstack([values - lo, hi - values]).clip(min=0.0))
+
+    success = np.array([s.success_rate for s in summaries])
+    returns = np.array([s.return_mean for s in summaries])
+    panels = [("success rate, 95 % Wilson interval (higher is better)", success,
+               whiskers(success, [s.success_ci for s in summaries])),
+              ("return, mean and 95 % bootstrap interval (higher is better)", returns,
+               whiskers(returns, [s.return_ci for s in summaries]))]
     if key != "return":
         panels.append((f"{label} ({'higher' if higher_is_better else 'lower'} is better)",
                        np.array([s.metrics.get(key, np.nan) for s in summaries], float), None))

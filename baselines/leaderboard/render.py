@@ -15,7 +15,7 @@ from paragym.baselines.leaderboard.summary import Summary
 from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import env_name
 
-__all__ = ["markdown", "terminal_table", "write_csv", "write_reports"]
+__all__ = ["markdown", "smoke_note", "terminal_table", "write_csv", "write_reports"]
 
 
 def _verdict(s: Summary) -> str:
@@ -27,8 +27,9 @@ def _verdict(s: Summary) -> str:
 def _columns(env: str, dynamic: bool = False) -> list[tuple[str, Callable[[Summary], str]]]:
     cols: list[tuple[str, Callable[[Summary], str]]] = [
         ("#", lambda s: str(s.rank)), ("policy", lambda s: s.policy), ("kind", lambda s: s.kind),
-        ("success", lambda s: f"{s.success_rate:.2f}"),
-        ("return", lambda s: f"{s.return_mean:.2f} ± {s.return_std:.2f}")]
+        ("success [95% CI]", lambda s: f"{s.success_rate:.2f} {_ci(s.success_ci, '.2f')}"),
+        ("return [95% CI]", lambda s: f"{s.return_mean:.2f} {_ci(s.return_ci, '.2f')}"),
+        ("apart from #1", _apart)]
     bench = bench_of(env)
     for c in bench.columns:
         cols.append((c.label, lambda s, key=c.key, fmt=c.fmt: format(s.metrics.get(key, math.nan), fmt)))
@@ -38,12 +39,32 @@ def _columns(env: str, dynamic: bool = False) -> list[tuple[str, Callable[[Summa
     if dynamic:
         key = bench.primary[0]
         fmt = bench.fmt(key)
-        cols += [("dynamic: success", lambda s: _dyn(s, lambda d: f"{d['success_rate']:.2f}")),
+        cols += [("dynamic: success [95% CI]", lambda s: _dyn(s, lambda d: f"{d['success_rate']:.2f} "
+                                                                      f"{_ci(d['success_ci'], '.2f')}")),
                  (f"dynamic: {bench.label(key)}", lambda s: _dyn(s, lambda d: format(
                      d["return_mean"] if key == "return" else d["metrics"].get(key, math.nan), fmt))),
                  ("dynamic: KF, own episode", lambda s: _dyn(s, lambda d: "" if d["kf"] is None else (
                      "PASS" if d["kf"]["passed"] else "FAIL")))]
     return cols
+
+
+def _ci(interval: tuple[float, float], fmt: str) -> str:
+    lo, hi = interval
+    return "" if not (math.isfinite(lo) and math.isfinite(hi)) else f"[{lo:{fmt}}, {hi:{fmt}}]"
+
+
+def _apart(s: Summary) -> str:
+    """Whether the leader is ahead of this row beyond doubt (:func:`~paragym.baselines.leaderboard.summary.
+    mark_separable`)."""
+    return "leader" if s.separable is None else ("yes" if s.separable else "no")
+
+
+def smoke_note(suite: EvalSuite) -> str:
+    """The warning a table of too few episodes carries ('' for the full suite)."""
+    if suite.name == "full":
+        return ""
+    return (f"**A smoke test, not a ranking**: {len(suite.keys())} episodes per policy ({suite.name} suite), so the "
+            f"intervals are wide and the order inside them is chance. Rank on the full suite (no --quick).")
 
 
 def _dyn(s: Summary, cell: Callable[[dict[str, Any]], str]) -> str:
@@ -72,7 +93,11 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
         out += ["| " + " | ".join(f(s).replace("|", "/") for _, f in cols) + " |" for s in summaries]
         key, sign = bench_of(env).primary
         out += ["", f"Ranked by success rate, then {bench_of(env).label(key)} "
-                f"({'higher' if sign > 0 else 'lower'} is better). {summaries[0].episodes} episodes per policy.", ""]
+                f"({'higher' if sign > 0 else 'lower'} is better). {summaries[0].episodes} episodes per policy. "
+                "Intervals: 95 %, Wilson's for success rates, Student's t for mean returns. "
+                "*apart from #1*: \"yes\" where the leader's success interval lies above the policy's, or, where "
+                "those overlap, the leader's interval of the ranking's next metric lies beyond the policy's; \"no\": "
+                "the two cannot be told apart on these episodes.", ""]
         dyn = next((s.dynamic for s in summaries if s.dynamic is not None), None)
         if dyn is not None:
             out += [f"Dynamic: {dyn['episodes']} episodes per policy under PyBullet's dynamics "
@@ -118,13 +143,15 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
     buf = io.StringIO()
     writer = csv.writer(buf)
     keys = sorted({k for ss in all_summaries.values() for s in ss for k in s.metrics})
-    writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "return_mean", "return_std",
+    writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "success_ci_low", "success_ci_high",
+                     "return_mean", "return_ci_low", "return_ci_high", "return_std", "apart_from_leader",
                      *keys, "wall_seconds_per_episode", "kf_validation", "dynamic_episodes", "dynamic_success_rate",
                      "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode", "producer"])
     for ss in all_summaries.values():
         for s in ss:
             writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
-                             f"{s.return_mean:.6g}", f"{s.return_std:.6g}",
+                             *(f"{v:.4f}" for v in s.success_ci), f"{s.return_mean:.6g}",
+                             *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s),
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
                              f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys), s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -157,7 +184,8 @@ def write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out
     for env, ss in all_summaries.items():
         key, sign = bench_of(env).primary
         png = plot_leaderboard(ss, key, bench_of(env).label(key), out / f"{env_name(env)}.png",
-                               f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite)",
+                               f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite"
+                               f"{': a smoke test, not a ranking' if suite.name != 'full' else ''})",
                                higher_is_better=sign > 0)
         files.append(png)
         images[env] = os.path.relpath(png, md_path.parent)
@@ -167,6 +195,8 @@ def write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out
               f"(reset seed 100000 + 1000 seed + episode), random scenarios, kinematic fidelity; "
               f"wall times on {platform.machine()} with {os.cpu_count()} cores. Written by `paragym leaderboard"
               f"{' --quick' if suite.name == 'quick' else ''}`; every episode is a row of the SQLite results database.")
+    if smoke_note(suite):
+        header += "\n\n" + smoke_note(suite)
     if env_ids or policies:
         header += ("\n\n**A partial table**, not the full leaderboard: only "
                    + "; ".join(x for x in (f"envs {', '.join(env_name(e) for e in env_ids)}" if env_ids else "",

@@ -13,7 +13,7 @@ import paragym
 from paragym import registry
 from paragym.baselines.agents import unreadable
 from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, DynamicJob, Job
-from paragym.baselines.leaderboard.render import terminal_table, write_reports
+from paragym.baselines.leaderboard.render import smoke_note, terminal_table, write_reports
 from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
 from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, summarise
 from paragym.baselines.policies import PolicySpec, policies_for
@@ -42,6 +42,9 @@ class LeaderboardRun:
     skipped_episodes: int
     files: list[Path]
     seconds: float
+    #: the dynamic-fidelity episodes run now, and those taken from the database
+    new_dynamic: int = 0
+    skipped_dynamic: int = 0
 
 
 def _select(env_ids: list[str] | None, policy_names: list[str] | None,
@@ -97,8 +100,9 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
              f"{store.path}; running {len(jobs)} with the {executor} executor")
         _execute(store, jobs, executor, workers, ray_address, models, progress, on_row)
+        dynamic_jobs, dynamic_total = [], 0
         if validate and suite.dynamic:
-            dynamic_jobs = _plan_dynamic(store, chosen, suite, producers)
+            dynamic_jobs, dynamic_total = _plan_dynamic(store, chosen, suite, producers)
             who = "" if suite.dynamic_all else ": the references, the other methods, each learned algorithm's seed 0"
             echo(f"dynamic fidelity: {len(dynamic_jobs)} episodes to run ({len(suite.dynamic)} per policy{who}; "
                  f"each with the KF validation of what it executed)")
@@ -108,9 +112,12 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         all_summaries = _summaries(store, chosen, suite, producers)
         files = write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
     seconds = time.perf_counter() - t0
+    if smoke_note(suite):
+        echo("\n" + smoke_note(suite).replace("**", ""))
     for env, ss in all_summaries.items():
         echo(f"\n{env}\n{terminal_table(ss)}")
-    return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds)
+    return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds, len(dynamic_jobs),
+                          dynamic_total - len(dynamic_jobs))
 
 
 def _report_folder(out: str | Path | None, markdown_path: str | Path | None, env_ids: list[str] | None,
@@ -145,15 +152,16 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
 
 
 def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
-                  producers: dict[tuple[str, str], str]) -> list[DynamicJob]:
+                  producers: dict[tuple[str, str], str]) -> tuple[list[DynamicJob], int]:
     """The dynamic-fidelity episodes ``store`` lacks for the current producers
-    (the policy's and the physics settings: :func:`dynamic_producer`)."""
+    (the policy's and the physics settings: :func:`dynamic_producer`), and how many the suite has."""
     done = store.dynamic_keys()
     made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
-    return [(spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
-            if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
-            for scenario, seed in suite.dynamic
-            if (spec.env_id, spec.name, scenario, seed, store.version, made[spec.env_id, spec.name]) not in done]
+    wanted = [(spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
+              if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
+              for scenario, seed in suite.dynamic]
+    return [job for job in wanted if (job[0].env_id, job[0].name, job[1], job[2], store.version, job[3]) not in done
+            ], len(wanted)
 
 
 def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,

@@ -11,10 +11,11 @@ import numpy as np
 
 from paragym import registry
 from paragym.baselines.leaderboard.suite import EvalSuite, dynamic_kwargs
+from paragym.baselines.stats import ahead, mean_ci, separable, wilson
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.tasks import bench_of
 
-__all__ = ["Summary", "dynamic_summary", "summarise"]
+__all__ = ["Summary", "dynamic_summary", "mark_separable", "summarise"]
 
 
 @dataclass
@@ -34,6 +35,13 @@ class Summary:
     validation: dict[str, Any] | None = None
     rank: int = 0
     producer: str = ""
+    #: 95 % intervals (:mod:`paragym.baselines.stats`): the success rate's (Wilson), the mean return's and the
+    #: primary metric's mean's (bootstrap)
+    success_ci: tuple[float, float] = (math.nan, math.nan)
+    return_ci: tuple[float, float] = (math.nan, math.nan)
+    primary_ci: tuple[float, float] = (math.nan, math.nan)
+    #: whether its intervals set it apart from the leader's (:func:`mark_separable`; None for the leader)
+    separable: bool | None = None
     #: the dynamic fidelity's episodes: episodes, success_rate, return_mean, metrics (means), kf (the verdict on
     #: the paper episode: passed, worst, position_error_mm); None when they were not run
     dynamic: dict[str, Any] | None = None
@@ -57,18 +65,42 @@ def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> d
         returns = np.array([r.episode_return for r in rs])
         keys = rs[0].metrics.keys()
         metrics = {k: float(np.mean([r.metrics[k] for r in rs])) for k in keys}
+        key = bench_of(env).primary[0]
+        wins = sum(bool(r.success) for r in rs)
         out.setdefault(env, []).append(Summary(
             env, policy, rs[0].kind, "", len(rs),
-            float(np.mean([r.success for r in rs])), float(returns.mean()), float(returns.std()), metrics,
+            wins / len(rs), float(returns.mean()), float(returns.std()), metrics,
             float(np.mean([r.wall_seconds for r in rs])),
-            store.validation(env, policy, rs[0].producer) if store is not None else None, producer=rs[0].producer))
+            store.validation(env, policy, rs[0].producer) if store is not None else None, producer=rs[0].producer,
+            success_ci=wilson(wins, len(rs)), return_ci=mean_ci(returns),
+            primary_ci=mean_ci(returns if key == "return" else [r.metrics.get(key, math.nan) for r in rs])))
     ordered = {r.id: out[r.id] for r in registry.rows() if r.id in out}
     for summaries in ordered.values():
         summaries.sort(key=Summary.sort_key)
         for i, s in enumerate(summaries, 1):
             s.rank = i
+        mark_separable(summaries)
     return ordered
 
+
+def mark_separable(summaries: list[Summary]) -> None:
+    """Set each non-leader's :attr:`Summary.separable`: whether the leader
+    (rank 1) is ahead of it beyond doubt: its success rate's interval lies
+    above the other's, or, where the success rates cannot be told apart, its
+    primary metric's interval lies beyond the other's on the better side (the
+    ranking's next criterion). Otherwise the order of the two rests on chance as much
+    as on the policies: a 3-episode lucky run and a 50-episode one are never
+    separable on success."""
+    if not summaries:
+        return
+    leader = summaries[0]
+    leader.separable = None
+    sign = bench_of(leader.env).primary[1]
+    for s in summaries[1:]:
+        ahead_on_success = ahead(leader.success_ci, s.success_ci, +1)
+        ahead_on_primary = not separable(leader.success_ci, s.success_ci) and ahead(leader.primary_ci, s.primary_ci,
+                                                                                      sign)
+        s.separable = ahead_on_success or ahead_on_primary
 
 
 def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] | None:
@@ -79,7 +111,8 @@ def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] 
     d = dynamic_kwargs(rows[0].env)["dynamics"]
     settings = (f"`{type(d).__name__}`: a {d.time_step * 1e3:g} ms step, {d.solver_iterations} solver iterations"
                 + (f", the {d.layout} layout" if getattr(d, "layout", "tree") != "tree" else ""))
-    return {"episodes": len(rows), "success_rate": float(np.mean([r.success for r in rows])),
+    wins = sum(bool(r.success) for r in rows)
+    return {"episodes": len(rows), "success_rate": wins / len(rows), "success_ci": wilson(wins, len(rows)),
             "return_mean": float(np.mean([r.episode_return for r in rows])),
             "metrics": {k: float(np.mean([r.metrics[k] for r in rows])) for k in rows[0].metrics},
             "kf": None if paper is None else {"passed": paper.kf_passed, **paper.kf},
