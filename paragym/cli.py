@@ -247,21 +247,49 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
                           models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
                           else args.executor, workers=args.workers, ray_address=args.ray_address, out=args.out,
                           markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress,
-                          on_row=still_asked)
+                          on_row=still_asked, command=_command(args.argv))
     print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; in dynamic fidelity "
           f"{run.new_dynamic} run, {run.skipped_dynamic} taken; {run.seconds:.0f} s")
     print("wrote " + ", ".join(str(p) for p in run.files))
     return 0
 
 
-def _register_agent(text: str, env_ids: list[str] | None) -> None:
+def _command(argv: Sequence[str]) -> str:
+    """The command as typed, for the results file (the agents' files by name only: no folder of this machine)."""
+    import shlex
+
+    shown = [Path(a).name if a.endswith(".py") or ".py:" in a else a for a in argv]
+    return "paragym " + shlex.join(shown)
+
+
+def _cmd_verify(args: argparse.Namespace) -> int:
+    from paragym.baselines.leaderboard.results import describe, verify
+
+    for text in args.agent or []:
+        _register_agent(text, None, default_envs=_file_envs(args.results))
+    sample = None if args.sample == "all" else int(args.sample)
+    if sample is not None and sample < 1:
+        raise ValueError(f"--sample must be a positive number or 'all'; got {args.sample!r}")
+    result = verify(args.results, sample, args.dynamic, args.seed, args.models)
+    print(describe(result))
+    return 0 if result.ok else 1
+
+
+def _file_envs(path: str) -> list[str]:
+    from paragym.baselines.leaderboard.results import read_results
+
+    return sorted({p["env"] for p in read_results(path)["policies"]})
+
+
+def _register_agent(text: str, env_ids: list[str] | None, default_envs: list[str] | None = None) -> None:
     """``--agent [NAME=]FILE.py:ATTR`` (or ``module:attr``): register it for the envs of ``--env``, else for the
     ids its ``env_ids`` attribute names."""
     from paragym.baselines.agents import AgentFile, identity, load_agent
     from paragym.baselines.policies import register_policy
 
     name, factory = load_agent(text)
-    envs = env_ids or getattr(factory.target if isinstance(factory, AgentFile) else factory, "env_ids", None)
+    envs = env_ids or getattr(factory.target if isinstance(factory, AgentFile) else factory, "env_ids", None) or \
+        default_envs
     if not envs:
         raise ValueError(f"--agent {text!r}: name the envs it plays with --env (or give {name} an env_ids "
                          f"attribute listing them)")
@@ -356,6 +384,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", default="report", help="folder for REPORT.md and its PNGs (default: %(default)s)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_report)
+    p = sub.add_parser("verify", help="re-run a sample of a results file's episodes (results.json.gz, written by "
+                                      "paragym leaderboard) and say whether they reproduce; exit code 1 if not")
+    p.add_argument("results", help="a results file (results.json or results.json.gz)")
+    p.add_argument("--sample", default="20", help="episodes to re-run, or 'all' (default %(default)s)")
+    p.add_argument("--dynamic", type=int, default=0, help="dynamic-fidelity episodes to re-run too (default 0)")
+    p.add_argument("--seed", type=int, default=0, help="which episodes the sample draws (default 0)")
+    p.add_argument("--models", default=None, help="the folder of the models the file ranks as user-...")
+    p.add_argument("--agent", action="append", metavar="[NAME=]FILE.py:FACTORY",
+                   help="an outside agent the file ranks, as given to paragym leaderboard --agent (repeatable)")
+    p.set_defaults(func=_cmd_verify)
     p = sub.add_parser("leaderboard", help="evaluate every env x every policy on fixed seeds; resumable; writes "
                                            "LEADERBOARD.md, a CSV and a PNG per env")
     p.add_argument("--quick", action="store_true",
@@ -388,6 +426,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``paragym`` console script."""
     args = build_parser().parse_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
         return args.func(args)
     except KeyboardInterrupt as exc:  # one line, no traceback: what was kept and how to go on

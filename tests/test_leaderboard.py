@@ -71,7 +71,7 @@ def test_reports_are_written(tmp_path):
                                                        "suite": EvalSuite("test", (0,), 1), "models_dir": tmp_path})
     names = sorted(p.name for p in run.files)
     assert names == ["HybridSingularityFree-v0.png", "LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
-                     "leaderboard.csv"]
+                     "episodes.csv", "leaderboard.csv", "results.json.gz"]
     folder = run.files[-1].parent  # a filtered run writes under out/partial-...
     assert folder.parent == tmp_path / "out" and folder.name.startswith("partial-")
     md = (folder / "LEADERBOARD.md").read_text()

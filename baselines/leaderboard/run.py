@@ -14,6 +14,7 @@ from paragym import registry
 from paragym.baselines.agents import unreadable
 from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, DynamicJob, Job
 from paragym.baselines.leaderboard.render import smoke_note, terminal_table, write_reports
+from paragym.baselines.leaderboard.results import write_episodes_csv, write_results
 from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
 from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, summarise
 from paragym.baselines.policies import PolicySpec, policies_for
@@ -71,10 +72,12 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
                     ray_address: str | None = None, out: str | Path | None = "results",
                     markdown_path: str | Path | None = None, validate: bool = True, progress: bool = True,
                     on_row: Callable[[EpisodeRow], None] | None = None, echo: Callable[[str], None] = print,
-                    ) -> LeaderboardRun:
+                    command: str = "") -> LeaderboardRun:
     """Evaluate what is missing from ``db`` for ``suite``, then write the
     reports (to ``out``: ``LEADERBOARD.md`` unless ``markdown_path``,
-    ``leaderboard.csv``, ``<env>.png``; nothing written when ``out`` is None).
+    ``leaderboard.csv``, ``<env>.png``, every episode in ``episodes.csv`` and
+    the self-describing ``results.json.gz`` that ``paragym verify`` checks,
+    which records ``command``; nothing written when ``out`` is None).
     ``on_row`` sees each new row after it is stored. The shipped models
     always take part; ``models_dir`` adds your own (``user-...``). An
     episode is taken from ``db`` only when its stored row has the policy's
@@ -109,8 +112,13 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
             _execute(store, dynamic_jobs, executor, workers, ray_address, models, progress, None, kind="dynamic")
         if validate:
             _validate_references(store, chosen, producers, echo)
-        all_summaries = _summaries(store, chosen, suite, producers)
+        rows, dynamic_rows = _selected(store, chosen, suite, producers)
+        all_summaries = _summaries(store, chosen, suite, rows, dynamic_rows)
         files = write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
+        if out is not None:  # the raw episodes, and the file anyone can check (paragym verify)
+            specs = {(env, name): spec for env, named in chosen.items() for name, spec in named.items()}
+            files[-1:-1] = [write_episodes_csv(out / "episodes.csv", rows),
+                            write_results(out / "results.json.gz", rows, dynamic_rows, specs, suite, command)]
     seconds = time.perf_counter() - t0
     if smoke_note(suite):
         echo("\n" + smoke_note(suite).replace("**", ""))
@@ -209,19 +217,25 @@ def _validate_references(store: ResultStore, chosen: dict[str, dict[str, PolicyS
             store.set_validation(env, name, passed, summary, producer)
 
 
-def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
-               producers: dict[tuple[str, str], str]) -> dict[str, list[Summary]]:
-    """The table of each env from the stored rows of the suite's episodes and
-    the current producers, with each policy's description."""
+def _selected(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+              producers: dict[tuple[str, str], str]) -> tuple[list[EpisodeRow], list[DynamicRow]]:
+    """The stored rows of the suite's episodes made by the current producers (kinematic, dynamic)."""
     keys = set(suite.keys())
     rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
-    all_summaries = summarise(rows, store)
     wanted = set(suite.dynamic)
     made = {key: dynamic_producer(chosen[key[0]][key[1]]) for key in producers}
+    dynamic = [r for r in store.dynamic_rows()
+               if made.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted]
+    return rows, dynamic
+
+
+def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
+               rows: list[EpisodeRow], dynamic_rows: list[DynamicRow]) -> dict[str, list[Summary]]:
+    """The table of each env from the selected rows (:func:`_selected`), with each policy's description."""
+    all_summaries = summarise(rows, store)
     dynamic: dict[tuple[str, str], list[DynamicRow]] = {}
-    for r in store.dynamic_rows():
-        if made.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted:
-            dynamic.setdefault((r.env, r.policy), []).append(r)
+    for r in dynamic_rows:
+        dynamic.setdefault((r.env, r.policy), []).append(r)
     for env, ss in all_summaries.items():
         for s in ss:
             s.dynamic = dynamic_summary(dynamic.get((env, s.policy), []), suite)
