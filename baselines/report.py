@@ -248,7 +248,7 @@ def _aggregate(db: str | Path, out: Path, rng: np.random.Generator) -> list[str]
     from rliable import metrics
 
     scores, tasks = normalized_scores(db)
-    lines = ["## Across tasks (rliable)", ""]
+    lines = ["## Across tasks (rliable)", "", evidence(db, tasks), ""]
     state = np.random.RandomState(int(rng.integers(2 ** 31)))
     if not scores:
         return lines + ["No learning algorithm has a run on every task's latest version in the database.", "",
@@ -266,6 +266,34 @@ def _aggregate(db: str | Path, out: Path, rng: np.random.Generator) -> list[str]
                      f"[{interval[algo][0, 0]:.3f}, {interval[algo][1, 0]:.3f}] |")
     lines += ["", f"![aggregate]({png.name})", ""]
     return lines + _improvement(db, state)
+
+
+def evidence(db: str | Path, env_ids: list[str]) -> str:
+    """What the scores rest on: the episodes per policy and the evaluation
+    seeds in ``db`` for ``env_ids`` (today's policies' rows), said plainly,
+    and flagged when it is fewer than the full suite's."""
+    from paragym.baselines.leaderboard.suite import FULL
+
+    counts: dict[tuple[str, str], int] = defaultdict(int)
+    seeds: set[int] = set()
+    with ResultStore(db) as store:
+        for env_id in env_ids:
+            producers = {name: spec.producer() for name, spec in policies_for(env_id).items()}
+            for row in store.rows(env_id):
+                if producers.get(row.policy) == row.producer:
+                    counts[env_id, row.policy] += 1
+                    seeds.add(row.seed)
+    if not counts:
+        return f"The database `{Path(db).name}` holds no episodes of today's policies on these tasks."
+    low, high = min(counts.values()), max(counts.values())
+    text = (f"The scores rest on {low if low == high else f'{low} to {high}'} episodes per policy and task "
+            f"(evaluation seeds {', '.join(map(str, sorted(seeds)))}) in the leaderboard database "
+            f"`{Path(db).name}`.")
+    full = len(FULL.keys())
+    if low < full:
+        text += (f" **Fewer than the full suite's {full}: a smoke test, not a ranking** (run `paragym leaderboard` "
+                 f"without --quick).")
+    return text
 
 
 def _improvement(db: str | Path, state: np.random.RandomState) -> list[str]:

@@ -381,7 +381,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-db", action="store_true", help="learning curves only")
     p.add_argument("--models", action="append", default=[],
                    help="a folder of your trained models to include beside the shipped ones (repeatable)")
-    p.add_argument("--out", default="report", help="folder for REPORT.md and its PNGs (default: %(default)s)")
+    p.add_argument("--out", default="results/report",
+                   help="folder for REPORT.md and its PNGs (default: %(default)s; the repository's committed report "
+                        "is in report/, written only when you name it)")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_report)
     p = sub.add_parser("verify", help="re-run a sample of a results file's episodes (results.json.gz, written by "

@@ -61,3 +61,22 @@ def test_report_writes_curves_of_the_shipped_models(tmp_path: Path):
     assert (tmp_path / "rep" / "curves-HybridSingularityFree-v0.png").stat().st_size > 10_000
     with pytest.raises(ValueError, match="no leaderboard database"):
         write_report(tmp_path / "rep", tmp_path / "missing.sqlite")
+
+
+def test_the_report_says_what_it_rests_on(tmp_path: Path):
+    """A report from a quick database says it is a smoke test; the default folder is not the committed report."""
+    from paragym.baselines.policies import policies_for
+    from paragym.baselines.report import evidence
+    from paragym.cli import build_parser
+
+    env = "paragym/HybridSingularityFree-v0"
+    specs = policies_for(env)
+    with ResultStore(tmp_path / "quick.sqlite") as store:
+        for name in ("polynomial-detour", "zero"):
+            for k in range(3):
+                store.add(EpisodeRow(env, name, 0, k, specs[name].kind, 1.0, 10, True,
+                                     producer=specs[name].producer()))
+    text = evidence(tmp_path / "quick.sqlite", [env])
+    assert "rest on 3 episodes per policy" in text and "seeds 0" in text and "smoke test, not a ranking" in text
+    assert str(tmp_path) not in text
+    assert build_parser().parse_args(["report"]).out != "report"
