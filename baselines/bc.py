@@ -17,6 +17,7 @@ the learned policy ``bc-seed<N>``.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import platform
@@ -45,8 +46,9 @@ def load_demonstrations(dataset_id: str, env_id: str) -> tuple[np.ndarray, np.nd
     import minari
 
     if dataset_id not in minari.list_local_datasets():
+        policy = dataset_id.rsplit("/", 1)[-1].rsplit("-v", 1)[0]  # paragym/<env>/<policy>-v0: whose episodes
         raise ValueError(f"no Minari dataset {dataset_id}: record it first with "
-                         f"`paragym demos {env_id} --episodes 200`")
+                         f"`paragym demos {env_id} --episodes 200 --policy {policy}`")
     data = minari.load_dataset(dataset_id)
     obs, act, index = [], [], []
     for k, ep in enumerate(data.iterate_episodes()):
@@ -81,7 +83,10 @@ def fit_bc(env_id: str, dataset_id: str, seed: int, settings: dict[str, Any], th
     t0 = time.perf_counter()
     curve = fit_policy(model.policy, obs[~test], act[~test], obs[test], act[test], hp, rng)
     seconds = time.perf_counter() - t0
-    meta = {"dataset_id": dataset_id, "dataset_episodes": int(data.total_episodes), "dataset_steps": int(len(obs)),
+    digest = hashlib.sha256(np.ascontiguousarray(obs, np.float64).tobytes())
+    digest.update(np.ascontiguousarray(act, np.float64).tobytes())
+    meta = {"dataset_id": dataset_id, "dataset_sha256": digest.hexdigest(),  # of what was learned: obs and actions
+            "dataset_episodes": int(data.total_episodes), "dataset_steps": int(len(obs)),
             "holdout_episodes": sorted(int(e) for e in held), "bc": hp, "train_seconds": seconds,
             "best_epoch": int(np.argmin(curve["holdout_loss"]) + 1), "curve": curve}
     return model, meta

@@ -136,19 +136,20 @@ def record_demos(env_id: str, episodes: int, policy: str | None = None, dataset_
                 if bar is not None:
                     bar.advance(task)
             k += 1
-        floor = _mean_return(env_id, specs["random"], min(episodes, 20))
+        floor = _mean_return(env_id, specs["random"], episodes)
         with warnings.catch_warnings():  # paragym has no e-mail address to give
             warnings.filterwarnings("ignore", message=".*author_email.*")
             collector.create_dataset(
                 dataset_id=dataset_id, eval_env=env_id, algorithm_name=f"paragym policy {name!r}: {spec.description}",
-                author=AUTHOR, code_permalink=f"https://pypi.org/project/paragym/{paragym.__version__}/",
-                ref_min_score=floor, ref_max_score=float(np.mean(returns)),
+                author=AUTHOR, ref_min_score=floor, ref_max_score=float(np.mean(returns)),
+                num_episodes_average_score=episodes,
                 description=(f"{episodes} episodes of {name} ({spec.kind}) on {env_id}, reset seeds "
                              f"{demo_seed(0)}-{demo_seed(k - 1)}"
                              + (f" but {skipped} (no plan found)" if skipped else "")
                              + f"; paragym {paragym.__version__}. "
-                             f"ref_min_score: the random policy's mean return over "
-                             f"{min(episodes, 20)} of these seeds; ref_max_score: this policy's."),
+                             f"ref_min_score: the random policy's mean return over reset seeds "
+                             f"{demo_seed(0)}-{demo_seed(episodes - 1)}; ref_max_score: this policy's over its "
+                             f"{episodes} recorded episodes. What made the actions: {spec.producer()}"),
                 requirements=[f"paragym=={paragym.__version__}"])
     finally:
         if bar is not None:

@@ -31,6 +31,8 @@ def test_demos_make_a_minari_dataset_that_reloads(datasets: Path):
     meta = again.storage.metadata
     assert meta["author"] in (AUTHOR, {AUTHOR}, [AUTHOR])
     assert meta["ref_max_score"] > meta["ref_min_score"]  # the reference beats the random floor
+    assert meta["num_episodes_average_score"] == 2  # the episodes the scores were measured on, not Minari's 100
+    assert not meta.get("code_permalink")  # no address that does not exist
     episode = next(again.iterate_episodes())
     assert episode.observations.shape == (607, 16) and episode.actions.shape == (606, 3)
     # the recorded episode is the env's, step for step: replay its actions from the same seed
@@ -117,3 +119,12 @@ def test_the_demos_command_records_every_registered_id(env_id: str, datasets: Pa
     assert main(["demos", env_id.split("/")[1], "--episodes", "1", "--policy", "zero", "--no-progress"]) == 0
     assert "1 episodes" in capsys.readouterr().out
     assert minari.load_dataset(dataset_id_for(env_id, "zero")).total_episodes == 1
+
+
+def test_bc_without_its_dataset_names_the_command_that_records_it(datasets: Path, tmp_path: Path):
+    """CaPaMan v1's clone learns from grid-dijkstra's episodes, not the reference's: the hint records those."""
+    from paragym.baselines.bc import train_bc
+
+    with pytest.raises(ValueError, match="paragym demos paragym/CaPaManCollisionFree-v1 --episodes 200 --policy "
+                                         "grid-dijkstra"):
+        train_bc("paragym/CaPaManCollisionFree-v1", models_dir=tmp_path)
