@@ -111,3 +111,22 @@ def test_verdict_passes_a_good_execution_and_fails_bad_ones(plan, scene):
     assert not late.report.passed
     weak = validate_capaman(plan.trajectory(0.45), dynamics=CaPaManDynamics(motor_torque=0.3))
     assert not weak.report.passed
+
+
+def test_the_figures_mark_a_component_below_the_noise_floor_as_the_table_does(plan, scene, tmp_path, monkeypatch):
+    """A component the sensors cannot see is "pass*" in the table; the figures used to call it "pass"."""
+    import matplotlib.pyplot as plt
+
+    from paragym.validation.report import plot_report
+
+    report = validate_capaman(plan.trajectory(0.9), scene=scene).report
+    hidden = [c for c in report.components if not c.observable]
+    assert hidden, "the paper's slow case has components below the noise floor"
+    titles: list[str] = []
+    close = plt.close
+    monkeypatch.setattr(plt, "close", lambda fig=None: (titles.extend(ax.get_title() for ax in fig.axes),
+                                                         close(fig)))
+    plot_report(report, tmp_path)
+    for c in hidden:
+        assert f"{c.label}" in report.table() and c.label.endswith("*")
+        assert any(t.startswith(f"{c.name}:") and t.endswith(f"— {c.label}") for t in titles), titles

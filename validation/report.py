@@ -59,6 +59,12 @@ class ComponentReport:
     passed: bool
     observable: bool  # the reference stands above twice the noise floor (else only the error bound is checked)
 
+    @property
+    def label(self) -> str:
+        """The component's verdict as the table and the figures write it: "pass", "FAIL", and a "*" where the
+        component lies below the noise floor (only its error bound was checked)."""
+        return ("pass" if self.passed else "FAIL") + ("" if self.observable else "*")
+
 
 @dataclass(frozen=True)
 class ValidationReport:
@@ -87,7 +93,7 @@ class ValidationReport:
             rows.append(f"{c.name:10s} {c.rms_theory:11.4f} {c.rmse_raw:9.4f} {c.rmse_kf:8.4f} "
                         f"{c.peak_error_raw:9.4f} {c.peak_error_kf:8.4f} {c.noise_reduction:8.1f} | "
                         f"{c.error_judged:7.4f} {c.tolerance:7.4f} {c.correlation:6.2f}  "
-                        f"{('pass' if c.passed else 'FAIL') + ('' if c.observable else '*')}")
+                        f"{c.label}")
         tol = self.tolerances
         rows.append(f"left of |: estimates against the plan's theoretical values; 'noise x' = RMSE raw / RMSE KF. "
                     f"Right of |: the {self.judged} estimate against the plan seen through the same filter.")
@@ -228,12 +234,14 @@ def plot_report(report: ValidationReport, out_dir: str | Path, title: str = "") 
             unit = UNITS[c.name[0]]
             ax.set_ylabel(f"{c.name} [{unit}]")
             ax.set_title(f"{c.name}: RMSE {c.rmse_kf if fig_name == 'fig9_kf' else c.rmse_raw:.3f} {unit}"
-                         f" — {'pass' if c.passed else 'FAIL'}", fontsize=9)
+                         f" — {c.label}", fontsize=9)
         for ax in axes[-1]:
             ax.set_xlabel("t [s]")
         axes[0, 0].legend(fontsize=8)
+        hidden = "" if all(c.observable for c in report.components) else (
+            "; * below the noise floor: only the error bound is checked")
         fig.suptitle((title + "\n" if title else "") + ("Fig 8 form: measured (raw)" if fig_name == "fig8_raw"
-                                                        else "Fig 9 form: Kalman filter over theory"))
+                                                        else "Fig 9 form: Kalman filter over theory") + hidden)
         fig.tight_layout()
         path = out / f"{fig_name}.png"
         fig.savefig(path, dpi=100)
