@@ -120,7 +120,8 @@ def fit_dagger(env_id: str, seed: int, settings: dict[str, Any], threads: int = 
     torch.manual_seed(seed)
     torch.set_num_threads(int(threads))
     env = gym.make(env_id)
-    expert = get_policy(env_id, hp["expert"]).factory(env, seed)
+    expert_spec = get_policy(env_id, hp["expert"])
+    expert = expert_spec.factory(env, seed)
     model = PPO("MlpPolicy", env, seed=seed, device="cpu",
                 policy_kwargs={"net_arch": list(hp["net_arch"]), "log_std_init": float(hp["log_std_init"])})
     optimiser = torch.optim.Adam(model.policy.parameters(), lr=float(hp["learning_rate"]))
@@ -154,7 +155,8 @@ def fit_dagger(env_id: str, seed: int, settings: dict[str, Any], threads: int = 
             echo(f"iteration {it}: {len(xs):,} pairs; {'expert' if it == 0 else 'policy'} rollouts succeed "
                  f"{np.mean(succ):.0%}; evaluation {success:.0%}, return {mean_return:.2f}")
     env.close()
-    meta = {"expert": hp["expert"], "dagger": hp, "pairs": len(xs), "episodes": k - len(skipped),
+    meta = {"expert": hp["expert"], "expert_producer": expert_spec.producer(), "dagger": hp,
+            "pairs": len(xs), "episodes": k - len(skipped),
             "skipped_seeds": skipped, "train_seconds": time.perf_counter() - t0, "curve": curve}
     return model, meta
 

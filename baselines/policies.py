@@ -290,12 +290,16 @@ def _what_trained(path: Path, algo: str) -> str:
     except (OSError, ValueError):
         info = {}
     if algo == "bc":
-        return f"behaviour cloning of {info.get('dataset_id', 'a Minari dataset')} (a PPO policy)"
+        sha = f", data sha256 {info['dataset_sha256'][:12]}" if info.get("dataset_sha256") else ""
+        return f"behaviour cloning of {info.get('dataset_id', 'a Minari dataset')}{sha} (a PPO policy)"
     if algo == "dagger":
         return f"DAgger with the expert {info.get('expert', '(unknown)')} (a PPO policy)"
     what = "TQC (sb3-contrib)" if algo == "tqc" else f"{algo.upper()} (Stable-Baselines3)"
-    if (info.get("hyperparams") or {}).get("init_from") == "bc":
-        what += " started from its seed's behaviour clone"
+    start = (info.get("hyperparams") or {}).get("init_from")
+    if isinstance(start, dict):
+        what += f" started from the behaviour clone {start['file']} (sha256 {start['sha256'][:12]})"
+    elif start == "bc":  # a model trained before paragym 0.9.0 recorded which clone
+        what += " started from a behaviour clone (which file was not recorded)"
     return what
 
 

@@ -373,6 +373,9 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
         saved = json.loads((files.checkpoints / "curve.json").read_text())
         for key in curve:
             curve[key] = list(saved.get(key, []))
+        start = files.checkpoints / "init_from.json"
+        if hp.get("init_from") and start.is_file():  # what the first start of this run began from
+            hp["init_from"] = json.loads(start.read_text())
         return model, curve, int(model.num_timesteps)
     kwargs = {k: v for k, v in hp.items() if k not in PARAGYM_KEYS and k != "policy"}
     if "noise_type" in hp or algo == "td3":  # rl-zoo's keys; only its Gaussian noise here
@@ -384,15 +387,21 @@ def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: in
         kwargs["action_noise"] = NormalActionNoise(np.zeros(dim), float(hp.get("noise_std", 0.1)) * np.ones(dim))
     model = cls(hp["policy"], env, seed=seed, device="cpu", verbose=verbose, **kwargs)
     if hp.get("init_from"):
-        _initialise_from(model, algo, hp["init_from"], files)
+        hp["init_from"] = _initialise_from(model, algo, hp["init_from"], files)
+        files.checkpoints.mkdir(parents=True, exist_ok=True)
+        write_atomic(files.checkpoints / "init_from.json", json.dumps(hp["init_from"]))
     return model, curve, 0
 
 
-def _initialise_from(model: Any, algo: str, source: str, files: RunFiles) -> None:
+def _initialise_from(model: Any, algo: str, source: str | dict[str, Any], files: RunFiles) -> dict[str, Any]:
     """Start ``model``'s policy from a behaviour-cloned one (paragym.yml's
     ``init_from: bc``): the ``bc_seed<N>.zip`` of this run's models folder if
     there is one, else the shipped one; its weights but not its action noise
-    (log_std stays the yml's). PPO only: the cloned policy is a PPO policy."""
+    (log_std stays the yml's). PPO only: the cloned policy is a PPO policy.
+    Returns what it started from (``kind``, ``file``, ``sha256``), for the
+    model's JSON, and says it on the console."""
+    if isinstance(source, dict):  # resumed: the record of the first start
+        return source
     if source != "bc" or algo != "ppo":
         raise ValueError(f"init_from must be 'bc' and the algorithm PPO; got {source!r} for {algo}")
     seed = files.model.stem.rsplit("seed", 1)[1]
@@ -406,6 +415,12 @@ def _initialise_from(model: Any, algo: str, source: str, files: RunFiles) -> Non
     state = model.policy.state_dict()
     state.update({k: v for k, v in cloned.items() if k != "log_std"})
     model.policy.load_state_dict(state)
+    import hashlib
+
+    shown = f"shipped: {path.relative_to(shipped_models_dir().parent)}" if path == shipped else str(path)
+    made = {"kind": "bc", "file": shown, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+    print(f"PPO starts from the behaviour clone {shown} (sha256 {made['sha256'][:12]}; paragym.yml's init_from)")
+    return made
 
 
 def _learn(model: Any, algo: str, n_envs: int, remaining: int, fresh: bool, callbacks: list[Any],
@@ -436,7 +451,8 @@ def _save_run(files: RunFiles, model: Any, meta: dict[str, Any], title: str) -> 
     meta["model_bytes"] = files.model.stat().st_size
     write_atomic(files.meta, json.dumps(meta, indent=1))
     plot_training_curve(meta["curve"], files.curve_png, title)
-    for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl"):
+    for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl",
+                 "init_from.json"):
         (files.checkpoints / name).unlink(missing_ok=True)
     for folder in (files.checkpoints, files.checkpoints.parent):
         if folder.exists() and not any(folder.iterdir()):

@@ -152,19 +152,25 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
-    from paragym.baselines.training import train
+    from paragym.baselines.training import LOADABLE, check_algo, train
 
-    if args.algo.lower() == "bc":  # behaviour cloning of the reference's demonstrations
+    algo = check_algo(args.algo, LOADABLE)
+    if algo in ("bc", "dagger") and args.timesteps is not None:
+        raise ValueError(f"--timesteps does not apply to {algo}: it learns from "
+                         + ("a dataset for a number of epochs" if algo == "bc" else "a number of iterations of "
+                            "expert-labelled episodes") + f"; set them in paragym.yml's {algo} section")
+    if algo == "bc":  # behaviour cloning of the reference's demonstrations
         from paragym.baselines.bc import train_bc
 
         res = train_bc(args.env_id, seed=args.seed, models_dir=args.models, threads=args.threads, force=args.force)
         meta = res.meta
         print(f"BC seed {meta['seed']} on {meta['env_id']}: {meta['dataset_steps']:,} steps of "
-              f"{meta['dataset_episodes']} episodes ({meta['dataset_id']}), {meta['bc']['epochs']} epochs in "
+              f"{meta['dataset_episodes']} episodes ({meta['dataset_id']}, sha256 {meta['dataset_sha256'][:12]}), "
+              f"{meta['bc']['epochs']} epochs in "
               f"{meta['train_seconds']:.0f} s; best held-out loss at epoch {meta['best_epoch']}")
         print(f"wrote {res.files.model}, {res.files.meta.name}, {res.files.curve_png.name}")
         return 0
-    if args.algo.lower() == "dagger":  # imitation of a feedback expert in the learner's own states
+    if algo == "dagger":  # imitation of a feedback expert in the learner's own states
         from paragym.baselines.dagger import train_dagger
 
         res = train_dagger(args.env_id, seed=args.seed, models_dir=args.models, threads=args.threads,
@@ -190,8 +196,12 @@ def _cmd_train(args: argparse.Namespace) -> int:
     last = (f"last evaluation {curve['eval_mean_return'][-1]:.3f} +- {curve['eval_std_return'][-1]:.3f}"
             if curve["eval_mean_return"] else "no evaluation yet")
     resumed = f", resumed at {res.resumed_from:,}" if res.resumed_from else ""
-    whole = (f" ({meta['num_timesteps']:,} done: PPO learns in whole rollouts)"
-             if meta["num_timesteps"] > meta["timesteps"] else "")
+    why = ("PPO learns in whole rollouts" if meta["algo"] == "ppo" else
+           f"its {meta['hyperparams']['n_envs']} envs step together")
+    whole = f" ({meta['num_timesteps']:,} done: {why})" if meta["num_timesteps"] > meta["timesteps"] else ""
+    start = meta["hyperparams"].get("init_from")
+    if isinstance(start, dict):
+        print(f"started from {start['file']} (sha256 {start['sha256'][:12]})")
     print(f"{meta['algo'].upper()} seed {meta['seed']} on {meta['env_id']}: {meta['timesteps']:,} steps{whole} in "
           f"{meta['train_seconds']:.0f} s{resumed}; {last}")
     print(f"wrote {res.files.model} ({meta['model_bytes'] / 1024:.0f} KiB, {meta['parameters']['policy']:,} "

@@ -129,3 +129,33 @@ def test_a_run_too_short_for_any_episode_still_draws_an_honest_curve(tmp_path):
         warnings.simplefilter("error")
         png = plot_training_curve(empty, tmp_path / "c.png", "nothing yet")
     assert png.stat().st_size > 2_000
+
+
+def test_a_warm_start_is_written_down(tmp_path, capsys):
+    """PPO's start from a behaviour clone is said on the console and recorded (file and SHA-256) in the model's
+    JSON, and the leaderboard's description of the model names it."""
+    import hashlib
+
+    from paragym.baselines.policies import policies_for
+    from paragym.models import shipped_models_folder
+
+    env_id = "paragym/MobileTripodOdometry-v1"
+    small = {"n_steps": 32, "batch_size": 64, "n_epochs": 1, "eval_freq": 64, "n_eval_episodes": 1}
+    res = train(env_id, "ppo", seed=1, timesteps=64, models_dir=tmp_path, progress_bar=False, hyperparams=small,
+                vectorized=True, n_envs=2)
+    start = res.meta["hyperparams"]["init_from"]
+    clone = shipped_models_folder(env_id) / "bc_seed0.zip"
+    assert start["sha256"] == hashlib.sha256(clone.read_bytes()).hexdigest()
+    assert start["file"] == "shipped: models/MobileTripodOdometry-v1/bc_seed0.zip"
+    assert "starts from the behaviour clone shipped: models/MobileTripodOdometry-v1/bc_seed0.zip" in \
+        capsys.readouterr().out
+    described = policies_for(env_id, tmp_path)["user-ppo-seed1"].description
+    assert f"sha256 {start['sha256'][:12]}" in described
+
+
+def test_train_options_that_do_not_apply_are_refused(capsys):
+    assert main(["train", HYBRID, "--algo", "dagger", "--timesteps", "500"]) == 2
+    assert main(["train", HYBRID, "--algo", "ppp"]) == 2
+    err = capsys.readouterr().err
+    assert "--timesteps does not apply to dagger" in err
+    assert "known: ppo, sac, td3, tqc, bc, dagger" in err
