@@ -144,13 +144,22 @@ def test_agent_file_is_checked_before_it_runs(tmp_path: Path) -> None:
         stale(None, 0)
 
 
-def test_cli_ranks_an_agent_file(tmp_path: Path) -> None:
-    path = _write(tmp_path / "mine.py", 0.5)
-    cmd = [sys.executable, "-m", "paragym.cli", "leaderboard", "--quick", "--agent", f"constant={path}:Agent",
-           "--policy", "constant", "--policy", "gradient-c", "--no-validation", "--no-progress", "--workers", "1",
-           "--db", str(tmp_path / "db.sqlite"), "--out", str(tmp_path / "out")]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=300, cwd=tmp_path)
-    assert done.returncode == 0, done.stderr[-2000:]
-    assert "constant" in done.stdout and "gradient-c" in done.stdout
-    table = next((tmp_path / "out").rglob("LEADERBOARD.md")).read_text()
-    assert "| constant | user |" in table
+def test_the_guide_ranks_and_verifies_its_agent_file(tmp_path: Path) -> None:
+    """docs/guides/own-agent.md: its agent file and its two commands, as a reader would run them."""
+    import re
+    import shlex
+
+    guide = (Path(__file__).parents[1] / "docs" / "guides" / "own-agent.md").read_text()
+    (tmp_path / "my_agent.py").write_text(re.findall(r"^```python\n(.*?)^```", guide, re.S | re.M)[0])
+    commands = re.findall(r"^```bash\n(.*?)^```", guide, re.S | re.M)[0].strip().splitlines()
+    assert [c.split()[:2] for c in commands] == [["paragym", "leaderboard"], ["paragym", "verify"]]
+    for line in commands:
+        words = shlex.split(line)
+        words = [str(p.relative_to(tmp_path)) for w in words for p in (sorted(tmp_path.glob(w)) or [tmp_path / w])]
+        done = subprocess.run([sys.executable, "-m", "paragym.cli", *words[1:], "--no-progress"]
+                              if words[1] == "leaderboard" else [sys.executable, "-m", "paragym.cli", *words[1:]],
+                              capture_output=True, text=True, timeout=600, cwd=tmp_path)
+        assert done.returncode == 0, (line, done.stdout[-2000:], done.stderr[-2000:])
+    assert "VERIFIED" in done.stdout and "NOT VERIFIED" not in done.stdout
+    table = next((tmp_path / "results" / "mine").rglob("LEADERBOARD.md")).read_text()
+    assert "| MyAgent | user |" in table and "A smoke test, not a ranking" in table
