@@ -22,8 +22,8 @@ from typing import Any
 
 from paragym import registry
 
-__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "readme_env_table", "render_frame", "sections", "status",
-           "write_pages"]
+__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "readme_env_table", "readme_leaderboard_table",
+           "render_frame", "sections", "status", "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
@@ -161,6 +161,52 @@ def readme_env_table() -> str:
     """The README's table of env ids (its status column from :func:`status`), between its markers."""
     lines = ["| env id | status | what it is |", "|---|---|---|"]
     lines += [f"| [`{r.id}`](docs/envs/{r.name}.md) | {status(r.id)} | {r.summary} |" for r in registry.rows()]
+    return "\n".join(lines)
+
+
+def readme_leaderboard_table(csv_path: str | Path) -> str:
+    """The README's headline leaderboard, from the committed run's ``leaderboard.csv``: per env id, the
+    leader, the reference, the best learned agent and the floors, each success rate with its 95 % interval
+    and the env's ranking metric after it; "(apart)" where the leader is ahead beyond doubt; and the
+    reference's episodes in dynamic fidelity (success with its interval, and the KF verdict on its own)."""
+    import csv
+
+    from paragym.baselines.stats import wilson
+    from paragym.baselines.tasks import bench_of
+
+    rows: dict[str, list[dict[str, str]]] = {}
+    with open(csv_path, newline="") as f:
+        for row in csv.DictReader(f):
+            rows.setdefault(row["env"], []).append(row)
+
+    def cell(r: dict[str, str] | None, key: str, apart: bool = True) -> str:
+        if r is None:
+            return ""
+        bench = bench_of(r["env"])
+        value = float(r["return_mean"] if key == "return" else r[key])
+        mark = " (apart)" if apart and r["apart_from_leader"] == "yes" else ""
+        return (f"`{r['policy']}` {float(r['success_rate']):.2f} [{float(r['success_ci_low']):.2f}, "
+                f"{float(r['success_ci_high']):.2f}], {bench.label(key)} {value:{bench.fmt(key)}}{mark}")
+
+    def dynamic(r: dict[str, str] | None) -> str:
+        if r is None or not r["dynamic_episodes"]:
+            return ""
+        n = int(r["dynamic_episodes"])
+        k = round(float(r["dynamic_success_rate"]) * n)
+        lo, hi = wilson(k, n)
+        return f"{k}/{n} [{lo:.2f}, {hi:.2f}], KF {r['dynamic_kf_own_episode']}"
+
+    lines = ["| env | 1st | reference | best learned | floors | reference, dynamic fidelity |",
+             "|---|---|---|---|---|---|"]
+    for env, rs in rows.items():
+        rs.sort(key=lambda r: int(r["rank"]))
+        key = bench_of(env).primary[0]
+        ref = next((r for r in rs if r["kind"] == "reference"), None)
+        learned = next((r for r in rs if r["kind"] == "learned"), None)
+        floors = "; ".join(cell(r, key, False) for r in rs if r["kind"] == "floor")
+        lines.append(f"| {env.split('/')[-1]} | {cell(rs[0], key, False)} | "
+                     f"{cell(ref, key) if ref is not rs[0] else 'the 1st'} | {cell(learned, key)} | {floors} | "
+                     f"{dynamic(ref)} |")
     return "\n".join(lines)
 
 

@@ -370,13 +370,15 @@ def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str |
 
     success = np.array([s.success_rate for s in summaries])
     returns = np.array([s.return_mean for s in summaries])
-    panels = [("success rate, 95 % Wilson interval (higher is better)", success,
+    panels = [("success rate (higher is better)\nbars: 95 % Wilson interval", success,
                whiskers(success, [s.success_ci for s in summaries])),
-              ("return, mean and 95 % bootstrap interval (higher is better)", returns,
+              ("mean return (higher is better)\nbars: 95 % Student's t interval", returns,
                whiskers(returns, [s.return_ci for s in summaries]))]
     if key != "return":
-        panels.append((f"{label} ({'higher' if higher_is_better else 'lower'} is better)",
-                       np.array([s.metrics.get(key, np.nan) for s in summaries], float), None))
+        primary = np.array([s.metrics.get(key, np.nan) for s in summaries], float)
+        panels.append((f"{label} ({'higher' if higher_is_better else 'lower'} is better)\nbars: 95 % Student's t "
+                       f"interval", primary, whiskers(primary, [getattr(s, "primary_ci", (np.nan, np.nan))
+                                                                for s in summaries])))
     fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 0.45 * len(names) + 2.0), sharey=True)
     for i, (ax, (name, values, err)) in enumerate(zip(axes, panels, strict=True)):
         base = 0.0

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import hashlib
 import io
 import math
 from collections.abc import Callable
@@ -146,14 +147,16 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
     writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "success_ci_low", "success_ci_high",
                      "return_mean", "return_ci_low", "return_ci_high", "return_std", "apart_from_leader",
                      *keys, "wall_seconds_per_episode", "kf_validation", "dynamic_episodes", "dynamic_success_rate",
-                     "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode", "producer"])
+                     "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode",
+                     "producer_sha256", "producer"])
     for ss in all_summaries.values():
         for s in ss:
             writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
                              *(f"{v:.4f}" for v in s.success_ci), f"{s.return_mean:.6g}",
                              *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s),
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
-                             f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys), s.producer])
+                             f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys),
+                             hashlib.sha256(s.producer.encode()).hexdigest()[:16], s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
     return path

@@ -133,17 +133,19 @@ def read_results(path: str | Path) -> dict[str, Any]:
 
 
 def write_episodes_csv(path: str | Path, rows: list[EpisodeRow]) -> Path:
-    """Every episode as a line: env, policy, seeds, return, length, success, the task's metrics, the producer."""
+    """Every episode as a line: env, policy, seeds, return (all digits), length, success, the task's metrics
+    and the first 16 hex digits of its producer's SHA-256 (the producers in full are in ``leaderboard.csv``'s
+    last column and the results file)."""
     metrics = sorted({k for r in rows for k in r.metrics})
     buf = io.StringIO()
     writer = csv.writer(buf)
     writer.writerow(["env", "policy", "kind", "seed", "episode", "reset_seed", "return", "length", "success",
-                     *metrics, "wall_seconds", "paragym", "producer"])
+                     *metrics, "wall_seconds", "paragym", "producer_sha256"])
     for r in rows:
         writer.writerow([r.env, r.policy, r.kind, r.seed, r.episode, episode_seed(r.seed, r.episode),
                          repr(r.episode_return), r.length, int(r.success),
                          *(repr(r.metrics[k]) if k in r.metrics else "" for k in metrics), f"{r.wall_seconds:.4f}",
-                         r.version, r.producer])
+                         r.version, hashlib.sha256(r.producer.encode()).hexdigest()[:16]])
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
