@@ -29,3 +29,20 @@ def test_the_readme_is_a_front_page_with_a_true_env_table():
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 250
     assert readme_env_table() in text, "README's env table is stale: paste paragym.docpages.readme_env_table()"
+
+
+def test_the_readme_leaderboard_is_the_committed_run_with_its_intervals():
+    """The headline table is generated from the committed leaderboard/leaderboard.csv, which the committed
+    LEADERBOARD.md was written with: the same run, of this version, with no path of the machine that ran it."""
+    import paragym
+    from paragym.docpages import readme_leaderboard_table
+
+    text = (ROOT / "README.md").read_text()
+    assert readme_leaderboard_table(ROOT / "leaderboard" / "leaderboard.csv") in text, \
+        "README's leaderboard is stale: paste paragym.docpages.readme_leaderboard_table('leaderboard/leaderboard.csv')"
+    board = (ROOT / "LEADERBOARD.md").read_text()
+    assert f"package version {paragym.__version__}; full suite" in board
+    assert "[95% CI]" in board and "apart from #1" in board
+    for name in ("LEADERBOARD.md", "report/REPORT.md"):
+        page = (ROOT / name).read_text()
+        assert "/home/" not in page and "/tmp/" not in page and "/work/" not in page, name
