@@ -248,16 +248,19 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
         if asked:
             raise KeyboardInterrupt
 
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
     for text in args.agent or []:
         _register_agent(text, args.env)
-
-    run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env, policies=args.policy,
-                          models_dir=args.models, executor="workers" if args.workers > 1 and args.executor == "local"
-                          else args.executor, workers=args.workers, ray_address=args.ray_address, out=args.out,
-                          markdown_path=args.markdown, validate=not args.no_validation, progress=not args.no_progress,
-                          on_row=still_asked, command=_command(args.argv))
+    before = signal.signal(signal.SIGTERM, stop), signal.signal(signal.SIGINT, stop)
+    try:
+        run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env,
+                              policies=args.policy, models_dir=args.models,
+                              executor="workers" if args.workers > 1 and args.executor == "local" else args.executor,
+                              workers=args.workers, ray_address=args.ray_address, out=args.out,
+                              markdown_path=args.markdown, validate=not args.no_validation,
+                              progress=not args.no_progress, on_row=still_asked, command=_command(args.argv))
+    finally:  # the caller's handlers again (a test or a notebook that called main)
+        signal.signal(signal.SIGTERM, before[0])
+        signal.signal(signal.SIGINT, before[1])
     print(f"\n{run.new_episodes} episodes run, {run.skipped_episodes} taken from {args.db}; in dynamic fidelity "
           f"{run.new_dynamic} run, {run.skipped_dynamic} taken; {run.seconds:.0f} s")
     print("wrote " + ", ".join(str(p) for p in run.files))

@@ -17,7 +17,7 @@ from paragym.baselines import policies
 from paragym.baselines.agents import AgentFile, identity, load_agent
 from paragym.baselines.leaderboard import QUICK, run_leaderboard
 
-ENV = "paragym/Orthoglide2PRRKappa-v0"
+ENV = "paragym/Orthoglide2PRRKappa-v1"
 
 AGENT = '''
 import numpy as np

@@ -78,7 +78,7 @@ def test_a_filtered_run_never_overwrites_the_full_table(tmp_path):
     assert "A partial table" in md.read_text()
     assert not (tmp_path / "out" / "LEADERBOARD.md").exists()
     assert sorted(p.name for p in md.parent.iterdir()) == ["LEADERBOARD.md", "Orthoglide2PRRKappa-v0.png",
-                                                          "leaderboard.csv"]
+                                                          "episodes.csv", "leaderboard.csv", "results.json.gz"]
 
 
 def test_demo_and_plan_work_on_every_env_with_their_defaults_and_name_the_policy(tmp_path, capsys):
