@@ -6,7 +6,7 @@ filter and with one filterpy KalmanFilter per sensor stepped sample by
 sample, in the same run; then the RTS smoothers; then the whole verdict.
 Target: the vectorised filter at least 20x faster and under 0.1 s.
 
-    python benchmarks/kf_speed.py
+    python benchmarks/kf_speed.py            # --dt 0.09: a smoke run on the paper's fast case
 """
 
 from __future__ import annotations
@@ -34,8 +34,15 @@ def best_of(f, repeat: int = 3) -> float:
 
 
 def main() -> None:
+    import argparse
+
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--dt", type=float, default=0.9,
+                        help="seconds between the plan's via points: its length (default %(default)s, an 18 s "
+                             "trajectory; the paper's 0.09 is a tenth of it, for a smoke run)")
+    args = parser.parse_args()
     planner = RrtGaPlanner(seed=0)
-    traj = planner.solve(paper_scenario()).trajectory(0.9)
+    traj = planner.solve(paper_scenario()).trajectory(args.dt)
     planner.close()
     sensors = AccelerometerArray.paper_layout()
     motion = capaman_planned_motion(traj, sensors.rate)
@@ -52,8 +59,11 @@ def main() -> None:
     for name, fast, slow, diff in rows:
         print(f"{name:18s} {fast * 1000:9.1f}ms {slow:8.2f}s {slow / fast:8.0f}x {diff:9.1e}")
     kf_fast, kf_slow = rows[0][1], rows[0][2]
+    verdict = 'met' if kf_slow / kf_fast >= 20 and kf_fast < 0.1 else 'MISSED'
+    if args.dt != 0.9:
+        verdict = "not judged: a smoke run (the target is for the default --dt 0.9)"
     print(f"\ntarget: vectorised filter >= 20x faster ({kf_slow / kf_fast:.0f}x) and < 0.1 s "
-          f"({kf_fast * 1000:.1f} ms): {'met' if kf_slow / kf_fast >= 20 and kf_fast < 0.1 else 'MISSED'}")
+          f"({kf_fast * 1000:.1f} ms): {verdict}")
     whole = best_of(lambda: validate(motion, motion, sensors))
     print(f"the whole verdict (readings, KF, RTS, inversions, noise floor, metrics): {whole:.2f} s")
 

@@ -36,7 +36,7 @@ class Summary:
     rank: int = 0
     producer: str = ""
     #: 95 % intervals (:mod:`paragym.baselines.stats`): the success rate's (Wilson), the mean return's and the
-    #: primary metric's mean's (bootstrap)
+    #: primary metric's mean's (Student's t)
     success_ci: tuple[float, float] = (math.nan, math.nan)
     return_ci: tuple[float, float] = (math.nan, math.nan)
     primary_ci: tuple[float, float] = (math.nan, math.nan)
@@ -88,9 +88,9 @@ def mark_separable(summaries: list[Summary]) -> None:
     (rank 1) is ahead of it beyond doubt: its success rate's interval lies
     above the other's, or, where the success rates cannot be told apart, its
     primary metric's interval lies beyond the other's on the better side (the
-    ranking's next criterion). Otherwise the order of the two rests on chance as much
-    as on the policies: a 3-episode lucky run and a 50-episode one are never
-    separable on success."""
+    ranking's next criterion). Otherwise the order of the two rests on chance
+    as much as on the policies: a 3-episode lucky run and a 50-episode one are
+    never separable on success."""
     if not summaries:
         return
     leader = summaries[0]
