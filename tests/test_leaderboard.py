@@ -184,9 +184,12 @@ OWN_MODELS = [r.id for r in registry.ROWS if r.models_from is None]
 def learned(shared_folder):
     """Every shipped model, random and zero on evaluation seed 0 x 5 episodes (run once per session, as
     :func:`references`)."""
+    wanted = sorted({name for env in OWN_MODELS for name, spec in policies_for(env).items()
+                     if spec.kind in ("learned", "floor")})  # the planners' episodes are the references fixture's
     with shared_folder("learned.sqlite") as db:
         run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 5), out=None, validate=False, progress=False,
-                              echo=lambda s: None, executor="workers", workers=2, policies=None, env_ids=OWN_MODELS)
+                              echo=lambda s: None, executor="workers", workers=2, policies=wanted,
+                              env_ids=OWN_MODELS)
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
