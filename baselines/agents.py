@@ -96,7 +96,7 @@ def identity(factory: Callable[..., Any], params: dict[str, Any] | None = None) 
 
 def unreadable(producer: dict[str, Any]) -> bool:
     """Whether a producer comes from a factory whose source could not be read."""
-    return producer.get("source") == _UNREADABLE or str(producer.get("source", "")).startswith("unreadable")
+    return str(producer.get("source", "")).startswith("unreadable source")
 
 
 @dataclass(frozen=True)
