@@ -53,3 +53,9 @@ def test_speed_report_prints_its_table():
     cells = lines[0].split()
     assert "1,000,000" in cells and "MiB" in cells  # the target and the peak RSS
     assert "native 8" in out and "@8, 20 steps" in out
+
+
+def test_native_speed_prints_a_row_per_env_beside_the_anchor():
+    out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-v1", "--robots", "8", "--seconds", "0.2")
+    (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("CaPaManCollisionFree-v1 ")]
+    assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 5

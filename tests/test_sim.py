@@ -195,7 +195,7 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     alpha = np.where(rng.random((3000, 1)) < 0.3, task + rng.normal(0, 0.1, (3000, 3)),
                      rng.uniform(G.alpha_min, G.alpha_max, (3000, 3)))
     alpha = np.clip(alpha, G.alpha_min, G.alpha_max)
-    value, part = occupancy.grid_clearance(alpha, grids, clusters, G, rows, chunk_points=5000)
+    value, part = occupancy.grid_clearance(alpha, grids, clusters, G, rows)
     expected_value, expected_part = _clearance_at_every_point(alpha, grids, clusters, rows)
     # collisions, and robots whose nearest point is near the cap, where a wrongly skipped block would show
     assert (expected_value < 0).any() and ((expected_value > 0.04) & (expected_value < 0.05)).sum() > 20
@@ -205,9 +205,9 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     parts, middles, radii, local = occupancy._blocks(clusters)
     centres, quats = capaman.part_frames(alpha, validate=False)
     rot, f32 = quat_to_matrix(quats), np.float32
-    reach = occupancy._reach(centres[:, parts].astype(f32), rot[:, parts].astype(f32), middles.astype(f32),
-                             radii.astype(f32), grids.active_lo[rows, None].astype(f32),
-                             grids.active_hi[rows, None].astype(f32))
+    reach = _spheres_meet_boxes(centres[:, parts].astype(f32), rot[:, parts].astype(f32), middles.astype(f32),
+                                radii.astype(f32), grids.active_lo[rows, None].astype(f32),
+                                grids.active_hi[rows, None].astype(f32))
     assert 0.005 < reach.mean() < 0.5
     robot, block = np.nonzero(~reach)
     pick = rng.choice(len(robot), 300_000, replace=False)
@@ -217,6 +217,18 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
         mine = rows[robot] == g
         assert np.all(_values_at(grids, g, centres[robot[mine], parts[block[mine]]],
                                  rot[robot[mine], parts[block[mine]]], point[mine]) == 100)
+
+
+def _spheres_meet_boxes(centres, rot, middles, radii, lo, hi):
+    """Which blocks' bounding spheres (``middles``, ``radii`` in their part's frame ``centres``, ``rot``) meet
+    their robot's box of cells below the cap (``lo``, ``hi``): the kernel's culling rule, in float32."""
+    gap = np.zeros(np.broadcast_shapes(centres.shape[:2], middles.shape[:1]), centres.dtype)
+    for k in range(3):
+        c = (centres[..., k] + middles[:, 0] * rot[..., k, 0] + middles[:, 1] * rot[..., k, 1]
+             + middles[:, 2] * rot[..., k, 2])
+        d = np.maximum(np.maximum(lo[..., k] - c, c - hi[..., k]), 0)
+        gap += d * d
+    return gap <= radii * radii
 
 
 def _closest_directly(sim, bodies, other="obstacles", cap=0.05):

@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
@@ -392,83 +393,104 @@ class DistanceGrids:
 
 def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoints,
                    geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, rows: np.ndarray | None = None,
-                   chunk_points: int = 1 << 20, pose: capaman.CaPaManPose | None = None
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   pose: capaman.CaPaManPose | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The clearance (m, N) of robots at crank angles ``alpha`` (N, 3) from
     their grids (``rows`` of ``grids``, default all): the smallest signed
     distance at any cluster point (negative: a collision by eq 2), and the
     part (N,) that holds that point (the lowest index on a tie; -1 when every
-    point reads the cap).
+    point reads the cap). ``pose``: the direct kinematics at ``alpha``, when
+    the caller has it.
 
-    The points are grouped in small blocks (:func:`_blocks`); a block whose
-    bounding sphere misses a robot's grid reads the cap there and is skipped.
-    The pairs (robot, block) that are left are evaluated in one vectorised
-    pass, ``chunk_points`` points at a time, with element-wise arithmetic
-    only, so that a robot's answer does not depend on the others in the
-    batch. ``pose``: the direct kinematics at ``alpha``, when the caller has it."""
+    One numba kernel over the robots (:func:`_clearance_kernel`). The points
+    are grouped in small blocks (:func:`_blocks`); a part whose bounding
+    sphere misses a robot's grid box reads the cap there and is skipped, and
+    so is a block whose own sphere misses it. The culling and the cells are
+    computed in float32, each robot on its own, so that a robot's answer does
+    not depend on the others in the batch; the values are those of paragym
+    0.9.0's vectorised numpy pass bit for bit (the released rollouts and the
+    leaderboard rows replay)."""
     n = len(alpha)
-    rows = np.arange(n) if rows is None else rows
+    rows = np.arange(n) if rows is None else np.asarray(rows, np.int64)
     centres, quats = capaman.part_frames(alpha, geometry, pose, validate=False)
     rot = quat_to_matrix(quats)  # (N, parts, 3, 3)
     parts, middles, radii, local = _blocks(clusters)
+    part_radii = _part_radii(clusters)
+    n_parts = len(part_radii)
+    first = np.searchsorted(parts, np.arange(n_parts + 1))  # the blocks of part p: first[p]:first[p + 1]
     cap = round(grids.cap / grids.unit)
-    lo, hi = grids.active_lo[rows].astype(np.float32), grids.active_hi[rows].astype(np.float32)
-    # which robots each part can reach (its bounding sphere), then which of its blocks (theirs): the pairs left
-    near = _reach(centres.astype(np.float32), rot.astype(np.float32), np.zeros((1, 3), np.float32),
-                  _part_radii(clusters).astype(np.float32), lo[:, None], hi[:, None])
-    robot_parts, block_parts = [], []
-    for p in np.flatnonzero(near.any(axis=0)):  # a loop over the (17) parts, each for all robots at once
-        i = np.flatnonzero(near[:, p])
-        bs = np.flatnonzero(parts == p)
-        ri, bi = np.nonzero(_reach(centres[i, p, None].astype(np.float32), rot[i, p, None].astype(np.float32),
-                                   middles[bs].astype(np.float32), radii[bs].astype(np.float32),
-                                   lo[i, None], hi[i, None]))
-        robot_parts.append(i[ri])
-        block_parts.append(bs[bi])
-    robot = np.concatenate(robot_parts) if robot_parts else np.zeros(0, np.int64)
-    block = np.concatenate(block_parts) if block_parts else np.zeros(0, np.int64)
-    # the smallest (value, part) of every pair as one key: value * parts + part
-    n_parts = len(_part_radii(clusters))
-    key = np.empty(len(robot), np.int32)
-    step = max(1, chunk_points // local.shape[1])
-    inv = 1.0 / grids.resolution
-    for s in range(0, len(robot), step):
-        i, b = robot[s:s + step], block[s:s + step]
-        g, p = rows[i], parts[b]
-        # the points in cell units of their robot's grid, clipped onto it
-        m = (rot[i, p] * inv).astype(np.float32)  # (K, 3, 3)
-        t = ((centres[i, p] - grids.origin[g]) * inv).astype(np.float32)  # (K, 3)
-        top = (grids.shape[g] - 1).astype(np.float32)
-        pts = local[b]  # (K, P, 3)
-        cells = []
-        for k in range(3):
-            x = (t[:, None, k] + pts[..., 0] * m[:, None, k, 0] + pts[..., 1] * m[:, None, k, 1]
-                 + pts[..., 2] * m[:, None, k, 2])
-            np.clip(x, 0.0, top[:, None, k], out=x)
-            cells.append(x.astype(np.int64))  # the floor, x being >= 0
-        sy, sz = grids.shape[g, 1, None], grids.shape[g, 2, None]
-        flat = (g * grids.slot)[:, None] + (cells[0] * sy + cells[1]) * sz + cells[2]
-        key[s:s + step] = grids.values[flat].min(axis=1).astype(np.int32) * n_parts + p
-    best = np.full(n, cap * n_parts, np.int64)
-    np.minimum.at(best, robot, key)
+    best = _clearance_kernel(centres, rot, rows, grids.origin, grids.shape, grids.slot, grids.values,
+                             grids.active_lo[rows].astype(np.float32), grids.active_hi[rows].astype(np.float32),
+                             part_radii.astype(np.float32), first, middles.astype(np.float32),
+                             radii.astype(np.float32), local, 1.0 / grids.resolution, cap, n_parts)
     value, part = best // n_parts, best % n_parts
     part[value >= cap] = -1
     return np.minimum(value, cap) * grids.unit, part
 
 
-def _reach(centres: np.ndarray, rot: np.ndarray, middles: np.ndarray, radii: np.ndarray, lo: np.ndarray,
-           hi: np.ndarray) -> np.ndarray:
-    """Which spheres meet which boxes, (M, K): spheres of ``radii`` (K,) about
-    points ``middles`` (K, 3) of frames (centres (M, K or 1, 3), rotations
-    (M, K or 1, 3, 3)), boxes ``lo``, ``hi`` (M, 1, 3); axis by axis, in the
-    arrays' dtype."""
-    gap = np.zeros(np.broadcast_shapes(centres.shape[:2], middles.shape[:1]), centres.dtype)
-    for k in range(3):
-        c = (centres[..., k] + middles[:, 0] * rot[..., k, 0] + middles[:, 1] * rot[..., k, 1]
-             + middles[:, 2] * rot[..., k, 2])
-        d = np.maximum(np.maximum(lo[..., k] - c, c - hi[..., k]), 0)
-        gap += d * d
-    return gap <= radii * radii
+@njit(cache=True, inline="always")
+def _axis_gap(c0: np.float32, mx: np.float32, r0: np.float32, my: np.float32, r1: np.float32, mz: np.float32,
+              r2: np.float32, lo: np.float32, hi: np.float32) -> np.float32:
+    """One axis of the culling test in float32: the squared distance of the sphere's centre
+    ``c0 + mx r0 + my r1 + mz r2`` from the box [lo, hi]."""
+    c = ((c0 + mx * r0) + my * r1) + mz * r2
+    d = max(max(lo - c, c - hi), np.float32(0.0))
+    return d * d
+
+
+@njit(cache=True)
+def _clearance_kernel(centres: np.ndarray, rot: np.ndarray, rows: np.ndarray, origin: np.ndarray,
+                      shape: np.ndarray, slot: int, values: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                      part_radii: np.ndarray, first: np.ndarray, middles: np.ndarray, radii: np.ndarray,
+                      local: np.ndarray, inv: float, cap: int, n_parts: int) -> np.ndarray:
+    """The smallest key value * parts + part of every robot (module docstring of :func:`grid_clearance`)."""
+    n = centres.shape[0]
+    zero = np.float32(0.0)
+    best = np.full(n, cap * n_parts, np.int64)
+    for i in range(n):
+        g = rows[i]
+        top0, top1, top2 = np.float32(shape[g, 0] - 1), np.float32(shape[g, 1] - 1), np.float32(shape[g, 2] - 1)
+        sy, sz = shape[g, 1], shape[g, 2]
+        base = g * slot
+        lo0, lo1, lo2, hi0, hi1, hi2 = lo[i, 0], lo[i, 1], lo[i, 2], hi[i, 0], hi[i, 1], hi[i, 2]
+        for p in range(n_parts):
+            c0, c1, c2 = np.float32(centres[i, p, 0]), np.float32(centres[i, p, 1]), np.float32(centres[i, p, 2])
+            a00, a01, a02 = np.float32(rot[i, p, 0, 0]), np.float32(rot[i, p, 0, 1]), np.float32(rot[i, p, 0, 2])
+            a10, a11, a12 = np.float32(rot[i, p, 1, 0]), np.float32(rot[i, p, 1, 1]), np.float32(rot[i, p, 1, 2])
+            a20, a21, a22 = np.float32(rot[i, p, 2, 0]), np.float32(rot[i, p, 2, 1]), np.float32(rot[i, p, 2, 2])
+            gap = ((zero + _axis_gap(c0, zero, a00, zero, a01, zero, a02, lo0, hi0))
+                   + _axis_gap(c1, zero, a10, zero, a11, zero, a12, lo1, hi1)) \
+                + _axis_gap(c2, zero, a20, zero, a21, zero, a22, lo2, hi2)
+            if not gap <= part_radii[p] * part_radii[p]:
+                continue
+            t0 = np.float32((centres[i, p, 0] - origin[g, 0]) * inv)
+            t1 = np.float32((centres[i, p, 1] - origin[g, 1]) * inv)
+            t2 = np.float32((centres[i, p, 2] - origin[g, 2]) * inv)
+            m00, m01, m02 = np.float32(rot[i, p, 0, 0] * inv), np.float32(rot[i, p, 0, 1] * inv), \
+                np.float32(rot[i, p, 0, 2] * inv)
+            m10, m11, m12 = np.float32(rot[i, p, 1, 0] * inv), np.float32(rot[i, p, 1, 1] * inv), \
+                np.float32(rot[i, p, 1, 2] * inv)
+            m20, m21, m22 = np.float32(rot[i, p, 2, 0] * inv), np.float32(rot[i, p, 2, 1] * inv), \
+                np.float32(rot[i, p, 2, 2] * inv)
+            for b in range(first[p], first[p + 1]):
+                mx, my, mz = middles[b, 0], middles[b, 1], middles[b, 2]
+                gap = ((zero + _axis_gap(c0, mx, a00, my, a01, mz, a02, lo0, hi0))
+                       + _axis_gap(c1, mx, a10, my, a11, mz, a12, lo1, hi1)) \
+                    + _axis_gap(c2, mx, a20, my, a21, mz, a22, lo2, hi2)
+                if not gap <= radii[b] * radii[b]:
+                    continue
+                low = 1 << 30
+                for q in range(local.shape[1]):
+                    x0, x1, x2 = local[b, q, 0], local[b, q, 1], local[b, q, 2]
+                    u = min(max(((t0 + x0 * m00) + x1 * m01) + x2 * m02, zero), top0)
+                    v = min(max(((t1 + x0 * m10) + x1 * m11) + x2 * m12, zero), top1)
+                    w = min(max(((t2 + x0 * m20) + x1 * m21) + x2 * m22, zero), top2)
+                    value = values[base + (np.int64(u) * sy + np.int64(v)) * sz + np.int64(w)]
+                    if value < low:
+                        low = value
+                key = low * n_parts + p
+                if key < best[i]:
+                    best[i] = key
+    return best
 
 
 def _groups(points: np.ndarray, size: int) -> list[np.ndarray]:
