@@ -37,10 +37,19 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-__all__ = ["AgentFile", "identity", "load_agent", "source_sha256", "unreadable"]
+__all__ = ["AgentFile", "identity", "load_agent", "sha256_of_file", "source_sha256", "unreadable"]
 
 #: one value per process for factories whose source cannot be read: rows made with it are never matched again
 _UNREADABLE = f"unreadable source (run {uuid.uuid4().hex[:12]}): its rows are never reused"
+
+
+def sha256_of_file(path: str | Path) -> str:
+    """The SHA-256 of the file at ``path`` (read a MiB at a time)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest()
 
 
 def _defining(factory: Any) -> tuple[Any, dict[str, Any]]:
@@ -74,7 +83,7 @@ def source_sha256(code: Any) -> str | None:
             return hashlib.sha256(inspect.getsource(code).encode()).hexdigest()
         except (OSError, TypeError):
             return None
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+    return sha256_of_file(path)
 
 
 def identity(factory: Callable[..., Any], params: dict[str, Any] | None = None) -> dict[str, Any]:
@@ -121,7 +130,7 @@ class AgentFile:
 @functools.lru_cache(maxsize=32)
 def _file_attr(path: str, attr: str, sha256: str) -> Any:
     p = Path(path)
-    if not p.is_file() or hashlib.sha256(p.read_bytes()).hexdigest() != sha256:
+    if not p.is_file() or sha256_of_file(p) != sha256:
         raise ValueError(f"agent file {p} changed (or went) since the leaderboard listed it (SHA-256 "
                          f"{sha256[:12]}): its episodes would not be the ones its rows name; run again")
     name = f"paragym_agent_{sha256[:16]}"
@@ -160,7 +169,7 @@ def load_agent(text: str) -> tuple[str, Callable[..., Any]]:
         p = Path(where).resolve()
         if not p.is_file():
             raise ValueError(f"--agent {text!r}: no file {where}")
-        factory: Callable[..., Any] = AgentFile(str(p), attr, hashlib.sha256(p.read_bytes()).hexdigest())
+        factory: Callable[..., Any] = AgentFile(str(p), attr, sha256_of_file(p))
         _file_attr(factory.path, attr, factory.sha256)  # fails now, not in the first episode
         return name, factory
     try:

@@ -24,7 +24,6 @@ SHA-256 for a learned policy, the planner's parameters for a planner.
 
 from __future__ import annotations
 
-import hashlib
 import json
 import re
 from collections.abc import Callable
@@ -37,7 +36,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
-from paragym.baselines.agents import identity
+from paragym.baselines.agents import identity, sha256_of_file
 from paragym.baselines.tasks import bench_of, init_defaults, random_factory
 from paragym.baselines.training import check_env_id, env_name, load_model
 from paragym.models import shared_with, shipped_models_dir, shipped_models_folder
@@ -176,11 +175,7 @@ def _numpy_actor(model: Any) -> tuple[list[tuple[np.ndarray, np.ndarray, Any]] |
 @lru_cache(maxsize=256)
 def file_sha256(path: str, mtime_ns: int, size: int) -> str:
     """The SHA-256 of a file (cached by path, modification time and size)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest()
+    return sha256_of_file(path)
 
 
 def _sha256(path: Path) -> str:

@@ -14,6 +14,7 @@ comparable, and the ``--db`` option takes a new file.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import sqlite3
 import time
@@ -23,7 +24,7 @@ from typing import Any
 
 import paragym
 
-__all__ = ["SCHEMA_VERSION", "DynamicRow", "EpisodeRow", "ResultStore"]
+__all__ = ["SCHEMA_VERSION", "DynamicRow", "EpisodeRow", "ResultStore", "producer_id"]
 
 SCHEMA_VERSION = "3"  # 3: the dynamic fidelity's episodes (paragym 0.6.0)
 
@@ -43,6 +44,11 @@ CREATE TABLE IF NOT EXISTS dynamic (
     kf_passed INTEGER NOT NULL, kf TEXT NOT NULL, wall_seconds REAL NOT NULL,
     PRIMARY KEY (env, policy, scenario, seed, version, producer));
 """
+
+
+def producer_id(producer: str) -> str:
+    """A producer in 16 hex digits (the first of its SHA-256): how the CSVs name it on every line."""
+    return hashlib.sha256(producer.encode()).hexdigest()[:16]
 
 
 @dataclass(frozen=True)

@@ -415,10 +415,10 @@ def _initialise_from(model: Any, algo: str, source: str | dict[str, Any], files:
     state = model.policy.state_dict()
     state.update({k: v for k, v in cloned.items() if k != "log_std"})
     model.policy.load_state_dict(state)
-    import hashlib
+    from paragym.baselines.agents import sha256_of_file
 
     shown = f"shipped: {path.relative_to(shipped_models_dir().parent)}" if path == shipped else str(path)
-    made = {"kind": "bc", "file": shown, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+    made = {"kind": "bc", "file": shown, "sha256": sha256_of_file(path)}
     print(f"PPO starts from the behaviour clone {shown} (sha256 {made['sha256'][:12]}; paragym.yml's init_from)")
     return made
 

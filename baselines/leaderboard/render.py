@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import csv
-import hashlib
 import io
 import math
 from collections.abc import Callable
@@ -13,6 +12,7 @@ from typing import Any
 import paragym
 from paragym.baselines.leaderboard.suite import EvalSuite
 from paragym.baselines.leaderboard.summary import Summary
+from paragym.baselines.store import producer_id
 from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import env_name
 
@@ -156,7 +156,7 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
                              *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s),
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
                              f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys),
-                             hashlib.sha256(s.producer.encode()).hexdigest()[:16], s.producer])
+                             producer_id(s.producer), s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
     return path

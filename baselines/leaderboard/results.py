@@ -44,7 +44,7 @@ import gymnasium as gym
 import paragym
 from paragym.baselines.leaderboard.suite import EvalSuite, episode_seed
 from paragym.baselines.policies import PolicySpec
-from paragym.baselines.store import DynamicRow, EpisodeRow
+from paragym.baselines.store import DynamicRow, EpisodeRow, producer_id
 
 __all__ = ["FORMAT", "Verification", "describe", "read_results", "verify", "write_episodes_csv", "write_results"]
 
@@ -145,7 +145,7 @@ def write_episodes_csv(path: str | Path, rows: list[EpisodeRow]) -> Path:
         writer.writerow([r.env, r.policy, r.kind, r.seed, r.episode, episode_seed(r.seed, r.episode),
                          repr(r.episode_return), r.length, int(r.success),
                          *(repr(r.metrics[k]) if k in r.metrics else "" for k in metrics), f"{r.wall_seconds:.4f}",
-                         r.version, hashlib.sha256(r.producer.encode()).hexdigest()[:16]])
+                         r.version, producer_id(r.producer)])
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
