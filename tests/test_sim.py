@@ -99,6 +99,20 @@ def test_grid_test_agrees_with_pybullet(scene, seed):
     np.testing.assert_array_equal(theta.ravel(), occupancy.grid_collision(full, grid, clusters))
 
 
+@pytest.mark.parametrize("seed", [0, 5])
+def test_joint_matrix_of_the_scenarios_equals_eq_2_everywhere(seed):
+    """The joint matrix as random scenarios draw it (16^3 configurations, cluster points every 10 mm: the
+    kernel's threaded path) equals eq 2 at every cluster point, obstacles far from and near the axis."""
+    from paragym.tasks.capaman import _random_obstacles
+
+    grid = occupancy.OccupancyGrid.from_obstacles(_random_obstacles(np.random.default_rng(seed)))
+    clusters = occupancy.cluster_points(spacing=0.01)
+    theta, axis = occupancy.joint_matrix(grid, clusters, 16)
+    full = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    assert theta.any() and not theta.all()
+    np.testing.assert_array_equal(theta.ravel(), occupancy.grid_collision(full, grid, clusters))
+
+
 def test_swept_boxes_hold_every_part_over_the_joint_range():
     lo, hi = capaman.swept_part_boxes(G, 9)
     rng = np.random.default_rng(5)
@@ -201,6 +215,11 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     assert (expected_value < 0).any() and ((expected_value > 0.04) & (expected_value < 0.05)).sum() > 20
     np.testing.assert_array_equal(value, expected_value)
     np.testing.assert_array_equal(part, expected_part)
+    # one after another (a short batch) as on numba's threads (a long one): the same answers
+    assert len(alpha) >= occupancy.PARALLEL_FROM > 60
+    short = occupancy.grid_clearance(alpha[:60], grids, clusters, G, rows[:60])
+    np.testing.assert_array_equal(short[0], value[:60])
+    np.testing.assert_array_equal(short[1], part[:60])
     # and the blocks skipped read the cap at every point
     parts, middles, radii, local = occupancy._blocks(clusters)
     centres, quats = capaman.part_frames(alpha, validate=False)

@@ -62,6 +62,9 @@ __all__ = [
     "kernel_consts",
     "part_shapes",
     "part_frames",
+    "part_table",
+    "k_part_frames",
+    "crank_trig",
     "swept_part_boxes",
     "tool_tip",
 ]
@@ -492,6 +495,52 @@ def _leg_part_table(g: CaPaManGeometry) -> SimpleNamespace:
                            qs=np.array(qs), leg=np.array(leg), crank=np.array(crank, float))
 
 
+@lru_cache(maxsize=32)
+def part_table(g: CaPaManGeometry) -> tuple[np.ndarray, ...]:
+    """The leg parts' affine table (:func:`_leg_part_table`) as :func:`k_part_frames` takes it: c0, c1, c2
+    (15, 3) m, qc, qs (15, 4), the leg of each part (15,) and whether it is a crank (15,); and L_tool / 2 (m)."""
+    t = _leg_part_table(g)
+    return (t.c0, t.c1, t.c2, t.qc, t.qs, t.leg.astype(np.int64), t.crank.astype(np.bool_),
+            np.float64(g.tool_length / 2))
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def k_part_frames(trig, position, quat, c0, c1, c2, qc, qs, leg, crank, tool_half, centres, quats):
+    """Centres (17, 3) and quaternions (17, 4) of every part at one configuration, written into
+    ``centres`` and ``quats``: ``trig`` (4, 3) holds cos alpha_k, sin alpha_k, cos alpha_k/2, sin alpha_k/2;
+    ``position`` and ``quat`` are the plate's pose (:func:`k_forward`); the rest is :func:`part_table`."""
+    for j in range(leg.shape[0]):
+        k = leg[j]
+        c, s = trig[0, k], trig[1, k]
+        hc, hs = (trig[2, k], trig[3, k]) if crank[j] else (1.0, 0.0)
+        for d in range(3):
+            centres[j, d] = c0[j, d] + c1[j, d] * c + c2[j, d] * s
+        for d in range(4):
+            quats[j, d] = qc[j, d] * hc + qs[j, d] * hs
+    plate, tool = leg.shape[0], leg.shape[0] + 1
+    x, y, z, w = quat[0], quat[1], quat[2], quat[3]
+    axis = (2 * (x * z + y * w), 2 * (y * z - x * w), 1 - 2 * (x * x + y * y))  # R z, as quat_to_matrix has it
+    for d in range(3):
+        centres[plate, d] = position[d]
+        centres[tool, d] = position[d] - tool_half * axis[d]
+    for d in range(4):
+        quats[plate, d] = quat[d]
+        quats[tool, d] = quat[d]
+
+
+def crank_trig(alpha: np.ndarray) -> np.ndarray:
+    """cos alpha, sin alpha, cos alpha/2, sin alpha/2 of configurations (N, 3), as (N, 4, 3) (numpy's
+    ufuncs, so that every caller gets the same floats)."""
+    return np.stack([np.cos(alpha), np.sin(alpha), np.cos(0.5 * alpha), np.sin(0.5 * alpha)], axis=1)
+
+
+@njit(cache=True, error_model="numpy")
+def _part_frames_all(trig, position, quat, c0, c1, c2, qc, qs, leg, crank, tool_half, centres, quats):
+    for i in range(trig.shape[0]):
+        k_part_frames(trig[i], position[i], quat[i], c0, c1, c2, qc, qs, leg, crank, tool_half, centres[i],
+                      quats[i])
+
+
 def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
                 pose: CaPaManPose | None = None, validate: bool = True
                 ) -> tuple[np.ndarray, np.ndarray]:
@@ -500,20 +549,18 @@ def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
     Order of :func:`part_shapes`. Each part's local z runs along its long axis
     (cranks along cos(alpha) u_k + sin(alpha) z, coupler along u_k, bar along
     z, rail along w_k, plate and tool along the plate normal R z). ``pose``
-    may be passed when the direct kinematics is already known.
+    may be passed when the direct kinematics is already known. One compiled
+    loop (:func:`k_part_frames`), which the grid's clearance kernel also runs.
     """
     g = geometry
-    t = _leg_part_table(g)
     al = check_joint_angles(alpha, g) if validate else np.atleast_2d(np.asarray(alpha, float))
+    al = np.ascontiguousarray(al, float)
     if pose is None:
         pose = forward(al, g, validate=False)
-    a = al[:, t.leg]  # (N, 15)
-    centres = t.c0 + t.c1 * np.cos(a)[..., None] + t.c2 * np.sin(a)[..., None]
-    half = 0.5 * a * t.crank
-    quats = t.qc * np.cos(half)[..., None] + t.qs * np.sin(half)[..., None]
-    tool_c = pose.position - (g.tool_length / 2) * pose.rotation[:, :, 2]
-    centres = np.concatenate([centres, pose.position[:, None], tool_c[:, None]], axis=1)
-    quats = np.concatenate([quats, pose.quaternion[:, None], pose.quaternion[:, None]], axis=1)
+    n = len(al)
+    centres, quats = np.empty((n, 17, 3)), np.empty((n, 17, 4))
+    _part_frames_all(crank_trig(al), np.ascontiguousarray(pose.position), np.ascontiguousarray(pose.quaternion),
+                     *part_table(g), centres, quats)
     return centres, quats
 
 

@@ -6,8 +6,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-__all__ = ["PartShape", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
+__all__ = ["PartShape", "k_quat_to_matrix", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
 
 
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -35,6 +36,16 @@ def quat_to_matrix(q: np.ndarray) -> np.ndarray:
         2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w),
         2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y),
     ], axis=-1).reshape(q.shape[:-1] + (3, 3))
+
+
+@njit(cache=True, inline="always")
+def k_quat_to_matrix(q: np.ndarray, out: np.ndarray) -> None:
+    """:func:`quat_to_matrix` of one quaternion (4,) into ``out`` (3, 3), in compiled code: the same sums in
+    the same order, so the same floats."""
+    x, y, z, w = q[0], q[1], q[2], q[3]
+    out[0, 0], out[0, 1], out[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
+    out[1, 0], out[1, 1], out[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
+    out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
 
 
 def matrix_to_quat(m: np.ndarray) -> np.ndarray:

@@ -21,12 +21,21 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import os
+
+import numba
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from paragym.mechanisms import capaman
-from paragym.mechanisms.geometry import quat_to_matrix
+from paragym.mechanisms.geometry import k_quat_to_matrix, quat_to_matrix
 from paragym.sim.obstacles import Box, Obstacle
+
+# The compiled loops run on numba's threads. GNU OpenMP's, numba's default here, abort a process that forks
+# after using them, as gymnasium's AsyncVectorEnv and multiprocessing do; a fork-safe layer (TBB or numba's
+# own work queue) is chosen instead, unless the user chose one.
+if "NUMBA_THREADING_LAYER" not in os.environ and numba.config.THREADING_LAYER == "default":
+    numba.config.THREADING_LAYER = "forksafe"
 
 __all__ = ["ClusterPoints", "DistanceGrids", "OccupancyGrid", "cluster_points", "grid_clearance", "grid_collision",
            "joint_matrix", "signed_distances"]
@@ -275,22 +284,64 @@ def _grid_hits(grid: OccupancyGrid, world: np.ndarray, idx: np.ndarray, lo: np.n
     float32, in blocks ``idx`` (B, 16) with bounding boxes ``lo``, ``hi``
     (3, N, B) (:meth:`ClusterPoints.on_joint_grid`): only the blocks that
     reach the box of a clump of occupied cells (grown by a cell, far more
-    than float32 rounding) are looked up; the others lie in free cells. The
-    same answer as ``grid.lookup(world).any(axis=1)`` in (N, M, 3) order."""
+    than float32 rounding) are looked up; the others lie in free cells; a
+    configuration stops at its first occupied point. The same answer as
+    ``grid.lookup(world).any(axis=1)`` in (N, M, 3) order, with the same
+    float32 arithmetic as :meth:`OccupancyGrid.lookup_axes` (one compiled
+    loop, :func:`_hits_kernel`)."""
     from scipy import ndimage
 
-    reach = np.zeros(lo.shape[1:], bool)
     labels, _ = ndimage.label(grid.occupied)
-    for box in ndimage.find_objects(labels):  # each clump of occupied cells (an obstacle or touching ones)
-        inside = np.ones(lo.shape[1:], bool)
-        for k, s in enumerate(box):
-            inside &= hi[k] >= np.float32(grid.origin[k] + (s.start - 1) * grid.resolution)
-            inside &= lo[k] <= np.float32(grid.origin[k] + (s.stop + 1) * grid.resolution)
-        reach |= inside
-    config, block = np.nonzero(reach)
-    out = np.zeros(world.shape[1], bool)
-    flat = config[:, None] * world.shape[2] + idx[block]
-    out[config[grid.lookup_axes(*(np.take(world[k], flat) for k in range(3))).any(axis=1)]] = True
+    boxes = ndimage.find_objects(labels)  # each clump of occupied cells (an obstacle or touching ones)
+    f32 = np.float32
+    clump_lo = np.array([[f32(grid.origin[k] + (s.start - 1) * grid.resolution) for k, s in enumerate(box)]
+                         for box in boxes], f32).reshape(-1, 3)
+    clump_hi = np.array([[f32(grid.origin[k] + (s.stop + 1) * grid.resolution) for k, s in enumerate(box)]
+                         for box in boxes], f32).reshape(-1, 3)
+    kernel = _hits_parallel if world.shape[1] >= 1024 else _hits_serial
+    return kernel(world, idx, lo, hi, clump_lo, clump_hi, grid.origin.astype(f32), f32(1.0 / grid.resolution),
+                  np.array(grid.occupied.shape, np.int64), grid.occupied.ravel())
+
+
+@njit(cache=True, inline="always")
+def _hits_one(n, world, idx, lo, hi, clump_lo, clump_hi, origin, inv, shape, occupied):
+    """Whether configuration ``n`` puts a point in an occupied cell (:func:`_grid_hits`)."""
+    zero = np.float32(0.0)
+    top = (np.float32(shape[0] - 1), np.float32(shape[1] - 1), np.float32(shape[2] - 1))
+    for b in range(idx.shape[0]):
+        reach = False
+        for c in range(clump_lo.shape[0]):
+            inside = True
+            for k in range(3):
+                inside = inside and hi[k, n, b] >= clump_lo[c, k] and lo[k, n, b] <= clump_hi[c, k]
+            reach = reach or inside
+        if not reach:
+            continue
+        for q in range(idx.shape[1]):
+            m = idx[b, q]
+            flat = 0
+            for k in range(3):
+                i = (world[k, n, m] - origin[k]) * inv
+                i = min(max(i, zero), top[k])  # clipped onto the grid, so that truncating is flooring
+                flat = flat * shape[k] + np.int64(np.int32(i))
+            if occupied[flat]:
+                return True
+    return False
+
+
+@njit(cache=True)
+def _hits_serial(world, idx, lo, hi, clump_lo, clump_hi, origin, inv, shape, occupied):
+    out = np.zeros(world.shape[1], np.bool_)
+    for n in range(world.shape[1]):
+        out[n] = _hits_one(n, world, idx, lo, hi, clump_lo, clump_hi, origin, inv, shape, occupied)
+    return out
+
+
+@njit(cache=True, parallel=True)
+def _hits_parallel(world, idx, lo, hi, clump_lo, clump_hi, origin, inv, shape, occupied):
+    out = np.zeros(world.shape[1], np.bool_)
+    for n in prange(world.shape[1]):
+        out[n] = _hits_one(n, world, idx, lo, hi, clump_lo, clump_hi, origin, inv, shape, occupied)
     return out
 
 
@@ -395,88 +446,105 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
                    geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, rows: np.ndarray | None = None,
                    pose: capaman.CaPaManPose | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The clearance (m, N) of robots at crank angles ``alpha`` (N, 3) from
-    their grids (``rows`` of ``grids``, default all): the smallest signed
+    their grids (``rows`` of ``grids``, default all; a row may repeat, as
+    when one robot is probed at several configurations: give them one after
+    the other, so that its grid is still in the cache): the smallest signed
     distance at any cluster point (negative: a collision by eq 2), and the
     part (N,) that holds that point (the lowest index on a tie; -1 when every
     point reads the cap). ``pose``: the direct kinematics at ``alpha``, when
     the caller has it.
 
-    One numba kernel over the robots (:func:`_clearance_kernel`). The points
-    are grouped in small blocks (:func:`_blocks`); a part whose bounding
-    sphere misses a robot's grid box reads the cap there and is skipped, and
-    so is a block whose own sphere misses it. The culling and the cells are
-    computed in float32, each robot on its own, so that a robot's answer does
-    not depend on the others in the batch; the values are those of paragym
-    0.9.0's vectorised numpy pass bit for bit (the released rollouts and the
-    leaderboard rows replay)."""
-    n = len(alpha)
+    One numba kernel over the configurations (:func:`_clearance_one`),
+    which places the parts (:func:`paragym.mechanisms.capaman.k_part_frames`)
+    and reads the grid; from :data:`PARALLEL_FROM` configurations on it runs
+    on every core numba has (``numba.set_num_threads`` limits them). The
+    points are grouped in small blocks (:func:`_blocks`); a part whose
+    bounding sphere misses a robot's grid box reads the cap there and is
+    skipped, and so is a block whose own sphere misses it. The culling and
+    the cells are computed in float32, each configuration on its own, so
+    that an answer does not depend on the others in the batch nor on the
+    threads; the values are those of paragym 0.9.0's vectorised numpy pass
+    bit for bit (the released rollouts and the leaderboard rows replay)."""
+    al = np.ascontiguousarray(np.atleast_2d(alpha), np.float64)
+    n = len(al)
     rows = np.arange(n) if rows is None else np.asarray(rows, np.int64)
-    centres, quats = capaman.part_frames(alpha, geometry, pose, validate=False)
-    rot = quat_to_matrix(quats)  # (N, parts, 3, 3)
+    if pose is None:
+        pose = capaman.forward(al, geometry, validate=False)
     parts, middles, radii, local = _blocks(clusters)
     part_radii = _part_radii(clusters)
     n_parts = len(part_radii)
-    first = np.searchsorted(parts, np.arange(n_parts + 1))  # the blocks of part p: first[p]:first[p + 1]
+    bounds, group_middles, group_radii = _block_groups(clusters)
+    first = np.searchsorted(bounds[:-1], np.searchsorted(parts, np.arange(n_parts + 1)))  # part p's runs
     cap = round(grids.cap / grids.unit)
-    best = _clearance_kernel(centres, rot, rows, grids.origin, grids.shape, grids.slot, grids.values,
-                             grids.active_lo[rows].astype(np.float32), grids.active_hi[rows].astype(np.float32),
-                             part_radii.astype(np.float32), first, middles.astype(np.float32),
-                             radii.astype(np.float32), local, 1.0 / grids.resolution, cap, n_parts)
+    kernel = _clearance_parallel if n >= PARALLEL_FROM else _clearance_serial
+    best = kernel(capaman.crank_trig(al), np.ascontiguousarray(pose.position), np.ascontiguousarray(pose.quaternion),
+                  capaman.part_table(geometry), rows, grids.origin, grids.shape, grids.slot, grids.values,
+                  grids.active_lo.astype(np.float32), grids.active_hi.astype(np.float32),
+                  part_radii.astype(np.float32), first, bounds, group_middles.astype(np.float32),
+                  group_radii.astype(np.float32), middles.astype(np.float32), radii.astype(np.float32), local,
+                  1.0 / grids.resolution, cap, n_parts)
     value, part = best // n_parts, best % n_parts
     part[value >= cap] = -1
     return np.minimum(value, cap) * grids.unit, part
 
 
+#: from this many configurations on, :func:`grid_clearance` runs its kernel on every core numba has
+PARALLEL_FROM = 256
+
+
 @njit(cache=True, inline="always")
-def _axis_gap(c0: np.float32, mx: np.float32, r0: np.float32, my: np.float32, r1: np.float32, mz: np.float32,
-              r2: np.float32, lo: np.float32, hi: np.float32) -> np.float32:
-    """One axis of the culling test in float32: the squared distance of the sphere's centre
-    ``c0 + mx r0 + my r1 + mz r2`` from the box [lo, hi]."""
-    c = ((c0 + mx * r0) + my * r1) + mz * r2
-    d = max(max(lo - c, c - hi), np.float32(0.0))
-    return d * d
+def _gap(frame: np.ndarray, middle: np.ndarray, box: np.ndarray) -> np.float32:
+    """The culling test in float32: the squared distance from the box ``box`` (lower and upper corners,
+    (2, 3)) of the centre of a sphere at ``middle`` (3,) in a part's ``frame`` (3, 4: centre, rotation)."""
+    total = np.float32(0.0)
+    for k in range(3):
+        c = ((frame[k, 0] + middle[0] * frame[k, 1]) + middle[1] * frame[k, 2]) + middle[2] * frame[k, 3]
+        d = max(max(box[0, k] - c, c - box[1, k]), np.float32(0.0))
+        total += d * d
+    return total
 
 
 @njit(cache=True)
-def _clearance_kernel(centres: np.ndarray, rot: np.ndarray, rows: np.ndarray, origin: np.ndarray,
-                      shape: np.ndarray, slot: int, values: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                      part_radii: np.ndarray, first: np.ndarray, middles: np.ndarray, radii: np.ndarray,
-                      local: np.ndarray, inv: float, cap: int, n_parts: int) -> np.ndarray:
-    """The smallest key value * parts + part of every robot (module docstring of :func:`grid_clearance`)."""
-    n = centres.shape[0]
+def _clearance_one(trig, position, quat, table, g, origin, shape, slot, values, lo, hi, part_radii, first,
+                   bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
+    """The smallest key value * parts + part of one configuration against grid ``g`` (the docstring of
+    :func:`grid_clearance`); ``trig``, ``position``, ``quat`` and ``table`` place its parts
+    (:func:`paragym.mechanisms.capaman.k_part_frames`)."""
+    c0_, c1_, c2_, qc, qs, leg, crank, tool_half = table
+    centres, quats, rot = np.empty((n_parts, 3)), np.empty((n_parts, 4)), np.empty((n_parts, 3, 3))
+    capaman.k_part_frames(trig, position, quat, c0_, c1_, c2_, qc, qs, leg, crank, tool_half, centres, quats)
+    for p in range(n_parts):
+        k_quat_to_matrix(quats[p], rot[p])
     zero = np.float32(0.0)
-    best = np.full(n, cap * n_parts, np.int64)
-    for i in range(n):
-        g = rows[i]
-        top0, top1, top2 = np.float32(shape[g, 0] - 1), np.float32(shape[g, 1] - 1), np.float32(shape[g, 2] - 1)
-        sy, sz = shape[g, 1], shape[g, 2]
-        base = g * slot
-        lo0, lo1, lo2, hi0, hi1, hi2 = lo[i, 0], lo[i, 1], lo[i, 2], hi[i, 0], hi[i, 1], hi[i, 2]
-        for p in range(n_parts):
-            c0, c1, c2 = np.float32(centres[i, p, 0]), np.float32(centres[i, p, 1]), np.float32(centres[i, p, 2])
-            a00, a01, a02 = np.float32(rot[i, p, 0, 0]), np.float32(rot[i, p, 0, 1]), np.float32(rot[i, p, 0, 2])
-            a10, a11, a12 = np.float32(rot[i, p, 1, 0]), np.float32(rot[i, p, 1, 1]), np.float32(rot[i, p, 1, 2])
-            a20, a21, a22 = np.float32(rot[i, p, 2, 0]), np.float32(rot[i, p, 2, 1]), np.float32(rot[i, p, 2, 2])
-            gap = ((zero + _axis_gap(c0, zero, a00, zero, a01, zero, a02, lo0, hi0))
-                   + _axis_gap(c1, zero, a10, zero, a11, zero, a12, lo1, hi1)) \
-                + _axis_gap(c2, zero, a20, zero, a21, zero, a22, lo2, hi2)
-            if not gap <= part_radii[p] * part_radii[p]:
+    best = cap * n_parts
+    top0, top1, top2 = np.float32(shape[g, 0] - 1), np.float32(shape[g, 1] - 1), np.float32(shape[g, 2] - 1)
+    sy, sz = shape[g, 1], shape[g, 2]
+    base = g * slot
+    box = np.empty((2, 3), np.float32)
+    box[0], box[1] = lo[g], hi[g]
+    frame = np.empty((3, 4), np.float32)  # a part's centre and rotation, float32: the culling's frame
+    origin_point = np.zeros(3, np.float32)
+    for p in range(n_parts):
+        for k in range(3):
+            frame[k, 0] = np.float32(centres[p, k])
+            for j in range(3):
+                frame[k, 1 + j] = np.float32(rot[p, k, j])
+        if not _gap(frame, origin_point, box) <= part_radii[p] * part_radii[p]:
+            continue
+        t0 = np.float32((centres[p, 0] - origin[g, 0]) * inv)
+        t1 = np.float32((centres[p, 1] - origin[g, 1]) * inv)
+        t2 = np.float32((centres[p, 2] - origin[g, 2]) * inv)
+        m00, m01, m02 = np.float32(rot[p, 0, 0] * inv), np.float32(rot[p, 0, 1] * inv), \
+            np.float32(rot[p, 0, 2] * inv)
+        m10, m11, m12 = np.float32(rot[p, 1, 0] * inv), np.float32(rot[p, 1, 1] * inv), \
+            np.float32(rot[p, 1, 2] * inv)
+        m20, m21, m22 = np.float32(rot[p, 2, 0] * inv), np.float32(rot[p, 2, 1] * inv), \
+            np.float32(rot[p, 2, 2] * inv)
+        for r in range(first[p], first[p + 1]):  # the part's runs of blocks, then each run's blocks
+            if not _gap(frame, group_middles[r], box) <= group_radii[r] * group_radii[r]:
                 continue
-            t0 = np.float32((centres[i, p, 0] - origin[g, 0]) * inv)
-            t1 = np.float32((centres[i, p, 1] - origin[g, 1]) * inv)
-            t2 = np.float32((centres[i, p, 2] - origin[g, 2]) * inv)
-            m00, m01, m02 = np.float32(rot[i, p, 0, 0] * inv), np.float32(rot[i, p, 0, 1] * inv), \
-                np.float32(rot[i, p, 0, 2] * inv)
-            m10, m11, m12 = np.float32(rot[i, p, 1, 0] * inv), np.float32(rot[i, p, 1, 1] * inv), \
-                np.float32(rot[i, p, 1, 2] * inv)
-            m20, m21, m22 = np.float32(rot[i, p, 2, 0] * inv), np.float32(rot[i, p, 2, 1] * inv), \
-                np.float32(rot[i, p, 2, 2] * inv)
-            for b in range(first[p], first[p + 1]):
-                mx, my, mz = middles[b, 0], middles[b, 1], middles[b, 2]
-                gap = ((zero + _axis_gap(c0, mx, a00, my, a01, mz, a02, lo0, hi0))
-                       + _axis_gap(c1, mx, a10, my, a11, mz, a12, lo1, hi1)) \
-                    + _axis_gap(c2, mx, a20, my, a21, mz, a22, lo2, hi2)
-                if not gap <= radii[b] * radii[b]:
+            for b in range(bounds[r], bounds[r + 1]):
+                if not _gap(frame, middles[b], box) <= radii[b] * radii[b]:
                     continue
                 low = 1 << 30
                 for q in range(local.shape[1]):
@@ -488,8 +556,32 @@ def _clearance_kernel(centres: np.ndarray, rot: np.ndarray, rows: np.ndarray, or
                     if value < low:
                         low = value
                 key = low * n_parts + p
-                if key < best[i]:
-                    best[i] = key
+                if key < best:
+                    best = key
+    return best
+
+
+@njit(cache=True)
+def _clearance_serial(trig, position, quat, table, rows, origin, shape, slot, values, lo, hi, part_radii, first,
+                      bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
+    """:func:`_clearance_one` of every configuration, one after the other."""
+    best = np.empty(trig.shape[0], np.int64)
+    for i in range(trig.shape[0]):
+        best[i] = _clearance_one(trig[i], position[i], quat[i], table, rows[i], origin, shape, slot, values, lo,
+                                 hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local,
+                                 inv, cap, n_parts)
+    return best
+
+
+@njit(cache=True, parallel=True)
+def _clearance_parallel(trig, position, quat, table, rows, origin, shape, slot, values, lo, hi, part_radii,
+                        first, bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
+    """:func:`_clearance_one` of every configuration, on numba's threads (consecutive ones on one thread)."""
+    best = np.empty(trig.shape[0], np.int64)
+    for i in prange(trig.shape[0]):
+        best[i] = _clearance_one(trig[i], position[i], quat[i], table, rows[i], origin, shape, slot, values, lo,
+                                 hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local,
+                                 inv, cap, n_parts)
     return best
 
 
@@ -506,6 +598,25 @@ def _groups(points: np.ndarray, size: int) -> list[np.ndarray]:
         order = idx[np.argsort(pts[:, np.argmax(np.ptp(pts, axis=0))], kind="stable")]
         todo += [order[:len(idx) // 2], order[len(idx) // 2:]]
     return out
+
+
+def _block_groups(clusters: ClusterPoints, size: int = 16) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Runs of up to ``size`` consecutive blocks of one part (:func:`_blocks`; consecutive blocks lie near each
+    other): the first block of each run and one past the last, (G + 1,); each run's centre (G, 3) and the
+    radius (G,) of a sphere that holds its blocks' spheres (m, in the part's frame). Kept on the clusters."""
+    key = ("block groups", size)
+    if key not in clusters._grid_cache:
+        parts, middles, radii, _ = _blocks(clusters)
+        edges = np.flatnonzero(np.diff(parts)) + 1
+        starts = np.concatenate([np.arange(a, b, size) for a, b in zip(np.r_[0, edges], np.r_[edges, len(parts)],
+                                                                       strict=True)])
+        bounds = np.r_[starts, len(parts)]
+        centre = np.array([(middles[a:b].min(axis=0) + middles[a:b].max(axis=0)) / 2
+                           for a, b in zip(bounds[:-1], bounds[1:], strict=True)])
+        radius = np.array([np.max(np.linalg.norm(middles[a:b] - c, axis=1) + radii[a:b]) + 1e-9
+                           for a, b, c in zip(bounds[:-1], bounds[1:], centre, strict=True)])
+        clusters._grid_cache[key] = (bounds, centre, radius)
+    return clusters._grid_cache[key]
 
 
 def _part_radii(clusters: ClusterPoints) -> np.ndarray:

@@ -211,6 +211,10 @@ class GridWorld:
         clearance, part = occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
         return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
 
+    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
+        return occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
+
 
 class SceneWorld:
     """One robot in the kinematic PyBullet scene: its exact signed distance."""
@@ -330,14 +334,13 @@ def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: 
     if not near.size:
         return
     g = params.geometry
-    probes = np.repeat(state.alpha[near][None], 3, axis=0)  # (3, M, 3): crank k moved in probes[k]
+    probes = np.repeat(state.alpha[near][:, None], 3, axis=1)  # (M, 3, 3): crank k moved in probes[:, k]
     for k in range(3):
-        probes[k, :, k] = np.minimum(probes[k, :, k] + LOOKAHEAD, g.alpha_max)
-    if isinstance(world, GridWorld):  # the grid answers all the probes of all the robots in one call
-        clearance, _, _ = world.place(np.tile(near, 3), probes.reshape(-1, 3))
-        ahead = clearance.reshape(3, -1).T
+        probes[:, k, k] = np.minimum(probes[:, k, k] + LOOKAHEAD, g.alpha_max)
+    if isinstance(world, GridWorld):  # the grid answers every probe in one call, a robot's one after another
+        ahead = world.clearance(np.repeat(near, 3), probes.reshape(-1, 3)).reshape(-1, 3)
     else:
-        ahead = np.stack([world.place(near, probes[k])[0] for k in range(3)], axis=1)
+        ahead = np.stack([world.place(near, probes[:, k])[0] for k in range(3)], axis=1)
     state.lookahead[near] = np.minimum(ahead, params.clearance_cap) - state.clearance[near, None]
     if pose_back and isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
         world.place(near, state.alpha[near])
