@@ -18,10 +18,9 @@ than the cluster spacing is seen (the tests check both against PyBullet).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-
-import os
 
 import numba
 import numpy as np
