@@ -381,15 +381,13 @@ def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, c
     # in z to its interval, and to the union the least of those; integers, so the same figures as a distance
     # transform of the whole grid, at the cost of one in two dimensions per obstacle
     occ = _occupied(shape, prisms)
-    d2 = np.full(shape, np.iinfo(np.int64).max)
-    k = np.arange(shape[2])
-    for plane, column in prisms:
+    dxy2 = np.empty((len(prisms), shape[0], shape[1]), np.int64)
+    z_range = np.empty((len(prisms), 2), np.int64)
+    for j, (plane, column) in enumerate(prisms):
         near = ndimage.distance_transform_edt(~plane, return_distances=False, return_indices=True)
-        dxy2 = (near[0] - np.arange(shape[0])[:, None]) ** 2 + (near[1] - np.arange(shape[1])[None, :]) ** 2
+        dxy2[j] = (near[0] - np.arange(shape[0])[:, None]) ** 2 + (near[1] - np.arange(shape[1])[None, :]) ** 2
         z = np.flatnonzero(column)
-        dz = np.maximum(np.maximum(z[0] - k, k - z[-1]), 0)
-        np.minimum(d2, dxy2[:, :, None] + (dz * dz)[None, None], out=d2)
-    outside = np.sqrt(d2.astype(np.float64)) * resolution - resolution / 2
+        z_range[j] = z[0], z[-1]
     # inside: only over the occupied cells' box grown by one cell, whose outer layer is free, so no occupied
     # cell has a nearer free cell beyond it (exact; the grid is mostly free space)
     inside = np.zeros(occ.shape)
@@ -397,9 +395,33 @@ def signed_distances(obstacles: Sequence[Obstacle], resolution: float = 0.005, c
         first, last = _mask_bounds(occ)
         box = tuple(slice(max(int(a) - 1, 0), int(b) + 2) for a, b in zip(first, last, strict=True))
         inside[box] = ndimage.distance_transform_edt(occ[box])
-    inside = inside * resolution - resolution / 2
-    d = np.where(occ, -inside, outside)
-    return np.clip(np.round(d / unit), -round(cap / unit), round(cap / unit)).astype(np.int8), origin
+    return _signed_kernel(dxy2, z_range, occ, inside, resolution, unit, round(cap / unit)), origin
+
+
+@njit(cache=True)
+def _signed_kernel(dxy2: np.ndarray, z_range: np.ndarray, occ: np.ndarray, inside: np.ndarray, resolution: float,
+                   unit: float, cap: int) -> np.ndarray:
+    """The int8 values of :func:`signed_distances` from each prism's squared distance (cells) in (x, y)
+    ``dxy2`` (P, nx, ny) and its z interval ``z_range`` (P, 2), Psi ``occ`` and the occupied cells' distance
+    (cells) to the nearest free one ``inside``: per cell, the least squared distance to a prism
+    (``dxy2 + dz^2``, integers), its root in m less half a cell, or minus ``inside`` in m plus half a cell
+    where occupied; rounded to ``unit`` (half to even) and clipped to +-``cap`` units."""
+    nx, ny, nz = occ.shape
+    out = np.empty((nx, ny, nz), np.int8)
+    half = resolution / 2
+    for x in range(nx):
+        for y in range(ny):
+            for z in range(nz):
+                if occ[x, y, z]:
+                    d = -(inside[x, y, z] * resolution - half)
+                else:
+                    d2 = np.iinfo(np.int64).max
+                    for j in range(dxy2.shape[0]):
+                        dz = max(max(z_range[j, 0] - z, z - z_range[j, 1]), 0)
+                        d2 = min(d2, dxy2[j, x, y] + dz * dz)
+                    d = np.sqrt(np.float64(d2)) * resolution - half
+                out[x, y, z] = np.int8(min(max(np.rint(d / unit), -cap), cap))
+    return out
 
 
 class DistanceGrids:
