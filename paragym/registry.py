@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "row", "rows", "rows_of", "task_of"]
+__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "newest", "row", "rows", "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -152,6 +152,12 @@ def task_of(env_id: str) -> str:
 def rows_of(task: str) -> tuple[EnvRow, ...]:
     """The rows of ``task``, oldest version first."""
     return tuple(sorted((r for r in rows() if r.task == task), key=lambda r: r.version))
+
+
+def newest() -> tuple[str, ...]:
+    """The newest id of every task, in the order the tasks first appear."""
+    tasks = dict.fromkeys(r.task for r in rows())
+    return tuple(rows_of(t)[-1].id for t in tasks)
 
 
 def first_version(env_id: str) -> str:

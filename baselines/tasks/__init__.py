@@ -29,7 +29,7 @@ import gymnasium as gym
 from paragym import registry
 from paragym.rollout import Episode
 
-__all__ = ["Bench", "BuiltIn", "Column", "bench_of", "init_defaults", "missing", "random_factory", "tightest",
+__all__ = ["Bench", "BuiltIn", "Column", "Target", "bench_of", "init_defaults", "missing", "random_factory", "tightest",
            "zero_factory"]
 
 #: a policy factory: ``factory(env, seed) -> policy`` (:mod:`paragym.baselines.policies`)
@@ -66,6 +66,37 @@ class BuiltIn:
 
 
 @dataclass(frozen=True)
+class Target:
+    """One condition of a solved task: the mean of ``key`` ("success": the success rate; "return"; else a
+    key of the bench's metrics) over the check's episodes reaches ``value`` (at least it for ``direction``
+    +1, at most it for -1), or beats ``factor`` times policy ``against``'s mean on the same episodes
+    (strictly above it for +1, below it for -1: a policy never solves a task by equalling a floor)."""
+
+    key: str
+    direction: int
+    value: float | None = None
+    against: str | None = None
+    factor: float = 1.0
+
+    def __post_init__(self) -> None:
+        if self.direction not in (-1, 1):
+            raise ValueError(f"direction must be +1 (at least) or -1 (at most); got {self.direction!r}")
+        if (self.value is None) == (self.against is None):
+            raise ValueError("a Target has either a value or a policy to compare against, not both or neither")
+
+    def met(self, figure: float, bound: float) -> bool:
+        """Whether ``figure`` meets this target's ``bound`` (its value, or the other policy's figure x factor)."""
+        gap = self.direction * (figure - bound)
+        return gap >= 0 if self.against is None else gap > 0
+
+    def describe(self) -> str:
+        word = (">=" if self.direction > 0 else "<=") if self.against is None else (">" if self.direction > 0 else "<")
+        bound = f"{self.value:g}" if self.value is not None else \
+            (f"{self.factor:g} x {self.against}'s" if self.factor != 1.0 else f"{self.against}'s")
+        return f"{self.key} {word} {bound}"
+
+
+@dataclass(frozen=True)
 class Bench:
     """One task's bench.
 
@@ -87,6 +118,8 @@ class Bench:
             ``--policy``); None: ``paragym validate`` validates the reference policy's episode.
         validated_plan: ``check(seed) -> (passed, summary)``, the leaderboard's KF validation of the
             reference plan on the paper's case; None: not validated apart from the dynamic episodes.
+        solved: when a learned policy has solved the task: every :class:`Target`
+            holds (``benchmarks/time_to_solve.py``); empty: the task states none.
     """
 
     task: str
@@ -102,6 +135,7 @@ class Bench:
     plan: Adapter | None = None
     validate_plan: Adapter | None = None
     validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = None
+    solved: tuple[Target, ...] = ()
 
     def label(self, key: str) -> str:
         """The column label of metric ``key`` ("return" for the return)."""
@@ -140,6 +174,13 @@ def missing(bench: Bench, env_id: str) -> list[str]:
     for name in ("dynamics", "plot_episode", "plan", "validate_plan", "validated_plan"):
         if getattr(bench, name) is not None and not callable(getattr(bench, name)):
             out.append(f"{name} (callable or None)")
+    for t in bench.solved:
+        if not isinstance(t, Target):
+            out.append(f"solved targets that are Targets (got {t!r})")
+        elif t.key not in keys | {"success", "return"}:
+            out.append(f"a column for the solved target's figure {t.key!r}")
+        elif t.against is not None and t.against not in names:
+            out.append(f"the policy {t.against!r} that a solved target compares against, on {env_id}")
     if bench.validated_plan is not None and bench.dynamics is None:
         out.append("dynamics, which the KF validation of the reference plan runs under")
     return out

@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, init_defaults, zero_factory
+from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, init_defaults, zero_factory
 from paragym.rollout import Episode
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
@@ -130,4 +130,5 @@ BENCH = Bench(
     demo="null-space gradient of kappa (paper 003, case c)",
     plot_episode=plot_episode,
     plan=plan,
+    solved=(Target("mean_kappa", -1, against="gradient-c", factor=1.01), Target("success", +1, 0.95)),
 )

@@ -1,0 +1,127 @@
+"""When a task counts as solved, and a check of it that can stop training (``benchmarks/time_to_solve.py``).
+
+A task's bench states its targets (:attr:`paragym.baselines.tasks.Bench.solved`), each a
+:class:`paragym.baselines.tasks.Target`: a figure (the success rate or one of the bench's metrics, averaged over the
+check's episodes) at least or at most a bound, which is a number or another policy's figure on the
+same episodes (times a factor). :class:`SolveCheck` plays a policy on a fixed set of validation
+episodes (reset seeds ``EVAL_SEED + k``, those ``paragym train`` evaluates on, apart from the
+leaderboard's test episodes) and says whether every target holds. :func:`stop_when_solved` is the
+Stable-Baselines3 callback that checks a model as it learns, on its wall clock without the checks'
+own time, and stops it when solved or out of time.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from paragym.baselines.policies import LearnedPolicy, policies_for
+from paragym.baselines.tasks import Target, bench_of
+from paragym.baselines.training import EVAL_SEED
+from paragym.registry import check_env_id
+from paragym.rollout import run_episode
+
+__all__ = ["SolveCheck", "SolvePoint", "Target", "stop_when_solved"]  # Target: the benches' (tasks)
+
+
+@dataclass
+class SolvePoint:
+    """One check: the training steps and seconds (without the checks) it came at, the figures and whether
+    every target held."""
+
+    timesteps: int
+    seconds: float
+    figures: dict[str, float]
+    solved: bool
+
+
+def _figures(env: Any, policy: Any, seeds: list[int], keys: set[str], metrics: Any) -> dict[str, float]:
+    """The mean of each key over the episodes of ``seeds``."""
+    rows: dict[str, list[float]] = {k: [] for k in keys}
+    for s in seeds:
+        ep = run_episode(env, policy, seed=s)
+        values = {"success": float(ep.success), "return": float(ep.episode_return), **metrics(ep)}
+        for k in keys:
+            rows[k].append(float(values[k]))
+    return {k: float(np.mean(v)) for k, v in rows.items()}
+
+
+@dataclass
+class SolveCheck:
+    """The targets of ``env_id``'s task (its bench's ``solved``, or ``targets``) checked on ``episodes``
+    validation episodes (kinematic, the env's defaults). The bounds against other policies are measured
+    once, on the same episodes."""
+
+    env_id: str
+    episodes: int = 20
+    targets: tuple[Target, ...] = ()
+    bounds: dict[int, float] = field(init=False)
+
+    def __post_init__(self) -> None:
+        import gymnasium as gym
+
+        self.env_id = check_env_id(self.env_id)
+        if not isinstance(self.episodes, int) or self.episodes < 1:
+            raise ValueError(f"episodes must be a positive integer; got {self.episodes!r}")
+        bench = bench_of(self.env_id)
+        self.targets = tuple(self.targets) or bench.solved
+        if not self.targets or not all(isinstance(t, Target) for t in self.targets):
+            raise ValueError(f"targets must be Targets; {self.env_id}'s task states none (its bench's solved) "
+                             f"and none were given")
+        self._metrics = bench.metrics
+        self.seeds = [EVAL_SEED + k for k in range(self.episodes)]
+        self.env = gym.make(self.env_id)
+        specs = policies_for(self.env_id)
+        self.bounds = {}
+        for i, t in enumerate(self.targets):
+            if t.against is None:
+                self.bounds[i] = float(t.value)
+                continue
+            if t.against not in specs:
+                raise ValueError(f"{self.env_id}: no policy {t.against!r} to compare against; have {sorted(specs)}")
+            spec = specs[t.against]
+            figures = [_figures(self.env, spec.factory(self.env, s), [s], {t.key}, self._metrics)[t.key]
+                       for s in self.seeds]  # a policy per episode, built for its seed, as the leaderboard does
+            self.bounds[i] = t.factor * float(np.mean(figures))
+
+    def check(self, policy: Any) -> tuple[bool, dict[str, float]]:
+        """Whether ``policy`` (``reset``/``act``) meets every target, and its figures."""
+        figures = _figures(self.env, policy, self.seeds, {t.key for t in self.targets}, self._metrics)
+        ok = all(t.met(figures[t.key], self.bounds[i]) for i, t in enumerate(self.targets))
+        return ok, figures
+
+    def describe(self) -> str:
+        return "; ".join(f"{t.describe()} ({self.bounds[i]:.4g})" for i, t in enumerate(self.targets))
+
+    def close(self) -> None:
+        self.env.close()
+
+
+def stop_when_solved(check: SolveCheck, every_seconds: float, budget_seconds: float,
+                     points: list[SolvePoint]) -> Any:
+    """An SB3 callback: every ``every_seconds`` of learning (the checks' own time left out) it checks the
+    model's deterministic policy (:class:`~paragym.baselines.policies.LearnedPolicy`), appends a
+    :class:`SolvePoint` to ``points``, and stops learning once solved or after ``budget_seconds``."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class StopWhenSolved(BaseCallback):
+        def _on_training_start(self) -> None:
+            self.learning, self.since = 0.0, time.perf_counter()
+            self.next_check = every_seconds
+
+        def _on_step(self) -> bool:
+            now = time.perf_counter()
+            self.learning += now - self.since
+            self.since = now
+            if self.learning < self.next_check and self.learning < budget_seconds:
+                return True
+            solved, figures = check.check(LearnedPolicy(self.model))
+            points.append(SolvePoint(int(self.num_timesteps), self.learning, figures, solved))
+            self.next_check = self.learning + every_seconds
+            self.since = time.perf_counter()  # the check's time is not learning
+            return not solved and self.learning < budget_seconds
+
+    return StopWhenSolved()

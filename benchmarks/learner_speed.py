@@ -1,0 +1,141 @@
+"""End-to-end PPO training speed on the native vector envs: Stable-Baselines3 beside the other learners.
+
+For each env id (default: the newest version of every task), each learner
+trains PPO from scratch on ``gym.make_vec(ID, N, "vector_entry_point")``
+behind SB3's VecEnv interface (:mod:`paragym.baselines.sb3_vec`), with the
+same settings for all: the env's PPO row of ``baselines/hyperparams/ppo.yml``
+(n_steps, n_epochs, gamma, gae_lambda, learning rate, clip range, the
+policy's layers), N robots and minibatches of ``N * n_steps / 4``. A warm-up
+``learn`` first (numba's kernels load, JAX compiles), then ``--timesteps``
+steps are timed. The figure is env steps per second of ``model.learn``,
+collection and updates together, its ratio to SB3's in the same run, and
+the share of the time in the updates (``model.train``).
+
+Learners (each measured only when installed):
+
+* ``sb3``: Stable-Baselines3's PyTorch PPO, ``torch.set_num_threads(--threads)``;
+* ``sbx``: SBX (``sbx-rl``), Stable-Baselines3's API on JAX/Flax, on JAX's CPU backend.
+
+    python benchmarks/learner_speed.py [--env ID ...] [--robots 64] [--timesteps 32768]
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import time
+import warnings
+from typing import Any
+
+import numpy as np
+
+import paragym
+from paragym.baselines.sb3_vec import as_sb3_vecenv
+from paragym.baselines.training import load_hyperparams
+from paragym.registry import check_env_id, newest
+
+#: the settings every learner gets from an env's PPO row
+SHARED = ("n_steps", "n_epochs", "gamma", "gae_lambda", "learning_rate", "clip_range", "ent_coef")
+
+
+def settings(env_id: str, robots: int) -> dict[str, Any]:
+    """The PPO keyword arguments every learner gets (module docstring)."""
+    hp = load_hyperparams("ppo", env_id)
+    kwargs = {k: hp[k] for k in SHARED if k in hp}
+    kwargs["batch_size"] = robots * int(kwargs["n_steps"]) // 4
+    arch = (hp.get("policy_kwargs") or {}).get("net_arch", [64, 64])
+    kwargs["policy_kwargs"] = {"net_arch": list(arch)}
+    return kwargs
+
+
+def learner(name: str, threads: int) -> Any:
+    """The PPO class of a learner (None when it is not installed)."""
+    if name == "sb3":
+        import torch
+        from stable_baselines3 import PPO
+
+        torch.set_num_threads(threads)
+        return PPO
+    if name == "sbx":
+        if importlib.util.find_spec("sbx") is None:
+            return None
+        from sbx import PPO
+
+        return PPO
+    raise ValueError(f"learner must be sb3 or sbx; got {name!r}")
+
+
+def _timed(model: Any, name: str, clock: dict[str, float]) -> None:
+    """Add the time of each call of ``model.<name>`` to ``clock[name]``."""
+    method = getattr(model, name)
+
+    def timed(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return method(*args, **kwargs)
+        finally:
+            clock[name] += time.perf_counter() - t0
+
+    setattr(model, name, timed)
+
+
+def steps_per_second(cls: Any, env_id: str, robots: int, timesteps: int) -> tuple[float, float]:
+    """Env steps/s of ``cls``'s PPO learning ``timesteps`` steps on ``robots`` robots, after a warm-up, and
+    the share of that time in the updates (``model.train``; the rest collects the rollouts)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = as_sb3_vecenv(env_id, robots)
+        model = cls("MlpPolicy", env, seed=0, device="cpu", verbose=0, **settings(env_id, robots))
+        rollout = robots * model.n_steps
+        model.learn(rollout)  # warm-up: kernels load, JAX compiles its update
+        clock = {"train": 0.0, "collect_rollouts": 0.0}
+        _timed(model, "train", clock)
+        _timed(model, "collect_rollouts", clock)
+        start, t0 = model.num_timesteps, time.perf_counter()
+        model.learn(max(timesteps, rollout), reset_num_timesteps=False)
+        seconds = time.perf_counter() - t0
+    env.close()
+    return (model.num_timesteps - start) / seconds, clock["train"] / seconds
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", action="append", help="only this env id (repeatable; the 'paragym/' may be omitted)")
+    parser.add_argument("--robots", type=int, default=64, help="N robots of the native env (default %(default)s)")
+    parser.add_argument("--timesteps", type=int, default=32_768, help="timed steps per learner (default %(default)s)")
+    parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads (default %(default)s)")
+    parser.add_argument("--learner", action="append", choices=("sb3", "sbx"), help="only these (repeatable)")
+    args = parser.parse_args()
+    ids = [check_env_id(e) for e in args.env] if args.env else [e for e in newest() if e in paragym.VECTOR_ENTRY_POINTS]
+    names = args.learner or ["sb3", "sbx"]
+    rows = []
+    for env_id in ids:
+        rates: dict[str, float | None] = {}
+        shares: dict[str, float] = {}
+        for name in names:
+            cls = learner(name, args.threads)
+            if cls is None:
+                rates[name] = None
+                print(f"{env_id} {name}: not installed", flush=True)
+                continue
+            rates[name], shares[name] = steps_per_second(cls, env_id, args.robots, args.timesteps)
+            print(f"{env_id} {name}: {rates[name]:,.0f} steps/s, {100 * shares[name]:.0f} % of it in the updates",
+                  flush=True)
+        rows.append((env_id, rates, shares))
+    print(f"\nPPO, {args.robots} robots, {args.timesteps:,} timed steps; env steps/s of model.learn and x SB3's")
+    print(f"{'environment':34s}" + "".join(f"{n:>12s}{'x sb3':>8s}{'update':>8s}" for n in names))
+    for env_id, rates, shares in rows:
+        base = rates.get("sb3")
+        cells = []
+        for n in names:
+            rate = rates[n]
+            cells.append(f"{'-':>12s}{'-':>8s}{'-':>8s}" if rate is None else
+                         f"{rate:12,.0f}" + (f"{rate / base:8.1f}" if base else f"{'-':>8s}")
+                         + f"{100 * shares[n]:7.0f}%")
+        print(f"{env_id.split('/')[-1]:34s}" + "".join(cells))
+    if any(np.isnan(r) for _, rates, _ in rows for r in rates.values() if r is not None):
+        raise SystemExit("a rate is NaN")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,180 @@
+"""Time to solve: wall-clock minutes of PPO from scratch until each task counts as solved.
+
+For each env id (default: the newest version of every task) and each seed,
+``paragym train`` trains PPO with the env's settings in
+``baselines/hyperparams/ppo.yml`` (as a user would run it, its own
+evaluations and checkpoints included). Every ``--check-every`` seconds of
+learning, the deterministic policy plays ``--episodes`` validation episodes
+and the task's targets are checked (:mod:`paragym.baselines.solve`; the
+targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The
+checks' own time is left out of the clock. A run stops when solved or after
+``--budget`` minutes of learning.
+
+Each run is written to ``OUT/<env name>-seed<N>.json`` (the points, the
+targets and their bounds, what produced it) as soon as it ends, and a run
+already there is taken as it is, so an interrupted benchmark goes on where it
+stopped (``--force`` runs it again). Then the table (minutes to solve per
+seed; the mean of the solved seeds with its 95 % interval, Student t), the
+learning curves with their interval over seeds (``OUT/time_to_solve.png``)
+and ``OUT/time_to_solve.md``.
+
+    python benchmarks/time_to_solve.py [--env ID ...] [--seeds 3] [--budget 30] [--out results/time_to_solve]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+import time
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import paragym
+from paragym.baselines.solve import SolveCheck, stop_when_solved
+from paragym.baselines.stats import mean_ci
+from paragym.baselines.training import train
+from paragym.registry import check_env_id, newest, row
+
+
+def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
+    """One training run of PPO on ``env_id`` from ``seed``, checked as it learns (module docstring)."""
+    check = SolveCheck(env_id, args.episodes)
+    points: list[Any] = []
+    stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
+    t0 = time.perf_counter()
+    train(env_id, "ppo", seed, timesteps=args.max_timesteps, models_dir=args.out / "models", progress_bar=False,
+          threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized)
+    wall = time.perf_counter() - t0
+    check.close()
+    solved = next((p for p in points if p.solved), None)
+    return {
+        "env_id": env_id, "seed": seed, "targets": check.describe(), "keys": [t.key for t in check.targets],
+        "vectorized": args.vectorized, "episodes": args.episodes,
+        "budget_minutes": args.budget, "check_every_seconds": args.check_every,
+        "solved": solved is not None,
+        "minutes": None if solved is None else solved.seconds / 60,
+        "timesteps": None if solved is None else solved.timesteps,
+        "points": [{"timesteps": p.timesteps, "minutes": p.seconds / 60, "figures": p.figures, "solved": p.solved}
+                   for p in points],
+        "wall_minutes": wall / 60,
+        "produced_by": {"paragym": paragym.__version__, "command": " ".join([Path(sys.argv[0]).name, *sys.argv[1:]]),
+                        "machine": f"{platform.machine()}, {os.cpu_count()} cores",
+                        "date": datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")},
+    }
+
+
+def curve(runs: list[dict[str, Any]], key: str, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The mean of ``key`` over the runs at each time of ``grid`` (min) and its 95 % interval; each run holds
+    its last checked figure (and, once it stopped, its last figure) until its next check."""
+    values = []
+    for r in runs:
+        t = np.array([p["minutes"] for p in r["points"]])
+        v = np.array([p["figures"][key] for p in r["points"]])
+        idx = np.searchsorted(t, grid, side="right") - 1
+        values.append(np.where(idx >= 0, v[np.maximum(idx, 0)], np.nan))
+    values = np.array(values)
+    mean, low, high = [], [], []
+    for col in values.T:
+        col = col[np.isfinite(col)]
+        mean.append(col.mean() if len(col) else np.nan)
+        lo, hi = mean_ci(col) if len(col) > 1 else (np.nan, np.nan)
+        low.append(lo)
+        high.append(hi)
+    return np.array(mean), np.array(low), np.array(high)
+
+
+def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) -> str:
+    """The table as markdown, and the curves' picture."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lines = ["| environment | targets | seeds solved | minutes to solve, per seed | mean [95% CI] "
+             "| steps to solve, mean |", "|---|---|---|---|---|---|"]
+    fig, axes = plt.subplots(1, len(by_env), figsize=(4.2 * len(by_env), 3.4), squeeze=False)
+    for ax, (env_id, runs) in zip(axes[0], by_env.items(), strict=True):
+        minutes = [r["minutes"] for r in runs]
+        solved = [m for m in minutes if m is not None]
+        per_seed = ", ".join(f"{m:.1f}" if m is not None else f"> {budget:g}" for m in minutes)
+        if len(solved) > 1:
+            lo, hi = mean_ci(solved)
+            mean = f"{np.mean(solved):.1f} [{lo:.1f}, {hi:.1f}]"
+            mean += "" if len(solved) == len(runs) else " (solved only)"
+        else:
+            mean = f"{solved[0]:.1f} (one seed)" if solved else "not solved"
+        steps = [r["timesteps"] for r in runs if r["timesteps"] is not None]
+        lines.append(f"| {env_id.split('/')[-1]} | {runs[0]['targets']} | {len(solved)} of {len(runs)} | {per_seed} | "
+                     f"{mean} | {f'{np.mean(steps):,.0f}' if steps else '-'} |")
+        if not any(r["points"] for r in runs):
+            continue
+        key = runs[0]["keys"][0]  # the first target's figure
+        end = max(p["minutes"] for r in runs for p in r["points"])
+        runs = [r for r in runs if r["points"]]
+        grid = np.linspace(0, end, 200)
+        mean_c, low, high = curve(runs, key, grid)
+        ax.plot(grid, mean_c, color="tab:blue", label=f"mean of {len(runs)} seeds")
+        ax.fill_between(grid, low, high, color="tab:blue", alpha=0.25, label="95% CI")
+        for r in runs:
+            ax.plot([p["minutes"] for p in r["points"]], [p["figures"][key] for p in r["points"]], ".",
+                    color="grey", ms=3)
+        ax.set_title(env_id.split("/")[-1], fontsize=9)
+        ax.set_xlabel("minutes of learning (2 cores)")
+        ax.set_ylabel(key)
+        ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(out / "time_to_solve.png", dpi=110)
+    plt.close(fig)
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", action="append", help="only this env id (repeatable; the 'paragym/' may be omitted)")
+    parser.add_argument("--seeds", type=int, default=3, help="seeds 0..N-1 per env (default %(default)s)")
+    parser.add_argument("--budget", type=float, default=30.0, help="minutes of learning per run (default %(default)s)")
+    parser.add_argument("--check-every", type=float, default=60.0, help="seconds of learning between checks")
+    parser.add_argument("--episodes", type=int, default=20, help="validation episodes per check")
+    parser.add_argument("--max-timesteps", type=int, default=200_000_000, help="a bound the budget ends first")
+    parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads")
+    parser.add_argument("--vectorized", action="store_true",
+                        help="train on the native vector env (n_envs robots) whatever paragym.yml says")
+    parser.add_argument("--out", type=Path, default=Path("results/time_to_solve"))
+    parser.add_argument("--force", action="store_true", help="run again the runs already in OUT")
+    args = parser.parse_args()
+    if args.seeds < 1 or args.budget <= 0 or args.check_every <= 0:
+        parser.error("--seeds, --budget and --check-every must be positive")
+    ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
+    args.out.mkdir(parents=True, exist_ok=True)
+    by_env: dict[str, list[dict[str, Any]]] = {}
+    for env_id in ids:
+        for seed in range(args.seeds):
+            path = args.out / f"{row(env_id).name}-seed{seed}.json"
+            if path.exists() and not args.force:
+                result = json.loads(path.read_text())
+                print(f"{env_id} seed {seed}: taken from {path}")
+            else:
+                result = run_one(env_id, seed, args)
+                path.write_text(json.dumps(result, indent=1))
+            shown = (f"solved in {result['minutes']:.1f} min" if result["solved"] else
+                     f"not solved in {result['budget_minutes']:g} min")
+            print(f"{env_id} seed {seed}: {shown}, {result['targets']}", flush=True)
+            by_env.setdefault(env_id, []).append(result)
+    table = report(by_env, args.budget, args.out)
+    first = next(iter(by_env.values()))[0]["produced_by"]
+    text = (f"# Time to solve\n\nPPO from scratch with each env's `ppo.yml` settings, {args.seeds} seeds, "
+            f"a budget of {args.budget:g} minutes of learning; checked every {args.check_every:g} s of learning on "
+            f"{args.episodes} validation episodes. {first['machine']}, paragym {first['paragym']}, {first['date']}.\n\n"
+            f"{table}\n\n![learning curves](time_to_solve.png)\n")
+    (args.out / "time_to_solve.md").write_text(text)
+    print("\n" + table + f"\n\nwrote {args.out / 'time_to_solve.md'} and {args.out / 'time_to_solve.png'}")
+
+
+if __name__ == "__main__":
+    main()
