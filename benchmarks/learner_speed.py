@@ -79,9 +79,10 @@ def _timed(model: Any, name: str, clock: dict[str, float]) -> None:
     setattr(model, name, timed)
 
 
-def steps_per_second(cls: Any, env_id: str, robots: int, timesteps: int) -> tuple[float, float]:
-    """Env steps/s of ``cls``'s PPO learning ``timesteps`` steps on ``robots`` robots, after a warm-up, and
-    the share of that time in the updates (``model.train``; the rest collects the rollouts)."""
+def steps_per_second(cls: Any, env_id: str, robots: int, timesteps: int) -> tuple[float, float, float]:
+    """Env steps/s of ``cls``'s PPO learning ``timesteps`` steps on ``robots`` robots, after a warm-up; the
+    share of that time in the updates (``model.train``); and the steps/s of the collection alone
+    (``model.collect_rollouts``: the env stepped by the policy's inference)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         env = as_sb3_vecenv(env_id, robots)
@@ -95,7 +96,8 @@ def steps_per_second(cls: Any, env_id: str, robots: int, timesteps: int) -> tupl
         model.learn(max(timesteps, rollout), reset_num_timesteps=False)
         seconds = time.perf_counter() - t0
     env.close()
-    return (model.num_timesteps - start) / seconds, clock["train"] / seconds
+    steps = model.num_timesteps - start
+    return steps / seconds, clock["train"] / seconds, steps / clock["collect_rollouts"]
 
 
 def main() -> None:
@@ -118,7 +120,7 @@ def main() -> None:
                 rates[name] = None
                 print(f"{env_id} {name}: not installed", flush=True)
                 continue
-            rates[name], shares[name] = steps_per_second(cls, env_id, args.robots, args.timesteps)
+            rates[name], shares[name], _ = steps_per_second(cls, env_id, args.robots, args.timesteps)
             print(f"{env_id} {name}: {rates[name]:,.0f} steps/s, {100 * shares[name]:.0f} % of it in the updates",
                   flush=True)
         rows.append((env_id, rates, shares))

@@ -59,3 +59,30 @@ def test_native_speed_prints_a_row_per_env_beside_the_anchor():
     out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-v1", "--robots", "8", "--seconds", "0.2")
     (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("CaPaManCollisionFree-v1 ")]
     assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 5
+
+
+def test_learner_speed_prints_each_learner_beside_sb3():
+    out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512")
+    (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("Orthoglide2PRRKappa-v1 ")]
+    assert float(row[1].replace(",", "")) > 0 and row[2] == "1.0" and row[3].endswith("%")  # sb3, x sb3, update
+    assert len(row) == 7  # and sbx's three cells ('-' when sbx-rl is not installed)
+
+
+def test_speed_tiers_prints_the_three_tiers_beside_the_anchor():
+    out = _run("benchmarks/speed_tiers.py", "--env", "Orthoglide2PRRKappa-v1", "--seconds", "0.2", "--robots", "8",
+               "--timesteps", "512")
+    (row,) = [ln for ln in out.splitlines() if ln.startswith("| Orthoglide2PRRKappa-v1 |")]
+    assert len(row.strip("|").split("|")) == 6
+
+
+def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
+    """A smoke run (a few seconds of learning): each run's file, the table, the curves; run again, it takes
+    the runs it finds instead of training."""
+    args = ("benchmarks/time_to_solve.py", "--env", "Orthoglide2PRRKappa-v1", "--seeds", "2", "--budget", "0.03",
+            "--check-every", "0.5", "--episodes", "1", "--out", str(tmp_path))
+    out = _run(*args)
+    assert (tmp_path / "Orthoglide2PRRKappa-v1-seed1.json").is_file() and (tmp_path / "time_to_solve.png").is_file()
+    (row,) = [ln for ln in out.splitlines() if ln.startswith("| Orthoglide2PRRKappa-v1 |")]
+    assert "mean_kappa < 1.01 x gradient-c's" in row and " of 2 |" in row
+    again = _run(*args)
+    assert again.count("taken from") == 2 and row in again
