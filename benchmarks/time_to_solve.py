@@ -1,9 +1,10 @@
 """Time to solve: wall-clock minutes of PPO from scratch until each task counts as solved.
 
 For each env id (default: the newest version of every task) and each seed,
-``paragym train`` trains PPO with the env's settings in
+``paragym train`` trains PPO from scratch with the env's settings in
 ``baselines/hyperparams/ppo.yml`` (as a user would run it, its own
-evaluations and checkpoints included). Every ``--check-every`` seconds of
+evaluations and checkpoints included; ``init_from``, a behaviour clone to
+start from, is dropped). Every ``--check-every`` seconds of
 learning, the deterministic policy plays ``--episodes`` validation episodes
 and the task's targets are checked (:mod:`paragym.baselines.solve`; the
 targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The
@@ -49,7 +50,8 @@ def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
     t0 = time.perf_counter()
     train(env_id, "ppo", seed, timesteps=args.max_timesteps, models_dir=args.out / "models", progress_bar=False,
-          threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized)
+          threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
+          hyperparams={"init_from": None})  # from scratch, also where the yml starts from a behaviour clone
     wall = time.perf_counter() - t0
     check.close()
     solved = next((p for p in points if p.solved), None)
