@@ -17,7 +17,7 @@ import numpy as np
 from gymnasium import spaces
 
 import paragym
-from paragym.baselines.tasks import Bench, BuiltIn, Column, zero_factory
+from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, zero_factory
 from paragym.envs.base import ParagymEnv
 from paragym.registry import EnvRow
 from paragym.rollout import Episode
@@ -181,6 +181,7 @@ BENCH = Bench(
     dynamics=None,
     demo="straight at the goal",
     plot_episode=plot_episode,
+    solved=(Target("final_distance_m", -1, against="zero", factor=0.5),),
 )
 
 ROW = paragym.register_env(EnvRow("paragym/PointReach-v0", "point_task:PointReachEnv", None, 50, "point", "paper",

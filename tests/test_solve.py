@@ -9,11 +9,11 @@ import pytest
 from paragym.baselines.policies import policies_for
 from paragym.baselines.solve import SolveCheck, stop_when_solved
 from paragym.baselines.tasks import Target, bench_of, missing
-from paragym.registry import newest, rows
+from paragym.registry import ROWS, newest
 
 
 def test_every_task_states_targets_its_bench_can_check():
-    for row in rows():
+    for row in ROWS:
         bench = bench_of(row.id)
         assert bench.solved, f"{row.id}: its task states no targets"
         assert missing(bench, row.id) == []
