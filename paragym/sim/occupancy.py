@@ -498,12 +498,12 @@ def grid_clearance(alpha: np.ndarray, grids: DistanceGrids, clusters: ClusterPoi
     first = np.searchsorted(bounds[:-1], np.searchsorted(parts, np.arange(n_parts + 1)))  # part p's runs
     cap = round(grids.cap / grids.unit)
     kernel = _clearance_parallel if n >= PARALLEL_FROM else _clearance_serial
+    grid = (*capaman.part_table(geometry), grids.origin, grids.shape, grids.slot, grids.values,
+            grids.active_lo.astype(np.float32), grids.active_hi.astype(np.float32), part_radii.astype(np.float32),
+            first, bounds, group_middles.astype(np.float32), group_radii.astype(np.float32),
+            middles.astype(np.float32), radii.astype(np.float32), local, 1.0 / grids.resolution, cap, n_parts)
     best = kernel(capaman.crank_trig(al), np.ascontiguousarray(pose.position), np.ascontiguousarray(pose.quaternion),
-                  capaman.part_table(geometry), rows, grids.origin, grids.shape, grids.slot, grids.values,
-                  grids.active_lo.astype(np.float32), grids.active_hi.astype(np.float32),
-                  part_radii.astype(np.float32), first, bounds, group_middles.astype(np.float32),
-                  group_radii.astype(np.float32), middles.astype(np.float32), radii.astype(np.float32), local,
-                  1.0 / grids.resolution, cap, n_parts)
+                  rows, grid)
     value, part = best // n_parts, best % n_parts
     part[value >= cap] = -1
     return np.minimum(value, cap) * grids.unit, part
@@ -526,12 +526,12 @@ def _gap(frame: np.ndarray, middle: np.ndarray, box: np.ndarray) -> np.float32:
 
 
 @njit(cache=True)
-def _clearance_one(trig, position, quat, table, g, origin, shape, slot, values, lo, hi, part_radii, first,
-                   bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
+def _clearance_one(trig, position, quat, g, c0_, c1_, c2_, qc, qs, leg, crank, tool_half, origin, shape, slot, values,
+                   lo, hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local, inv, cap,
+                   n_parts):
     """The smallest key value * parts + part of one configuration against grid ``g`` (the docstring of
-    :func:`grid_clearance`); ``trig``, ``position``, ``quat`` and ``table`` place its parts
-    (:func:`paragym.mechanisms.capaman.k_part_frames`)."""
-    c0_, c1_, c2_, qc, qs, leg, crank, tool_half = table
+    :func:`grid_clearance`); ``trig``, ``position``, ``quat`` and the part table (``c0_`` to ``tool_half``)
+    place its parts (:func:`paragym.mechanisms.capaman.k_part_frames`)."""
     centres, quats, rot = np.empty((n_parts, 3)), np.empty((n_parts, 4)), np.empty((n_parts, 3, 3))
     capaman.k_part_frames(trig, position, quat, c0_, c1_, c2_, qc, qs, leg, crank, tool_half, centres, quats)
     for p in range(n_parts):
@@ -583,26 +583,20 @@ def _clearance_one(trig, position, quat, table, g, origin, shape, slot, values, 
 
 
 @njit(cache=True)
-def _clearance_serial(trig, position, quat, table, rows, origin, shape, slot, values, lo, hi, part_radii, first,
-                      bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
-    """:func:`_clearance_one` of every configuration, one after the other."""
+def _clearance_serial(trig, position, quat, rows, grid):
+    """:func:`_clearance_one` of every configuration, one after the other (``grid``: its other arguments)."""
     best = np.empty(trig.shape[0], np.int64)
     for i in range(trig.shape[0]):
-        best[i] = _clearance_one(trig[i], position[i], quat[i], table, rows[i], origin, shape, slot, values, lo,
-                                 hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local,
-                                 inv, cap, n_parts)
+        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], *grid)
     return best
 
 
 @njit(cache=True, parallel=True)
-def _clearance_parallel(trig, position, quat, table, rows, origin, shape, slot, values, lo, hi, part_radii,
-                        first, bounds, group_middles, group_radii, middles, radii, local, inv, cap, n_parts):
-    """:func:`_clearance_one` of every configuration, on numba's threads (consecutive ones on one thread)."""
+def _clearance_parallel(trig, position, quat, rows, grid):
+    """:func:`_clearance_serial` on numba's threads (consecutive configurations on one thread)."""
     best = np.empty(trig.shape[0], np.int64)
     for i in prange(trig.shape[0]):
-        best[i] = _clearance_one(trig[i], position[i], quat[i], table, rows[i], origin, shape, slot, values, lo,
-                                 hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local,
-                                 inv, cap, n_parts)
+        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], *grid)
     return best
 
 
