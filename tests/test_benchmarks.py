@@ -86,3 +86,11 @@ def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
     assert "mean_kappa < 1.01 x gradient-c's" in row and " of 2 |" in row
     again = _run(*args)
     assert again.count("taken from") == 2 and row in again
+
+
+def test_capaman_detours_splits_success_by_tour():
+    """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes)."""
+    out = _run("benchmarks/capaman_detours.py", "--episodes", "4", "--policy", "zero")
+    (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("straight ")]
+    done, straight = row[1].split("/")
+    assert done == straight != "0" and row[4].split("/")[0] == "0"

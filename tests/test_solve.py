@@ -76,4 +76,4 @@ def test_training_stops_when_solved_and_when_out_of_time(tmp_path):
     train(env_id, "ppo", 0, timesteps=200_000, models_dir=tmp_path, progress_bar=False, force=True,
           callbacks=[stop_when_solved(hard, 0.5, 2.0, points)])
     assert not any(p.solved for p in points) and 2.0 <= points[-1].seconds < 4.0
-    assert all(b.seconds - a.seconds >= 0.5 or b is points[-1] for a, b in zip(points, points[1:]))
+    assert all(b.seconds - a.seconds >= 0.5 or b is points[-1] for a, b in zip(points, points[1:], strict=False))
