@@ -14,7 +14,8 @@ checks' own time is left out of the clock. A run stops when solved or after
 Each run is written to ``OUT/<env name>-seed<N>.json`` (the points, the
 targets and their bounds, what produced it) as soon as it ends, and a run
 already there is taken as it is, so an interrupted benchmark goes on where it
-stopped (``--force`` runs it again). Then the table (minutes to solve per
+stopped (``--force`` runs it again; ``--report-only`` trains nothing and
+reports the runs found). Then the table (minutes to solve per
 seed; the mean of the solved seeds with its 95 % interval, Student t), the
 learning curves with their interval over seeds (``OUT/time_to_solve.png``)
 and ``OUT/time_to_solve.md``.
@@ -149,6 +150,7 @@ def main() -> None:
                         help="train on the native vector env (n_envs robots) whatever paragym.yml says")
     parser.add_argument("--out", type=Path, default=Path("results/time_to_solve"))
     parser.add_argument("--force", action="store_true", help="run again the runs already in OUT")
+    parser.add_argument("--report-only", action="store_true", help="train nothing: the report of the runs in OUT")
     args = parser.parse_args()
     if args.seeds < 1 or args.budget <= 0 or args.check_every <= 0:
         parser.error("--seeds, --budget and --check-every must be positive")
@@ -161,6 +163,9 @@ def main() -> None:
             if path.exists() and not args.force:
                 result = json.loads(path.read_text())
                 print(f"{env_id} seed {seed}: taken from {path}")
+            elif args.report_only:
+                print(f"{env_id} seed {seed}: not run yet (no {path})")
+                continue
             else:
                 result = run_one(env_id, seed, args)
                 path.write_text(json.dumps(result, indent=1))
@@ -168,12 +173,17 @@ def main() -> None:
                      f"not solved in {result['budget_minutes']:g} min")
             print(f"{env_id} seed {seed}: {shown}, {result['targets']}", flush=True)
             by_env.setdefault(env_id, []).append(result)
+    if not by_env:
+        raise SystemExit(f"no runs in {args.out}")
     table = report(by_env, args.budget, args.out)
     first = next(iter(by_env.values()))[0]["produced_by"]
+    missing = [f"{e.split('/')[-1]} seed {s}" for e in ids for s in range(args.seeds)
+               if not (args.out / f"{row(e).name}-seed{s}.json").exists()]
     text = (f"# Time to solve\n\nPPO from scratch with each env's `ppo.yml` settings, {args.seeds} seeds, "
             f"a budget of {args.budget:g} minutes of learning; checked every {args.check_every:g} s of learning on "
             f"{args.episodes} validation episodes. {first['machine']}, paragym {first['paragym']}, {first['date']}.\n\n"
-            f"{table}\n\n![learning curves](time_to_solve.png)\n")
+            f"{table}\n\n![learning curves](time_to_solve.png)\n"
+            + (f"\nNot run yet: {', '.join(missing)}.\n" if missing else ""))
     (args.out / "time_to_solve.md").write_text(text)
     print("\n" + table + f"\n\nwrote {args.out / 'time_to_solve.md'} and {args.out / 'time_to_solve.png'}")
 
