@@ -6,7 +6,9 @@ reset with seed 0 and stepped with uniformly random actions (16 batches drawn
 once) for ``--seconds``; the robots whose episodes end are reset by the env
 itself, so the rate counts autoresets, as training sees them. When panda-gym
 is installed its PandaReach-v3 (one robot, steps/s) is measured in the same
-run, between the rows, and each rate is also given as a ratio to it.
+run, between the rows, and each rate is also given as a ratio to it. The last
+columns say how many robots were reset per batch step and the share of the
+time their resets took (the task's ``_start``).
 
     python benchmarks/native_speed.py --env CaPaManCollisionFree-v1 --env CaPaManCollisionFree-v0
 """
@@ -24,9 +26,10 @@ import paragym
 from paragym.registry import check_env_id
 
 
-def robot_steps_per_second(env_id: str, n: int, seconds: float) -> float:
+def robot_steps_per_second(env_id: str, n: int, seconds: float, resets: dict[str, float] | None = None) -> float:
     """The native env's robot-steps/s at ``n`` robots, random actions, autoresets counted (a few warm-up steps
-    first: numba's kernels load, the first scenarios are drawn)."""
+    first: numba's kernels load, the first scenarios are drawn). ``resets``, when given, receives the robots
+    reset during the measurement (``robots``) and the share of the time their resets took (``share``)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
@@ -36,13 +39,27 @@ def robot_steps_per_second(env_id: str, n: int, seconds: float) -> float:
                for _ in range(16)]
     for k in range(5):
         env.step(actions[k])
+    clock = {"seconds": 0.0, "robots": 0}
+    start = env._start  # the task's reset of the given robots, which every native env calls (ParagymVectorEnv)
+
+    def timed(rows: np.ndarray, *args: object) -> object:
+        t = time.perf_counter()
+        try:
+            return start(rows, *args)
+        finally:
+            clock["seconds"] += time.perf_counter() - t
+            clock["robots"] += len(rows)
+
+    env._start = timed
     steps, t0 = 0, time.perf_counter()
     while time.perf_counter() - t0 < seconds:
         env.step(actions[steps % 16])
         steps += 1
-    rate = steps * n / (time.perf_counter() - t0)
+    total = time.perf_counter() - t0
     env.close()
-    return rate
+    if resets is not None:
+        resets.update(robots=clock["robots"], share=clock["seconds"] / total, steps=steps)
+    return steps * n / total
 
 
 def anchor_steps_per_second(seconds: float) -> float | None:
@@ -74,15 +91,18 @@ def main() -> None:
     rows = []
     for env_id in ids:
         before = anchor_steps_per_second(args.seconds / 2)
-        rate = robot_steps_per_second(env_id, args.robots, args.seconds)
+        resets: dict[str, float] = {}
+        rate = robot_steps_per_second(env_id, args.robots, args.seconds, resets)
         after = anchor_steps_per_second(args.seconds / 2)
         anchor = None if before is None else (before + after) / 2
-        rows.append((env_id, rate, anchor))
-    print(f"\n{'environment':40s} {'N':>6s} {'robot-steps/s':>14s} {'anchor steps/s':>15s} {'x anchor':>9s}")
-    for env_id, rate, anchor in rows:
+        rows.append((env_id, rate, anchor, resets))
+    print(f"\n{'environment':40s} {'N':>6s} {'robot-steps/s':>14s} {'anchor steps/s':>15s} {'x anchor':>9s} "
+          f"{'resets/step':>12s} {'resets':>7s}")
+    for env_id, rate, anchor, resets in rows:
         ratio = f"{rate / anchor:9.0f}" if anchor else f"{'-':>9s}"
         shown = f"{anchor:15,.0f}" if anchor else f"{'-':>15s}"
-        print(f"{env_id.split('/')[-1]:40s} {args.robots:6d} {rate:14,.0f} {shown} {ratio}")
+        print(f"{env_id.split('/')[-1]:40s} {args.robots:6d} {rate:14,.0f} {shown} {ratio} "
+              f"{resets['robots'] / resets['steps']:12.1f} {100 * resets['share']:6.0f}%")
 
 
 if __name__ == "__main__":

@@ -58,7 +58,7 @@ def test_speed_report_prints_its_table():
 def test_native_speed_prints_a_row_per_env_beside_the_anchor():
     out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-v1", "--robots", "8", "--seconds", "0.2")
     (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("CaPaManCollisionFree-v1 ")]
-    assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 5
+    assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 7 and row[6].endswith("%")
 
 
 def test_learner_speed_prints_each_learner_beside_sb3():
