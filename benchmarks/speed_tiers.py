@@ -6,7 +6,7 @@ For the newest version of every task (or ``--env ID``, repeatable):
   before the clock, resets included; ``env_speed.py``) and robot-steps/s of
   the native vector env at ``--robots`` N with autoresets (``native_speed.py``);
 * **with policy inference**: env steps/s while Stable-Baselines3's PPO
-  collects its rollouts on the native env with 64 robots (the policy's
+  collects its rollouts on the native env with 64 robots (``--ppo-robots``; the policy's
   forward pass on every batch of observations, the rollout buffer);
 * **during training**: env steps/s of PPO's ``model.learn`` end to end, the
   same run (``learner_speed.py``: the env's ``ppo.yml`` settings);
@@ -38,6 +38,7 @@ def main() -> None:
     parser.add_argument("--seconds", type=float, default=4.0, help="duration of each env measurement")
     parser.add_argument("--robots", type=int, default=1024, help="N of the native env alone (default %(default)s)")
     parser.add_argument("--timesteps", type=int, default=32_768, help="PPO's timed steps (default %(default)s)")
+    parser.add_argument("--ppo-robots", type=int, default=64, help="PPO's robots (default %(default)s)")
     args = parser.parse_args()
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
     ppo = learner("sb3", 2)
@@ -50,7 +51,7 @@ def main() -> None:
             single = steps_per_second(env, args.seconds)
             env.close()
         native = robot_steps_per_second(env_id, args.robots, args.seconds)
-        training, _, collecting = learning_rate(ppo, env_id, 64, args.timesteps)
+        training, _, collecting = learning_rate(ppo, env_id, args.ppo_robots, args.timesteps)
         rows.append((env_id, anchor, single, native, collecting, training))
         print(f"{env_id}: anchor {anchor or 0:,.0f}, single {single:,.0f}, native {native:,.0f}, "
               f"with inference {collecting:,.0f}, training {training:,.0f}", flush=True)
@@ -58,8 +59,8 @@ def main() -> None:
     def cell(rate: float, anchor: float | None) -> str:
         return f"{rate:,.0f}" + (f" ({rate / anchor:,.0f}x)" if anchor else "")
 
-    print(f"\n| environment | single env | native, N = {args.robots} | with policy inference (PPO, N = 64) "
-          f"| during training (PPO, N = 64) | anchor (PandaReach-v3) |")
+    print(f"\n| environment | single env | native, N = {args.robots} | with policy inference (PPO, N = "
+          f"{args.ppo_robots}) | during training (PPO, N = {args.ppo_robots}) | anchor (PandaReach-v3) |")
     print("|---|---|---|---|---|---|")
     for env_id, anchor, single, native, collecting, training in rows:
         print(f"| {env_id.split('/')[-1]} | {cell(single, anchor)} | {cell(native, anchor)} | "
