@@ -58,6 +58,7 @@ def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     solved = next((p for p in points if p.solved), None)
     return {
         "env_id": env_id, "seed": seed, "targets": check.describe(), "keys": [t.key for t in check.targets],
+        "bounds": [check.bounds[i] for i in range(len(check.targets))],
         "vectorized": args.vectorized, "episodes": args.episodes,
         "budget_minutes": args.budget, "check_every_seconds": args.check_every,
         "solved": solved is not None,
@@ -127,6 +128,9 @@ def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) ->
         for r in runs:
             ax.plot([p["minutes"] for p in r["points"]], [p["figures"][key] for p in r["points"]], ".",
                     color="grey", ms=3)
+        if "bounds" in runs[0]:
+            ax.axhline(runs[0]["bounds"][0], color="tab:red", lw=0.8, ls="--", label="target")
+        ax.set_xlim(0, end)
         ax.set_title(env_id.split("/")[-1], fontsize=9)
         ax.set_xlabel("minutes of learning (2 cores)")
         ax.set_ylabel(key)
