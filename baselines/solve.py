@@ -58,7 +58,7 @@ class SolveCheck:
     env_id: str
     episodes: int = 20
     targets: tuple[Target, ...] = ()
-    bounds: dict[int, float] = field(init=False)
+    bounds: list[float] = field(init=False)
 
     def __post_init__(self) -> None:
         import gymnasium as gym
@@ -75,26 +75,26 @@ class SolveCheck:
         self.seeds = [EVAL_SEED + k for k in range(self.episodes)]
         self.env = gym.make(self.env_id)
         specs = policies_for(self.env_id)
-        self.bounds = {}
-        for i, t in enumerate(self.targets):
+        self.bounds = []
+        for t in self.targets:
             if t.against is None:
-                self.bounds[i] = float(t.value)
+                self.bounds.append(float(t.value))
                 continue
             if t.against not in specs:
                 raise ValueError(f"{self.env_id}: no policy {t.against!r} to compare against; have {sorted(specs)}")
             spec = specs[t.against]
             figures = [_figures(self.env, spec.factory(self.env, s), [s], {t.key}, self._metrics)[t.key]
                        for s in self.seeds]  # a policy per episode, built for its seed, as the leaderboard does
-            self.bounds[i] = t.factor * float(np.mean(figures))
+            self.bounds.append(t.factor * float(np.mean(figures)))
 
     def check(self, policy: Any) -> tuple[bool, dict[str, float]]:
         """Whether ``policy`` (``reset``/``act``) meets every target, and its figures."""
         figures = _figures(self.env, policy, self.seeds, {t.key for t in self.targets}, self._metrics)
-        ok = all(t.met(figures[t.key], self.bounds[i]) for i, t in enumerate(self.targets))
+        ok = all(t.met(figures[t.key], bound) for t, bound in zip(self.targets, self.bounds, strict=True))
         return ok, figures
 
     def describe(self) -> str:
-        return "; ".join(f"{t.describe()} ({self.bounds[i]:.4g})" for i, t in enumerate(self.targets))
+        return "; ".join(f"{t.describe()} ({bound:.4g})" for t, bound in zip(self.targets, self.bounds, strict=True))
 
     def close(self) -> None:
         self.env.close()

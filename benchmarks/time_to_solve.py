@@ -58,7 +58,7 @@ def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     solved = next((p for p in points if p.solved), None)
     return {
         "env_id": env_id, "seed": seed, "targets": check.describe(), "keys": [t.key for t in check.targets],
-        "bounds": [check.bounds[i] for i in range(len(check.targets))],
+        "bounds": list(check.bounds),
         "vectorized": args.vectorized, "episodes": args.episodes,
         "budget_minutes": args.budget, "check_every_seconds": args.check_every,
         "solved": solved is not None,
