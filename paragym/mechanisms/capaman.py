@@ -557,10 +557,11 @@ def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
     al = np.ascontiguousarray(al, float)
     if pose is None:
         pose = forward(al, g, validate=False)
-    n = len(al)
-    centres, quats = np.empty((n, 17, 3)), np.empty((n, 17, 4))
+    n, table = len(al), part_table(g)
+    parts = len(table[5]) + 2  # the leg parts, the plate and the tool
+    centres, quats = np.empty((n, parts, 3)), np.empty((n, parts, 4))
     _part_frames_all(crank_trig(al), np.ascontiguousarray(pose.position), np.ascontiguousarray(pose.quaternion),
-                     *part_table(g), centres, quats)
+                     *table, centres, quats)
     return centres, quats
 
 

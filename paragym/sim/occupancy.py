@@ -287,7 +287,7 @@ def _grid_hits(grid: OccupancyGrid, world: np.ndarray, idx: np.ndarray, lo: np.n
     configuration stops at its first occupied point. The same answer as
     ``grid.lookup(world).any(axis=1)`` in (N, M, 3) order, with the same
     float32 arithmetic as :meth:`OccupancyGrid.lookup_axes` (one compiled
-    loop, :func:`_hits_kernel`)."""
+    loop over the configurations, :func:`_hits_one`)."""
     from scipy import ndimage
 
     labels, _ = ndimage.label(grid.occupied)
