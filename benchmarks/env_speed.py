@@ -53,12 +53,21 @@ DYNAMIC_TARGET = 2.0
 ROUNDS = 3
 
 
+def _random_actions(space: gym.Space, n: int, seed: int) -> list:
+    """``n`` uniform random actions of ``space``: one numpy draw for a bounded Box (``Box.sample``
+    one at a time took about 90 us each, 0.4 s of every short measurement), else ``sample``."""
+    if isinstance(space, gym.spaces.Box) and space.is_bounded():
+        draws = np.random.default_rng(seed).uniform(space.low, space.high, size=(n, *space.shape))
+        return list(draws.astype(space.dtype))
+    space.seed(seed)
+    return [space.sample() for _ in range(n)]
+
+
 def run_for(env: gym.Env, seconds: float, seed: int = 0) -> tuple[int, float]:
     """Step ``env`` with pre-drawn random actions (resets included) for ``seconds`` (checked every 20
     steps, so that a slow env is not held to a fixed number of steps); the steps taken and the time (s)."""
     env.reset(seed=seed)
-    env.action_space.seed(seed)
-    actions = [env.action_space.sample() for _ in range(4_000)]
+    actions = _random_actions(env.action_space, 4_000, seed)
     steps, t0 = 0, time.perf_counter()
     while time.perf_counter() - t0 < seconds:
         start = steps % len(actions)
