@@ -229,3 +229,19 @@ def test_random_scenarios_in_a_batch_equal_one_at_a_time():
     together = random_scenarios([np.random.default_rng(s) for s in range(24)])
     alone = [random_scenario(np.random.default_rng(s)) for s in range(24)]
     assert together == alone
+
+
+def test_the_solver_kernel_compiles_once_for_every_caller():
+    """A fresh process: the geometry's constants, one pose, a batch and a fixed split reach the kernel as one
+    signature (a read-only constant in one call and a writable one in another had compiled it three times,
+    about 20 s of the main job's first run)."""
+    import subprocess
+    import sys
+
+    code = ("import numpy as np\nfrom paragym.mechanisms import hybrid\n"
+            "hybrid.solve(np.zeros(6)); hybrid.solve(np.zeros((3, 6)), np.full(3, 0.4))\n"
+            "hybrid.solve_rows(np.zeros((2, 6)), np.full(2, 0.5)); hybrid.split(np.zeros(6), 0.5)\n"
+            "print(len(hybrid._solve_all.signatures))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.split()[-1] == "1"

@@ -318,13 +318,14 @@ def kernel_consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
                                                        g.tripod_axes, g.tripod_base,
                                                        np.linalg.pinv(g.tripod_axes[:, :2]).T, home_pose(g))]
     raw = np.array([g.tripod_home_height, 1.0 / g.platform_radius, 1.0 / g.r_te, 1.0, 1.0])
+    for a in (*arrays, raw):  # read-only before the first call too: numba compiles one signature, not two
+        a.setflags(write=False)
     mu_h, mu_t = np.empty(1), np.empty(1)
     none = np.empty((0, 3, 3))
     _solve_all(np.zeros((1, 6)), np.full(1, 0.5), *arrays, raw, True, np.empty((1, 9)), mu_h, mu_t,
                none, none[:, 0], none, none[:, 0])  # home: p = 0, any split
     sc = np.array([*raw[:3], mu_h[0], mu_t[0]])
-    for a in (*arrays, sc):
-        a.setflags(write=False)
+    sc.setflags(write=False)
     return (*arrays, sc)
 
 
@@ -337,7 +338,8 @@ def _home_sigmas(g: HybridGeometry) -> tuple[float, float]:
 def _run(p: np.ndarray, delta: np.ndarray, g: HybridGeometry, measures: bool, keep: bool) -> tuple[np.ndarray, ...]:
     p = np.ascontiguousarray(np.atleast_2d(p), float)
     n = len(p)
-    d = np.ascontiguousarray(np.broadcast_to(np.asarray(delta, float), (n,)))
+    d = np.empty(n)  # writable whatever ``delta`` is: one kernel signature
+    d[:] = delta
     lengths, mu_h, mu_t = np.empty((n, 9)), np.empty(n), np.empty(n)
     m = n if keep else 0
     ra, pa, rt, pt = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3, 3)), np.empty((m, 3))
