@@ -57,7 +57,7 @@ def test_an_interrupted_run_resumes_to_the_same_table_without_duplicates(tmp_pat
 
 
 def test_the_process_pool_and_ray_give_the_same_rows_as_the_local_executor(tmp_path):
-    kw = {**SMALL, "suite": EvalSuite("test", (0,), 2), "models_dir": tmp_path}
+    kw = {**SMALL, "suite": EvalSuite("test", (0,), 1), "models_dir": tmp_path}
     run_leaderboard(db=tmp_path / "local.sqlite", **kw)
     run_leaderboard(db=tmp_path / "pool.sqlite", executor="workers", workers=2, **kw)
     assert _rows(tmp_path / "pool.sqlite") == _rows(tmp_path / "local.sqlite")
@@ -151,13 +151,17 @@ LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
 
 @pytest.fixture(scope="module")
 def references(shared_folder):
-    """Reference, random and zero on evaluation seeds 0-1 x 10 episodes of every env (run by one xdist worker;
-    the others read its database, where every episode is already stored)."""
-    policies = sorted({bench_of(env).reference for env in paragym.ENVIRONMENTS} | {"random", "zero"})
+    """The reference on evaluation seeds 0-1 x 10 episodes of every env, random and zero on seed 0 (run by one
+    xdist worker; the others read its database, where every episode is already stored)."""
+    out: dict[str, dict] = {}
     with shared_folder("references.sqlite") as db:
-        run = run_leaderboard(db=db, suite=EvalSuite("test", (0, 1), 10), policies=policies, out=None,
-                              validate=False, progress=False, echo=lambda s: None, executor="workers", workers=2)
-    return {env: {s.policy: s for s in ss} for env, ss in run.summaries.items()}
+        for seeds, policies in (((0, 1), sorted({bench_of(env).reference for env in paragym.ENVIRONMENTS})),
+                                ((0,), ["random", "zero"])):
+            run = run_leaderboard(db=db, suite=EvalSuite("test", seeds, 10), policies=policies, out=None,
+                                  validate=False, progress=False, echo=lambda s: None, executor="workers", workers=2)
+            for env, ss in run.summaries.items():
+                out.setdefault(env, {}).update({s.policy: s for s in ss})
+    return out
 
 
 @pytest.mark.parametrize("env_id", list(paragym.ENVIRONMENTS))
@@ -252,3 +256,19 @@ def test_the_quick_suite_runs_the_dynamic_episodes_of_the_references_and_seed_0(
     chosen = {n for n, s in specs.items() if QUICK.runs_dynamic(s)}
     assert {"rrt-ga", "grid-field", "dagger-seed0", "ppo-seed0"} <= chosen
     assert not chosen & {"zero", "random", "ppo-seed1", "dagger-seed2"}
+
+
+def test_the_workers_start_on_different_tasks():
+    """Jobs go a task at a time in turn, each task's own order kept: from a cold numba cache two workers compile
+    two tasks' kernels side by side (the main job's first run took 20 s longer with both on the same task)."""
+    from paragym.baselines.leaderboard.run import _by_turns
+
+    jobs = [(get_policy(env, "zero"), 0, k, "") for env in paragym.ENVIRONMENTS for k in range(2)]
+    ordered = _by_turns(jobs)
+    tasks = [registry.task_of(j[0].env_id) for j in ordered]
+    count = len(set(tasks))
+    assert len(set(tasks[:count])) == count  # the first jobs: one of each task
+    assert sorted(ordered, key=jobs.index) == jobs
+    for task in set(tasks):  # each task's jobs in their order
+        assert [j for j in ordered if registry.task_of(j[0].env_id) == task] == \
+            [j for j in jobs if registry.task_of(j[0].env_id) == task]

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import time
 from collections.abc import Callable
@@ -156,7 +157,17 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
         if unreadable(json.loads(made)):
             echo(f"{env_name(env)} {name}: its source cannot be read (defined in an interactive session?), so "
                  f"nothing identifies its code: its stored rows are never reused, and its episodes run every time")
-    return jobs, sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+    return _by_turns(jobs), sum(len(specs) for specs in chosen.values()) * len(suite.keys())
+
+
+def _by_turns(jobs: list[Any]) -> list[Any]:
+    """``jobs`` taken a task at a time in turn (each task's own order kept): the
+    workers start on different tasks, so from a cold numba cache each compiles
+    another task's kernels instead of both compiling the same ones."""
+    groups: dict[str, list[Any]] = {}
+    for job in jobs:
+        groups.setdefault(registry.task_of(job[0].env_id), []).append(job)
+    return [job for turn in itertools.zip_longest(*groups.values()) for job in turn if job is not None]
 
 
 def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
@@ -168,8 +179,8 @@ def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], 
     wanted = [(spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
               if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
               for scenario, seed in suite.dynamic]
-    return [job for job in wanted if (job[0].env_id, job[0].name, job[1], job[2], store.version, job[3]) not in done
-            ], len(wanted)
+    return _by_turns([job for job in wanted
+                      if (job[0].env_id, job[0].name, job[1], job[2], store.version, job[3]) not in done]), len(wanted)
 
 
 def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,
