@@ -15,10 +15,10 @@ Each run is written to ``OUT/<env name>-seed<N>.json`` (the points, the
 targets and their bounds, what produced it) as soon as it ends, and a run
 already there is taken as it is, so an interrupted benchmark goes on where it
 stopped (``--force`` runs it again; ``--report-only`` trains nothing and
-reports the runs found). Then the table (minutes to solve per
-seed; the mean of the solved seeds with its 95 % interval, Student t), the
-learning curves with their interval over seeds (``OUT/time_to_solve.png``)
-and ``OUT/time_to_solve.md``.
+reports the runs found). Then the table (minutes to solve per seed; the mean
+of the solved seeds with its 95 % interval, Student t, cut to [0, budget]),
+the learning curves with their interval over seeds
+(``OUT/time_to_solve.png``) and ``OUT/time_to_solve.md``.
 
     python benchmarks/time_to_solve.py [--env ID ...] [--seeds 3] [--budget 30] [--out results/time_to_solve]
 """
@@ -109,6 +109,7 @@ def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) ->
         per_seed = ", ".join(f"{m:.1f}" if m is not None else f"> {budget:g}" for m in minutes)
         if len(solved) > 1:
             lo, hi = mean_ci(solved)
+            lo, hi = max(lo, 0.0), min(hi, budget)  # minutes of learning lie between 0 and the budget
             mean = f"{np.mean(solved):.1f} [{lo:.1f}, {hi:.1f}]"
             mean += "" if len(solved) == len(runs) else " (solved only)"
         else:

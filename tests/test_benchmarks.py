@@ -94,3 +94,18 @@ def test_capaman_detours_splits_success_by_tour():
     (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("straight ")]
     done, straight = row[1].split("/")
     assert done == straight != "0" and row[4].split("/")[0] == "0"
+
+
+def test_time_to_solve_keeps_its_interval_within_what_minutes_can_be(tmp_path):
+    """Minutes of learning lie between 0 and the budget: Student's t over two solved seeds (16.1 and 3.0 min) had
+    reported 9.6 [-73.1, 92.2]."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("time_to_solve", ROOT / "benchmarks" / "time_to_solve.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    runs = [{"minutes": m, "timesteps": None if m is None else 1000, "targets": "t", "keys": ["k"], "points": []}
+            for m in (16.1, None, 3.0)]
+    table = module.report({"paragym/X-v0": runs}, 30.0, tmp_path)
+    (row,) = [ln for ln in table.splitlines() if ln.startswith("| X-v0 |")]
+    assert "9.6 [0.0, 30.0] (solved only)" in row, row
