@@ -558,7 +558,7 @@ def part_frames(alpha: np.ndarray, geometry: CaPaManGeometry = DEFAULT_GEOMETRY,
     if pose is None:
         pose = forward(al, g, validate=False)
     n, table = len(al), part_table(g)
-    parts = len(table[5]) + 2  # the leg parts, the plate and the tool
+    parts = len(_leg_part_table(g).leg) + 2  # the leg parts (cached table), the plate and the tool
     centres, quats = np.empty((n, parts, 3)), np.empty((n, parts, 4))
     _part_frames_all(crank_trig(al), np.ascontiguousarray(pose.position), np.ascontiguousarray(pose.quaternion),
                      *table, centres, quats)
