@@ -359,10 +359,27 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
     return env, eval_env
 
 
+def console_logger(verbose: int = 0) -> Any:
+    """An SB3 logger that prints (``verbose`` >= 1) and writes no file. SB3's default makes an empty
+    ``SB3-<date>`` folder in the temp dir at every ``learn``; give models this one (``model.set_logger``)."""
+    import sys
+
+    from stable_baselines3.common.logger import HumanOutputFormat, Logger
+
+    return Logger(folder=None, output_formats=[HumanOutputFormat(sys.stdout)] if verbose >= 1 else [])
+
+
 def _build_model(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: int, files: RunFiles,
                  force: bool) -> tuple[Any, dict[str, list], int]:
     """The model (resumed from its checkpoint, with its replay buffer and its
     curve so far, unless ``force``), the curve and the timesteps it resumed from."""
+    model, curve, start = _model_and_curve(algo, hp, env, seed, verbose, files, force)
+    model.set_logger(console_logger(verbose))
+    return model, curve, start
+
+
+def _model_and_curve(algo: str, hp: dict[str, Any], env: Any, seed: int, verbose: int, files: RunFiles,
+                     force: bool) -> tuple[Any, dict[str, list], int]:
     curve: dict[str, list] = {k: [] for k in ("eval_timesteps", "eval_seconds", "eval_mean_return", "eval_std_return",
                                               "eval_success_rate", "train_timesteps", "train_return")}
     cls, latest = _algorithm(algo), files.checkpoints / "latest.zip"

@@ -31,7 +31,7 @@ import numpy as np
 
 import paragym
 from paragym.baselines.sb3_vec import as_sb3_vecenv
-from paragym.baselines.training import load_hyperparams
+from paragym.baselines.training import console_logger, load_hyperparams
 from paragym.registry import check_env_id, newest
 
 #: the settings every learner gets from an env's PPO row
@@ -87,6 +87,7 @@ def steps_per_second(cls: Any, env_id: str, robots: int, timesteps: int) -> tupl
         warnings.simplefilter("ignore")
         env = as_sb3_vecenv(env_id, robots)
         model = cls("MlpPolicy", env, seed=0, device="cpu", verbose=0, **settings(env_id, robots))
+        model.set_logger(console_logger())
         rollout = robots * model.n_steps
         model.learn(rollout)  # warm-up: kernels load, JAX compiles its update
         clock = {"train": 0.0, "collect_rollouts": 0.0}

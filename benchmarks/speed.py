@@ -110,7 +110,7 @@ def ppo_rate(env_id: str, vectorized: bool, steps: int = 16_384, n_envs: int = 6
     from stable_baselines3.common.env_util import make_vec_env
 
     from paragym.baselines.sb3_vec import as_sb3_vecenv
-    from paragym.baselines.training import PARAGYM_KEYS, load_hyperparams
+    from paragym.baselines.training import PARAGYM_KEYS, console_logger, load_hyperparams
 
     torch.set_num_threads(1)
     hp = load_hyperparams("ppo", env_id)
@@ -118,6 +118,7 @@ def ppo_rate(env_id: str, vectorized: bool, steps: int = 16_384, n_envs: int = 6
     kwargs.update(n_steps=64, batch_size=1024)
     env = as_sb3_vecenv(env_id, n_envs) if vectorized else make_vec_env(env_id, n_envs=n_envs, seed=0)
     model = PPO("MlpPolicy", env, seed=0, device="cpu", **kwargs)
+    model.set_logger(console_logger())
     model.learn(n_envs * 64)  # warm-up: one rollout and one update
     t0 = time.perf_counter()
     model.learn(steps, reset_num_timesteps=False)

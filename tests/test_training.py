@@ -46,6 +46,19 @@ def test_a_short_run_writes_its_files_and_is_not_repeated(tmp_path, algo):
     assert again.skipped
 
 
+def test_training_leaves_no_folder_in_the_temp_dir(tmp_path, monkeypatch):
+    """SB3's default logger makes an empty ``SB3-<date>`` folder in the temp dir at every learn: paragym's
+    training gives the model a logger without a folder, so a run writes only its own files."""
+    import tempfile
+
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
+    train(HYBRID, "ppo", seed=3, timesteps=128, models_dir=tmp_path / "models", progress_bar=False,
+          hyperparams=TINY["ppo"])
+    assert list(temp.glob("SB3-*")) == []  # (torch may keep its own cache there, torchinductor_<user>)
+
+
 @pytest.mark.parametrize("algo", ALGOS)
 def test_numpy_inference_equals_predict(tmp_path, algo):
     res = train(HYBRID, algo, seed=0, timesteps=200, models_dir=tmp_path, progress_bar=False, hyperparams=TINY[algo])
