@@ -1,13 +1,13 @@
 """When a task counts as solved, and a check of it that can stop training (``benchmarks/time_to_solve.py``).
 
 A task's bench states its targets (:attr:`paragym.baselines.tasks.Bench.solved`), each a
-:class:`paragym.baselines.tasks.Target`: a figure (the success rate or one of the bench's metrics, averaged over the
-check's episodes) at least or at most a bound, which is a number or another policy's figure on the
-same episodes (times a factor). :class:`SolveCheck` plays a policy on a fixed set of validation
-episodes (reset seeds ``EVAL_SEED + k``, those ``paragym train`` evaluates on, apart from the
-leaderboard's test episodes) and says whether every target holds. :func:`stop_when_solved` is the
-Stable-Baselines3 callback that checks a model as it learns, on its wall clock without the checks'
-own time, and stops it when solved or out of time.
+:class:`paragym.baselines.tasks.Target`: a figure (the success rate or one of the bench's metrics) whose mean over
+the check's episodes is at least or at most a number, or which beats another policy's figure (times a factor)
+episode by episode, the 95 % interval of the paired gap wholly on the better side. :class:`SolveCheck` plays a
+policy on a fixed set of validation episodes (reset seeds ``EVAL_SEED + k``, those ``paragym train`` evaluates
+on, apart from the leaderboard's test episodes) and says whether every target holds. :func:`stop_when_solved` is
+the Stable-Baselines3 callback that checks a model as it learns, on its wall clock without the checks' own time,
+and stops it when solved or out of time.
 """
 
 from __future__ import annotations
@@ -38,22 +38,24 @@ class SolvePoint:
     solved: bool
 
 
-def _figures(env: Any, policy: Any, seeds: list[int], keys: set[str], metrics: Any) -> dict[str, float]:
-    """The mean of each key over the episodes of ``seeds``."""
+def _figures(env: Any, policy: Any, seeds: list[int], keys: set[str], metrics: Any) -> dict[str, np.ndarray]:
+    """Each key's value on each episode of ``seeds`` (one array per key, in the order of the seeds)."""
     rows: dict[str, list[float]] = {k: [] for k in keys}
     for s in seeds:
         ep = run_episode(env, policy, seed=s)
         values = {"success": float(ep.success), "return": float(ep.episode_return), **metrics(ep)}
         for k in keys:
             rows[k].append(float(values[k]))
-    return {k: float(np.mean(v)) for k, v in rows.items()}
+    return {k: np.array(v) for k, v in rows.items()}
 
 
 @dataclass
 class SolveCheck:
     """The targets of ``env_id``'s task (its bench's ``solved``, or ``targets``) checked on ``episodes``
-    validation episodes (kinematic, the env's defaults). The bounds against other policies are measured
-    once, on the same episodes."""
+    validation episodes (kinematic, the env's defaults). The figures of the policies a target compares
+    against are measured once, on the same episodes, and a policy is compared with them episode by episode
+    (:meth:`paragym.baselines.tasks.Target.met`); ``bounds`` holds each target's value or that policy's mean
+    times the factor, for the record."""
 
     env_id: str
     episodes: int = 20
@@ -75,23 +77,28 @@ class SolveCheck:
         self.seeds = [EVAL_SEED + k for k in range(self.episodes)]
         self.env = gym.make(self.env_id)
         specs = policies_for(self.env_id)
-        self.bounds = []
+        self.bounds, self._others = [], []
         for t in self.targets:
             if t.against is None:
                 self.bounds.append(float(t.value))
+                self._others.append(None)
                 continue
             if t.against not in specs:
                 raise ValueError(f"{self.env_id}: no policy {t.against!r} to compare against; have {sorted(specs)}")
+            if self.episodes < 2:
+                raise ValueError(f"episodes must be at least 2 to compare with {t.against!r} episode by episode; "
+                                 f"got {self.episodes}")
             spec = specs[t.against]
-            figures = [_figures(self.env, spec.factory(self.env, s), [s], {t.key}, self._metrics)[t.key]
-                       for s in self.seeds]  # a policy per episode, built for its seed, as the leaderboard does
-            self.bounds.append(t.factor * float(np.mean(figures)))
+            others = np.array([_figures(self.env, spec.factory(self.env, s), [s], {t.key}, self._metrics)[t.key][0]
+                               for s in self.seeds])  # a policy per episode, built for its seed (the leaderboard's way)
+            self._others.append(others)
+            self.bounds.append(t.factor * float(others.mean()))
 
     def check(self, policy: Any) -> tuple[bool, dict[str, float]]:
-        """Whether ``policy`` (``reset``/``act``) meets every target, and its figures."""
+        """Whether ``policy`` (``reset``/``act``) meets every target, and its figures (means over the episodes)."""
         figures = _figures(self.env, policy, self.seeds, {t.key for t in self.targets}, self._metrics)
-        ok = all(t.met(figures[t.key], bound) for t, bound in zip(self.targets, self.bounds, strict=True))
-        return ok, figures
+        ok = all(t.met(figures[t.key], others) for t, others in zip(self.targets, self._others, strict=True))
+        return ok, {k: float(v.mean()) for k, v in figures.items()}
 
     def describe(self) -> str:
         return "; ".join(f"{t.describe()} ({bound:.4g})" for t, bound in zip(self.targets, self.bounds, strict=True))

@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 import gymnasium as gym
+import numpy as np
 
 from paragym import registry
 from paragym.rollout import Episode
@@ -67,10 +68,13 @@ class BuiltIn:
 
 @dataclass(frozen=True)
 class Target:
-    """One condition of a solved task: the mean of ``key`` ("success": the success rate; "return"; else a
-    key of the bench's metrics) over the check's episodes reaches ``value`` (at least it for ``direction``
-    +1, at most it for -1), or beats ``factor`` times policy ``against``'s mean on the same episodes
-    (strictly above it for +1, below it for -1: a policy never solves a task by equalling a floor)."""
+    """One condition of a solved task, on the check's episodes.
+
+    * With a ``value``: the mean of ``key`` ("success": the success rate; "return"; else a key of the bench's
+      metrics) reaches it (at least it for ``direction`` +1, at most it for -1).
+    * With ``against`` (another policy): the policy beats ``factor`` times that policy's figure, episode by
+      episode: the Student-t 95 % interval of the mean per-episode gap (better side positive) lies wholly
+      above 0. A mean that is better by chance, or equal to a floor's, does not solve a task."""
 
     key: str
     direction: int
@@ -84,16 +88,22 @@ class Target:
         if (self.value is None) == (self.against is None):
             raise ValueError("a Target has either a value or a policy to compare against, not both or neither")
 
-    def met(self, figure: float, bound: float) -> bool:
-        """Whether ``figure`` meets this target's ``bound`` (its value, or the other policy's figure x factor)."""
-        gap = self.direction * (figure - bound)
-        return gap >= 0 if self.against is None else gap > 0
+    def met(self, figures: np.ndarray, others: np.ndarray | None = None) -> bool:
+        """Whether the per-episode ``figures`` meet this target: their mean against the value, or, paired
+        with the ``against`` policy's figures on the same episodes (``others``), beyond its interval."""
+        figures = np.asarray(figures, float)
+        if self.against is None:
+            return bool(self.direction * (figures.mean() - self.value) >= 0)
+        from paragym.baselines.stats import mean_ci
+
+        low = mean_ci(self.direction * (figures - self.factor * np.asarray(others, float)))[0]
+        return bool(low > 0)  # nan (fewer than two episodes) is not a win
 
     def describe(self) -> str:
-        word = (">=" if self.direction > 0 else "<=") if self.against is None else (">" if self.direction > 0 else "<")
-        bound = f"{self.value:g}" if self.value is not None else \
-            (f"{self.factor:g} x {self.against}'s" if self.factor != 1.0 else f"{self.against}'s")
-        return f"{self.key} {word} {bound}"
+        if self.against is None:
+            return f"{self.key} {'>=' if self.direction > 0 else '<='} {self.value:g}"
+        other = f"{self.factor:g} x {self.against}'s" if self.factor != 1.0 else f"{self.against}'s"
+        return f"{self.key} {'>' if self.direction > 0 else '<'} {other} (paired, 95 %)"
 
 
 @dataclass(frozen=True)
