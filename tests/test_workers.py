@@ -118,3 +118,31 @@ def test_a_ray_task_error_arrives_as_the_tasks_own_message(tmp_path):
                         policies=["broken"], executor="ray", workers=1, out=None, validate=False, progress=False,
                         echo=lambda s: None)
     assert str(info.value) == "this policy cannot start" and "\x1b[" not in str(info.value)
+
+
+def _signal_handlers() -> tuple[bool, bool]:
+    """In a pool worker: whether SIGTERM ends it (the default action) and SIGINT is left to the parent."""
+    return signal.getsignal(signal.SIGTERM) == signal.SIG_DFL, signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+
+
+def test_a_pool_worker_ends_on_sigterm_whatever_its_parent_handles():
+    """The CLI turns SIGTERM and SIGINT into KeyboardInterrupt; a forked worker inherited that, caught it as its
+    job's error, and went on with the next queued episode, so an interrupted run waited 18 s for episodes it
+    would never store. A worker takes SIGTERM's default action and ignores SIGINT (its parent stops it)."""
+    import multiprocessing as mp
+    import os
+    from concurrent.futures import ProcessPoolExecutor
+
+    from paragym.baselines.leaderboard.executors import _init_worker
+
+    def stop(signum, frame):
+        raise KeyboardInterrupt
+
+    before = signal.signal(signal.SIGTERM, stop), signal.signal(signal.SIGINT, stop)
+    try:
+        with ProcessPoolExecutor(1, mp_context=mp.get_context("fork"), initializer=_init_worker,
+                                 initargs=(os.getpid(),)) as pool:
+            assert pool.submit(_signal_handlers).result(timeout=60) == (True, True)
+    finally:
+        signal.signal(signal.SIGTERM, before[0])
+        signal.signal(signal.SIGINT, before[1])

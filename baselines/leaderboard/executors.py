@@ -61,6 +61,13 @@ def die_with_parent(parent: int) -> None:
 
 
 def _init_worker(parent: int) -> None:
+    """A pool worker: it ends with its parent, takes SIGTERM's default action and ignores SIGINT. A forked worker
+    inherits the parent's Python handlers (the CLI's turn both into KeyboardInterrupt), and a worker that catches
+    one as its job's error goes on with the next queued episode instead of stopping."""
+    import signal
+
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches the whole process group: the parent stops us
     die_with_parent(parent)
     try:
         import torch
