@@ -16,6 +16,11 @@ each one's success on the two kinds of tours, with Wilson's 95 % interval:
 * each ``--model PATH``, a saved Stable-Baselines3 model (e.g. the PPO runs
   of ``time_to_solve.py``), played deterministically.
 
+A third column says how the progress term paid each policy's way on the
+tours that need a detour: the steps whose progress (v1's, the decrease of
+the straight joint-space distance to the current target) was negative, of
+all its steps there, and their sum (rad).
+
     python benchmarks/capaman_detours.py --model results/time_to_solve/models/CaPaManCollisionFree-v1/ppo_seed0.zip
 """
 
@@ -69,6 +74,18 @@ def needs_detour(scenario: Any, geometry: capaman.CaPaManGeometry, step: float =
     return False
 
 
+def against_the_target(ep: Any, tp: np.ndarray) -> tuple[int, int, float]:
+    """The steps of episode ``ep`` whose progress toward the current target T.P. (``tp`` (3, 3) rad; v1's term:
+    straight joint-space distance before minus after) was negative, the episode's steps, and that progress's sum."""
+    count, total = 0, 0.0
+    for before, after in zip(ep.infos[:-1], ep.infos[1:], strict=True):
+        target = tp[before["target_index"]]
+        progress = np.linalg.norm(before["alpha"] - target) - np.linalg.norm(after["alpha"] - target)
+        if progress < -1e-9:
+            count, total = count + 1, total + progress
+    return count, len(ep.infos) - 1, total
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--env", default="paragym/CaPaManCollisionFree-v1")
@@ -94,15 +111,24 @@ def main() -> None:
     detour = np.array(detour)
     print(f"{args.env}: {args.episodes} validation episodes, {int(detour.sum())} need a detour, "
           f"{int((~detour).sum())} do not")
-    print(f"{'policy':28s} {'straight tours':>24s} {'tours with a detour':>26s}")
+    print(f"{'policy':28s} {'straight tours':>24s} {'tours with a detour':>26s} "
+          f"{'detours: steps against the target':>36s}")
     for name, factory in players.items():
-        success = np.array([run_episode(env, factory(env, s), seed=s).success for s in seeds])
+        success, against = [], [0, 0, 0.0]
+        for s, needs in zip(seeds, detour, strict=True):
+            ep = run_episode(env, factory(env, s), seed=s)
+            success.append(ep.success)
+            if needs:
+                against = [a + b for a, b in zip(against, against_the_target(ep, env.unwrapped.state.tp[0]),
+                                                 strict=True)]
+        success = np.array(success)
         cells = []
         for kind in (~detour, detour):
             k, n = int(success[kind].sum()), int(kind.sum())
             lo, hi = wilson(k, n) if n else (float("nan"), float("nan"))
             cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
-        print(f"{name:28s} {cells[0]:>24s} {cells[1]:>26s}", flush=True)
+        cells.append(f"{against[0]}/{against[1]} ({against[2]:.3f} rad)")
+        print(f"{name:28s} {cells[0]:>24s} {cells[1]:>26s} {cells[2]:>36s}", flush=True)
     env.close()
 
 

@@ -176,6 +176,9 @@ def main() -> None:
     args = parser.parse_args()
     if args.seeds < 1 or args.budget <= 0 or args.check_every <= 0:
         parser.error("--seeds, --budget and --check-every must be positive")
+    if args.episodes < 2:
+        parser.error(f"--episodes must be at least 2 (a target against another policy compares episode by "
+                     f"episode); got {args.episodes}")
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
     args.out.mkdir(parents=True, exist_ok=True)
     by_env: dict[str, list[dict[str, Any]]] = {}

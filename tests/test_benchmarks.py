@@ -79,7 +79,7 @@ def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
     """A smoke run (a few seconds of learning): each run's file, the table, the curves; run again, it takes
     the runs it finds instead of training."""
     args = ("benchmarks/time_to_solve.py", "--env", "Orthoglide2PRRKappa-v1", "--seeds", "1", "--budget", "0.03",
-            "--check-every", "0.5", "--episodes", "1", "--out", str(tmp_path))
+            "--check-every", "0.5", "--episodes", "2", "--out", str(tmp_path))
     out = _run(*args)
     assert (tmp_path / "Orthoglide2PRRKappa-v1-seed0.json").is_file() and (tmp_path / "time_to_solve.png").is_file()
     (row,) = [ln for ln in out.splitlines() if ln.startswith("| Orthoglide2PRRKappa-v1 |")]
@@ -89,11 +89,15 @@ def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
 
 
 def test_capaman_detours_splits_success_by_tour():
-    """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes)."""
-    out = _run("benchmarks/capaman_detours.py", "--episodes", "4", "--policy", "zero")
-    (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("straight ")]
-    done, straight = row[1].split("/")
-    assert done == straight != "0" and row[4].split("/")[0] == "0"
+    """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes), and
+    the grid's expert completes the detour without a step against its target (v1's progress never went below 0
+    on its way round)."""
+    out = _run("benchmarks/capaman_detours.py", "--episodes", "4", "--policy", "zero", "--policy", "grid-field")
+    rows = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.startswith(("straight ", "grid-field "))}
+    done, straight = rows["straight"][1].split("/")
+    assert done == straight != "0" and rows["straight"][4].split("/")[0] == "0"
+    assert rows["grid-field"][4] == "1/1" and rows["grid-field"][7].startswith("0/")
+    assert int(rows["grid-field"][7].split("/")[1]) > 0  # the steps of its detour tour were counted
 
 
 def _time_to_solve():
