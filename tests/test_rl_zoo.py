@@ -27,25 +27,53 @@ CASES = [  # (algo, env id, overrides that keep it to a few hundred steps)
 ]
 
 
+#: one Python process trains every case, ``rl_zoo3.train`` called once per case's command line: importing rl-zoo
+#: and its dependencies takes seconds, paid once
+_DRIVER = """
+import json, sys
+import rl_zoo3.train
+for argv in json.loads(sys.argv[1]):
+    sys.argv = ["rl_zoo3.train", *argv]
+    rl_zoo3.train.train()
+"""
+
+
+@pytest.fixture(scope="module")
+def zoo_runs(shared_folder) -> Path:
+    """Every case trained by ``rl_zoo3.train`` from the shipped files, each in ``<folder>/<algo>-<env name>``
+    (by one xdist worker; the others find the runs there)."""
+    import json
+
+    conf = {algo: str(resources.files("paragym.baselines").joinpath("hyperparams", f"{algo}.yml"))
+            for algo, _, _ in CASES}
+    with shared_folder("zoo") as folder:
+        if not (folder / "done").is_file():
+            commands = [["--algo", algo, "--env", env_id, "--gym-packages", "paragym", "-conf", conf[algo], "-n", "300",
+                         "--eval-freq", "-1", "-f", str(folder / f"{algo}-{env_id.split('/')[1]}"), "--seed", "0",
+                         "-params", *overrides] for algo, env_id, overrides in CASES]
+            folder.mkdir(exist_ok=True)
+            done = subprocess.run([sys.executable, "-c", _DRIVER, json.dumps(commands)], capture_output=True,
+                                  text=True, timeout=600, cwd=folder)
+            assert done.returncode == 0, done.stderr[-3000:]
+            (folder / "done").write_text(done.stdout[-2000:])
+        return folder
+
+
 @pytest.mark.parametrize(("algo", "env_id", "overrides"), CASES, ids=[f"{a}-{e.split('/')[1]}" for a, e, _ in CASES])
-def test_rl_zoo_trains_from_the_shipped_file(tmp_path: Path, algo: str, env_id: str, overrides: list[str]) -> None:
-    conf = resources.files("paragym.baselines").joinpath("hyperparams", f"{algo}.yml")
-    cmd = [sys.executable, "-m", "rl_zoo3.train", "--algo", algo, "--env", env_id, "--gym-packages", "paragym",
-           "-conf", str(conf), "-n", "300", "--eval-freq", "-1", "-f", str(tmp_path), "--seed", "0",
-           "-params", *overrides]
-    done = subprocess.run(cmd, capture_output=True, text=True, timeout=600, cwd=tmp_path)
-    assert done.returncode == 0, done.stderr[-3000:]
+def test_rl_zoo_trains_from_the_shipped_file(zoo_runs: Path, tmp_path: Path, algo: str, env_id: str,
+                                             overrides: list[str]) -> None:
+    logs = zoo_runs / f"{algo}-{env_id.split('/')[1]}"
     name = env_id.replace("/", "-")
-    model = tmp_path / algo / f"{name}_1" / f"{name}.zip"
-    assert model.is_file(), done.stdout[-2000:]
+    model = logs / algo / f"{name}_1" / f"{name}.zip"
+    assert model.is_file(), (zoo_runs / "done").read_text()
     loaded = load_model(model)  # paragym reads what rl-zoo wrote, without unpickling and without algo=
     assert loaded.num_timesteps >= 300 and type(loaded).__name__.lower() == algo
-    spec = policies_for(env_id, tmp_path)[f"user-{algo}-zoo1"]  # --models takes rl-zoo's log folder
+    spec = policies_for(env_id, logs)[f"user-{algo}-zoo1"]  # --models takes rl-zoo's log folder
     assert spec.kind == "learned" and "rl-baselines3-zoo" in spec.description
     if env_id.endswith("Orthoglide2PRRKappa-v0"):  # and the leaderboard ranks it from the command line
         from paragym.cli import main
 
-        assert main(["leaderboard", "--quick", "--env", env_id, "--models", str(tmp_path), "--policy",
+        assert main(["leaderboard", "--quick", "--env", env_id, "--models", str(logs), "--policy",
                      "user-ppo-zoo1", "--no-validation", "--no-progress", "--workers", "1", "--db",
                      str(tmp_path / "db.sqlite"), "--out", str(tmp_path / "out")]) == 0
         assert "user-ppo-zoo1" in next((tmp_path / "out").rglob("LEADERBOARD.md")).read_text()
