@@ -28,6 +28,7 @@ import gymnasium as gym
 import numpy as np
 
 from paragym import registry
+from paragym.baselines.stats import mean_ci
 from paragym.rollout import Episode
 
 __all__ = ["Bench", "BuiltIn", "Column", "Target", "bench_of", "init_defaults", "missing", "random_factory", "tightest",
@@ -94,8 +95,6 @@ class Target:
         figures = np.asarray(figures, float)
         if self.against is None:
             return bool(self.direction * (figures.mean() - self.value) >= 0)
-        from paragym.baselines.stats import mean_ci
-
         low = mean_ci(self.direction * (figures - self.factor * np.asarray(others, float)))[0]
         return bool(low > 0)  # nan (fewer than two episodes) is not a win
 
