@@ -77,13 +77,11 @@ def needs_detour(scenario: Any, geometry: capaman.CaPaManGeometry, step: float =
 def against_the_target(ep: Any, tp: np.ndarray) -> tuple[int, int, float]:
     """The steps of episode ``ep`` whose progress toward the current target T.P. (``tp`` (3, 3) rad; v1's term:
     straight joint-space distance before minus after) was negative, the episode's steps, and that progress's sum."""
-    count, total = 0, 0.0
-    for before, after in zip(ep.infos[:-1], ep.infos[1:], strict=True):
-        target = tp[before["target_index"]]
-        progress = np.linalg.norm(before["alpha"] - target) - np.linalg.norm(after["alpha"] - target)
-        if progress < -1e-9:
-            count, total = count + 1, total + progress
-    return count, len(ep.infos) - 1, total
+    alpha = np.array([info["alpha"] for info in ep.infos])
+    target = tp[[info["target_index"] for info in ep.infos[:-1]]]  # each step's target, as it was before the step
+    progress = np.linalg.norm(alpha[:-1] - target, axis=1) - np.linalg.norm(alpha[1:] - target, axis=1)
+    against = progress < -1e-9
+    return int(against.sum()), len(progress), float(progress[against].sum())
 
 
 def main() -> None:
@@ -114,20 +112,20 @@ def main() -> None:
     print(f"{'policy':28s} {'straight tours':>24s} {'tours with a detour':>26s} "
           f"{'detours: steps against the target':>36s}")
     for name, factory in players.items():
-        success, against = [], [0, 0, 0.0]
+        success, against = [], []
         for s, needs in zip(seeds, detour, strict=True):
             ep = run_episode(env, factory(env, s), seed=s)
             success.append(ep.success)
             if needs:
-                against = [a + b for a, b in zip(against, against_the_target(ep, env.unwrapped.state.tp[0]),
-                                                 strict=True)]
+                against.append(against_the_target(ep, env.unwrapped.state.tp[0]))
         success = np.array(success)
+        steps, of, rad = np.sum(against, axis=0) if against else (0, 0, 0.0)
         cells = []
         for kind in (~detour, detour):
             k, n = int(success[kind].sum()), int(kind.sum())
             lo, hi = wilson(k, n) if n else (float("nan"), float("nan"))
             cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
-        cells.append(f"{against[0]}/{against[1]} ({against[2]:.3f} rad)")
+        cells.append(f"{int(steps)}/{int(of)} ({rad:.3f} rad)")
         print(f"{name:28s} {cells[0]:>24s} {cells[1]:>26s} {cells[2]:>36s}", flush=True)
     env.close()
 
