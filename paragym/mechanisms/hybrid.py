@@ -284,9 +284,11 @@ def _solve_all(p, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, meas
     for i in range(p.shape[0]):
         mu_h[i], mu_t[i] = k_solve(p[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home, sc, measures,
                                    lengths[i], work)
-        if keep:
-            ra_out[i], pa_out[i], rt_out[i], pt_out[i] = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], \
-                work[1, 3, :3]
+        if keep:  # by element: numba compiles an array copied into a slice with a shape check (seconds of compile)
+            for a in range(3):
+                pa_out[i, a], pt_out[i, a] = work[0, 3, a], work[1, 3, a]
+                for b in range(3):
+                    ra_out[i, a, b], rt_out[i, a, b] = work[0, a, b], work[1, a, b]
 
 
 @njit(cache=True, error_model="numpy")

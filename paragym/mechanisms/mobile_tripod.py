@@ -198,14 +198,15 @@ def _eta_least_squares(t0, t1, t2, eta, c, iterations, out):
         if new_cost < cost:
             e += step
             _jacobian(a0, a1, a2, b0, b1, b2, jac)
-            res[:] = new_res
+            res[0], res[1], res[2] = new_res[0], new_res[1], new_res[2]  # by element: see the end
             cost = new_cost
             lam *= 0.1
             if max(abs(step[0]), abs(step[1]), abs(step[2])) < 1e-9:  # an accepted step this small: converged
                 break
         else:
             lam *= 10.0
-    out[:] = e
+    # by element: numba compiles an array copied into a slice with a shape check that costs seconds of compile
+    out[0], out[1], out[2] = e[0], e[1], e[2]
 
 
 @njit(cache=True, error_model="numpy")
