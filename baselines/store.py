@@ -24,7 +24,7 @@ from typing import Any
 
 import paragym
 
-__all__ = ["SCHEMA_VERSION", "DynamicRow", "EpisodeRow", "ResultStore", "producer_id"]
+__all__ = ["SCHEMA_VERSION", "DynamicRow", "EpisodeRow", "ResultStore", "ValidationRow", "producer_id"]
 
 SCHEMA_VERSION = "3"  # 3: the dynamic fidelity's episodes (paragym 0.6.0)
 
@@ -95,6 +95,18 @@ class DynamicRow:
     @property
     def key(self) -> tuple[str, str, str, int, str, str]:
         return (self.env, self.policy, self.scenario, self.seed, self.version, self.producer)
+
+
+@dataclass(frozen=True)
+class ValidationRow:
+    """The KF validation of a task's reference plan (its bench's ``validated_plan``): the verdict and what
+    the check found, for the reference of ``env`` made by ``producer``."""
+
+    env: str
+    policy: str
+    passed: bool
+    summary: dict[str, Any]
+    producer: str = ""
 
 
 #: SQLite's application id of a paragym results file ("PGYM"): a file without it was not made by paragym

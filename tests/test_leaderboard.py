@@ -263,12 +263,46 @@ def test_the_workers_start_on_different_tasks():
     two tasks' kernels side by side (the main job's first run took 20 s longer with both on the same task)."""
     from paragym.baselines.leaderboard.run import _by_turns
 
-    jobs = [(get_policy(env, "zero"), 0, k, "") for env in paragym.ENVIRONMENTS for k in range(2)]
+    jobs = [("episode", get_policy(env, "zero"), 0, k, "") for env in paragym.ENVIRONMENTS for k in range(2)]
     ordered = _by_turns(jobs)
-    tasks = [registry.task_of(j[0].env_id) for j in ordered]
+    tasks = [registry.task_of(j[1].env_id) for j in ordered]
     count = len(set(tasks))
     assert len(set(tasks[:count])) == count  # the first jobs: one of each task
     assert sorted(ordered, key=jobs.index) == jobs
     for task in set(tasks):  # each task's jobs in their order
-        assert [j for j in ordered if registry.task_of(j[0].env_id) == task] == \
-            [j for j in jobs if registry.task_of(j[0].env_id) == task]
+        assert [j for j in ordered if registry.task_of(j[1].env_id) == task] == \
+            [j for j in jobs if registry.task_of(j[1].env_id) == task]
+
+
+def test_one_stream_runs_the_validations_first_then_the_dynamic_episodes_then_the_episodes(tmp_path, monkeypatch):
+    """Every job of a run goes to the executor in one stream, the longest first: a worker never waits at a
+    phase's end for the other, and the reference plans' validations (seconds each) run in the pool instead of
+    one after another in this process (the quick main job spent 12 s on them with a core idle)."""
+    from paragym.baselines.leaderboard import run as run_module
+
+    calls = []
+    monkeypatch.setattr(run_module, "_execute", lambda store, jobs, shared, *a: calls.append((jobs, shared)))
+    envs = [HYBRID, "paragym/HybridSingularityFree-v1", ORTHO]
+    run_leaderboard(db=tmp_path / "r.sqlite", suite=EvalSuite("test", (0,), 1, (("paper", 0),)), env_ids=envs,
+                    policies=["zero", "polynomial-detour", "gradient-c"], validate=True, progress=False,
+                    echo=lambda s: None, out=None)
+    [(jobs, shared)] = calls
+    kinds = [job[0] for job in jobs]
+    assert kinds == sorted(kinds, key=["validation", "dynamic", "episode"].index)
+    assert kinds.count("validation") == 1 and kinds.count("dynamic") == 6 and kinds.count("episode") == 6
+    # v1 validates v0's plan: one job, its verdict stored for both
+    [validation] = [job for job in jobs if job[0] == "validation"]
+    assert [env for env, *_ in shared[validation[1].env_id, "polynomial-detour"]] == envs[:2]
+
+
+def test_a_validation_is_stored_for_every_env_that_validates_the_same_plan(tmp_path):
+    from paragym.baselines.leaderboard.run import _store
+    from paragym.baselines.store import ValidationRow
+
+    shared = {(HYBRID, "polynomial-detour"): [(HYBRID, "polynomial-detour", "a"),
+                                              ("paragym/HybridSingularityFree-v1", "polynomial-detour", "b")]}
+    with ResultStore(tmp_path / "r.sqlite") as store:
+        _store(store, ValidationRow(HYBRID, "polynomial-detour", True, {"text": "fine"}, "a"), shared)
+        assert store.validation(HYBRID, "polynomial-detour", "a") == {"passed": True, "text": "fine"}
+        assert store.validation("paragym/HybridSingularityFree-v1", "polynomial-detour", "b")["passed"]
+        assert store.validation(HYBRID, "polynomial-detour", "b") is None

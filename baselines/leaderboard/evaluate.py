@@ -10,11 +10,11 @@ import gymnasium as gym
 from paragym import registry
 from paragym.baselines.leaderboard.suite import dynamic_kwargs, dynamic_producer, episode_seed
 from paragym.baselines.policies import PolicySpec
-from paragym.baselines.store import DynamicRow, EpisodeRow
+from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 from paragym.baselines.tasks import bench_of, tightest
 from paragym.rollout import run_episode
 
-__all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job"]
+__all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job", "evaluate_validation"]
 
 _ENVS: dict[str, gym.Env] = {}
 
@@ -93,6 +93,24 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
 
 
 
-def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any, producer: str | None = None) -> EpisodeRow | DynamicRow:
-    """One job of either kind: an episode (seed, episode) or a dynamic episode (scenario, seed)."""
-    return evaluate_episode(spec, a, b, producer) if kind == "episode" else evaluate_dynamic(spec, a, b, producer)
+def evaluate_validation(spec: PolicySpec, seed: int, producer: str | None = None) -> ValidationRow:
+    """The KF validation of the reference plan of ``spec``'s task (its bench's ``validated_plan``, run from
+    ``seed``), for ``spec``, the reference."""
+    check = bench_of(spec.env_id).validated_plan
+    if check is None:
+        raise ValueError(f"{spec.env_id} validates no reference plan")
+    passed, summary = check(seed)
+    return ValidationRow(spec.env_id, spec.name, passed, summary, spec.producer() if producer is None else producer)
+
+
+def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any, producer: str | None = None
+                 ) -> EpisodeRow | DynamicRow | ValidationRow:
+    """One job of any kind: an "episode" (evaluation seed ``a``, episode ``b``), a "dynamic" episode
+    (scenario ``a``, reset seed ``b``) or the "validation" of the reference plan (seed ``a``)."""
+    if kind == "episode":
+        return evaluate_episode(spec, a, b, producer)
+    if kind == "dynamic":
+        return evaluate_dynamic(spec, a, b, producer)
+    if kind == "validation":
+        return evaluate_validation(spec, a, producer)
+    raise ValueError(f"unknown kind of job {kind!r}")

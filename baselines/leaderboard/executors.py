@@ -15,20 +15,21 @@ from typing import Any
 from paragym.baselines.leaderboard import reaper
 from paragym.baselines.leaderboard.evaluate import evaluate_job
 from paragym.baselines.policies import PolicySpec
-from paragym.baselines.store import DynamicRow, EpisodeRow
+from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 
-__all__ = ["EXECUTORS", "RUNNERS", "DynamicJob", "Job", "die_with_parent"]
+__all__ = ["EXECUTORS", "RUNNERS", "Job", "Row", "die_with_parent"]
 
-#: an episode's job: the spec, the evaluation seed, the episode, and the producer its row records (computed once,
-#: by the run that planned the job: a worker never recomputes what identifies the policy)
-Job = tuple[PolicySpec, int, int, str]
-#: a dynamic-fidelity job: the spec, the scenario, the reset seed, the producer
-DynamicJob = tuple[PolicySpec, str, int, str]
+#: a job: its kind ("episode", "dynamic" or "validation"), the spec, the kind's two arguments (the evaluation
+#: seed and the episode; the scenario and the reset seed; the seed and None:
+#: :func:`~paragym.baselines.leaderboard.evaluate.evaluate_job`), and the producer its row records (computed
+#: once, by the run that planned the job: a worker never recomputes what identifies the policy)
+Job = tuple[str, PolicySpec, Any, Any, str]
+#: what a job gives back
+Row = EpisodeRow | DynamicRow | ValidationRow
 
 
-def _run_local(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
-               kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
-    for spec, a, b, made in jobs:
+def _run_local(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None) -> Iterator[Row]:
+    for kind, spec, a, b, made in jobs:
         yield evaluate_job(kind, spec, a, b, made)
 
 
@@ -77,15 +78,13 @@ def _init_worker(parent: int) -> None:
         pass
 
 
-def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any, made: str
-                      ) -> EpisodeRow | DynamicRow:
+def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any, made: str) -> Row:
     from paragym.baselines.policies import get_policy
 
     return evaluate_job(kind, get_policy(env_id, name, models_dir), a, b, made)
 
 
-def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
-              kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None) -> Iterator[Row]:
     """A fork-started process pool: workers inherit the policy registry, so
     policies registered in the calling script work too. The workers die with
     this process (:func:`die_with_parent`), and an interrupted run stops them
@@ -99,7 +98,7 @@ def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir
     finished = False
     try:
         futures = [pool.submit(_evaluate_by_name, kind, spec.env_id, spec.name, models_dir, a, b, made)
-                   for spec, a, b, made in jobs]
+                   for kind, spec, a, b, made in jobs]
         for fut in as_completed(futures):
             yield fut.result()
         finished = True
@@ -110,8 +109,7 @@ def _run_pool(jobs: list[Any], workers: int, ray_address: str | None, models_dir
         pool.shutdown(wait=finished, cancel_futures=True)
 
 
-def _run_ray(jobs: list[Any], workers: int, ray_address: str | None, models_dir: str | None,
-             kind: str = "episode") -> Iterator[EpisodeRow | DynamicRow]:
+def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None) -> Iterator[Row]:
     """Ray tasks (one per episode; the policy spec travels with the task,
     pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
     try:
@@ -128,7 +126,7 @@ def _run_ray(jobs: list[Any], workers: int, ray_address: str | None, models_dir:
                 reaper_pid = _start_reaper()
             ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
         remote = ray.remote(num_cpus=1)(evaluate_job)
-        pending = [remote.remote(kind, spec, a, b, made) for spec, a, b, made in jobs]
+        pending = [remote.remote(kind, spec, a, b, made) for kind, spec, a, b, made in jobs]
         while pending:
             done, pending = ray.wait(pending, num_returns=1)
             try:
@@ -179,5 +177,5 @@ def _stop_reaper(pid: int) -> None:
 
 EXECUTORS = ("local", "workers", "ray")
 
-#: executor -> ``run(jobs, workers, ray_address, models_dir, kind)``
+#: executor -> ``run(jobs, workers, ray_address, models_dir)``: the rows as their jobs finish
 RUNNERS = {"local": _run_local, "workers": _run_pool, "ray": _run_ray}

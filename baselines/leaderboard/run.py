@@ -13,7 +13,7 @@ from typing import Any
 import paragym
 from paragym import registry
 from paragym.baselines.agents import unreadable
-from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, DynamicJob, Job
+from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, Job, Row
 from paragym.baselines.leaderboard.render import smoke_note, terminal_table, write_reports
 from paragym.baselines.leaderboard.results import write_episodes_csv, write_results
 from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
@@ -86,9 +86,12 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     again, and ``echo`` says so.
 
     The steps: choose the policies (:func:`_select`), plan the missing
-    episodes (:func:`_plan`), run them with the executor (:func:`_execute`),
-    validate the reference plans (:func:`_validate_references`), summarise
-    (:func:`_summaries`) and write the reports (:func:`_write_reports`)."""
+    episodes (:func:`_plan`), the missing dynamic episodes
+    (:func:`_plan_dynamic`) and validations of the reference plans
+    (:func:`_plan_validations`), run them all in one stream of jobs with the
+    executor (:func:`_execute`: the longest first, so that no worker waits
+    for another at a phase's end), summarise (:func:`_summaries`) and write
+    the reports (:func:`_write_reports`)."""
     if executor not in EXECUTORS:
         raise ValueError(f"unknown executor {executor!r}; known: {', '.join(EXECUTORS)}")
     if not isinstance(workers, int) or workers < 1:
@@ -103,16 +106,23 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
              f"{store.path}; running {len(jobs)} with the {executor} executor")
-        _execute(store, jobs, executor, workers, ray_address, models, progress, on_row)
-        dynamic_jobs, dynamic_total = [], 0
+        dynamic_jobs: list[Job] = []
+        dynamic_total = 0
+        validations: list[Job] = []
+        shared: Shared = {}
         if validate and suite.dynamic:
             dynamic_jobs, dynamic_total = _plan_dynamic(store, chosen, suite, producers)
             who = "" if suite.dynamic_all else ": the references, the other methods, each learned algorithm's seed 0"
             echo(f"dynamic fidelity: {len(dynamic_jobs)} episodes to run ({len(suite.dynamic)} per policy{who}; "
                  f"each with the KF validation of what it executed)")
-            _execute(store, dynamic_jobs, executor, workers, ray_address, models, progress, None, kind="dynamic")
         if validate:
-            _validate_references(store, chosen, producers, echo)
+            validations, shared = _plan_validations(store, chosen, producers)
+            for job in validations:
+                echo(f"KF validation of {job[1].name}'s plan on {job[1].env_id} (dynamic fidelity)")
+        # the validations and the dynamic episodes (seconds each) first, then the episodes (mostly a fraction of
+        # a second): the workers finish together
+        _execute(store, validations + dynamic_jobs + jobs, shared, executor, workers, ray_address, models, progress,
+                 on_row)
         rows, dynamic_rows = _selected(store, chosen, suite, producers)
         all_summaries = _summaries(store, chosen, suite, rows, dynamic_rows)
         files = write_reports(all_summaries, suite, out, markdown_path, env_ids, policies) if out is not None else []
@@ -149,7 +159,8 @@ def _plan(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: E
     """The episodes ``store`` lacks for the current producers (saying which
     stored ones are run again), and how many episodes the suite has."""
     done = store.done_keys()
-    jobs = [(spec, s, k, producers[spec.env_id, spec.name]) for specs in chosen.values() for spec in specs.values()
+    jobs = [("episode", spec, s, k, producers[spec.env_id, spec.name]) for specs in chosen.values()
+            for spec in specs.values()
             for s, k in suite.keys()
             if (spec.env_id, spec.name, s, k, store.version, producers[spec.env_id, spec.name]) not in done]
     _say_what_is_rerun(jobs, done, store.version, producers, echo)
@@ -166,66 +177,77 @@ def _by_turns(jobs: list[Any]) -> list[Any]:
     another task's kernels instead of both compiling the same ones."""
     groups: dict[str, list[Any]] = {}
     for job in jobs:
-        groups.setdefault(registry.task_of(job[0].env_id), []).append(job)
+        groups.setdefault(registry.task_of(job[1].env_id), []).append(job)
     return [job for turn in itertools.zip_longest(*groups.values()) for job in turn if job is not None]
 
 
 def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
-                  producers: dict[tuple[str, str], str]) -> tuple[list[DynamicJob], int]:
+                  producers: dict[tuple[str, str], str]) -> tuple[list[Job], int]:
     """The dynamic-fidelity episodes ``store`` lacks for the current producers
     (the policy's and the physics settings: :func:`dynamic_producer`), and how many the suite has."""
     done = store.dynamic_keys()
     made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
-    wanted = [(spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
+    wanted = [("dynamic", spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
               if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
               for scenario, seed in suite.dynamic]
     return _by_turns([job for job in wanted
-                      if (job[0].env_id, job[0].name, job[1], job[2], store.version, job[3]) not in done]), len(wanted)
+                      if (job[1].env_id, job[1].name, job[2], job[3], store.version, job[4]) not in done]), len(wanted)
 
 
-def _execute(store: ResultStore, jobs: list[Any], executor: str, workers: int, ray_address: str | None,
-             models: Path | None, progress: bool, on_row: Callable[[EpisodeRow], None] | None,
-             kind: str = "episode") -> None:
-    """Run ``jobs`` with the executor, storing each row as it comes (Ctrl-C
-    keeps what is stored and stops the workers). ``kind``: "episode" or
-    "dynamic" (:data:`DynamicJob`)."""
+def _execute(store: ResultStore, jobs: list[Job], shared: Shared, executor: str, workers: int,
+             ray_address: str | None, models: Path | None, progress: bool,
+             on_row: Callable[[EpisodeRow], None] | None) -> None:
+    """Run ``jobs`` (of every kind) with the executor, storing each row as it comes (Ctrl-C keeps what is stored
+    and stops the workers); ``on_row`` sees each episode's row. A reference plan's validation is stored for
+    each env ``shared`` lists for it."""
     from tqdm.auto import tqdm
 
     run = RUNNERS[executor]
-    stream = run(jobs, workers, ray_address, str(models) if models is not None else None, kind)
+    stream = run(jobs, workers, ray_address, str(models) if models is not None else None)
     saved = 0
     try:
-        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="episode", dynamic_ncols=True) as bar:
+        with tqdm(total=len(jobs), disable=not progress or not jobs, unit="job", dynamic_ncols=True) as bar:
             for row in stream:
-                if kind == "dynamic":
-                    store.add_dynamic(row)
-                else:
-                    store.add(row)
+                _store(store, row, shared)
                 saved += 1
                 bar.set_postfix_str(f"{env_name(row.env)} {row.policy}", refresh=False)
                 bar.update()
-                if on_row is not None:
+                if on_row is not None and isinstance(row, EpisodeRow):
                     on_row(row)
     except KeyboardInterrupt:
         stream.close()  # stops the workers now
         raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
 
 
-def _validate_references(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]],
-                         producers: dict[tuple[str, str], str], echo: Callable[[str], None]) -> None:
-    """The KF validation of each validated reference plan that takes part and
-    has none stored for its producer (dynamic fidelity)."""
-    verdicts: dict[Any, tuple[bool, dict[str, Any]]] = {}  # v1 validates v0's plan: run each check once
+def _store(store: ResultStore, row: Row, shared: dict[tuple[str, str], list[tuple[str, str, str]]]) -> None:
+    if isinstance(row, EpisodeRow):
+        store.add(row)
+    elif isinstance(row, DynamicRow):
+        store.add_dynamic(row)
+    else:
+        for env, name, producer in shared[row.env, row.policy]:
+            store.set_validation(env, name, row.passed, row.summary, producer)
+
+
+#: a validation job's (env, reference) -> every (env, reference, producer) its verdict is stored for
+Shared = dict[tuple[str, str], list[tuple[str, str, str]]]
+
+
+def _plan_validations(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]],
+                      producers: dict[tuple[str, str], str]) -> tuple[list[Job], Shared]:
+    """The KF validation of each validated reference plan that takes part and has none stored for its producer
+    (dynamic fidelity): one job per plan, run for the first env whose reference has it, and the envs its
+    verdict is stored for (the hybrid's v1 and v2 validate v0's plan: the same check, run once)."""
+    by_check: dict[Any, list[tuple[str, str, str]]] = {}
     for env in chosen:
         bench = bench_of(env)
-        check, name = bench.validated_plan, bench.reference
-        producer = producers.get((env, name))
-        if check is not None and name in chosen[env] and store.validation(env, name, producer) is None:
-            if check not in verdicts:
-                echo(f"KF validation of {name} on {env} (dynamic fidelity) ...")
-                verdicts[check] = check(0)
-            passed, summary = verdicts[check]
-            store.set_validation(env, name, passed, summary, producer)
+        name = bench.reference
+        if bench.validated_plan is not None and name in chosen[env] and \
+                store.validation(env, name, producers[env, name]) is None:
+            by_check.setdefault(bench.validated_plan, []).append((env, name, producers[env, name]))
+    jobs: list[Job] = [("validation", chosen[env][name], 0, None, made)
+                       for (env, name, made), *_ in by_check.values()]
+    return jobs, {(envs[0][0], envs[0][1]): envs for envs in by_check.values()}
 
 
 def _selected(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
@@ -263,11 +285,11 @@ def _say_what_is_rerun(jobs: list[Job], done: set[tuple], version: str, producer
     for key in done:
         stored.setdefault(key[:5], []).append(key[5])
     stale: dict[tuple[str, str], set[str]] = {}
-    for spec, s, k, _ in jobs:
+    for _, spec, s, k, _ in jobs:
         for old in stored.get((spec.env_id, spec.name, s, k, version), ()):
             stale.setdefault((spec.env_id, spec.name), set()).add(old)
     for (env, name), old in stale.items():
-        n = sum(1 for spec, *_ in jobs if (spec.env_id, spec.name) == (env, name))
+        n = sum(1 for _, spec, *_ in jobs if (spec.env_id, spec.name) == (env, name))
         echo(f"{env_name(env)} {name}: the stored episodes were made by another producer "
              f"({_short(next(iter(old)))} -> {_short(producers[env, name])}); re-running {n} of them")
 
