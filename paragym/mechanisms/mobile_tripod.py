@@ -274,7 +274,8 @@ def eta(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_
     (:func:`k_eta`), and whether Newton's method converged (N,) (else the
     least-squares reading)."""
     units = np.ascontiguousarray(np.asarray(units, float).reshape(-1, 3, 3))
-    eta0 = np.ascontiguousarray(np.broadcast_to(np.asarray(eta0, float).reshape(-1, 3), (len(units), 3)))
+    # a writable copy: the drive simulation's k_eta takes writable guesses, and a read-only one is another compile
+    eta0 = np.array(np.broadcast_to(np.asarray(eta0, float).reshape(-1, 3), (len(units), 3)), order="C")
     out, converged = np.empty((len(units), 3)), np.empty(len(units), bool)
     _eta_all(units, eta0, kernel_consts(geometry), iterations, tol, out, converged)
     return out, converged
