@@ -36,6 +36,7 @@ import gymnasium as gym
 import numpy as np
 import yaml
 
+from paragym.baselines.actor import MlpActor, actor_from_file, actor_from_model
 from paragym.baselines.agents import identity, sha256_of_file
 from paragym.baselines.tasks import bench_of, init_defaults, random_factory
 from paragym.baselines.training import check_env_id, env_name, load_model
@@ -104,72 +105,35 @@ def register_policy(env_id: str, name: str, factory: Callable[[gym.Env, int], An
 
 
 class LearnedPolicy:
-    """A saved Stable-Baselines3 model acting deterministically.
+    """A Stable-Baselines3 policy acting deterministically: a model in memory
+    (``model``), or the actor read from a model file (``actor``:
+    :func:`paragym.baselines.actor.actor_from_file`, without PyTorch).
 
     The deterministic action of an MLP policy is a few matrix products, so
-    the layers are copied out once into numpy and evaluated there (about
-    20 us a step against about 300 us through ``model.predict``); the result
-    equals ``model.predict(obs, deterministic=True)`` to float32 rounding
-    (tested). Networks of other shapes go through ``model.predict``."""
+    it is evaluated in numpy (:class:`paragym.baselines.actor.MlpActor`:
+    about 20 us a step against about 300 us through ``model.predict``); the
+    result equals ``model.predict(obs, deterministic=True)`` to float32
+    rounding (tested). Networks of other shapes go through ``model.predict``."""
 
-    def __init__(self, model: Any) -> None:
+    def __init__(self, model: Any = None, actor: MlpActor | None = None) -> None:
+        if model is None and actor is None:
+            raise ValueError("a learned policy needs a model or an actor")
         self.model = model
-        self.layers, self.squash = _numpy_actor(model)
-        space = model.action_space
-        self.low, self.high = space.low.astype(np.float64), space.high.astype(np.float64)
+        self.actor = actor if actor is not None else actor_from_model(model)
+
+    @property
+    def layers(self) -> tuple[Any, ...] | None:
+        """The numpy actor's layers; None when the policy acts through ``model.predict``."""
+        return None if self.actor is None else self.actor.layers
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
         pass
 
     def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
-        if self.layers is None:
+        if self.actor is None:
             action, _ = self.model.predict(obs, deterministic=True)
             return action
-        x = np.asarray(obs, np.float32).reshape(-1)
-        for weight, bias, activation in self.layers:
-            x = weight @ x + bias
-            if activation is not None:
-                x = activation(x)
-        if self.squash:  # SAC/TD3: tanh-squashed to [-1, 1], then to the bounds
-            x = self.low + 0.5 * (np.tanh(x) + 1.0) * (self.high - self.low)
-        return np.clip(x, self.low, self.high).astype(np.float32)
-
-
-def _numpy_actor(model: Any) -> tuple[list[tuple[np.ndarray, np.ndarray, Any]] | None, bool]:
-    """The deterministic actor of ``model`` as (weight, bias, activation)
-    layers in numpy and whether its output is tanh-squashed; (None, False)
-    when the network is not a plain MLP on flat observations."""
-    import torch.nn as nn
-
-    acts = {nn.Tanh: np.tanh, nn.ReLU: lambda v: np.maximum(v, 0.0)}
-    policy = model.policy
-    if hasattr(policy, "mlp_extractor") and hasattr(policy, "action_net"):  # PPO/A2C
-        if type(policy.features_extractor).__name__ != "FlattenExtractor" or getattr(policy, "squash_output", False):
-            return None, False
-        modules, squash = [*policy.mlp_extractor.policy_net, policy.action_net], False
-    elif hasattr(policy, "actor") and hasattr(policy.actor, "mu"):  # SAC (latent_pi, mu) / TD3 (mu)
-        actor = policy.actor
-        if type(actor.features_extractor).__name__ != "FlattenExtractor" or getattr(actor, "use_sde", False):
-            return None, False
-        if hasattr(actor, "latent_pi"):
-            modules = [*actor.latent_pi, actor.mu]
-        else:  # TD3: mu ends in the Tanh that the squashing applies
-            modules = [*actor.mu][:-1] if isinstance([*actor.mu][-1], nn.Tanh) else None
-            if modules is None:
-                return None, False
-        squash = True
-    else:
-        return None, False
-    layers: list[list[Any]] = []
-    for m in modules:
-        if isinstance(m, nn.Linear):
-            layers.append([m.weight.detach().numpy().astype(np.float32), m.bias.detach().numpy().astype(np.float32),
-                           None])
-        elif type(m) in acts and layers and layers[-1][2] is None:
-            layers[-1][2] = acts[type(m)]
-        else:
-            return None, False
-    return [tuple(layer) for layer in layers], squash
+        return self.actor.act(obs)
 
 
 @lru_cache(maxsize=256)
@@ -188,6 +152,11 @@ def _cached_model(path: str, sha256: str) -> Any:
     return load_model(path)
 
 
+@lru_cache(maxsize=64)
+def _cached_actor(path: str, sha256: str) -> tuple[MlpActor | None, Any]:
+    return actor_from_file(path)
+
+
 @dataclass(frozen=True)
 class _LearnedFactory:
     """Loads the model once per process (picklable, for worker pools and Ray),
@@ -201,11 +170,14 @@ class _LearnedFactory:
         if not p.is_file() or _sha256(p) != self.sha256:
             raise ValueError(f"model {p} changed (or went) since the leaderboard listed it: its episodes would not "
                              f"be the model's recorded in their rows (SHA-256 {self.sha256[:12]}); run again")
-        model = _cached_model(str(p), self.sha256)
-        if model.observation_space.shape != env.observation_space.shape:
-            raise ValueError(f"model {p} expects observations of shape {model.observation_space.shape}, "
+        actor, observation = _cached_actor(str(p), self.sha256)  # an MLP acts in numpy: PyTorch is not loaded
+        policy = LearnedPolicy(actor=actor) if actor is not None else LearnedPolicy(_cached_model(str(p), self.sha256))
+        if actor is None:
+            observation = policy.model.observation_space
+        if observation.shape != env.observation_space.shape:
+            raise ValueError(f"model {p} expects observations of shape {observation.shape}, "
                              f"the env gives {env.observation_space.shape}")
-        return LearnedPolicy(model)
+        return policy
 
 
 def _learned(env_id: str, models_dir: Path | None, prefix: str, origin: str) -> dict[str, PolicySpec]:

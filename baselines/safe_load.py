@@ -36,7 +36,10 @@ made.
 from __future__ import annotations
 
 import ast
+import collections
+import io
 import json
+import pickle
 import re
 import zipfile
 from pathlib import Path
@@ -44,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["safe_custom_objects"]
+__all__ = ["read_weights", "readable_box", "readable_policy_kwargs", "safe_custom_objects"]
 
 #: entries that hold a schedule (a function of the remaining progress), whatever SB3 version wrote them
 SCHEDULES = ("lr_schedule", "learning_rate", "clip_range", "clip_range_vf", "exploration_schedule")
@@ -97,19 +100,105 @@ def _schedule(entry: dict[str, str]) -> Any:
     return FloatSchedule(ConstantSchedule(float(found[1]) if found else 0.0))
 
 
-def _policy_kwargs(entry: dict[str, str]) -> dict[str, Any]:
-    import torch.nn as nn
-
+def readable_policy_kwargs(entry: Any) -> dict[str, Any]:
+    """A model's ``policy_kwargs`` from its readable form (a plain JSON object, or the fields SB3 writes beside
+    the pickled payload): literals, and an activation function as its ``torch.nn`` class name."""
+    if not isinstance(entry, dict):
+        return {}
     out: dict[str, Any] = {}
     for key, text in entry.items():
         if key.startswith(":"):
             continue
         found = re.fullmatch(r"<class 'torch\.nn\.modules\.activation\.(\w+)'>", str(text))
         if found and found[1] in ACTIVATIONS:
-            out[key] = getattr(nn, found[1])
+            out[key] = found[1]
+        elif found:
+            raise ValueError(f"policy_kwargs[{key!r}] names activation {found[1]}, not one of {', '.join(ACTIVATIONS)}")
         else:
             out[key] = _literal(text, f"policy_kwargs[{key!r}]")
     return out
+
+
+def _policy_kwargs(entry: dict[str, str]) -> dict[str, Any]:
+    import torch.nn as nn
+
+    out = readable_policy_kwargs(entry)
+    if "activation_fn" in out:
+        out["activation_fn"] = getattr(nn, out["activation_fn"])
+    return out
+
+
+def readable_box(entry: Any, what: str) -> Any:
+    """A space of a model file's ``data`` (its readable fields) as a ``Box``."""
+    if not isinstance(entry, dict):
+        raise ValueError(f"{what} is not a space SB3 wrote")
+    return _box({k: v for k, v in entry.items() if k != ":serialized:"}, what)
+
+
+#: the storages a weights file may hold, by their torch class name
+_STORAGES = {"FloatStorage": np.dtype("<f4"), "DoubleStorage": np.dtype("<f8"), "HalfStorage": np.dtype("<f2"),
+             "LongStorage": np.dtype("<i8"), "IntStorage": np.dtype("<i4"), "BoolStorage": np.dtype("?")}
+
+
+def _rebuild_tensor(storage: np.ndarray, offset: int, size: tuple[int, ...], stride: tuple[int, ...],
+                    *_: Any) -> np.ndarray:
+    """torch._utils._rebuild_tensor_v2, in numpy: a copy of the strided view of ``storage`` (elements)."""
+    if len(size) != len(stride) or offset < 0 or any(n < 0 for n in size) or any(s < 0 for s in stride):
+        raise ValueError("a tensor in the weights has a negative offset, size or stride, or a stride per axis wrong")
+    end = offset + sum((n - 1) * s for n, s in zip(size, stride, strict=True)) + 1 if all(size) else offset
+    if end > storage.size:
+        raise ValueError("a tensor in the weights reaches past its storage")
+    item = storage.itemsize
+    return np.lib.stride_tricks.as_strided(storage[offset:], shape=tuple(size),
+                                           strides=tuple(s * item for s in stride)).copy()
+
+
+class _WeightsUnpickler(pickle.Unpickler):
+    """Unpickles a ``torch.save``'d state dict into numpy arrays, building nothing else: an ordered dict, tensors
+    (:func:`_rebuild_tensor`) and storages read from the archive; any other class is refused."""
+
+    def __init__(self, archive: zipfile.ZipFile, prefix: str, data: bytes) -> None:
+        super().__init__(io.BytesIO(data))
+        self.archive, self.prefix = archive, prefix
+
+    def find_class(self, module: str, name: str) -> Any:
+        if (module, name) == ("collections", "OrderedDict"):
+            return collections.OrderedDict
+        if (module, name) == ("torch._utils", "_rebuild_tensor_v2"):
+            return _rebuild_tensor
+        if module == "torch" and name in _STORAGES:
+            return _STORAGES[name]
+        raise ValueError(f"the weights name {module}.{name}, which is not a tensor; refusing to unpickle it")
+
+    def persistent_load(self, pid: Any) -> np.ndarray:
+        if not (isinstance(pid, tuple) and len(pid) == 5 and pid[0] == "storage" and isinstance(pid[1], np.dtype)):
+            raise ValueError(f"the weights refer to {str(pid)[:60]}, which is not a storage")
+        _, dtype, key, _, count = pid
+        raw = self.archive.read(f"{self.prefix}/data/{key}")
+        return np.frombuffer(raw, dtype=dtype, count=int(count))
+
+
+def read_weights(path: str | Path) -> dict[str, np.ndarray]:
+    """The policy's weights in the SB3 model file at ``path`` (its ``policy.pth``, a ``torch.save`` archive) as
+    numpy arrays by name, without PyTorch: the archive's pickle may only build an ordered dict of tensors."""
+    try:
+        with zipfile.ZipFile(path) as outer:
+            inner = zipfile.ZipFile(io.BytesIO(outer.read("policy.pth")))
+        pickles = [n for n in inner.namelist() if n.endswith("/data.pkl")]
+        if len(pickles) != 1:
+            raise ValueError("its policy.pth is not a torch archive")
+        prefix = pickles[0][: -len("/data.pkl")]
+        order = f"{prefix}/byteorder"  # torch writes it; files without one are little-endian
+        if order in inner.namelist() and inner.read(order).decode().strip() != "little":
+            raise ValueError("its weights are big-endian")
+        weights = _WeightsUnpickler(inner, prefix, inner.read(pickles[0])).load()
+    except (OSError, KeyError, zipfile.BadZipFile, pickle.UnpicklingError, EOFError) as exc:
+        raise ValueError(f"cannot read the weights of {path}: {type(exc).__name__}: {exc}") from exc
+    except ValueError as exc:
+        raise ValueError(f"cannot read the weights of {path}: {exc}") from exc
+    if not isinstance(weights, dict) or not all(isinstance(v, np.ndarray) for v in weights.values()):
+        raise ValueError(f"cannot read the weights of {path}: its policy.pth is not a state dict of tensors")
+    return dict(weights)
 
 
 def safe_custom_objects(path: str | Path, algorithm: type) -> dict[str, Any]:

@@ -176,3 +176,83 @@ def test_a_shipped_model_is_described_by_its_path_in_the_package():
             if spec.kind == "learned":
                 path = spec.description.rsplit(": ", 1)[1]
                 assert path.startswith("models/") and not path.startswith("/"), spec.description
+
+
+# a Python that cannot import PyTorch or Stable-Baselines3 (the main job's install has neither)
+_WITHOUT_TORCH = """
+import sys
+
+class _Refuse:
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in ("torch", "stable_baselines3", "sb3_contrib"):
+            raise ImportError(f"no {name} here")
+
+sys.meta_path.insert(0, _Refuse())
+"""
+
+
+def test_the_leaderboard_plays_the_shipped_models_without_pytorch_as_sb3_would():
+    """The leaderboard's learned policies read their actor from the model file (weights as tensors only, no
+    PyTorch): the main job needs no deep-learning install, and every action is SB3's to float32 rounding."""
+    import numpy as np
+
+    from paragym.baselines.actor import actor_from_file
+    from paragym.baselines.leaderboard.suite import episode_seed
+    from paragym.baselines.policies import LearnedPolicy
+    from paragym.rollout import run_episode
+
+    code = _WITHOUT_TORCH + (
+        "from paragym.baselines.leaderboard import evaluate_episode\n"
+        "from paragym.baselines.policies import policies_for\n"
+        f"for name in ('ppo-seed0', 'sac-seed1'):\n"
+        f"    print(repr(evaluate_episode(policies_for({HYBRID!r})[name], 0, 0).episode_return))\n"
+        "print('torch' in sys.modules, 'stable_baselines3' in sys.modules)\n")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert res.returncode == 0, res.stderr
+    *returns, imported = res.stdout.split("\n")[-4:-1]
+    assert imported == "False False"
+    import gymnasium as gym
+
+    env = gym.make(HYBRID)
+    for name, got in zip(("ppo", "sac"), returns, strict=True):  # the same episodes through SB3's model
+        path = shipped_models_dir() / "HybridSingularityFree-v0" / f"{name}_seed{0 if name == 'ppo' else 1}.zip"
+        ep = run_episode(env, LearnedPolicy(load_model(path)), seed=episode_seed(0, 0))
+        assert float(got) == ep.episode_return
+    for path in sorted(shipped_models_dir().glob("*/*_seed*.zip"))[1::4]:
+        actor, observation = actor_from_file(path)
+        model = load_model(path)
+        obs = np.random.default_rng(0).uniform(-1, 1, (20, *observation.shape)).astype(np.float32)
+        assert observation == model.observation_space
+        assert np.abs(np.array([actor.act(o) for o in obs]) - model.predict(obs, deterministic=True)[0]).max() < 1e-5
+
+
+def test_weights_that_name_anything_but_tensors_are_refused_unrun(tmp_path):
+    """A model's policy.pth is a pickle too: the torch-free reader builds tensors and nothing else."""
+    import io
+    import pickle
+
+    from paragym.baselines.actor import actor_from_file
+
+    shipped = shipped_models_dir() / "HybridSingularityFree-v0" / "ppo_seed0.zip"
+    folder = tmp_path / "mine" / "HybridSingularityFree-v0"
+    folder.mkdir(parents=True)
+    evil, marker = folder / "ppo_seed0.zip", tmp_path / "ran"
+    with zipfile.ZipFile(shipped) as zin, zipfile.ZipFile(evil, "w") as zout:
+        for item in zin.infolist():
+            payload = zin.read(item.filename)
+            if item.filename == "policy.pth":
+                buffer = io.BytesIO()
+                with zipfile.ZipFile(io.BytesIO(payload)) as inner, zipfile.ZipFile(buffer, "w") as out:
+                    for entry in inner.infolist():
+                        body = inner.read(entry.filename)
+                        if entry.filename.endswith("/data.pkl"):
+                            body = pickle.dumps({"action_net.weight": _Touch(str(marker))}, protocol=2)
+                        out.writestr(entry, body)
+                payload = buffer.getvalue()
+            zout.writestr(item, payload)
+    with pytest.raises(ValueError, match="not a tensor"):
+        actor_from_file(evil)
+    spec = policies_for(HYBRID, tmp_path / "mine")["user-ppo-seed0"]
+    with pytest.raises(ValueError, match="not a tensor"):
+        evaluate_episode(spec, 0, 0)
+    assert not marker.exists()

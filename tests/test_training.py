@@ -69,6 +69,12 @@ def test_numpy_inference_equals_predict(tmp_path, algo):
     ours = np.array([policy.act(o, {}) for o in obs])
     theirs = np.array([model.predict(o, deterministic=True)[0] for o in obs])
     assert np.abs(ours - theirs).max() < 1e-5
+    from paragym.baselines.actor import actor_from_file  # the leaderboard's way, without PyTorch: the same actor
+
+    actor, observation = actor_from_file(res.files.model)
+    assert observation == model.observation_space and actor.squash == policy.actor.squash
+    for (w, b, f), (w2, b2, f2) in zip(actor.layers, policy.layers, strict=True):
+        assert np.array_equal(w, w2) and np.array_equal(b, b2) and f is f2
 
 
 class _Interrupt(BaseCallback):

@@ -66,16 +66,14 @@ def _init_worker(parent: int) -> None:
     inherits the parent's Python handlers (the CLI's turn both into KeyboardInterrupt), and a worker that catches
     one as its job's error goes on with the next queued episode instead of stopping."""
     import signal
+    import sys
 
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # a Ctrl-C reaches the whole process group: the parent stops us
     die_with_parent(parent)
-    try:
-        import torch
-
+    torch = sys.modules.get("torch")  # not imported for it: shipped (MLP) models act in numpy without PyTorch
+    if torch is not None:
         torch.set_num_threads(1)
-    except ImportError:
-        pass
 
 
 def _evaluate_by_name(kind: str, env_id: str, name: str, models_dir: str | None, a: Any, b: Any, made: str) -> Row:
