@@ -226,7 +226,8 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
             self.scene: CaPaManScene | CaPaManDynamicScene | None = None
             self.world = GridWorld(1, geometry, clearance_cap)
         elif fidelity == "kinematic":
-            self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap)
+            self.scene = CaPaManScene(geometry, gui=render_mode == "human", clearance_cap=clearance_cap,
+                                      draws=render_mode is not None)
             self.world = SceneWorld(self.scene)
         else:
             check_control_period(self.control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
@@ -243,11 +244,11 @@ class CaPaManCollisionFreeEnv(_CaPaManTask, ParagymEnv):
         collisions; a second, kinematic one in dynamic fidelity)."""
         if self.scene is None:
             self.scene = CaPaManScene(self.geometry, gui=self.render_mode == "human",
-                                      clearance_cap=self.params.clearance_cap)
+                                      clearance_cap=self.params.clearance_cap, draws=self.render_mode is not None)
         if isinstance(self.scene, CaPaManScene):
             return self.scene
         if self._scenario_scene is None:
-            self._scenario_scene = CaPaManScene(self.geometry, clearance_cap=self.scene.clearance_cap)
+            self._scenario_scene = CaPaManScene(self.geometry, clearance_cap=self.scene.clearance_cap, draws=False)
         return self._scenario_scene
 
     def _info(self) -> dict[str, Any]:
@@ -381,7 +382,8 @@ class CaPaManCollisionFreeVectorEnv(_CaPaManTask, ParagymVectorEnv):
     def _checker(self) -> CaPaManScene:
         """The kinematic scene that checks every robot's scenario and draws robot ``render_index``."""
         if self._scene is None:
-            self._scene = CaPaManScene(self.geometry, clearance_cap=self.params.clearance_cap)
+            self._scene = CaPaManScene(self.geometry, clearance_cap=self.params.clearance_cap,
+                                       draws=self.render_mode is not None)
         return self._scene
 
     def render(self) -> np.ndarray | None:

@@ -311,7 +311,7 @@ class RrtGaPlanner:
     def scene(self) -> CaPaManScene:
         """The planner's own PyBullet scene for the final check (made on first use)."""
         if self._scene is None:
-            self._scene = CaPaManScene(self.geometry)
+            self._scene = CaPaManScene(self.geometry, draws=False)  # checks, never drawn
         return self._scene
 
     def close(self) -> None:

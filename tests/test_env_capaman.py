@@ -199,3 +199,26 @@ def test_dynamic_fidelity_passes_the_checker_and_tours_the_paper_scenario():
     a = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)
     b = _rollout(gym.make(ENV_ID, scenario="paper", fidelity="dynamic"), 3, 40)
     np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("env_id", ["paragym/CaPaManCollisionFree-v0", "paragym/CaPaManCollisionFree-v1"])
+def test_an_env_never_drawn_builds_no_visual_shapes_and_plays_as_a_drawn_one(env_id, monkeypatch):
+    """Without a render mode, the scene that checks the scenarios builds collision shapes only (the obstacles
+    at every reset took twice as long with their visual shapes); scenarios and episodes stay the same."""
+    from paragym.sim import client
+
+    made = []
+    real = client.pb.createVisualShape
+    monkeypatch.setattr(client.pb, "createVisualShape", lambda *a, **k: made.append(1) or real(*a, **k))
+    plain = gym.make(env_id)
+    runs = [run_episode(plain, GridPathPolicy(), seed=seed) for seed in range(3)]
+    assert not made
+    drawn = gym.make(env_id, render_mode="rgb_array")
+    for seed, a in enumerate(runs):
+        b = run_episode(drawn, GridPathPolicy(), seed=seed)
+        assert a.infos[0]["scenario"] == b.infos[0]["scenario"]
+        np.testing.assert_array_equal(a.observations, b.observations)
+        assert a.episode_return == b.episode_return
+    assert made and drawn.render().std() > 0
+    plain.close()
+    drawn.close()

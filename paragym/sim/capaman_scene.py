@@ -81,15 +81,17 @@ class CaPaManScene:
         geometry: the mechanism's dimensions.
         gui: open the PyBullet GUI.
         clearance_cap: distances beyond this (m) are reported as the cap.
+        draws: build visual shapes (False: a scene that is never drawn, such as a checker of scenarios,
+            builds its obstacles at every reset in about half the time; :class:`~paragym.sim.client.PyBulletSim`).
     """
 
     ROBOT = "capaman"
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                 gui: bool = False, clearance_cap: float = 0.05) -> None:
+                 gui: bool = False, clearance_cap: float = 0.05, draws: bool = True) -> None:
         self.geometry = geometry
         self.clearance_cap = clearance_cap
-        self.sim = PyBulletSim(gui=gui)
+        self.sim = PyBulletSim(gui=gui, draws=draws)
         g = geometry
         base = Cylinder(center=(0.0, 0.0, -0.005), radius=g.r_f + g.c / 2 + 0.03, height=0.01)
         self.sim.add_static("fixed_plate", base, rgba=(0.6, 0.6, 0.6, 1.0))
