@@ -108,8 +108,8 @@ def actor_from_model(model: Any) -> MlpActor | None:
     policy = model.policy
     extractor = getattr(policy, "features_extractor", None) or getattr(getattr(policy, "actor", None),
                                                                          "features_extractor", None)
-    if type(extractor).__name__ != "FlattenExtractor" or getattr(policy, "use_sde", False) or \
-            getattr(policy, "squash_output", False) and hasattr(policy, "action_net"):
+    squashed_gaussian = getattr(policy, "squash_output", False) and hasattr(policy, "action_net")
+    if type(extractor).__name__ != "FlattenExtractor" or getattr(policy, "use_sde", False) or squashed_gaussian:
         return None
     activation = getattr(policy, "activation_fn", None) or getattr(policy, "net_args", {}).get("activation_fn")
     weights = {k: v.detach().cpu().numpy() for k, v in policy.state_dict().items()}

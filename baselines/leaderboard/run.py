@@ -194,6 +194,10 @@ def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], 
                       if (job[1].env_id, job[1].name, job[2], job[3], store.version, job[4]) not in done]), len(wanted)
 
 
+#: a validation job's (env, reference) -> every (env, reference, producer) its verdict is stored for
+Shared = dict[tuple[str, str], list[tuple[str, str, str]]]
+
+
 def _execute(store: ResultStore, jobs: list[Job], shared: Shared, executor: str, workers: int,
              ray_address: str | None, models: Path | None, progress: bool,
              on_row: Callable[[EpisodeRow], None] | None) -> None:
@@ -219,7 +223,7 @@ def _execute(store: ResultStore, jobs: list[Job], shared: Shared, executor: str,
         raise LeaderboardInterrupted(saved, len(jobs), store.path) from None
 
 
-def _store(store: ResultStore, row: Row, shared: dict[tuple[str, str], list[tuple[str, str, str]]]) -> None:
+def _store(store: ResultStore, row: Row, shared: Shared) -> None:
     if isinstance(row, EpisodeRow):
         store.add(row)
     elif isinstance(row, DynamicRow):
@@ -227,10 +231,6 @@ def _store(store: ResultStore, row: Row, shared: dict[tuple[str, str], list[tupl
     else:
         for env, name, producer in shared[row.env, row.policy]:
             store.set_validation(env, name, row.passed, row.summary, producer)
-
-
-#: a validation job's (env, reference) -> every (env, reference, producer) its verdict is stored for
-Shared = dict[tuple[str, str], list[tuple[str, str, str]]]
 
 
 def _plan_validations(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]],
