@@ -79,9 +79,13 @@ def _numbers(text: Any, dtype: np.dtype, size: int, what: str) -> np.ndarray:
     return values
 
 
-def _box(entry: dict[str, str], what: str) -> Any:
+def readable_box(entry: Any, what: str) -> Any:
+    """A space of a model file's ``data`` entry, rebuilt as a ``Box`` from its readable fields (shape, dtype,
+    bounds), never from its pickled payload."""
     from gymnasium import spaces
 
+    if not isinstance(entry, dict):
+        raise ValueError(f"{what} is not a space SB3 wrote")
     kind = entry.get(":type:", "")
     if not kind.endswith("spaces.box.Box'>"):
         raise ValueError(f"{what} is a {kind or 'space of unknown type'}; only Box spaces load without unpickling")
@@ -126,13 +130,6 @@ def _policy_kwargs(entry: dict[str, str]) -> dict[str, Any]:
     if "activation_fn" in out:
         out["activation_fn"] = getattr(nn, out["activation_fn"])
     return out
-
-
-def readable_box(entry: Any, what: str) -> Any:
-    """A space of a model file's ``data`` (its readable fields) as a ``Box``."""
-    if not isinstance(entry, dict):
-        raise ValueError(f"{what} is not a space SB3 wrote")
-    return _box({k: v for k, v in entry.items() if k != ":serialized:"}, what)
 
 
 #: the storages a weights file may hold, by their torch class name
@@ -215,7 +212,7 @@ def safe_custom_objects(path: str | Path, algorithm: type) -> dict[str, Any]:
             continue
         readable = {k: v for k, v in entry.items() if k != ":serialized:"}
         if key in ("observation_space", "action_space"):
-            out[key] = _box(readable, key)
+            out[key] = readable_box(entry, key)
         elif key == "policy_class":
             out[key] = algorithm.policy_aliases["MlpPolicy"]
         elif key == "policy_kwargs":
@@ -224,8 +221,7 @@ def safe_custom_objects(path: str | Path, algorithm: type) -> dict[str, Any]:
             out[key] = (1, "step")
         elif key == "target_entropy":  # TQC keeps a numpy scalar; only training reads it: its "auto" value
             action = data.get("action_space")
-            shape = _box({k: v for k, v in action.items() if k != ":serialized:"}, "action_space").shape \
-                if isinstance(action, dict) else (1,)
+            shape = readable_box(action, "action_space").shape if isinstance(action, dict) else (1,)
             out[key] = -float(np.prod(shape))
         elif "Schedule" in readable.get(":type:", "") or key in SCHEDULES:
             out[key] = _schedule(readable)
