@@ -412,8 +412,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("leaderboard", help="evaluate every env x every policy on fixed seeds; resumable; writes "
                                            "LEADERBOARD.md, a CSV and a PNG per env")
     p.add_argument("--quick", action="store_true",
-                   help="1 seed x 3 episodes instead of 5 x 10, and the paper case in dynamic fidelity for the "
-                        "references and learned seed 0 instead of 3 episodes for every policy (about 65 s on 2 "
+                   help="1 seed x 3 episodes instead of 5 x 10, and the paper case in dynamic fidelity on each task's "
+                        "newest id for the references and learned seed 0 instead of 3 episodes for every policy (about 65 s on 2 "
                         "cores; 85-110 s the first time, when the kernels compile)")
     p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
     p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")

@@ -258,6 +258,18 @@ def test_the_quick_suite_runs_the_dynamic_episodes_of_the_references_and_seed_0(
     assert not chosen & {"zero", "random", "ppo-seed1", "dagger-seed2"}
 
 
+def test_the_quick_suite_runs_the_dynamic_episodes_on_each_tasks_newest_id_only():
+    """The older ids' dynamic episodes took 96 of the quick run's 131 CPU-seconds of physics from a cold cache;
+    the full suite keeps them."""
+    from paragym.baselines.leaderboard import FULL, QUICK
+
+    for env in paragym.ENVIRONMENTS:
+        specs = policies_for(env).values()
+        quick = any(QUICK.runs_dynamic(s) for s in specs)
+        assert quick == (env in registry.newest()), env
+        assert all(FULL.runs_dynamic(s) for s in specs)
+
+
 def test_the_workers_start_on_different_tasks():
     """Jobs go a task at a time in turn, each task's own order kept: from a cold numba cache two workers compile
     two tasks' kernels side by side (the main job's first run took 20 s longer with both on the same task)."""
@@ -306,3 +318,14 @@ def test_a_validation_is_stored_for_every_env_that_validates_the_same_plan(tmp_p
         assert store.validation(HYBRID, "polynomial-detour", "a") == {"passed": True, "text": "fine"}
         assert store.validation("paragym/HybridSingularityFree-v1", "polynomial-detour", "b")["passed"]
         assert store.validation(HYBRID, "polynomial-detour", "b") is None
+
+
+def test_a_quick_table_of_an_older_id_says_where_its_dynamic_episodes_are():
+    from paragym.baselines.leaderboard import FULL, QUICK, markdown
+
+    rows = [EpisodeRow("paragym/Orthoglide2PRRKappa-v0", "zero", 0, k, "floor", 0.0, 10, False,
+                       {"mean_kappa": 3.0, "max_kappa": 4.0, "tracking_error_mm": 0.0, "max_tracking_error_mm": 0.0,
+                        "path_completed": 1.0}, 0.1) for k in range(3)]
+    quick = markdown(summarise(rows), QUICK, {}, "# header")
+    assert "runs the dynamic episodes on each task's newest id (`paragym/Orthoglide2PRRKappa-v1`)" in quick
+    assert "newest id" not in markdown(summarise(rows), FULL, {}, "# header")

@@ -112,7 +112,8 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
         shared: Shared = {}
         if validate and suite.dynamic:
             dynamic_jobs, dynamic_total = _plan_dynamic(store, chosen, suite, producers)
-            who = "" if suite.dynamic_all else ": the references, the other methods, each learned algorithm's seed 0"
+            who = "" if suite.dynamic_all else (": on each task's newest id, the references, the other methods, each "
+                                                "learned algorithm's seed 0")
             echo(f"dynamic fidelity: {len(dynamic_jobs)} episodes to run ({len(suite.dynamic)} per policy{who}; "
                  f"each with the KF validation of what it executed)")
         if validate:

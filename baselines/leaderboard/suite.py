@@ -6,6 +6,7 @@ import json
 from dataclasses import dataclass
 from typing import Any
 
+from paragym import registry
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.tasks import bench_of
 
@@ -17,20 +18,27 @@ class EvalSuite:
     """Which episodes are evaluated: ``episodes`` per evaluation seed, and
     ``dynamic``: the episodes each policy also runs in the dynamic fidelity,
     as (scenario, reset seed), "paper" being each env's paper case
-    (:data:`PAPER_SCENARIO`); ``dynamic_all``: whether every policy runs them
-    (the quick suite leaves out the floors and the learned seeds other than
-    0, to stay under two minutes)."""
+    (:data:`PAPER_SCENARIO`); ``dynamic_all``: whether every policy of every
+    id runs them (the quick suite runs them on each task's newest id only,
+    and there leaves out the floors and the learned seeds other than 0, to
+    stay near two minutes from a fresh clone)."""
 
     name: str
     seeds: tuple[int, ...]
     episodes: int
     dynamic: tuple[tuple[str, int], ...] = ()
-    dynamic_all: bool = True  # every policy runs the dynamic episodes (else: no floors, learned seed 0 only)
+    dynamic_all: bool = True  # every policy runs the dynamic episodes (else: newest ids, no floors, seed 0 only)
+
+    def runs_dynamic_on(self, env_id: str) -> bool:
+        """Whether this suite runs dynamic episodes on ``env_id`` (if its task has a dynamic fidelity)."""
+        return bool(self.dynamic) and (self.dynamic_all or env_id in registry.newest())
 
     def runs_dynamic(self, spec: PolicySpec) -> bool:
         """Whether ``spec`` runs the dynamic episodes in this suite."""
         if self.dynamic_all:
             return True
+        if not self.runs_dynamic_on(spec.env_id):
+            return False
         return spec.kind != "floor" and not (spec.kind == "learned" and not spec.name.endswith("seed0"))
 
     def keys(self) -> list[tuple[int, int]]:
