@@ -4,9 +4,10 @@ SB3's ``VecEnv`` resets a finished sub-environment within the same step and
 hands the last observation over in ``infos[i]["terminal_observation"]``
 (with ``infos[i]["TimeLimit.truncated"]`` for a time limit); paragym's
 native vector envs follow gymnasium 1.x's NEXT_STEP autoreset. The adapter
-steps the native env, then resets the robots that finished at once
-(:meth:`ParagymVectorEnv.reset_done`), so SB3 sees exactly its own contract
-while all robots still step in one numpy call.
+steps the env's SAME_STEP view (:class:`paragym.envs.vector.SameStepVectorEnv`,
+which resets the robots that finished at once) and hands its ``final_obs`` on
+as SB3's ``terminal_observation``, so SB3 sees exactly its own contract while
+all robots still step in one numpy call.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import gymnasium as gym
 import numpy as np
 from stable_baselines3.common.vec_env.base_vec_env import VecEnv, VecEnvIndices, VecEnvStepReturn
 
-from paragym.envs.vector import ParagymVectorEnv
+from paragym.envs.vector import ParagymVectorEnv, SameStepVectorEnv
 
 __all__ = ["ParagymSB3VecEnv", "as_sb3_vecenv"]
 
@@ -28,6 +29,7 @@ class ParagymSB3VecEnv(VecEnv):
 
     def __init__(self, venv: ParagymVectorEnv) -> None:
         self.venv = venv
+        self._same = SameStepVectorEnv(venv)
         super().__init__(venv.num_envs, venv.single_observation_space, venv.single_action_space)
         self._actions: np.ndarray | None = None
         self._first_reset = True
@@ -43,19 +45,16 @@ class ParagymSB3VecEnv(VecEnv):
         self._actions = np.asarray(actions)
 
     def step_wait(self) -> VecEnvStepReturn:
-        obs, rewards, terminated, truncated, info = self.venv.step(self._actions)
+        obs, rewards, terminated, truncated, info = self._same.step(self._actions)
         dones = terminated | truncated
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
         if dones.any():
-            rows, first = self.venv.reset_done()
-            success = info.get("is_success")
-            for i in rows:
-                infos[i]["terminal_observation"] = obs[i].copy()
+            success = info["final_info"].get("is_success")
+            for i in np.flatnonzero(dones):
+                infos[i]["terminal_observation"] = info["final_obs"][i]
                 infos[i]["TimeLimit.truncated"] = bool(truncated[i] and not terminated[i])
                 if success is not None:  # what SB3's EvalCallback reads of a finished episode
                     infos[i]["is_success"] = bool(success[i])
-            obs = obs.copy()
-            obs[rows] = first
         return obs, rewards.astype(np.float32), dones, infos
 
     def close(self) -> None:

@@ -13,6 +13,9 @@ Autoreset: gymnasium 1.x's ``NEXT_STEP`` mode, as ``SyncVectorEnv``: the step
 after a robot's episode ends resets that robot (its action is ignored; its
 reward is 0 and its termination and truncation flags are False). The time
 limit of the registration (``max_episode_steps``) truncates as ``TimeLimit``.
+:class:`SameStepVectorEnv` gives the ``SAME_STEP`` view of the same env, which
+Stable-Baselines3 (:mod:`paragym.baselines.sb3_vec`) and TorchRL's
+``GymWrapper`` expect.
 
 The single env and the vector env of a task are shells over one
 transition, written once over N robots (``paragym.tasks.*_step``): the
@@ -36,7 +39,7 @@ from gymnasium.vector.utils import batch_space
 
 from paragym.envs.base import check_action, check_options, check_seed
 
-__all__ = ["ParagymVectorEnv"]
+__all__ = ["ParagymVectorEnv", "SameStepVectorEnv"]
 
 
 class ParagymVectorEnv(VectorEnv):
@@ -179,3 +182,60 @@ class ParagymVectorEnv(VectorEnv):
 
     def _load_single(self, i: int) -> None:
         raise NotImplementedError
+
+
+class SameStepVectorEnv(VectorEnv):
+    """A native vector env in gymnasium's ``SAME_STEP`` autoreset mode: a robot
+    whose episode ends is reset within the same step (by
+    :meth:`ParagymVectorEnv.reset_done`), so the step returns its first
+    observation of the next episode. As gymnasium's ``SyncVectorEnv`` in that
+    mode, the info then holds ``final_obs`` (an object array: the last
+    observation of each robot that finished, None for the others) and
+    ``final_info`` (the info of that last step), each with its ``_``-prefixed
+    mask, and, for the robots reset, their reset info. All robots still step in
+    one call of the native env.
+
+    ``venv``: a :class:`ParagymVectorEnv`, or what ``gymnasium.make_vec(ID,
+    num_envs=N, vectorization_mode="vector_entry_point")`` returns.
+    """
+
+    metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.SAME_STEP, "render_modes": ["rgb_array"]}
+
+    def __init__(self, venv: VectorEnv) -> None:
+        native = getattr(venv, "unwrapped", venv)
+        if not isinstance(native, ParagymVectorEnv):
+            raise TypeError(f"venv must be a paragym native vector env; got {type(native).__name__}")
+        self.venv = native
+        self.num_envs = native.num_envs
+        self.render_mode = native.render_mode
+        self.single_observation_space = native.single_observation_space
+        self.single_action_space = native.single_action_space
+        self.observation_space = native.observation_space
+        self.action_space = native.action_space
+
+    @property
+    def autoreset_mode(self) -> AutoresetMode:
+        return AutoresetMode.SAME_STEP
+
+    def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        """As :meth:`ParagymVectorEnv.reset`."""
+        return self.venv.reset(seed=seed, options=options)
+
+    def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.venv.step(actions)
+        done = terminated | truncated
+        if not done.any():
+            return obs, reward, terminated, truncated, info
+        rows, first = self.venv.reset_done()
+        final = np.full(self.num_envs, None, dtype=object)
+        final[rows] = list(obs[rows])
+        obs[rows] = first
+        return obs, reward, terminated, truncated, {**self.venv._infos(), "final_obs": final, "_final_obs": done,
+                                                    "final_info": info, "_final_info": done}
+
+    def render(self) -> np.ndarray | None:
+        return self.venv.render()
+
+    def close(self, **kwargs: Any) -> None:
+        self.venv.close(**kwargs)

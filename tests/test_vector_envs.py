@@ -67,6 +67,38 @@ def test_autoreset_is_next_step():
     assert np.allclose(obs[:, 0], 0.01)
 
 
+def test_the_same_step_view_equals_gymnasiums_same_step_sync_env(env_id="paragym/HybridSingularityFree-v2",
+                                                                   steps=230):
+    """:class:`SameStepVectorEnv` (what SB3's adapter and TorchRL step) against gymnasium's own ``SyncVectorEnv`` in
+    ``SAME_STEP`` mode over single envs: the observations, rewards, ends, last observations and infos."""
+    from paragym.envs.vector import SameStepVectorEnv
+
+    same = SameStepVectorEnv(gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point"))
+    sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync",
+                        vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
+    assert same.metadata["autoreset_mode"] == sync.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
+    np.testing.assert_allclose(same.reset(seed=5)[0], sync.reset(seed=5)[0], rtol=0, atol=1e-9)
+    rng = np.random.default_rng(2)
+    ended = 0
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, same.action_space.shape).astype(np.float32)
+        a, b = same.step(actions), sync.step(actions)
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=0, atol=1e-9)
+        done = a[2] | a[3]
+        assert ("final_obs" in a[4]) == ("final_obs" in b[4]) == bool(done.any())
+        if done.any():
+            np.testing.assert_array_equal(a[4]["_final_obs"], b[4]["_final_obs"])
+            for i in np.flatnonzero(done):
+                np.testing.assert_allclose(a[4]["final_obs"][i], b[4]["final_obs"][i], rtol=0, atol=1e-9)
+                assert bool(a[4]["final_info"]["is_success"][i]) == bool(b[4]["final_info"]["is_success"][i])
+            ended += int(done.sum())
+        assert bool(a[4]["is_success"].any()) == bool(b[4]["is_success"].any())  # reset robots: their reset info
+    assert ended >= 3
+    same.close()
+    sync.close()
+
+
 @pytest.mark.parametrize("env_id", list(paragym.ENVIRONMENTS))
 def test_make_vec_works_for_every_id(env_id):
     for mode in ("sync", "async"):
