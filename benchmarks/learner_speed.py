@@ -14,7 +14,16 @@ the share of the time in the updates (``model.train``).
 Learners (each measured only when installed):
 
 * ``sb3``: Stable-Baselines3's PyTorch PPO, ``torch.set_num_threads(--threads)``;
-* ``sbx``: SBX (``sbx-rl``), Stable-Baselines3's API on JAX/Flax, on JAX's CPU backend.
+* ``sbx``: SBX (``sbx-rl``), Stable-Baselines3's API on JAX/Flax, on JAX's CPU backend;
+* ``torchrl``: TorchRL's PPO parts (``Collector``, ``GAE``, ``ClipPPOLoss``, a replay buffer sampled
+  without replacement) in the loop of its PPO tutorial, on the native env's SAME_STEP view
+  (:class:`paragym.envs.vector.SameStepVectorEnv`, which SB3's adapter also steps) through
+  ``GymWrapper``, which takes gymnasium vector envs with same-step autoreset only; a Gaussian
+  policy with a state-independent scale, SB3's loss weights (value 0.5, gradients clipped at 0.5) and
+  Adam's epsilon 1e-5.
+
+PufferLib is not measured: 3.0.0 is a source package whose build downloads raylib from the internet, and
+2.0.2, the newest wheel, pins numpy 1.23 and gymnasium <= 0.29 and does not ship its PPO trainer.
 
     python benchmarks/learner_speed.py [--env ID ...] [--robots 64] [--timesteps 32768]
 """
@@ -27,11 +36,13 @@ import time
 import warnings
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 import paragym
 from paragym.baselines.sb3_vec import as_sb3_vecenv
 from paragym.baselines.training import console_logger, load_hyperparams
+from paragym.envs.vector import SameStepVectorEnv
 from paragym.registry import check_env_id, newest
 
 #: the settings every learner gets from an env's PPO row
@@ -63,6 +74,73 @@ def learner(name: str, threads: int) -> Any:
 
         return PPO
     raise ValueError(f"learner must be sb3 or sbx; got {name!r}")
+
+
+def torchrl_steps_per_second(env_id: str, robots: int, timesteps: int, threads: int
+                             ) -> tuple[float, float, float] | None:
+    """:func:`steps_per_second` for TorchRL's PPO (module docstring); None when TorchRL is not installed."""
+    if importlib.util.find_spec("torchrl") is None:
+        return None
+    import torch
+    from tensordict.nn import AddStateIndependentNormalScale, TensorDictModule
+    from torchrl.collectors import Collector
+    from torchrl.data import LazyTensorStorage, ReplayBuffer, SamplerWithoutReplacement
+    from torchrl.envs.libs.gym import GymWrapper
+    from torchrl.modules import MLP, IndependentNormal, ProbabilisticActor, ValueOperator
+    from torchrl.objectives import ClipPPOLoss
+    from torchrl.objectives.value import GAE
+
+    torch.set_num_threads(threads)
+    torch.manual_seed(0)
+    kw = settings(env_id, robots)
+    arch = kw["policy_kwargs"]["net_arch"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = GymWrapper(SameStepVectorEnv(gym.make_vec(env_id, num_envs=robots,
+                                                        vectorization_mode="vector_entry_point")))
+        n_obs, n_act = env.observation_spec["observation"].shape[-1], env.action_spec.shape[-1]
+        actor = ProbabilisticActor(
+            TensorDictModule(torch.nn.Sequential(MLP(n_obs, n_act, num_cells=arch, activation_class=torch.nn.Tanh),
+                                                 AddStateIndependentNormalScale(n_act)),
+                             in_keys=["observation"], out_keys=["loc", "scale"]),
+            in_keys=["loc", "scale"], spec=env.action_spec, distribution_class=IndependentNormal,
+            return_log_prob=True)
+        critic = ValueOperator(MLP(n_obs, 1, num_cells=arch, activation_class=torch.nn.Tanh), in_keys=["observation"])
+        rollout = robots * int(kw["n_steps"])
+        total = rollout * (1 + -(-max(timesteps, rollout) // rollout))
+        collector = Collector(env, actor, frames_per_batch=rollout, total_frames=total)
+        gae = GAE(gamma=kw["gamma"], lmbda=kw["gae_lambda"], value_network=critic, average_gae=False)
+        loss = ClipPPOLoss(actor, critic, clip_epsilon=kw["clip_range"], entropy_coeff=kw.get("ent_coef", 0.0),
+                           critic_coeff=0.5, loss_critic_type="l2", normalize_advantage=True)
+        optim = torch.optim.Adam(loss.parameters(), lr=kw["learning_rate"], eps=1e-5)
+        buffer = ReplayBuffer(storage=LazyTensorStorage(rollout), sampler=SamplerWithoutReplacement(),
+                              batch_size=kw["batch_size"])
+        clock = {"train": 0.0, "collect": 0.0}
+        steps, t0, mark = 0, 0.0, time.perf_counter()
+        for batch, data in enumerate(collector):
+            now = time.perf_counter()
+            clock["collect"] += now - mark
+            with torch.no_grad():
+                gae(data)
+            buffer.extend(data.reshape(-1))
+            for _ in range(int(kw["n_epochs"])):
+                for _ in range(rollout // kw["batch_size"]):
+                    out = loss(buffer.sample())
+                    (out["loss_objective"] + out["loss_critic"] + out.get("loss_entropy", 0.0)).backward()
+                    torch.nn.utils.clip_grad_norm_(loss.parameters(), 0.5)
+                    optim.step()
+                    optim.zero_grad()
+            collector.update_policy_weights_()
+            mark = time.perf_counter()
+            clock["train"] += mark - now
+            if batch == 0:  # the first rollout and its update were the warm-up: the clock starts now
+                t0, clock = mark, {"train": 0.0, "collect": 0.0}
+            else:
+                steps += rollout
+        seconds = mark - t0
+        collector.shutdown()
+    env.close()
+    return steps / seconds, clock["train"] / seconds, steps / clock["collect"]
 
 
 def _timed(model: Any, name: str, clock: dict[str, float]) -> None:
@@ -107,21 +185,26 @@ def main() -> None:
     parser.add_argument("--robots", type=int, default=64, help="N robots of the native env (default %(default)s)")
     parser.add_argument("--timesteps", type=int, default=32_768, help="timed steps per learner (default %(default)s)")
     parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads (default %(default)s)")
-    parser.add_argument("--learner", action="append", choices=("sb3", "sbx"), help="only these (repeatable)")
+    parser.add_argument("--learner", action="append", choices=("sb3", "sbx", "torchrl"),
+                        help="only these (repeatable)")
     args = parser.parse_args()
     ids = [check_env_id(e) for e in args.env] if args.env else [e for e in newest() if e in paragym.VECTOR_ENTRY_POINTS]
-    names = args.learner or ["sb3", "sbx"]
+    names = args.learner or ["sb3", "sbx", "torchrl"]
     rows = []
     for env_id in ids:
         rates: dict[str, float | None] = {}
         shares: dict[str, float] = {}
         for name in names:
-            cls = learner(name, args.threads)
-            if cls is None:
+            if name == "torchrl":
+                measured = torchrl_steps_per_second(env_id, args.robots, args.timesteps, args.threads)
+            else:
+                cls = learner(name, args.threads)
+                measured = None if cls is None else steps_per_second(cls, env_id, args.robots, args.timesteps)
+            if measured is None:
                 rates[name] = None
                 print(f"{env_id} {name}: not installed", flush=True)
                 continue
-            rates[name], shares[name], _ = steps_per_second(cls, env_id, args.robots, args.timesteps)
+            rates[name], shares[name], _ = measured
             print(f"{env_id} {name}: {rates[name]:,.0f} steps/s, {100 * shares[name]:.0f} % of it in the updates",
                   flush=True)
         rows.append((env_id, rates, shares))

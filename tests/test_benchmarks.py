@@ -65,7 +65,7 @@ def test_learner_speed_prints_each_learner_beside_sb3():
     out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512")
     (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("Orthoglide2PRRKappa-v1 ")]
     assert float(row[1].replace(",", "")) > 0 and row[2] == "1.0" and row[3].endswith("%")  # sb3, x sb3, update
-    assert len(row) == 7  # and sbx's three cells ('-' when sbx-rl is not installed)
+    assert len(row) == 10  # and sbx's and torchrl's three cells each ('-' when not installed)
 
 
 def test_speed_tiers_prints_the_three_tiers_beside_the_anchor():
