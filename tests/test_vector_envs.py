@@ -29,20 +29,26 @@ def _pair(env_id: str, n: int, **kwargs):
     return native, sync
 
 
+def _side_by_side(one, other, steps: int, seed: int, actions_seed: int):
+    """Reset both vector envs with ``seed`` and step them with the same random actions, checking that the
+    observations (first the reset's), rewards, terminations and truncations agree to 1e-9; yields each step's
+    pair of results."""
+    np.testing.assert_allclose(one.reset(seed=seed)[0], other.reset(seed=seed)[0], rtol=0, atol=1e-9)
+    rng = np.random.default_rng(actions_seed)
+    for _ in range(steps):
+        actions = rng.uniform(-1, 1, one.action_space.shape).astype(np.float32)
+        a, b = one.step(actions), other.step(actions)
+        for x, y in zip(a[:4], b[:4], strict=True):
+            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=0, atol=1e-9)
+        yield a, b
+
+
 @pytest.mark.parametrize(("env_id", "kwargs", "steps"), CASES, ids=lambda v: str(v)[-40:])
 def test_native_equals_single_over_full_episodes(env_id, kwargs, steps):
     n = 2 if "CaPaMan" in env_id else 3  # the single env's grid check is slow (the reference, not the product)
     native, sync = _pair(env_id, n, **kwargs)
-    obs_n, _ = native.reset(seed=11)
-    obs_s, _ = sync.reset(seed=11)
-    np.testing.assert_allclose(obs_n, obs_s, rtol=0, atol=1e-9)
-    rng = np.random.default_rng(3)
     ended = 0
-    for _ in range(steps):
-        actions = rng.uniform(-1, 1, native.action_space.shape).astype(np.float32)
-        a, b = native.step(actions), sync.step(actions)
-        for x, y in zip(a[:4], b[:4], strict=True):
-            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=0, atol=1e-9)
+    for a, _ in _side_by_side(native, sync, steps, seed=11, actions_seed=3):
         ended += int(np.sum(a[2] | a[3]))
     assert ended >= (2 if "CaPaMan" in env_id else 6)  # autoresets on the way
     native.close()
@@ -77,14 +83,8 @@ def test_the_same_step_view_equals_gymnasiums_same_step_sync_env(env_id="paragym
     sync = gym.make_vec(env_id, num_envs=3, vectorization_mode="sync",
                         vector_kwargs={"autoreset_mode": gym.vector.AutoresetMode.SAME_STEP})
     assert same.metadata["autoreset_mode"] == sync.metadata["autoreset_mode"] == gym.vector.AutoresetMode.SAME_STEP
-    np.testing.assert_allclose(same.reset(seed=5)[0], sync.reset(seed=5)[0], rtol=0, atol=1e-9)
-    rng = np.random.default_rng(2)
     ended = 0
-    for _ in range(steps):
-        actions = rng.uniform(-1, 1, same.action_space.shape).astype(np.float32)
-        a, b = same.step(actions), sync.step(actions)
-        for x, y in zip(a[:4], b[:4], strict=True):
-            np.testing.assert_allclose(np.asarray(x, float), np.asarray(y, float), rtol=0, atol=1e-9)
+    for a, b in _side_by_side(same, sync, steps, seed=5, actions_seed=2):
         done = a[2] | a[3]
         assert ("final_obs" in a[4]) == ("final_obs" in b[4]) == bool(done.any())
         if done.any():
