@@ -413,8 +413,8 @@ def build_parser() -> argparse.ArgumentParser:
                                            "LEADERBOARD.md, a CSV and a PNG per env")
     p.add_argument("--quick", action="store_true",
                    help="1 seed x 3 episodes instead of 5 x 10, and the paper case in dynamic fidelity on each task's "
-                        "newest id for the references and learned seed 0 instead of 3 episodes for every policy (about 60 s on 2 "
-                        "cores; 85-100 s the first time, when the kernels compile)")
+                        "newest id for the references and learned seed 0 instead of 3 episodes for every policy "
+                        "(about 60 s on 2 cores; 85-100 s the first time, when the kernels compile)")
     p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
     p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")
     p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")
