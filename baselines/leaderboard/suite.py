@@ -37,9 +37,8 @@ class EvalSuite:
         """Whether ``spec`` runs the dynamic episodes in this suite."""
         if self.dynamic_all:
             return True
-        if not self.runs_dynamic_on(spec.env_id):
-            return False
-        return spec.kind != "floor" and not (spec.kind == "learned" and not spec.name.endswith("seed0"))
+        return self.runs_dynamic_on(spec.env_id) and spec.kind != "floor" and not (
+            spec.kind == "learned" and not spec.name.endswith("seed0"))
 
     def keys(self) -> list[tuple[int, int]]:
         return [(s, k) for s in self.seeds for k in range(self.episodes)]
