@@ -143,6 +143,14 @@ def torchrl_steps_per_second(env_id: str, robots: int, timesteps: int, threads: 
     return steps / seconds, clock["train"] / seconds, steps / clock["collect"]
 
 
+def measure(name: str, env_id: str, robots: int, timesteps: int, threads: int) -> tuple[float, float, float] | None:
+    """What :func:`steps_per_second` gives for learner ``name`` (module docstring); None when it is not installed."""
+    if name == "torchrl":
+        return torchrl_steps_per_second(env_id, robots, timesteps, threads)
+    cls = learner(name, threads)
+    return None if cls is None else steps_per_second(cls, env_id, robots, timesteps)
+
+
 def _timed(model: Any, name: str, clock: dict[str, float]) -> None:
     """Add the time of each call of ``model.<name>`` to ``clock[name]``."""
     method = getattr(model, name)
@@ -195,11 +203,7 @@ def main() -> None:
         rates: dict[str, float | None] = {}
         shares: dict[str, float] = {}
         for name in names:
-            if name == "torchrl":
-                measured = torchrl_steps_per_second(env_id, args.robots, args.timesteps, args.threads)
-            else:
-                cls = learner(name, args.threads)
-                measured = None if cls is None else steps_per_second(cls, env_id, args.robots, args.timesteps)
+            measured = measure(name, env_id, args.robots, args.timesteps, args.threads)
             if measured is None:
                 rates[name] = None
                 print(f"{env_id} {name}: not installed", flush=True)
