@@ -1,0 +1,86 @@
+"""Numbers that do not depend on the CPU (issue 38): the parts of an episode paragym computes itself give the
+same bits on another CPU, simulated here by making each library take another CPU's code in a new process
+(:data:`paragym.machine.SIMULATED`)."""
+
+from __future__ import annotations
+
+import hashlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from paragym import machine
+
+#: the learned actors of two shipped models, one per kind of network (Tanh actor-critic; ReLU and squashed SAC),
+#: on 300 observations drawn in their spaces: the hash of the actions
+ACTORS = """
+import hashlib, numpy as np
+from paragym.baselines.policies import policies_for
+out = hashlib.sha256()
+for env_id, name in (("paragym/CaPaManCollisionFree-v1", "ppo-seed0"), ("paragym/Orthoglide2PRRKappa-v0", "sac-seed0"),
+                     ("paragym/MobileTripodOdometry-v1", "bc-seed0")):
+    spec = policies_for(env_id)[name]
+    import gymnasium as gym
+    env = gym.make(env_id)
+    policy = spec.factory(env, 0)
+    rng = np.random.default_rng(0)
+    space = env.observation_space
+    for _ in range(300):
+        obs = rng.uniform(np.maximum(space.low, -3), np.minimum(space.high, 3)).astype(np.float32)
+        out.update(np.asarray(policy.act(obs, {}), np.float32).tobytes())
+    env.close()
+print(out.hexdigest())
+"""
+
+#: the hybrid's two singularity measures on 2,000 poses near home
+HYBRID = """
+import hashlib, numpy as np
+from paragym.mechanisms import hybrid
+rng = np.random.default_rng(0)
+p = rng.normal(0, [0.03, 0.03, 0.03, 0.15, 0.15, 0.15], (2000, 6))
+lengths, mu_h, mu_t, *_ = hybrid.solve_rows(p, rng.uniform(0, 1, 2000))
+print(hashlib.sha256(np.concatenate([mu_h, mu_t]).tobytes()).hexdigest())
+"""
+
+
+def _digest(code: str, cpu: str) -> str:
+    done = subprocess.run([sys.executable, "-c", code], env=machine.simulated_environment(cpu), capture_output=True,
+                          text=True, timeout=600)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize("what", ["actors", "hybrid"])
+def test_the_same_bits_on_another_cpu(what: str) -> None:
+    code = {"actors": ACTORS, "hybrid": HYBRID}[what]
+    here = _digest(code, "host")
+    for cpu in ("older-x86-64-same-libm", "avx512-blas"):
+        assert _digest(code, cpu) == here, f"{what} differ on the simulated {cpu}"
+
+
+def test_the_simulation_changes_what_it_says() -> None:
+    """The simulated CPU does change the libraries' code: BLAS products of the same numbers differ."""
+    code = ("import numpy as np, hashlib; r = np.random.default_rng(0); a = r.normal(size=(64, 300)); "
+            "b = r.normal(size=300); print(hashlib.sha256((a @ b).tobytes()).hexdigest())")
+    assert _digest(code, "older-x86-64") != _digest(code, "avx512-blas")
+
+
+def test_describe_names_what_results_depend_on() -> None:
+    facts = machine.describe()
+    assert facts["cpu"]["model"] and facts["cpu"]["isa"]["found"]
+    assert facts["blas"] and facts["blas"][0]["architecture"]
+    assert facts["numba"]["cpu_name"]
+    with pytest.raises(ValueError, match="unknown simulated CPU"):
+        machine.simulated_environment("pentium")
+
+
+def test_the_deterministic_tanh_is_tanh() -> None:
+    from paragym.baselines.actor import k_tanh
+
+    x = np.concatenate([np.linspace(-30, 30, 200_001), [0.0, -0.0, 1e-30, -1e-12, 20.0, 400.0, -400.0]])
+    got = np.array([k_tanh(v) for v in x])
+    np.testing.assert_allclose(got, np.tanh(x), rtol=1e-15, atol=1e-300)
+    assert np.all(np.abs(got) <= 1.0)
+    assert hashlib.sha256(got.tobytes()).hexdigest()  # finite bytes
