@@ -1,4 +1,4 @@
-"""A saved policy's deterministic action in numpy, without PyTorch.
+"""A saved policy's deterministic action without PyTorch, the same bits on every CPU.
 
 The deterministic action of a Stable-Baselines3 MLP policy is a few matrix
 products: the actor's linear layers with their activation between, then,
@@ -10,6 +10,18 @@ spaces and keyword arguments from the file's readable fields: PyTorch is
 not imported) or from a model in memory (:func:`actor_from_model`). Both go
 through :func:`actor_from_weights`, so the leaderboard's actions are the
 same whichever way the model came.
+
+The forward pass is one compiled kernel (:func:`k_forward`) in a fixed
+order, not BLAS: OpenBLAS picks its kernels per CPU, and its float32
+products of the same weights differ in the last bits between CPUs, which
+an episode then carries into its returns (issue 38). Each dot product is
+summed in float64 in index order (a product of two float32 is exact in
+float64), the bias added, and the sum rounded to float32, as the layer's
+float32 output; tanh is :func:`k_tanh`, written here in plain arithmetic,
+because libm's and numpy's tanh are CPU-dependent too. Numba compiles
+without fast-math, so no sum is reordered or contracted into an FMA on any
+target. The actions equal PyTorch's to float32 rounding (tested), and
+equal themselves on every CPU (``tests/test_cpu_independence.py``).
 
 The actor covers the policies SB3 builds for flat ``Box`` observations:
 ``ActorCriticPolicy`` (PPO, A2C, and paragym's BC and DAgger, whose
@@ -23,46 +35,136 @@ None: such a model acts through SB3's ``predict``.
 from __future__ import annotations
 
 import json
+import math
 import re
 import zipfile
-from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numba import njit
 
-__all__ = ["MlpActor", "actor_from_file", "actor_from_model", "actor_from_weights"]
+__all__ = ["ACTIVATIONS", "MlpActor", "actor_from_file", "actor_from_model", "actor_from_weights", "k_forward",
+           "k_tanh"]
 
-#: activations (by their torch.nn class name) as numpy functions
-ACTIVATIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
-    "Tanh": np.tanh,
-    "ReLU": lambda v: np.maximum(v, np.float32(0.0)),
-}
+#: the activations the kernel computes, by their torch.nn class name, as the kernel's codes
+ACTIVATIONS: dict[str, int] = {"Tanh": 1, "ReLU": 2}
 
-Layer = tuple[np.ndarray, np.ndarray, Callable[[np.ndarray], np.ndarray] | None]
+#: (weight (out, in), bias (out,), activation name or None) in float32
+Layer = tuple[np.ndarray, np.ndarray, str | None]
+
+_LN2_HI = 6.93147180369123816490e-01  # ln 2 in two parts (fdlibm's): k * _LN2_HI is exact for |k| < 2**11
+_LN2_LO = 1.90821492927058770002e-10
+_INV_LN2 = 1.44269504088896338700e00
+
+
+@njit(cache=True)
+def _expm1_pos(y: float) -> float:
+    """exp(y) - 1 for 0 <= y <= 64, in +, *, / only (no libm): a Taylor series below 0.5, else
+    2**k * exp(r) - 1 with r = y - k ln 2 (|r| <= ln 2 / 2) and exp(r) by its Taylor series to r**15.
+    Relative error about 1e-16; the same bits on every IEEE-754 machine."""
+    if y < 0.5:
+        term, total = y, y
+        for n in range(2, 19):
+            term = term * y / n
+            total += term
+        return total
+    k = math.floor(y * _INV_LN2 + 0.5)
+    r = (y - k * _LN2_HI) - k * _LN2_LO
+    term, total = 1.0, 1.0
+    for n in range(1, 16):
+        term = term * r / n
+        total += term
+    scale = 1.0
+    for _ in range(int(k)):
+        scale *= 2.0
+    return total * scale - 1.0
+
+
+@njit(cache=True)
+def k_tanh(x: float) -> float:
+    """tanh(x) in float64 from :func:`_expm1_pos` (tanh|x| = e / (e + 2), e = exp(2|x|) - 1): within 1e-15 of
+    libm's, and the same bits on every CPU. 1 (with x's sign) from |x| = 20 on, where tanh rounds to 1."""
+    a = abs(x)
+    if a >= 20.0:
+        t = 1.0
+    elif a == 0.0:
+        return x
+    else:
+        e = _expm1_pos(2.0 * a)
+        t = e / (e + 2.0)
+    return t if x > 0 else -t
+
+
+@njit(cache=True)
+def k_forward(obs, weights, biases, shapes, activations, squash, low, high, out):
+    """The actor's deterministic action for one observation ``obs`` (float32) into ``out`` (float32).
+    ``weights``: every layer's weights, transposed ((in, out), row-major) and concatenated, as float64 (each a
+    float32 value); ``biases``: the biases, concatenated (float32); ``shapes`` (L, 2): each layer's (out, in);
+    ``activations`` (L,): 0 none, 1 tanh, 2 ReLU. Each output is the float64 sum over the inputs in index
+    order, plus the bias, rounded to float32 (the loop runs over the outputs inside the inputs, so that it
+    vectorises across outputs without reordering any one sum); then, if ``squash``,
+    low + (tanh(x) + 1) / 2 * (high - low) in float64; the action clipped to [low, high]."""
+    width = 0
+    for i in range(shapes.shape[0]):
+        width = max(width, shapes[i, 0], shapes[i, 1])
+    x = np.zeros(width, np.float64)
+    acc = np.zeros(width, np.float64)
+    for j in range(obs.shape[0]):
+        x[j] = np.float64(obs[j])
+    w_at, b_at = 0, 0
+    for layer in range(shapes.shape[0]):
+        n_out, n_in = shapes[layer, 0], shapes[layer, 1]
+        code = activations[layer]
+        for i in range(n_out):
+            acc[i] = 0.0
+        for j in range(n_in):
+            xj = x[j]
+            row = w_at + j * n_out
+            for i in range(n_out):
+                acc[i] += weights[row + i] * xj
+        for i in range(n_out):
+            v = np.float32(acc[i] + np.float64(biases[b_at + i]))
+            if code == 1:
+                v = np.float32(k_tanh(np.float64(v)))
+            elif code == 2 and v < 0:
+                v = np.float32(0.0)
+            x[i] = np.float64(v)
+        w_at += n_out * n_in
+        b_at += n_out
+    for i in range(out.shape[0]):
+        v = x[i]
+        if squash:
+            v = low[i] + 0.5 * (k_tanh(v) + 1.0) * (high[i] - low[i])
+        out[i] = np.float32(min(max(v, low[i]), high[i]))
 
 
 @dataclass(frozen=True)
 class MlpActor:
-    """An actor as (weight, bias, activation) layers in float32, whether its
-    output is tanh-squashed to the bounds, and the action bounds."""
+    """An actor as (weight, bias, activation name) layers in float32, whether its output is tanh-squashed
+    to the bounds, and the action bounds; :meth:`act` runs :func:`k_forward`."""
 
     layers: tuple[Layer, ...]
     squash: bool
     low: np.ndarray
     high: np.ndarray
+    _packed: tuple[np.ndarray, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        packed = (np.concatenate([w.T.reshape(-1) for w, _, _ in self.layers]).astype(np.float64),
+                  np.concatenate([b for _, b, _ in self.layers]).astype(np.float32),
+                  np.array([w.shape for w, _, _ in self.layers], np.int64),
+                  np.array([ACTIVATIONS.get(a, 0) if a else 0 for _, _, a in self.layers], np.int64))
+        object.__setattr__(self, "_packed", packed)
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """The deterministic action for one observation, clipped to the bounds (float32)."""
-        x = np.asarray(obs, np.float32).reshape(-1)
-        for weight, bias, activation in self.layers:
-            x = weight @ x + bias
-            if activation is not None:
-                x = activation(x)
-        if self.squash:  # SAC/TD3/TQC: tanh-squashed to [-1, 1], then to the bounds
-            x = self.low + 0.5 * (np.tanh(x) + 1.0) * (self.high - self.low)
-        return np.clip(x, self.low, self.high).astype(np.float32)
+        x = np.ascontiguousarray(obs, np.float32).reshape(-1)
+        out = np.empty(self.low.shape[0], np.float32)
+        k_forward(x, *self._packed, self.squash, self.low, self.high, out)
+        return out
 
 
 def _linear_chain(weights: Mapping[str, np.ndarray], prefix: str) -> list[int] | None:
@@ -94,12 +196,14 @@ def actor_from_weights(weights: Mapping[str, np.ndarray], activation: str | None
         last = (f"actor.mu.{chain[-1]}.weight", f"actor.mu.{chain[-1]}.bias")
     else:
         return None
-    function = ACTIVATIONS.get(activation or default)
-    if hidden is None or function is None:
+    function = activation or default
+    if hidden is None or function not in ACTIVATIONS:
         return None
-    layers: list[Layer] = [(np.asarray(weights[f"{prefix}.{i}.weight"], np.float32),
-                            np.asarray(weights[f"{prefix}.{i}.bias"], np.float32), function) for i in hidden]
-    layers.append((np.asarray(weights[last[0]], np.float32), np.asarray(weights[last[1]], np.float32), None))
+    layers: list[Layer] = [(np.ascontiguousarray(weights[f"{prefix}.{i}.weight"], np.float32),
+                            np.ascontiguousarray(weights[f"{prefix}.{i}.bias"], np.float32), function)
+                           for i in hidden]
+    layers.append((np.ascontiguousarray(weights[last[0]], np.float32),
+                   np.ascontiguousarray(weights[last[1]], np.float32), None))
     return MlpActor(tuple(layers), squash, np.asarray(low, np.float64), np.asarray(high, np.float64))
 
 

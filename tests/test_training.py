@@ -74,7 +74,7 @@ def test_numpy_inference_equals_predict(tmp_path, algo):
     actor, observation = actor_from_file(res.files.model)
     assert observation == model.observation_space and actor.squash == policy.actor.squash
     for (w, b, f), (w2, b2, f2) in zip(actor.layers, policy.layers, strict=True):
-        assert np.array_equal(w, w2) and np.array_equal(b, b2) and f is f2
+        assert np.array_equal(w, w2) and np.array_equal(b, b2) and f == f2
 
 
 class _Interrupt(BaseCallback):
