@@ -40,8 +40,12 @@ split (:func:`_stages`), the tripod's parasitic motion (:func:`_tripod_stage`)
 and the legs with their rows of eq 11's matrices (:func:`_legs`). Every array
 function here (``solve``, ``solve_rows``, ``split``, ``hexapod_matrix``, ...)
 loops them over N, and the env's step calls the same loop, so one robot and
-4096 run the same code. The smallest singular values come from LAPACK's
-symmetric eigensolver on M^T M, as numpy's ``eigvalsh`` computes them.
+4096 run the same code. The smallest singular values are the square roots of
+the smallest eigenvalues of M^T M, found by cyclic Jacobi rotations
+(:func:`_min_eigenvalue`) rather than LAPACK: OpenBLAS, under LAPACK, picks
+its kernels per CPU, and its eigenvalues differed in the last bits between
+CPUs (issue 38); the rotations use +, *, / and sqrt only, the same bits
+everywhere.
 """
 
 from __future__ import annotations
@@ -232,9 +236,58 @@ def _constraints(rt, top, axes, inv_e, rows):
 
 
 @njit(cache=True, error_model="numpy")
+def _min_eigenvalue(a):
+    """The smallest eigenvalue of the symmetric 6x6 ``a`` (overwritten), by cyclic Jacobi rotations: each
+    sweep zeroes every off-diagonal element in row order (Golub and Van Loan, Algorithm 8.5.3); an element
+    too small to change either diagonal element it couples is set to zero after three sweeps, and the sweeps
+    stop when every off-diagonal element is zero (six to eight sweeps here). Plain arithmetic and sqrt only,
+    in a fixed order: the same bits on every CPU."""
+    n = a.shape[0]
+    for sweep in range(60):
+        off = 0.0
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                off += abs(a[p, q])
+        if off == 0.0:
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                apq = a[p, q]
+                if apq == 0.0:
+                    continue
+                app, aqq = a[p, p], a[q, q]
+                g = 100.0 * abs(apq)
+                if sweep > 2 and abs(app) + g == abs(app) and abs(aqq) + g == abs(aqq):
+                    a[p, q] = a[q, p] = 0.0
+                    continue
+                theta = (aqq - app) / (2.0 * apq)
+                if abs(theta) > 1e150:
+                    t = 0.5 / theta
+                else:
+                    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                    if theta < 0.0:
+                        t = -t
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(n):
+                    akp, akq = a[k, p], a[k, q]
+                    a[k, p] = c * akp - s * akq
+                    a[k, q] = s * akp + c * akq
+                for k in range(n):
+                    apk, aqk = a[p, k], a[q, k]
+                    a[p, k] = c * apk - s * aqk
+                    a[q, k] = s * apk + c * aqk
+                a[p, q] = a[q, p] = 0.0
+    low = a[0, 0]
+    for i in range(1, n):
+        low = min(low, a[i, i])
+    return low
+
+
+@njit(cache=True, error_model="numpy")
 def _sigma_min(rows):
     """The smallest singular value of a 6x6 matrix: the square root of the
-    smallest eigenvalue of M^T M (LAPACK's symmetric eigensolver)."""
+    smallest eigenvalue of M^T M (:func:`_min_eigenvalue`)."""
     gram = np.empty((6, 6))
     for a in range(6):
         for b in range(6):
@@ -242,7 +295,7 @@ def _sigma_min(rows):
             for r in range(6):
                 acc += rows[r, a] * rows[r, b]
             gram[a, b] = acc
-    return math.sqrt(max(np.linalg.eigvalsh(gram)[0], 0.0))
+    return math.sqrt(max(_min_eigenvalue(gram), 0.0))
 
 
 @njit(cache=True, error_model="numpy")
@@ -310,6 +363,16 @@ def _tripod_all(z, roll, pitch, top, axes, pinv_t, out):
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = pt[0], pt[1], z[i], roll[i], pitch[i], yaw
 
 
+def _pinv_t(a: np.ndarray) -> np.ndarray:
+    """The transposed pseudo-inverse A (A^T A)^-1 (3, 2) of a full-rank (3, 2) matrix, in closed form: LAPACK's
+    SVD (numpy's ``pinv``) gives CPU-dependent last bits (:mod:`paragym.machine`)."""
+    a = np.asarray(a, float).tolist()
+    p, q, r = (sum(row[i] * row[j] for row in a) for i, j in ((0, 0), (0, 1), (1, 1)))
+    det = p * r - q * q
+    inv = np.array([[r / det, -q / det], [-q / det, p / det]])
+    return np.array([[a[i][0] * inv[0, j] + a[i][1] * inv[1, j] for j in range(2)] for i in range(3)])
+
+
 @lru_cache(maxsize=8)
 def kernel_consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
     """The geometry as the kernels take it (read-only): B_i, A_i, q_j, t_j,
@@ -318,7 +381,7 @@ def kernel_consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
     the hexapod, of the tripod]."""
     arrays = [np.ascontiguousarray(a, float) for a in (g.base_joints, g.platform_joints, g.tripod_top,
                                                        g.tripod_axes, g.tripod_base,
-                                                       np.linalg.pinv(g.tripod_axes[:, :2]).T, home_pose(g))]
+                                                       _pinv_t(g.tripod_axes[:, :2]), home_pose(g))]
     raw = np.array([g.tripod_home_height, 1.0 / g.platform_radius, 1.0 / g.r_te, 1.0, 1.0])
     for a in (*arrays, raw):  # read-only before the first call too: numba compiles one signature, not two
         a.setflags(write=False)
