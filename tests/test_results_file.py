@@ -11,8 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from paragym import machine
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
-from paragym.baselines.leaderboard.results import _digest, read_results, verify
+from paragym.baselines.leaderboard.results import TOLERANCE, _digest, compare, describe, read_results, verify
 
 ORTHO = "paragym/Orthoglide2PRRKappa-v1"
 
@@ -40,6 +41,10 @@ def test_the_results_file_describes_its_run(written: Path) -> None:
     data = read_results(written)
     assert data["written_by"]["paragym"] and data["written_by"]["packages"]["gymnasium"]
     assert data["written_by"]["command"].startswith("paragym leaderboard")
+    facts = data["written_by"]["machine"]  # what the numbers depended on, beside the package versions
+    assert facts["cpu"]["model"] and facts["cpu"]["isa"]["found"] and facts["blas"][0]["architecture"]
+    assert facts["numba"]["cpu_name"] and facts["libc"] is not None
+    assert data["tolerance"]["kinematic"] == TOLERANCE["kinematic"] and data["tolerance"]["measured_by"]
     assert data["suite"]["seeds"] == [0] and data["envs"][ORTHO]["max_episode_steps"]
     assert {p["policy"] for p in data["policies"]} == {"gradient-c", "zero", "random"}
     assert all(p["producer"] for p in data["policies"])
@@ -54,7 +59,8 @@ def test_the_results_file_describes_its_run(written: Path) -> None:
 def test_another_process_reproduces_it(written: Path) -> None:
     done = _run_verify(written, "--sample", "all", "--dynamic", "1")
     assert done.returncode == 0, done.stdout + done.stderr
-    assert "7 of 7 episodes reproduced" in done.stdout and "VERIFIED" in done.stdout
+    assert "7 of 7 episodes reproduced: 7 identical" in done.stdout and "VERIFIED" in done.stdout
+    assert done.stdout.count("  identical ") == 7  # each episode on a line
 
 
 def _tamper(path: Path, out: Path, fix_digest: bool) -> Path:
@@ -89,8 +95,62 @@ def test_a_row_of_another_producer_is_not_compared(written: Path, tmp_path: Path
     assert not result.ok and any("producer differs" in p for p in result.problems)
 
 
-def test_the_committed_results_file_reproduces() -> None:
-    """A sample of the committed leaderboard's episodes, re-run here: the published numbers are this code's."""
+def test_compare_tells_identical_within_tolerance_and_diverged() -> None:
+    stored = {"return": 5.0, "length": 40, "success": True, "metrics": {"min_clearance_mm": 14.0, "collision": 0.0}}
+
+    def again(**change):
+        out = {k: v for k, v in stored.items() if k != "metrics"} | {"metrics": dict(stored["metrics"])}
+        for k, v in change.items():
+            (out["metrics"] if k in stored["metrics"] else out)[k] = v
+        return out
+
+    exact = ("collision",)
+    assert compare(stored, again(), exact, 1e-6, 1e-9).verdict == "identical"
+    near = compare(stored, again(**{"return": 5.0 * (1 + 2e-9)}), exact, 1e-6, 1e-9)
+    assert near.verdict == "within tolerance" and near.worst == "return" and 1e-9 < near.deviation < 3e-9
+    for change in ({"return": 5.1}, {"length": 41}, {"success": False}, {"collision": 1e-12},
+                   {"min_clearance_mm": 14.1}):
+        assert compare(stored, again(**change), exact, 1e-6, 1e-9).verdict == "diverged", change
+
+
+def test_a_file_cannot_loosen_its_own_tolerance(written: Path, tmp_path: Path) -> None:
+    data = json.loads(gzip.decompress(written.read_bytes()))
+    data["tolerance"]["kinematic"] = {"rtol": 1.0, "atol": 1.0}
+    data["episodes"][0]["return"] *= 1.01  # 1 %: inside the file's tolerance, not inside paragym's
+    data["sha256"] = _digest({k: v for k, v in data.items() if k != "sha256"})
+    path = tmp_path / "loose.json"
+    path.write_text(json.dumps(data))
+    result = verify(path, sample=None, echo=lambda s: None)
+    assert result.tolerance["kinematic"] == TOLERANCE["kinematic"]
+    assert not result.ok and result.count("diverged") == 1
+
+
+@pytest.mark.parametrize("content", [b"\x89PNG\r\n\x1a\n\x00\x00", b"name,return\n", b'{"a": 1}', b"\x1f\x8bnot gzip"])
+def test_a_file_that_is_not_a_results_file_gets_one_line(tmp_path: Path, content: bytes) -> None:
+    path = tmp_path / "thing.bin"
+    path.write_bytes(content)
+    done = _run_verify(path)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert str(path) in lines[0] and "not a paragym results file" in lines[0]
+    assert "Expecting value" not in lines[0] and "codec" not in lines[0]
+
+
+@pytest.mark.parametrize("cpu", ["host", "older-x86-64"])
+def test_the_committed_results_file_reproduces_on_another_cpu(cpu: str) -> None:
+    """A sample of the committed leaderboard's episodes, re-run in a new process as this machine computes and
+    as an older x86-64 would (another BLAS kernel, numba's generic target, numpy without its SIMD loops, libm
+    without its FMA variants: :data:`paragym.machine.SIMULATED`): every one reproduces under ``verify``'s
+    rule, and the episodes whose numbers paragym computes itself are identical."""
     committed = Path(__file__).parents[1] / "leaderboard" / "results.json.gz"
-    result = verify(committed, sample=3, seed=2, echo=lambda s: None)
-    assert result.ok, result.problems
+    done = subprocess.run([sys.executable, "-m", "paragym.cli", "verify", str(committed), "--sample", "4", "--seed",
+                           "2"], capture_output=True, text=True, timeout=900, env=machine.simulated_environment(cpu))
+    assert done.returncode == 0 and "VERIFIED" in done.stdout, done.stdout + done.stderr[-2000:]
+    assert "4 of 4 episodes reproduced" in done.stdout
+    if cpu == "host":
+        assert "4 identical" in done.stdout, done.stdout
+
+
+def test_the_verdict_names_both_machines(written: Path) -> None:
+    text = describe(verify(written, sample=1, echo=lambda s: None))
+    assert "written on" in text and "re-run on" in text and "the rule:" in text

@@ -4,7 +4,11 @@ The results file (:func:`write_results`, JSON, gzip-compressed when its name
 ends in ``.gz``) holds everything a reader needs to trust or re-run a table:
 
 * what wrote it: paragym's version, Python's, the platform, the versions of
-  the packages that decide an episode's numbers, and the command;
+  the packages that decide an episode's numbers, the machine as far as the
+  numbers can depend on it (:func:`paragym.machine.describe`: the CPU and its
+  instruction sets, the C library, each BLAS with the kernel it picked,
+  numba's target) and the command;
+* the tolerance a re-run on another machine is held to (:data:`TOLERANCE`);
 * the suite: evaluation seeds, episodes, the reset-seed rule and the dynamic
   episodes;
 * every env id's registration (entry point, arguments, step limit);
@@ -17,10 +21,21 @@ ends in ``.gz``) holds everything a reader needs to trust or re-run a table:
 
 :func:`verify` reads such a file, checks its digest, builds each sampled
 episode's policy here, refuses to compare when the policy here is not the
-one that made the row (another producer), re-runs the episode and compares:
-bit for bit in the kinematic fidelity (the episode is a pure function of its
-seeds), to a relative 1e-6 in the dynamic one (PyBullet's solver may round
-differently on another CPU).
+one that made the row (another producer), re-runs the episode and compares
+(:func:`compare`): the discrete outcomes exactly (success, length, and the
+task's counts and flags, :meth:`paragym.baselines.tasks.Bench.exact_metrics`),
+the return and the continuous metrics within :data:`TOLERANCE`. Each episode
+is *identical* (every bit), *within tolerance*, or *diverged*.
+
+Why a tolerance at all: what paragym computes itself (its numba kernels, the
+learned actors, the hybrid's eigenvalues) gives the same bits whatever the
+CPU's BLAS kernels, SIMD extensions or numba target
+(``tests/test_cpu_independence.py``), but glibc's libm computes sin, cos,
+exp, atan2, ... with per-CPU variants (and differently between its
+versions), and Python, numpy, numba and PyBullet all call it; filterpy's
+UKF and a user's own agent call BLAS. ``benchmarks/cpu_dependence.py``
+measures what each source moves (``docs/reports/cpu.md``); the tolerance is
+set above the largest deviation it found.
 """
 
 from __future__ import annotations
@@ -42,18 +57,23 @@ from typing import Any
 import gymnasium as gym
 
 import paragym
+from paragym import machine
 from paragym.baselines.leaderboard.suite import EvalSuite, episode_seed
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, producer_id
 
-__all__ = ["FORMAT", "Verification", "describe", "read_results", "verify", "write_episodes_csv", "write_results"]
+__all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "describe", "read_results", "verify",
+           "write_episodes_csv", "write_results"]
 
 FORMAT = "paragym-results/1"
 #: the packages whose versions decide an episode's numbers
 PACKAGES = ("numpy", "scipy", "numba", "gymnasium", "pybullet", "torch", "stable_baselines3", "sb3_contrib",
             "filterpy")
-#: the dynamic fidelity's tolerance across machines (relative, on the return and every metric)
-DYNAMIC_RTOL = 1e-6
+#: how far a re-run on another machine may move the return and each continuous metric, per fidelity:
+#: |a - b| <= atol + rtol * max(|a|, |b|). Set above the largest deviation that benchmarks/cpu_dependence.py
+#: measured on simulated CPUs (docs/reports/cpu.md); recorded in every results file.
+TOLERANCE: dict[str, dict[str, float]] = {"kinematic": {"rtol": 1e-6, "atol": 1e-9},
+                                          "dynamic": {"rtol": 1e-6, "atol": 1e-9}}
 
 
 def _versions() -> dict[str, str]:
@@ -91,7 +111,10 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
         "format": FORMAT,
         "written_by": {"paragym": paragym.__version__, "python": platform.python_version(),
                        "platform": f"{platform.system()} {platform.machine()}", "packages": _versions(),
-                       "command": command, "date": time.strftime("%Y-%m-%d", time.gmtime())},
+                       "machine": machine.describe(), "command": command,
+                       "date": time.strftime("%Y-%m-%d", time.gmtime())},
+        "tolerance": {**TOLERANCE, "exact": ["success", "length", "the exact metrics of each task's bench"],
+                      "measured_by": "benchmarks/cpu_dependence.py (docs/reports/cpu.md)"},
         "suite": {"name": suite.name, "seeds": list(suite.seeds), "episodes": suite.episodes,
                   "reset_seed": "100000 + 1000 * seed + episode", "dynamic": [list(d) for d in suite.dynamic]},
         "envs": {env: _env_spec(env) for env in sorted({k[0] for k in keys})},
@@ -124,11 +147,21 @@ def read_results(path: str | Path) -> dict[str, Any]:
     path = Path(path)
     try:
         raw = path.read_bytes()
-        data = json.loads(gzip.decompress(raw) if raw[:2] == b"\x1f\x8b" else raw)
-    except (OSError, ValueError, EOFError) as exc:
-        raise ValueError(f"{path} is not a paragym results file: {exc}") from exc
+    except IsADirectoryError:
+        raise ValueError(f"{path} is a folder, not a paragym results file (results.json.gz)") from None
+    except OSError as exc:
+        raise ValueError(f"cannot read {path}: {exc.strerror or exc}") from None
+    try:
+        text = gzip.decompress(raw) if raw[:2] == b"\x1f\x8b" else raw
+    except (OSError, EOFError):
+        raise ValueError(f"{path} is not a paragym results file: a damaged gzip file") from None
+    try:
+        data = json.loads(text)
+    except (ValueError, UnicodeDecodeError):
+        raise ValueError(f"{path} is not a paragym results file: not JSON (paragym leaderboard writes "
+                         f"results.json.gz)") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT:
-        raise ValueError(f"{path} is not a paragym results file (format {FORMAT!r})")
+        raise ValueError(f"{path} is not a paragym results file: JSON without \"format\": {FORMAT!r}")
     return data
 
 
@@ -152,55 +185,118 @@ def write_episodes_csv(path: str | Path, rows: list[EpisodeRow]) -> Path:
     return path
 
 
+@dataclass(frozen=True)
+class Comparison:
+    """One re-run episode against the file's: ``verdict`` "identical" (every bit), "within tolerance" or
+    "diverged"; ``worst``: the figure that moved most and ``deviation`` its relative change (0: none);
+    ``differences``: the figures that broke the rule, as "key: stored -> again"."""
+
+    verdict: str
+    worst: str = ""
+    deviation: float = 0.0
+    differences: tuple[str, ...] = ()
+
+
+def _relative(a: float, b: float) -> float:
+    if a == b or (math.isnan(a) and math.isnan(b)):
+        return 0.0
+    if math.isnan(a) or math.isnan(b) or math.isinf(a) or math.isinf(b):
+        return math.inf
+    return abs(a - b) / max(abs(a), abs(b))
+
+
+def compare(stored: dict[str, Any], again: dict[str, Any], exact: tuple[str, ...] | list[str], rtol: float,
+            atol: float) -> Comparison:
+    """Compare a re-run episode (``again``: its return, success, length if it has one, and its ``metrics``) with
+    the file's (``stored``): success, length and the metrics named in ``exact`` must be equal; the return and
+    every other metric may differ by ``atol + rtol * max(|a|, |b|)``."""
+    figures = [(k, stored[k], again[k]) for k in ("return", "length", "success") if k in stored]
+    figures += [(k, stored["metrics"].get(k), again["metrics"].get(k))
+                for k in sorted(set(stored["metrics"]) | set(again["metrics"]))]
+    identical, worst, deviation, broken = True, "", 0.0, []
+    for key, a, b in figures:
+        numbers = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in (a, b))
+        if a == b or (numbers and math.isnan(a) and math.isnan(b)):
+            continue
+        identical = False
+        if key in ("length", "success") or key in exact or not numbers:
+            broken.append(f"{key}: {a!r} -> {b!r}")
+            worst, deviation = key, math.inf
+            continue
+        moved = _relative(float(a), float(b))
+        if moved > deviation:
+            worst, deviation = key, moved
+        if not abs(a - b) <= atol + rtol * max(abs(a), abs(b)):
+            broken.append(f"{key}: {a!r} -> {b!r}")
+    verdict = "identical" if identical else "diverged" if broken else "within tolerance"
+    return Comparison(verdict, worst, deviation, tuple(broken))
+
+
 @dataclass
 class Verification:
-    """What :func:`verify` found."""
+    """What :func:`verify` found: per compared episode a line (what, :class:`Comparison`), and the problems
+    (an episode that did not reproduce, or could not be compared)."""
 
     path: Path
     intact: bool
     checked: int = 0
-    reproduced: int = 0
-    #: one line per episode that did not reproduce, or could not be compared
+    episodes: list[tuple[str, Comparison]] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
     written_by: str = ""
+    #: the tolerance each fidelity was held to (the stricter of the file's and this version's)
+    tolerance: dict[str, dict[str, float]] = field(default_factory=dict)
+    machines: str = ""
+
+    def count(self, verdict: str) -> int:
+        return sum(c.verdict == verdict for _, c in self.episodes)
+
+    @property
+    def reproduced(self) -> int:
+        """Episodes identical or within tolerance."""
+        return self.count("identical") + self.count("within tolerance")
 
     @property
     def ok(self) -> bool:
         return self.intact and self.checked > 0 and self.reproduced == self.checked and not self.problems
 
 
-def _same(a: Any, b: Any, rtol: float) -> bool:
-    if isinstance(a, bool) or isinstance(b, bool) or not isinstance(a, (int, float)):
-        return a == b
-    if rtol == 0.0:
-        return a == b or (math.isnan(a) and math.isnan(b))
-    return math.isclose(a, b, rel_tol=rtol, abs_tol=rtol) or (math.isnan(a) and math.isnan(b))
-
-
-def _differences(stored: dict[str, Any], again: dict[str, Any], rtol: float) -> list[str]:
-    out = [f"{k}: {stored[k]!r} -> {again[k]!r}" for k in ("return", "length", "success")
-           if k in stored and not _same(stored[k], again[k], rtol)]
-    for k in sorted(set(stored["metrics"]) | set(again["metrics"])):
-        if not _same(stored["metrics"].get(k), again["metrics"].get(k), rtol):
-            out.append(f"{k}: {stored['metrics'].get(k)!r} -> {again['metrics'].get(k)!r}")
+def _tolerance(data: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """Per fidelity, the stricter of the file's recorded tolerance and this version's :data:`TOLERANCE` (a
+    file cannot loosen the rule it is checked by)."""
+    recorded = data.get("tolerance") or {}
+    out = {}
+    for fidelity, rule in TOLERANCE.items():
+        theirs = recorded.get(fidelity) or {}
+        out[fidelity] = {k: min(float(theirs.get(k, v)), v) for k, v in rule.items()}
     return out
+
+
+def _machine_line(facts: dict[str, Any] | None) -> str:
+    if not facts:
+        return "not recorded"
+    blas = ", ".join(f"{b.get('internal_api')} {b.get('architecture')}" for b in facts.get("blas", []))
+    return f"{facts['cpu']['model']} ({blas}; numba for {facts['numba']['cpu_name']}; {facts.get('libc', '')})"
 
 
 def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: int = 0,
            models_dir: str | Path | None = None, echo: Callable[[str], None] = print) -> Verification:
     """Re-run ``sample`` episodes of the results file at ``path`` (None: all
     of them) and ``dynamic`` of its dynamic-fidelity episodes, drawn with
-    ``seed``, and compare them with the file's. Policies are found as the
+    ``seed``, and compare them with the file's (:func:`compare`, under the file's tolerance or this
+    version's, the stricter). Policies are found as the
     leaderboard finds them (``models_dir``: your models; register outside
     agents first, or pass ``--agent`` to ``paragym verify``)."""
     from paragym.baselines.leaderboard.evaluate import evaluate_dynamic, evaluate_episode
     from paragym.baselines.leaderboard.suite import dynamic_producer
     from paragym.baselines.policies import policies_for
+    from paragym.baselines.tasks import bench_of
 
     data = read_results(path)
     body = {k: v for k, v in data.items() if k != "sha256"}
     result = Verification(Path(path), _digest(body) == data.get("sha256"),
-                          written_by=f"paragym {data['written_by'].get('paragym', '?')}")
+                          written_by=f"paragym {data['written_by'].get('paragym', '?')}", tolerance=_tolerance(data),
+                          machines=f"written on {_machine_line(data['written_by'].get('machine'))}; "
+                                   f"re-run on {_machine_line(machine.describe())}")
     if not result.intact:
         result.problems.append("the file's digest does not match its contents: it was edited or damaged after "
                                "paragym wrote it")
@@ -235,26 +331,41 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
             row = evaluate_episode(spec, entry["seed"], entry["episode"])
             again = {"return": row.episode_return, "length": row.length, "success": row.success,
                      "metrics": row.metrics}
-            diff = _differences(entry, again, 0.0)
+            rule = result.tolerance["kinematic"]
         else:
             if json.loads(dynamic_producer(spec)).get("dynamics") != entry["physics"]:
                 result.problems.append(f"{what}: this version's physics settings differ from the file's")
                 continue
             d = evaluate_dynamic(spec, entry["scenario"], entry["seed"])
             again = {"return": d.episode_return, "success": d.success, "metrics": d.metrics}
-            diff = _differences(entry, again, DYNAMIC_RTOL)
-        if diff:
-            result.problems.append(f"{what}: does not reproduce: {'; '.join(diff[:4])}")
-        else:
-            result.reproduced += 1
+            rule = result.tolerance["dynamic"]
+        found_cmp = compare(entry, again, bench_of(env).exact_metrics(), rule["rtol"], rule["atol"])
+        result.episodes.append((what, found_cmp))
+        if found_cmp.verdict == "diverged":
+            result.problems.append(f"{what}: does not reproduce: {'; '.join(found_cmp.differences[:4])}")
     return result
 
 
 def describe(result: Verification) -> str:
-    """The verdict in a few lines."""
+    """The verdict: each compared episode on a line (identical, within tolerance with its largest deviation,
+    or diverged), then the counts, the rule and the verdict."""
     lines = [f"{result.path}: {result.written_by}; digest {'intact' if result.intact else 'DOES NOT MATCH'}",
-             f"{result.reproduced} of {result.checked} episodes reproduced (kinematic: bit for bit; dynamic: to a "
-             f"relative {DYNAMIC_RTOL:g})"]
-    lines += [f"  {p}" for p in result.problems]
+             result.machines]
+    for what, c in result.episodes:
+        if c.verdict == "identical":
+            lines.append(f"  identical         {what}")
+        elif c.verdict == "within tolerance":
+            lines.append(f"  within tolerance  {what}: largest deviation {c.deviation:.1e} relative ({c.worst})")
+        else:
+            lines.append(f"  DIVERGED          {what}: {'; '.join(c.differences[:4])}")
+    lines += [f"  {p}" for p in result.problems if "does not reproduce" not in p]
+    rule = "; ".join(f"{f}: rtol {r['rtol']:g}, atol {r['atol']:g}" for f, r in result.tolerance.items())
+    worst = max((c for _, c in result.episodes if c.verdict == "within tolerance"), key=lambda c: c.deviation,
+                default=None)
+    lines.append(f"{result.reproduced} of {result.checked} episodes reproduced: {result.count('identical')} identical, "
+                 f"{result.count('within tolerance')} within tolerance"
+                 + (f" (largest deviation {worst.deviation:.1e} relative, {worst.worst})" if worst else "")
+                 + f", {result.count('diverged')} diverged")
+    lines.append(f"the rule: success, length and counts exactly; the return and continuous metrics within {rule}")
     lines.append("VERIFIED" if result.ok else "NOT VERIFIED")
     return "\n".join(lines)

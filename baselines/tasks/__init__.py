@@ -42,11 +42,15 @@ Adapter = Callable[[gym.Env, argparse.Namespace, Path, str], int]
 
 @dataclass(frozen=True)
 class Column:
-    """A leaderboard column: a key of the task's metrics, its label and its number format."""
+    """A leaderboard column: a key of the task's metrics, its label and its number format; ``exact``: the
+    metric counts or flags something (a collision, a target reached, a pose outside the limits), so that
+    ``paragym verify`` requires it equal on another machine, as it does the success and the length, where a
+    continuous metric may differ within the results file's tolerance."""
 
     key: str
     label: str
     fmt: str = ".2f"
+    exact: bool = False
 
 
 @dataclass(frozen=True)
@@ -149,6 +153,10 @@ class Bench:
     def label(self, key: str) -> str:
         """The column label of metric ``key`` ("return" for the return)."""
         return "return" if key == "return" else next(c.label for c in self.columns if c.key == key)
+
+    def exact_metrics(self) -> tuple[str, ...]:
+        """The metrics ``paragym verify`` compares exactly: the exact columns', and ``policy_failed``."""
+        return (*(c.key for c in self.columns if c.exact), "policy_failed")
 
     def fmt(self, key: str) -> str:
         return next((c.fmt for c in self.columns if c.key == key), ".2f")

@@ -171,7 +171,8 @@ BENCH = Bench(
     metrics=metrics,
     columns=(Column("path_length_rad", "joint path [rad]", ".2f"),
              Column("min_clearance_mm", "min clearance [mm]", ".1f"),
-             Column("collision", "collisions", ".2f"), Column("tcs_reached", "T.C.s reached", ".2f")),
+             Column("collision", "collisions", ".2f", exact=True),
+             Column("tcs_reached", "T.C.s reached", ".2f", exact=True)),
     # RRT+GA has the best return and the shortest joint path but not the best success rate: with the paper's
     # m = 21 via configurations it finds no tour in about 2% of the random scenarios, where Dijkstra on Theta
     # (no limit on via points) always does

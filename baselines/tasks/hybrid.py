@@ -147,8 +147,9 @@ BENCH = Bench(
     task="hybrid",
     metrics=metrics,
     columns=(Column("min_mu", "min singularity measure", ".3f"),
-             Column("limit_violations", "leg-limit poses", ".1f"),
-             Column("bad_poses", "singular/limit poses", ".1f"), Column("max_detour_mm", "max detour [mm]", ".1f")),
+             Column("limit_violations", "leg-limit poses", ".1f", exact=True),
+             Column("bad_poses", "singular/limit poses", ".1f", exact=True),
+             Column("max_detour_mm", "max detour [mm]", ".1f")),
     primary=("bad_poses", -1),  # the paper's method: every pose singularity-free within the limits
     reference="polynomial-detour",
     reference_success=0.95,  # 1.00 over the full suite

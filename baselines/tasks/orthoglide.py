@@ -114,7 +114,7 @@ BENCH = Bench(
     columns=(Column("mean_kappa", "mean kappa", ".3f"), Column("max_kappa", "max kappa", ".2f"),
              Column("mean_tracking_error_mm", "tracking error [mm]", ".2f"),
              Column("max_tracking_error_mm", "max tracking error [mm]", ".2f"),
-             Column("path_completed", "path completed", ".2f")),
+             Column("path_completed", "path completed", ".2f", exact=True)),
     primary=("mean_kappa", -1),  # case (c) minimises kappa
     reference="gradient-c",
     reference_success=0.95,  # 1.00 over the full suite
