@@ -31,6 +31,7 @@ import importlib.util
 import inspect
 import re
 import sys
+import traceback
 import uuid
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -143,9 +144,14 @@ def _file_attr(path: str, attr: str, sha256: str) -> Any:
         sys.modules[name] = module  # so that classes defined in it pickle within this process
         try:
             spec.loader.exec_module(module)
-        except Exception:
+        except SyntaxError as exc:  # one line that names the file and the place, no traceback of the import
             del sys.modules[name]
-            raise
+            raise ValueError(f"agent file {p}, line {exc.lineno}: {type(exc).__name__}: {exc.msg}") from None
+        except Exception as exc:
+            del sys.modules[name]
+            lines = [f.lineno for f in traceback.extract_tb(exc.__traceback__) if Path(f.filename) == p]
+            where = f", line {lines[-1]}" if lines else ""
+            raise ValueError(f"agent file {p}{where}: importing it raised {type(exc).__name__}: {exc}") from None
     if not hasattr(module, attr):
         raise ValueError(f"agent file {p} has no {attr!r}; it defines "
                          f"{', '.join(n for n in vars(module) if not n.startswith('_')) or 'nothing public'}")

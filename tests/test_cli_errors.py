@@ -130,3 +130,28 @@ def test_validate_runs_a_policy_episode_of_each_task(task, tmp_path, capsys):
     code, out, err = _run(capsys, "validate", row.name, "--policy", "zero", "--out", str(tmp_path))
     assert code in (0, 1), err  # 1: the KF check failed, said in the report; never a traceback
     assert "wrote" in out and list(tmp_path.rglob("report.json"))
+
+
+AGENTS = {  # an agent file, and what the one line must say of it
+    "syntax": ("class A:\n    def __init__(self, env, seed) pass\n", ["line 2", "SyntaxError"]),
+    "import": ("import paragym_no_such_module_here\n", ["line 1", "ModuleNotFoundError"]),
+    "action": ("class A:\n    def __init__(self, env, seed):\n        pass\n\n    def reset(self, obs, info):\n"
+               "        pass\n\n    def act(self, obs, info):\n        return 'x'\n",
+               ["policy 'A'", "Orthoglide2PRRKappa-v1", "evaluation seed 0 episode 0", "action must be"]),
+}
+
+
+@pytest.mark.parametrize("case", sorted(AGENTS))
+def test_a_broken_agent_gets_one_line_naming_it(case, tmp_path, capsys):
+    """A submission's error names the file or the agent, the env and the episode, on one line (issue 38)."""
+    source, said = AGENTS[case]
+    agent = tmp_path / "my_agent.py"
+    agent.write_text(source)
+    code, _, err = _run(capsys, "leaderboard", "--no-progress", "--no-validation", "--workers", "1", "--env",
+                        "Orthoglide2PRRKappa-v1", "--agent", f"{agent}:A", "--policy", "A", "--db",
+                        str(tmp_path / "r.sqlite"), "--out", str(tmp_path / "o"))
+    lines = [line for line in err.strip().splitlines() if not line.startswith("pybullet build")]
+    assert code == 2 and len(lines) == 1, err
+    assert all(s in lines[0] for s in said), lines[0]
+    if case != "action":
+        assert str(agent) in lines[0]

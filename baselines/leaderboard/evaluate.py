@@ -51,6 +51,9 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int, producer: str | 
     except PlanningError:
         failed = 1.0
         ep = run_episode(env, ZeroPolicy(env.action_space), seed=s)
+    except (ValueError, TypeError) as exc:  # an action the env refuses, a policy that breaks: say whose and where
+        raise ValueError(f"policy {spec.name!r} on {spec.env_id}, evaluation seed {seed} episode {episode} (reset "
+                         f"seed {s}): {exc}") from exc
     wall = time.perf_counter() - t0
     metrics = bench_of(spec.env_id).metrics(ep)
     metrics["policy_failed"] = failed
@@ -83,6 +86,9 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
         except PlanningError:
             failed = 1.0
             val = validate_episode(env, ZeroPolicy(env.action_space), seed=seed, sensor_seed=seed)
+        except (ValueError, TypeError) as exc:
+            raise ValueError(f"policy {spec.name!r} on {spec.env_id}, dynamic fidelity, {scenario} scenario, reset "
+                             f"seed {seed}: {exc}") from exc
     finally:
         env.close()
     metrics = bench_of(spec.env_id).metrics(val.episode)
