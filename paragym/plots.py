@@ -24,7 +24,7 @@ __all__ = ["plot_capaman_episode", "plot_episode", "plot_capaman_motion", "plot_
 def _save(fig: Any, path: str | Path, title: str, dpi: int = 100,
           rect: tuple[float, float, float, float] = (0, 0, 1, 1)) -> Path:
     """Title, lay out (within ``rect`` of the figure), write the PNG (making its folder), close; the path."""
-    fig.suptitle(title)
+    fig.suptitle(title, wrap=True)  # a long title breaks into lines rather than running off both edges
     fig.tight_layout(rect=rect)
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)

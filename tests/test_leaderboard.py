@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import sqlite3
 
+import numpy as np
 import pytest
 
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard, summarise
@@ -329,3 +330,23 @@ def test_a_quick_table_of_an_older_id_says_where_its_dynamic_episodes_are():
     quick = markdown(summarise(rows), QUICK, {}, "# header")
     assert "runs the dynamic episodes on each task's newest id (`paragym/Orthoglide2PRRKappa-v1`)" in quick
     assert "newest id" not in markdown(summarise(rows), FULL, {}, "# header")
+
+
+def test_a_long_title_stays_inside_the_720_px_picture(tmp_path):
+    """A two-panel picture is 720 px wide; the quick suite's title is wider than that in one line, and once ran
+    off both edges (issue 38): it breaks into lines instead."""
+    from types import SimpleNamespace
+
+    from PIL import Image
+
+    from paragym.plots import plot_leaderboard
+
+    rows = [SimpleNamespace(policy=f"policy-{i}", kind="learned", success_rate=0.5, success_ci=(0.3, 0.7),
+                            return_mean=-3.0, return_ci=(-4.0, -2.0), metrics={}) for i in range(4)]
+    path = plot_leaderboard(rows, "return", "return", tmp_path / "lb.png", "paragym/CaPaManCollisionFree-v1: 3 "
+                            "episodes per policy (quick suite: a smoke test, not a ranking)", True)
+    pixels = np.asarray(Image.open(path).convert("L"))
+    title = pixels[: int(0.1 * pixels.shape[0])]
+    assert pixels.shape[1] == 720
+    assert title[:, :4].min() > 200 and title[:, -4:].min() > 200  # nothing drawn at either edge
+    assert title.min() < 100  # the title is there
