@@ -33,7 +33,7 @@ from pathlib import Path
 import numpy as np
 
 from paragym import machine
-from paragym.baselines.leaderboard.results import TOLERANCE, compare, read_results
+from paragym.baselines.leaderboard.results import TOLERANCE, compare, read_results, tolerance_of
 
 ROOT = Path(__file__).resolve().parents[1]
 #: the episode the issue was reported on (env, policy, evaluation seed, episode)
@@ -172,9 +172,14 @@ def main() -> int:
         discrete = [lab for c, lab in moved if c.deviation == float("inf")]
         worst = {k: max((c.deviation for c, lab in moved if lab[0] == k), default=0.0) for k in ("episode", "dynamic")}
         which = sorted({f"{lab[3]}" + ("" if lab[0] == "episode" else " (dynamic)") for c, lab in moved})
-        who = sorted({lab[1].split("/")[1].split("-")[0] for c, lab in moved})
+        per_task: dict[str, float] = {}
+        for c, lab in moved:
+            if lab[0] == "dynamic":
+                task = lab[1].split("/")[1].split("-")[0]
+                per_task[task] = max(per_task.get(task, 0.0), c.deviation)
+        dyn = ", ".join(f"{t} {v:.1e}" for t, v in sorted(per_task.items())) or "-"
         table.append((cpu, sum(c.verdict == "identical" for c in versus_file), len(picks), len(moved), worst["episode"],
-                      worst["dynamic"], len(discrete), ", ".join(which) or "-", ", ".join(who) or "-"))
+                      worst["dynamic"], len(discrete), ", ".join(which) or "-", dyn))
         i = next(j for j, lab in enumerate(label) if lab[0] == "episode" and (lab[1], lab[2], lab[4]["seed"],
                                                                              lab[4]["episode"]) == REPORTED)
         reported.append((cpu, got[i]["return"], versus_file[i].deviation))
@@ -207,7 +212,7 @@ def write_report(path: Path, args: argparse.Namespace, table: list, reported: li
         "*discrete* counts episodes whose success, length or a count changed.",
         "",
         "| simulated CPU | as the file | moved | largest, kinematic | largest, dynamic | discrete | which "
-        "policies moved | tasks |",
+        "policies moved | largest dynamic, per task |",
         "|---|---|---|---|---|---|---|---|",
     ]
     for cpu, same, n, moved, wk, wd, disc, which, who in table:
@@ -219,8 +224,15 @@ def write_report(path: Path, args: argparse.Namespace, table: list, reported: li
               f"episode {REPORTED[3]}: its return as each simulated CPU computes it.", "",
               "| simulated CPU | return | against the file |", "|---|---|---|"]
     lines += [f"| `{cpu}` | {ret!r} | {dev:.1e} |" for cpu, ret, dev in reported]
-    lines += ["", "The tolerance of `paragym verify` (`TOLERANCE`): " + "; ".join(
-        f"{f}: rtol {r['rtol']:g}, atol {r['atol']:g}" for f, r in TOLERANCE.items()) + ".", "",
+    from paragym import registry
+
+    dyn = {}
+    for env in (r.id for r in registry.rows()):
+        r = tolerance_of(env, "dynamic")
+        dyn.setdefault(f"rtol {r['rtol']:g}, atol {r['atol']:g}", []).append(env.split("/")[1])
+    lines += ["", f"The tolerance of `paragym verify`: kinematic (`TOLERANCE`) rtol {TOLERANCE['rtol']:g}, atol "
+              f"{TOLERANCE['atol']:g}; dynamic (each task's `Bench.dynamic_tolerance`): "
+              + "; ".join(f"{k} ({', '.join(v)})" for k, v in dyn.items()) + ".", "",
         "The cost of the CPU-independent code, against what it replaced, in the same run:", "",
         "| what | CPU-independent [us] | BLAS / LAPACK [us] | ratio |", "|---|---|---|---|"]
     lines += [f"| {w} | {a:.2f} | " + (f"{b:.2f} | {a / b:.2f} |" if b == b else "- | - |") for w, a, b in timing]

@@ -47,7 +47,7 @@ def test_the_rows_are_the_recorded_ones(tmp_path):
     got = rows(tmp_path)
     assert [(r["env"], r["policy"], r["seed"], r["episode"]) for r in got] == \
         [(r["env"], r["policy"], r["seed"], r["episode"]) for r in want]
-    rule = TOLERANCE["kinematic"]
+    rule = TOLERANCE
     for g, w in zip(got, want, strict=True):
         where = f"{g['env']} {g['policy']} episode {g['episode']}"
         found = compare(w, g, bench_of(g["env"]).exact_metrics(), rule["rtol"], rule["atol"])

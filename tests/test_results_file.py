@@ -13,7 +13,15 @@ import pytest
 
 from paragym import machine
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
-from paragym.baselines.leaderboard.results import TOLERANCE, _digest, compare, describe, read_results, verify
+from paragym.baselines.leaderboard.results import (
+    TOLERANCE,
+    _digest,
+    compare,
+    describe,
+    read_results,
+    tolerance_of,
+    verify,
+)
 
 ORTHO = "paragym/Orthoglide2PRRKappa-v1"
 
@@ -44,7 +52,8 @@ def test_the_results_file_describes_its_run(written: Path) -> None:
     facts = data["written_by"]["machine"]  # what the numbers depended on, beside the package versions
     assert facts["cpu"]["model"] and facts["cpu"]["isa"]["found"] and facts["blas"][0]["architecture"]
     assert facts["numba"]["cpu_name"] and facts["libc"] is not None
-    assert data["tolerance"]["kinematic"] == TOLERANCE["kinematic"] and data["tolerance"]["measured_by"]
+    assert data["tolerance"]["kinematic"] == TOLERANCE and data["tolerance"]["measured_by"]
+    assert data["tolerance"]["dynamic"][ORTHO] == tolerance_of(ORTHO, "dynamic")
     assert data["suite"]["seeds"] == [0] and data["envs"][ORTHO]["max_episode_steps"]
     assert {p["policy"] for p in data["policies"]} == {"gradient-c", "zero", "random"}
     assert all(p["producer"] for p in data["policies"])
@@ -121,7 +130,7 @@ def test_a_file_cannot_loosen_its_own_tolerance(written: Path, tmp_path: Path) -
     path = tmp_path / "loose.json"
     path.write_text(json.dumps(data))
     result = verify(path, sample=None, echo=lambda s: None)
-    assert result.tolerance["kinematic"] == TOLERANCE["kinematic"]
+    assert all(rule == TOLERANCE for (_, fidelity), rule in result.tolerance.items() if fidelity == "kinematic")
     assert not result.ok and result.count("diverged") == 1
 
 

@@ -8,7 +8,8 @@ ends in ``.gz``) holds everything a reader needs to trust or re-run a table:
   numbers can depend on it (:func:`paragym.machine.describe`: the CPU and its
   instruction sets, the C library, each BLAS with the kernel it picked,
   numba's target) and the command;
-* the tolerance a re-run on another machine is held to (:data:`TOLERANCE`);
+* the tolerance a re-run on another machine is held to (:data:`TOLERANCE`, and
+  each task's for its dynamic episodes);
 * the suite: evaluation seeds, episodes, the reset-seed rule and the dynamic
   episodes;
 * every env id's registration (entry point, arguments, step limit);
@@ -24,7 +25,7 @@ episode's policy here, refuses to compare when the policy here is not the
 one that made the row (another producer), re-runs the episode and compares
 (:func:`compare`): the discrete outcomes exactly (success, length, and the
 task's counts and flags, :meth:`paragym.baselines.tasks.Bench.exact_metrics`),
-the return and the continuous metrics within :data:`TOLERANCE`. Each episode
+the return and the continuous metrics within the tolerance (:func:`tolerance_of`). Each episode
 is *identical* (every bit), *within tolerance*, or *diverged*.
 
 Why a tolerance at all: what paragym computes itself (its numba kernels, the
@@ -62,18 +63,28 @@ from paragym.baselines.leaderboard.suite import EvalSuite, episode_seed
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, producer_id
 
-__all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "describe", "read_results", "verify",
-           "write_episodes_csv", "write_results"]
+__all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "describe", "read_results",
+           "tolerance_of", "verify", "write_episodes_csv", "write_results"]
 
 FORMAT = "paragym-results/1"
 #: the packages whose versions decide an episode's numbers
 PACKAGES = ("numpy", "scipy", "numba", "gymnasium", "pybullet", "torch", "stable_baselines3", "sb3_contrib",
             "filterpy")
-#: how far a re-run on another machine may move the return and each continuous metric, per fidelity:
-#: |a - b| <= atol + rtol * max(|a|, |b|). Set above the largest deviation that benchmarks/cpu_dependence.py
-#: measured on simulated CPUs (docs/reports/cpu.md); recorded in every results file.
-TOLERANCE: dict[str, dict[str, float]] = {"kinematic": {"rtol": 1e-6, "atol": 1e-9},
-                                          "dynamic": {"rtol": 1e-6, "atol": 1e-9}}
+#: how far a re-run of a kinematic-fidelity episode on another machine may move its return and each continuous
+#: metric: |a - b| <= atol + rtol * max(|a|, |b|). Set above the largest deviation that
+#: benchmarks/cpu_dependence.py measured on simulated CPUs (docs/reports/cpu.md); recorded in every results file.
+#: The dynamic fidelity's is each task's (:attr:`paragym.baselines.tasks.Bench.dynamic_tolerance`).
+TOLERANCE: dict[str, float] = {"rtol": 1e-6, "atol": 1e-9}
+
+
+def tolerance_of(env_id: str, fidelity: str) -> dict[str, float]:
+    """The tolerance of ``env_id``'s episodes in ``fidelity`` ("kinematic" or "dynamic") in this version."""
+    from paragym.baselines.tasks import bench_of
+
+    if fidelity == "kinematic":
+        return dict(TOLERANCE)
+    rtol, atol = bench_of(env_id).dynamic_tolerance
+    return {"rtol": rtol, "atol": atol}
 
 
 def _versions() -> dict[str, str]:
@@ -113,7 +124,9 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
                        "platform": f"{platform.system()} {platform.machine()}", "packages": _versions(),
                        "machine": machine.describe(), "command": command,
                        "date": time.strftime("%Y-%m-%d", time.gmtime())},
-        "tolerance": {**TOLERANCE, "exact": ["success", "length", "the exact metrics of each task's bench"],
+        "tolerance": {"kinematic": dict(TOLERANCE),
+                      "dynamic": {env: tolerance_of(env, "dynamic") for env in sorted({r.env for r in dynamic})},
+                      "exact": ["success", "length", "each task's exact columns, and policy_failed"],
                       "measured_by": "benchmarks/cpu_dependence.py (docs/reports/cpu.md)"},
         "suite": {"name": suite.name, "seeds": list(suite.seeds), "episodes": suite.episodes,
                   "reset_seed": "100000 + 1000 * seed + episode", "dynamic": [list(d) for d in suite.dynamic]},
@@ -243,8 +256,8 @@ class Verification:
     episodes: list[tuple[str, Comparison]] = field(default_factory=list)
     problems: list[str] = field(default_factory=list)
     written_by: str = ""
-    #: the tolerance each fidelity was held to (the stricter of the file's and this version's)
-    tolerance: dict[str, dict[str, float]] = field(default_factory=dict)
+    #: the tolerance each (env, fidelity) was held to (the stricter of the file's and this version's)
+    tolerance: dict[tuple[str, str], dict[str, float]] = field(default_factory=dict)
     machines: str = ""
 
     def count(self, verdict: str) -> int:
@@ -260,15 +273,14 @@ class Verification:
         return self.intact and self.checked > 0 and self.reproduced == self.checked and not self.problems
 
 
-def _tolerance(data: dict[str, Any]) -> dict[str, dict[str, float]]:
-    """Per fidelity, the stricter of the file's recorded tolerance and this version's :data:`TOLERANCE` (a
-    file cannot loosen the rule it is checked by)."""
-    recorded = data.get("tolerance") or {}
-    out = {}
-    for fidelity, rule in TOLERANCE.items():
-        theirs = recorded.get(fidelity) or {}
-        out[fidelity] = {k: min(float(theirs.get(k, v)), v) for k, v in rule.items()}
-    return out
+def _rule(data: dict[str, Any], env: str, fidelity: str) -> dict[str, float]:
+    """The stricter of the file's recorded tolerance for ``env``'s ``fidelity`` and this version's
+    (:func:`tolerance_of`): a file cannot loosen the rule it is checked by."""
+    recorded = (data.get("tolerance") or {}).get(fidelity) or {}
+    if fidelity == "dynamic" and "rtol" not in recorded:  # per env id
+        recorded = recorded.get(env) or {}
+    ours = tolerance_of(env, fidelity)
+    return {k: min(float(recorded.get(k, v)), v) for k, v in ours.items()}
 
 
 def _machine_line(facts: dict[str, Any] | None) -> str:
@@ -294,7 +306,7 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
     data = read_results(path)
     body = {k: v for k, v in data.items() if k != "sha256"}
     result = Verification(Path(path), _digest(body) == data.get("sha256"),
-                          written_by=f"paragym {data['written_by'].get('paragym', '?')}", tolerance=_tolerance(data),
+                          written_by=f"paragym {data['written_by'].get('paragym', '?')}",
                           machines=f"written on {_machine_line(data['written_by'].get('machine'))}; "
                                    f"re-run on {_machine_line(machine.describe())}")
     if not result.intact:
@@ -331,14 +343,15 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
             row = evaluate_episode(spec, entry["seed"], entry["episode"])
             again = {"return": row.episode_return, "length": row.length, "success": row.success,
                      "metrics": row.metrics}
-            rule = result.tolerance["kinematic"]
+            fidelity = "kinematic"
         else:
             if json.loads(dynamic_producer(spec)).get("dynamics") != entry["physics"]:
                 result.problems.append(f"{what}: this version's physics settings differ from the file's")
                 continue
             d = evaluate_dynamic(spec, entry["scenario"], entry["seed"])
             again = {"return": d.episode_return, "success": d.success, "metrics": d.metrics}
-            rule = result.tolerance["dynamic"]
+            fidelity = "dynamic"
+        rule = result.tolerance.setdefault((env, fidelity), _rule(data, env, fidelity))
         found_cmp = compare(entry, again, bench_of(env).exact_metrics(), rule["rtol"], rule["atol"])
         result.episodes.append((what, found_cmp))
         if found_cmp.verdict == "diverged":
@@ -359,7 +372,10 @@ def describe(result: Verification) -> str:
         else:
             lines.append(f"  DIVERGED          {what}: {'; '.join(c.differences[:4])}")
     lines += [f"  {p}" for p in result.problems if "does not reproduce" not in p]
-    rule = "; ".join(f"{f}: rtol {r['rtol']:g}, atol {r['atol']:g}" for f, r in result.tolerance.items())
+    rules: dict[str, list[str]] = {}
+    for (env, fidelity), r in sorted(result.tolerance.items()):
+        rules.setdefault(f"{fidelity}: rtol {r['rtol']:g}, atol {r['atol']:g}", []).append(env.split("/")[-1])
+    rule = "; ".join(f"{k} ({', '.join(v)})" for k, v in rules.items()) or "none applied"
     worst = max((c for _, c in result.episodes if c.verdict == "within tolerance"), key=lambda c: c.deviation,
                 default=None)
     lines.append(f"{result.reproduced} of {result.checked} episodes reproduced: {result.count('identical')} identical, "

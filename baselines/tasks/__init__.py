@@ -133,6 +133,11 @@ class Bench:
             reference plan on the paper's case; None: not validated apart from the dynamic episodes.
         solved: when a learned policy has solved the task: every :class:`Target`
             holds (``benchmarks/time_to_solve.py``); empty: the task states none.
+        dynamic_tolerance: (rtol, atol): how far a dynamic-fidelity episode's return and continuous metrics
+            may move when re-run on another CPU (``paragym verify``). Where PyBullet's contacts amplify a
+            last-bit difference of libm or BLAS into a different trajectory, the task states the spread that
+            ``benchmarks/cpu_dependence.py`` measured (``docs/reports/cpu.md``); success, length and the
+            exact columns are compared exactly all the same.
     """
 
     task: str
@@ -149,6 +154,7 @@ class Bench:
     validate_plan: Adapter | None = None
     validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = None
     solved: tuple[Target, ...] = ()
+    dynamic_tolerance: tuple[float, float] = (1e-6, 1e-9)
 
     def label(self, key: str) -> str:
         """The column label of metric ``key`` ("return" for the return)."""
@@ -198,6 +204,9 @@ def missing(bench: Bench, env_id: str) -> list[str]:
             out.append(f"a column for the solved target's figure {t.key!r}")
         elif t.against is not None and t.against not in names:
             out.append(f"the policy {t.against!r} that a solved target compares against, on {env_id}")
+    rtol, atol = (tuple(bench.dynamic_tolerance) + (None, None))[:2]
+    if len(bench.dynamic_tolerance) != 2 or not all(isinstance(v, float) and v >= 0 for v in (rtol, atol)):
+        out.append(f"a dynamic tolerance of two non-negative floats (rtol, atol); got {bench.dynamic_tolerance!r}")
     if bench.validated_plan is not None and bench.dynamics is None:
         out.append("dynamics, which the KF validation of the reference plan runs under")
     return out

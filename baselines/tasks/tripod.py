@@ -137,6 +137,10 @@ BENCH = Bench(
         BuiltIn("zero", zero_factory, "floor", "= odometry only: no correction (paper 004's uncorrected estimate)"),
     ),
     dynamics=TripodDynamics,  # the env's default
+    # the wheels' stick and slip on the terrain make the dynamic drive chaotic: a last-bit difference of libm or
+    # BLAS on another CPU moves the final unit error by tens of percent (measured in docs/reports/cpu.md);
+    # success is still compared exactly
+    dynamic_tolerance=(0.5, 1e-9),
     demo="redundant-encoder correction (paper 004)",
     plot_episode=plot_episode,
     plan=plan,
