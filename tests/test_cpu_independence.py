@@ -34,14 +34,23 @@ for env_id, name in (("paragym/CaPaManCollisionFree-v1", "ppo-seed0"), ("paragym
 print(out.hexdigest())
 """
 
-#: the hybrid's two singularity measures on 2,000 poses near home
+#: the hybrid's two singularity measures on 2,000 poses near home, and along 60 steps of the env
 HYBRID = """
-import hashlib, numpy as np
+import hashlib, numpy as np, gymnasium as gym
+import paragym
 from paragym.mechanisms import hybrid
 rng = np.random.default_rng(0)
 p = rng.normal(0, [0.03, 0.03, 0.03, 0.15, 0.15, 0.15], (2000, 6))
 lengths, mu_h, mu_t, *_ = hybrid.solve_rows(p, rng.uniform(0, 1, 2000))
-print(hashlib.sha256(np.concatenate([mu_h, mu_t]).tobytes()).hexdigest())
+env = gym.make("paragym/HybridSingularityFree-v2")
+env.reset(seed=0)
+steps = []
+for _ in range(60):
+    _, _, te, tr, info = env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+    steps += [info["mu_hexapod"], info["mu_tripod"]]
+    if te or tr:
+        env.reset()
+print(hashlib.sha256(np.concatenate([mu_h, mu_t, steps]).tobytes()).hexdigest())
 """
 
 

@@ -372,10 +372,12 @@ def describe(result: Verification) -> str:
         else:
             lines.append(f"  DIVERGED          {what}: {'; '.join(c.differences[:4])}")
     lines += [f"  {p}" for p in result.problems if "does not reproduce" not in p]
-    rules: dict[str, list[str]] = {}
+    rules: dict[str, dict[str, list[str]]] = {}
     for (env, fidelity), r in sorted(result.tolerance.items()):
-        rules.setdefault(f"{fidelity}: rtol {r['rtol']:g}, atol {r['atol']:g}", []).append(env.split("/")[-1])
-    rule = "; ".join(f"{k} ({', '.join(v)})" for k, v in rules.items()) or "none applied"
+        rules.setdefault(fidelity, {}).setdefault(f"rtol {r['rtol']:g}, atol {r['atol']:g}", []).append(
+            env.split("/")[-1])
+    rule = "; ".join(f"{fidelity}: " + ", ".join(k if len(by) == 1 else f"{k} ({', '.join(v)})" for k, v in by.items())
+                     for fidelity, by in rules.items()) or "none applied"
     worst = max((c for _, c in result.episodes if c.verdict == "within tolerance"), key=lambda c: c.deviation,
                 default=None)
     lines.append(f"{result.reproduced} of {result.checked} episodes reproduced: {result.count('identical')} identical, "
