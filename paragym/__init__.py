@@ -11,6 +11,7 @@ Importing ``paragym`` registers its environments with Gymnasium (one row per id 
 from gymnasium.envs.registration import register
 from gymnasium.envs.registration import registry as gym_registry
 
+from paragym import machine as _machine
 from paragym import registry as _registry
 from paragym.registry import ROWS, EnvRow, check_env_id
 
@@ -53,6 +54,18 @@ def _load_task_plugins() -> None:
                           f"{type(exc).__name__}: {exc}", RuntimeWarning, stacklevel=2)
 
 
+def _kernel_folders() -> list[str]:
+    """The folders of paragym's sources that compile numba kernels (the core, and baselines' actor)."""
+    import importlib.util
+    from pathlib import Path
+
+    core = Path(__path__[0])
+    spec = importlib.util.find_spec("paragym.baselines")
+    extra = [Path(p) for p in (spec.submodule_search_locations or [])] if spec else []
+    return [str(core), *(str(p) for p in extra if core not in p.parents)]
+
+
+_machine.refresh_kernel_cache(_kernel_folders())  # before any kernel loads: a cache older than its sources goes
 for _row in ROWS:
     register_env(_row)
 _load_task_plugins()

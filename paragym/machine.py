@@ -23,12 +23,14 @@ only when the libraries load).
 
 from __future__ import annotations
 
+import hashlib
 import os
 import platform
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-__all__ = ["NUMERIC_VARIABLES", "SIMULATED", "describe", "simulated_environment"]
+__all__ = ["NUMERIC_VARIABLES", "SIMULATED", "describe", "refresh_kernel_cache", "simulated_environment"]
 
 #: the environment variables that change which code computes an episode's floats
 NUMERIC_VARIABLES = ("OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "NUMBA_CPU_NAME",
@@ -116,3 +118,51 @@ def describe() -> dict[str, Any]:
         "numba": _numba_target(),
         "variables": {k: os.environ[k] for k in NUMERIC_VARIABLES if k in os.environ},
     }
+
+
+def _cache_dirs(folder: Path) -> list[Path]:
+    """Where numba caches the kernels of the sources in ``folder``: its ``__pycache__`` folders, or their
+    mirror under ``NUMBA_CACHE_DIR`` (numba's own two rules for a writable tree)."""
+    found = [p for p in folder.rglob("__pycache__") if p.is_dir()]
+    mirror = os.environ.get("NUMBA_CACHE_DIR")
+    if mirror:
+        for source_dir in {p.parent for p in folder.rglob("*.py")}:
+            where = Path(mirror) / source_dir.resolve().relative_to(source_dir.resolve().anchor)
+            if where.is_dir():
+                found.append(where)
+    return found
+
+
+def refresh_kernel_cache(folders: Sequence[str | Path]) -> bool:
+    """Clear numba's cached kernels of the sources in ``folders`` when any source there changed since the
+    caches were written; True when it cleared them.
+
+    numba keys a cached kernel on its own file only: a kernel that calls a kernel of another file keeps its
+    compiled copy of the callee after the callee's file changes (a ``git pull`` into an editable install does
+    that), and its results are then those of the old code, which no fresh install reproduces. So the digest
+    of the sources in ``folders`` that use numba is kept beside the caches
+    (``__pycache__/paragym-kernels.sha256`` in the first folder), and a new digest removes the cache files
+    (``*.nbi``, ``*.nbc``) of those folders, which numba wrote for paragym's kernels, before any is loaded.
+    An unwritable folder is left as it is."""
+    roots = [Path(f) for f in folders]
+    digest = hashlib.sha256()
+    for root in roots:
+        for path in sorted(root.rglob("*.py")):
+            text = path.read_bytes()
+            if b"numba" in text:  # a kernel can only depend on the sources that compile kernels
+                digest.update(str(path.relative_to(root)).encode() + b"\0" + text)
+    stamp = roots[0] / "__pycache__" / "paragym-kernels.sha256"
+    try:
+        if stamp.is_file() and stamp.read_text().strip() == digest.hexdigest():
+            return False
+        for root in roots:
+            for cache in _cache_dirs(root):
+                for path in [*cache.glob("*.nbi"), *cache.glob("*.nbc")]:
+                    path.unlink(missing_ok=True)
+        stamp.parent.mkdir(exist_ok=True)
+        fresh = stamp.with_name(f"{stamp.name}.{os.getpid()}")
+        fresh.write_text(digest.hexdigest() + "\n")
+        os.replace(fresh, stamp)
+    except OSError:  # a read-only install: numba caches elsewhere, per user
+        return False
+    return True

@@ -93,3 +93,23 @@ def test_the_deterministic_tanh_is_tanh() -> None:
     np.testing.assert_allclose(got, np.tanh(x), rtol=1e-15, atol=1e-300)
     assert np.all(np.abs(got) <= 1.0)
     assert hashlib.sha256(got.tobytes()).hexdigest()  # finite bytes
+
+
+def test_a_kernel_cache_older_than_its_sources_is_cleared(tmp_path) -> None:
+    """numba keys a cached kernel on its own file only: after a callee's file changes, the caller's cache would
+    run the old callee. Any change to a source that uses numba clears the caches; an unchanged tree keeps them."""
+    core, other = tmp_path / "core", tmp_path / "other"
+    for folder, name in ((core, "callee.py"), (other, "caller.py")):
+        (folder / "__pycache__").mkdir(parents=True)
+        (folder / name).write_text("from numba import njit\n")
+        (folder / "__pycache__" / f"{name[:-3]}.k-1.py311.nbi").write_bytes(b"index")
+        (folder / "__pycache__" / f"{name[:-3]}.k-1.py311.1.nbc").write_bytes(b"code")
+    (core / "plain.py").write_text("x = 1\n")
+    caches = lambda: sorted(p.name for p in tmp_path.rglob("*.nb?"))  # noqa: E731
+    assert machine.refresh_kernel_cache([core, other]) and caches() == []  # no digest yet: cleared
+    (other / "__pycache__" / "caller.k-1.py311.nbi").write_bytes(b"index")
+    assert not machine.refresh_kernel_cache([core, other]) and caches() == ["caller.k-1.py311.nbi"]
+    (core / "plain.py").write_text("x = 2\n")  # no kernel there: the caches stand
+    assert not machine.refresh_kernel_cache([core, other]) and caches() == ["caller.k-1.py311.nbi"]
+    (core / "callee.py").write_text("from numba import njit\n# changed\n")
+    assert machine.refresh_kernel_cache([core, other]) and caches() == []
