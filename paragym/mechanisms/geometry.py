@@ -3,12 +3,13 @@ rigid parts that the PyBullet scenes are built of."""
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
-__all__ = ["PartShape", "k_quat_to_matrix", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
+__all__ = ["PartShape", "k_jacobi", "k_quat_to_matrix", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
 
 
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -46,6 +47,60 @@ def k_quat_to_matrix(q: np.ndarray, out: np.ndarray) -> None:
     out[0, 0], out[0, 1], out[0, 2] = 1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)
     out[1, 0], out[1, 1], out[1, 2] = 2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)
     out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
+
+
+@njit(cache=True, error_model="numpy")
+def k_jacobi(a, v):
+    """The eigen-decomposition of the symmetric ``a`` (n, n) in place, by cyclic Jacobi rotations: the
+    eigenvalues end on ``a``'s diagonal, the eigenvectors in ``v``'s columns (``v`` is set to the identity
+    first). Each sweep zeroes every off-diagonal element in row order (Golub and Van Loan, Algorithm 8.5.3);
+    an element too small to change either diagonal element it couples is set to zero after three sweeps, and
+    the sweeps stop when every off-diagonal element is zero (six to eight sweeps for n = 6). Plain arithmetic
+    and sqrt only, in a fixed order, where LAPACK runs on OpenBLAS's per-CPU kernels: the same bits on every
+    CPU (issue 38)."""
+    n = a.shape[0]
+    for i in range(n):
+        for j in range(n):
+            v[i, j] = 1.0 if i == j else 0.0
+    for sweep in range(60):
+        off = 0.0
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                off += abs(a[p, q])
+        if off == 0.0:
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                apq = a[p, q]
+                if apq == 0.0:
+                    continue
+                app, aqq = a[p, p], a[q, q]
+                g = 100.0 * abs(apq)
+                if sweep > 2 and abs(app) + g == abs(app) and abs(aqq) + g == abs(aqq):
+                    a[p, q] = a[q, p] = 0.0
+                    continue
+                theta = (aqq - app) / (2.0 * apq)
+                if abs(theta) > 1e150:
+                    t = 0.5 / theta
+                else:
+                    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
+                    if theta < 0.0:
+                        t = -t
+                c = 1.0 / math.sqrt(t * t + 1.0)
+                s = t * c
+                for k in range(n):
+                    akp, akq = a[k, p], a[k, q]
+                    a[k, p] = c * akp - s * akq
+                    a[k, q] = s * akp + c * akq
+                for k in range(n):
+                    apk, aqk = a[p, k], a[q, k]
+                    a[p, k] = c * apk - s * aqk
+                    a[q, k] = s * apk + c * aqk
+                a[p, q] = a[q, p] = 0.0
+                for k in range(n):
+                    vkp, vkq = v[k, p], v[k, q]
+                    v[k, p] = c * vkp - s * vkq
+                    v[k, q] = s * vkp + c * vkq
 
 
 def matrix_to_quat(m: np.ndarray) -> np.ndarray:

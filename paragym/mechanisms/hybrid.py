@@ -42,7 +42,7 @@ function here (``solve``, ``solve_rows``, ``split``, ``hexapod_matrix``, ...)
 loops them over N, and the env's step calls the same loop, so one robot and
 4096 run the same code. The smallest singular values are the square roots of
 the smallest eigenvalues of M^T M, found by cyclic Jacobi rotations
-(:func:`_min_eigenvalue`) rather than LAPACK: OpenBLAS, under LAPACK, picks
+(:func:`paragym.mechanisms.geometry.k_jacobi`) rather than LAPACK: OpenBLAS, under LAPACK, picks
 its kernels per CPU, and its eigenvalues differed in the last bits between
 CPUs (issue 38); the rotations use +, *, / and sqrt only, the same bits
 everywhere.
@@ -57,6 +57,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
+from paragym.mechanisms.geometry import k_jacobi
 from paragym.units import DEG
 
 __all__ = [
@@ -237,49 +238,11 @@ def _constraints(rt, top, axes, inv_e, rows):
 
 @njit(cache=True, error_model="numpy")
 def _min_eigenvalue(a):
-    """The smallest eigenvalue of the symmetric 6x6 ``a`` (overwritten), by cyclic Jacobi rotations: each
-    sweep zeroes every off-diagonal element in row order (Golub and Van Loan, Algorithm 8.5.3); an element
-    too small to change either diagonal element it couples is set to zero after three sweeps, and the sweeps
-    stop when every off-diagonal element is zero (six to eight sweeps here). Plain arithmetic and sqrt only,
-    in a fixed order: the same bits on every CPU."""
-    n = a.shape[0]
-    for sweep in range(60):
-        off = 0.0
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                off += abs(a[p, q])
-        if off == 0.0:
-            break
-        for p in range(n - 1):
-            for q in range(p + 1, n):
-                apq = a[p, q]
-                if apq == 0.0:
-                    continue
-                app, aqq = a[p, p], a[q, q]
-                g = 100.0 * abs(apq)
-                if sweep > 2 and abs(app) + g == abs(app) and abs(aqq) + g == abs(aqq):
-                    a[p, q] = a[q, p] = 0.0
-                    continue
-                theta = (aqq - app) / (2.0 * apq)
-                if abs(theta) > 1e150:
-                    t = 0.5 / theta
-                else:
-                    t = 1.0 / (abs(theta) + math.sqrt(theta * theta + 1.0))
-                    if theta < 0.0:
-                        t = -t
-                c = 1.0 / math.sqrt(t * t + 1.0)
-                s = t * c
-                for k in range(n):
-                    akp, akq = a[k, p], a[k, q]
-                    a[k, p] = c * akp - s * akq
-                    a[k, q] = s * akp + c * akq
-                for k in range(n):
-                    apk, aqk = a[p, k], a[q, k]
-                    a[p, k] = c * apk - s * aqk
-                    a[q, k] = s * apk + c * aqk
-                a[p, q] = a[q, p] = 0.0
+    """The smallest eigenvalue of the symmetric 6x6 ``a`` (overwritten), by Jacobi rotations
+    (:func:`paragym.mechanisms.geometry.k_jacobi`)."""
+    k_jacobi(a, np.empty((6, 6)))
     low = a[0, 0]
-    for i in range(1, n):
+    for i in range(1, 6):
         low = min(low, a[i, i])
     return low
 

@@ -39,6 +39,8 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
+from paragym.mechanisms.geometry import k_jacobi
+
 __all__ = ["FOOT", "TripodGeometry", "distances", "eta", "forward", "inverse", "k_eta", "kernel_consts",
            "plate_fit", "plate_frame_units", "relocate"]
 
@@ -281,16 +283,64 @@ def eta(units: np.ndarray, eta0: np.ndarray, geometry: TripodGeometry = DEFAULT_
     return out, converged
 
 
+@njit(cache=True, error_model="numpy")
+def _k_fit(local, world, rot, shift):
+    """The rigid motion that best places the points ``local`` (N, K, 3) onto ``world`` (N, K, 3), least
+    squares, into ``rot`` (N, 3, 3) and ``shift`` (N, 3): Horn's closed form (J. Opt. Soc. Am. A 4, 1987): the
+    rotation is the unit quaternion of the largest eigenvalue of the 4x4 matrix built from the centred
+    points' cross-covariance, found by Jacobi rotations (:func:`paragym.mechanisms.geometry.k_jacobi`). The
+    same least-squares rotation as Kabsch's SVD, without LAPACK, whose last bits depend on the CPU."""
+    k = local.shape[1]
+    s = np.empty((3, 3))
+    m = np.empty((4, 4))
+    vec = np.empty((4, 4))
+    lc, wc = np.empty(3), np.empty(3)
+    for n in range(local.shape[0]):
+        for a in range(3):
+            lc[a], wc[a] = 0.0, 0.0
+            for j in range(k):
+                lc[a] += local[n, j, a]
+                wc[a] += world[n, j, a]
+            lc[a] /= k
+            wc[a] /= k
+        for a in range(3):
+            for b in range(3):
+                acc = 0.0
+                for j in range(k):
+                    acc += (local[n, j, a] - lc[a]) * (world[n, j, b] - wc[b])
+                s[a, b] = acc
+        sxx, sxy, sxz = s[0, 0], s[0, 1], s[0, 2]
+        syx, syy, syz = s[1, 0], s[1, 1], s[1, 2]
+        szx, szy, szz = s[2, 0], s[2, 1], s[2, 2]
+        m[0, 0], m[0, 1], m[0, 2], m[0, 3] = sxx + syy + szz, syz - szy, szx - sxz, sxy - syx
+        m[1, 1], m[1, 2], m[1, 3] = sxx - syy - szz, sxy + syx, szx + sxz
+        m[2, 2], m[2, 3] = -sxx + syy - szz, syz + szy
+        m[3, 3] = -sxx - syy + szz
+        for a in range(4):
+            for b in range(a):
+                m[a, b] = m[b, a]
+        k_jacobi(m, vec)
+        best = 0
+        for a in range(1, 4):
+            if m[a, a] > m[best, best]:
+                best = a
+        w, x, y, z = vec[0, best], vec[1, best], vec[2, best], vec[3, best]
+        norm = math.sqrt(w * w + x * x + y * y + z * z)
+        w, x, y, z = w / norm, x / norm, y / norm, z / norm
+        r = rot[n]
+        r[0, 0], r[0, 1], r[0, 2] = w * w + x * x - y * y - z * z, 2 * (x * y - w * z), 2 * (x * z + w * y)
+        r[1, 0], r[1, 1], r[1, 2] = 2 * (x * y + w * z), w * w - x * x + y * y - z * z, 2 * (y * z - w * x)
+        r[2, 0], r[2, 1], r[2, 2] = 2 * (x * z - w * y), 2 * (y * z + w * x), w * w - x * x - y * y + z * z
+        for a in range(3):
+            shift[n, a] = wc[a] - (r[a, 0] * lc[0] + r[a, 1] * lc[1] + r[a, 2] * lc[2])
+
+
 def _kabsch(local: np.ndarray, world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R (N, 3, 3), t (N, 3) with world ~ R local + t (least squares, proper rotations)."""
-    lc, wc = local.mean(axis=1), world.mean(axis=1)
-    h = np.swapaxes(local - lc[:, None], 1, 2) @ (world - wc[:, None])
-    u, _, vt = np.linalg.svd(h)
-    d = np.sign(np.linalg.det(np.swapaxes(vt, 1, 2) @ np.swapaxes(u, 1, 2)))
-    fix = np.ones((len(d), 3))
-    fix[:, 2] = d
-    rot = np.swapaxes(vt, 1, 2) @ (fix[:, :, None] * np.swapaxes(u, 1, 2))
-    return rot, wc - np.einsum("nij,nj->ni", rot, lc)
+    """R (N, 3, 3), t (N, 3) with world ~ R local + t (least squares, proper rotations; :func:`_k_fit`)."""
+    local, world = np.ascontiguousarray(local, float), np.ascontiguousarray(world, float)
+    rot, shift = np.empty((len(local), 3, 3)), np.empty((len(local), 3))
+    _k_fit(local, world, rot, shift)
+    return rot, shift
 
 
 def plate_fit(units: np.ndarray, eta: np.ndarray, geometry: TripodGeometry = DEFAULT_GEOMETRY

@@ -182,10 +182,12 @@ class TripodDynamicScene:
         for i in range(3):
             sim.reset_joint(self.ROBOT, self.legs[i], float(eta[i]))
             # the chassis level and facing its true heading, in the leg's frame
-            leg = rotation @ quat_to_matrix(np.array(self._leg_frames[i])) @ _rot_y(float(eta[i]))
+            # numpy's own loops, not BLAS, whose per-CPU kernels round a 3x3 product differently (issue 38)
+            leg = np.einsum("ij,jk,kl->il", rotation, quat_to_matrix(np.array(self._leg_frames[i])),
+                            _rot_y(float(eta[i])))
             yaw = heading + float(heading_error[i])
             chassis = np.array([[math.cos(yaw), -math.sin(yaw), 0.0], [math.sin(yaw), math.cos(yaw), 0.0], [0, 0, 1]])
-            sim.reset_joint(self.ROBOT, self.chassis[i], matrix_to_quat(leg.T @ chassis))
+            sim.reset_joint(self.ROBOT, self.chassis[i], matrix_to_quat(np.einsum("ji,jk->ik", leg, chassis)))
             for w in self.wheels[i]:
                 sim.reset_joint(self.ROBOT, w, 0.0)
         self._wheel_angle[:] = 0.0
