@@ -39,7 +39,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: the episode the issue was reported on (env, policy, evaluation seed, episode)
 REPORTED = ("paragym/CaPaManCollisionFree-v1", "dagger-seed2", 0, 0)
 SOURCES = ["blas-sandybridge", "avx512-blas", "numba-generic", "numpy-baseline-simd", "libm-without-fma",
-           "older-x86-64-same-libm", "older-x86-64"]
+           "older-blas-generic-numba", "older-x86-64"]
 
 
 def pick(data: dict, per_policy: int, dynamic: int, seed: int) -> list[tuple[str, int]]:

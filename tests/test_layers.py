@@ -15,8 +15,8 @@ FOLDERS = {"paragym": "paragym", "envs": "paragym.envs", "planners": "paragym.pl
 #: the layers, bottom first. A module imports from its own layer's package or from lower layers only;
 #: packages that share a layer (envs, planners, validation) do not import each other.
 LAYERS = [
-    ("paragym.registry",),  # one row per env id: every layer may read it
-    ("paragym", "paragym.units", "paragym.trajectories", "paragym.rollout", "paragym.machine"),  # plain data
+    ("paragym.registry", "paragym.machine"),  # one row per env id; what results depend on: every layer may read them
+    ("paragym", "paragym.units", "paragym.trajectories", "paragym.rollout"),  # registration and plain data
     ("paragym.mechanisms",),  # the papers' math
     ("paragym.sim",),  # PyBullet
     ("paragym.tasks",),  # each task's scenario: dataclass, validation, the paper's case, the random generator

@@ -29,12 +29,13 @@ the return and the continuous metrics within the tolerance (:func:`tolerance_of`
 is *identical* (every bit), *within tolerance*, or *diverged*.
 
 Why a tolerance at all: what paragym computes itself (its numba kernels, the
-learned actors, the hybrid's eigenvalues) gives the same bits whatever the
-CPU's BLAS kernels, SIMD extensions or numba target
+learned actors, the hybrid's eigenvalues, the tripod's rigid fit) gives the
+same bits whatever the CPU's BLAS kernels or numba's target
 (``tests/test_cpu_independence.py``), but glibc's libm computes sin, cos,
 exp, atan2, ... with per-CPU variants (and differently between its
-versions), and Python, numpy, numba and PyBullet all call it; filterpy's
-UKF and a user's own agent call BLAS. ``benchmarks/cpu_dependence.py``
+versions), and Python, numpy, numba and PyBullet all call it; numpy takes
+its own AVX-512 loops for arctan2, arcsin and arccos; filterpy's UKF and a
+user's own agent call BLAS. ``benchmarks/cpu_dependence.py``
 measures what each source moves (``docs/reports/cpu.md``); the tolerance is
 set above the largest deviation it found.
 """
