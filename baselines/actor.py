@@ -85,8 +85,9 @@ def _expm1_pos(y: float) -> float:
 
 @njit(cache=True)
 def k_tanh(x: float) -> float:
-    """tanh(x) in float64 from :func:`_expm1_pos` (tanh|x| = e / (e + 2), e = exp(2|x|) - 1): within 1e-15 of
-    libm's, and the same bits on every CPU. 1 (with x's sign) from |x| = 20 on, where tanh rounds to 1."""
+    """tanh(x) in float64 from :func:`_expm1_pos` (``tanh(abs(x)) = e / (e + 2)`` with ``e = exp(2 abs(x)) - 1``):
+    within 1e-15 of libm's, and the same bits on every CPU; 1 with the sign of x from ``abs(x) = 20`` on, where
+    tanh rounds to 1."""
     a = abs(x)
     if a >= 20.0:
         t = 1.0

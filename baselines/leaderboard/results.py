@@ -72,7 +72,7 @@ FORMAT = "paragym-results/1"
 PACKAGES = ("numpy", "scipy", "numba", "gymnasium", "pybullet", "torch", "stable_baselines3", "sb3_contrib",
             "filterpy")
 #: how far a re-run of a kinematic-fidelity episode on another machine may move its return and each continuous
-#: metric: |a - b| <= atol + rtol * max(|a|, |b|). Set above the largest deviation that
+#: metric: ``|a - b| <= atol + rtol * max(|a|, |b|)``. Set above the largest deviation that
 #: benchmarks/cpu_dependence.py measured on simulated CPUs (docs/reports/cpu.md); recorded in every results file.
 #: The dynamic fidelity's is each task's (:attr:`paragym.baselines.tasks.Bench.dynamic_tolerance`).
 TOLERANCE: dict[str, float] = {"rtol": 1e-6, "atol": 1e-9}
