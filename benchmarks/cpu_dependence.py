@@ -90,12 +90,12 @@ def run_as(cpu: str, path: str, picks: list[tuple[str, int]]) -> list[dict]:
 
 def speed() -> list[tuple[str, float, float]]:
     """(what, us with the CPU-independent code, us with the BLAS/LAPACK code it replaced), same run."""
+    import gymnasium as gym
+
     from paragym.baselines.policies import policies_for
     from paragym.mechanisms import hybrid
 
     rows = []
-    import gymnasium as gym
-
     for env_id, name in (("paragym/CaPaManCollisionFree-v1", "ppo-seed0"), ("paragym/Orthoglide2PRRKappa-v0",
                                                                               "sac-seed0")):
         env = gym.make(env_id)

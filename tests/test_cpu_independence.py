@@ -6,7 +6,6 @@ tolerance covers them (``docs/reports/cpu.md``)."""
 
 from __future__ import annotations
 
-import hashlib
 import subprocess
 import sys
 
@@ -114,8 +113,7 @@ def test_the_deterministic_tanh_is_tanh() -> None:
     x = np.concatenate([np.linspace(-30, 30, 200_001), [0.0, -0.0, 1e-30, -1e-12, 20.0, 400.0, -400.0]])
     got = np.array([k_tanh(v) for v in x])
     np.testing.assert_allclose(got, np.tanh(x), rtol=1e-15, atol=1e-300)
-    assert np.all(np.abs(got) <= 1.0)
-    assert hashlib.sha256(got.tobytes()).hexdigest()  # finite bytes
+    assert np.all(np.abs(got) <= 1.0) and got[-3] == 1.0 and got[-1] == -1.0
 
 
 def test_a_kernel_cache_older_than_its_sources_is_cleared(tmp_path) -> None:
