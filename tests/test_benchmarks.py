@@ -134,3 +134,14 @@ def test_time_to_solve_runs_again_a_run_checked_against_other_targets(tmp_path):
         path = tmp_path / f"run{k}.json"
         path.write_text(json.dumps({"targets": targets}))
         assert (module.stored_run(path, env_id) is not None) == taken, targets
+
+
+def test_cpu_dependence_writes_its_report(tmp_path):
+    """The issue's episode, here and with another CPU's BLAS kernels: a row each, the episode's table, the
+    speed table, written to the report."""
+    report = tmp_path / "cpu.md"
+    out = _run("benchmarks/cpu_dependence.py", "--per-policy", "0", "--dynamic", "0", "--cpu", "blas-sandybridge",
+               "--report", str(report))
+    assert "host " in out and "blas-sandybridge " in out and "us against" in out, out
+    text = report.read_text()
+    assert "| `blas-sandybridge` | 1/1 |" in text and "dagger-seed2" in text and "| ratio |" in text, text
