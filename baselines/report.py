@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 
 import paragym
+from paragym import registry
 from paragym.baselines.policies import policies_for
 from paragym.baselines.stats import BOOTSTRAP_REPS, bootstrap_mean_ci
 from paragym.baselines.store import ResultStore
@@ -42,7 +43,7 @@ __all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalize
 def latest_versions() -> list[str]:
     """The newest registered version of every task (its id without ``-vN``)."""
     newest: dict[str, str] = {}
-    for env_id in paragym.ENVIRONMENTS:
+    for env_id in (r.id for r in registry.rows()):
         task, version = env_id.rsplit("-v", 1)
         if task not in newest or int(version) > int(newest[task].rsplit("-v", 1)[1]):
             newest[task] = env_id
@@ -53,7 +54,7 @@ def _runs(models_dirs: list[Path]) -> dict[str, dict[str, list[dict[str, Any]]]]
     """env id -> algo -> the training logs (JSON) of its seeds."""
     found: dict[str, dict[str, list[dict[str, Any]]]] = defaultdict(lambda: defaultdict(list))
     for folder in models_dirs:
-        for env_id in paragym.ENVIRONMENTS:
+        for env_id in (r.id for r in registry.rows()):
             shipped = folder.resolve() == shipped_models_dir().resolve()
             for path in sorted((shipped_models_folder(env_id) if shipped else folder / env_name(env_id)
                                 ).glob("*_seed*.json")):
@@ -215,7 +216,7 @@ def write_report(out: str | Path, db: str | Path | None, models_dirs: list[str |
              f"95 % bootstrap confidence interval of the mean ({BOOTSTRAP_REPS} resamples of the seeds), against env "
              f"steps and wall-clock. Written by `paragym report`.", ""]
     try:
-        for env_id in paragym.ENVIRONMENTS:
+        for env_id in (r.id for r in registry.rows()):
             if env_id not in runs:
                 continue
             curves = {}

@@ -45,7 +45,7 @@ import numpy as np
 import yaml
 
 import paragym
-from paragym import check_env_id
+from paragym import check_env_id, registry
 from paragym.models import shipped_models_dir, shipped_models_folder
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
@@ -337,7 +337,7 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
 
         import paragym.baselines.sb3_vec as sb3_vec
 
-        if env_id not in paragym.VECTOR_ENTRY_POINTS:
+        if registry.row(env_id).vector_entry_point is None:
             raise ValueError(f"{env_id} has no native vector env yet; train without --vectorized")
         env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, n_envs, **env_kwargs))
         env.seed(seed)

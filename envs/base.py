@@ -1,22 +1,27 @@
-"""The base class every paragym environment derives from.
+"""The single env of every paragym task: a generic shell over the task's contract.
 
-As in Gymnasium-Robotics, the base owns ``reset``/``step``/``render``/``close``
-and the checks every task shares (the action's shape and finiteness, the
-render mode); a task fills the hooks below. All randomness comes from
-``self.np_random``, so the same seed gives the same episode bit for bit.
+:class:`ParagymEnv` owns ``reset``/``step``/``render``/``close``, the checks
+every task shares (the action's shape and finiteness, the render mode, the
+seed and the options) and one lifecycle; everything else is the task's
+(:class:`paragym.tasks.base.Task`). An env id's class names its task and its
+rules and carries the docstring its docs page is made from. All randomness
+comes from ``self.np_random``, so the same seed gives the same episode bit
+for bit.
 """
 
 from __future__ import annotations
 
-import warnings
+import inspect
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from paragym.sim.client import divides, physics_steps
+from paragym.mechanisms.geometry import pose6
+from paragym.tasks.base import check_control_period
 
-__all__ = ["ParagymEnv", "check_action", "check_control_period", "check_options", "check_seed", "pose6"]
+__all__ = ["ParagymEnv", "box", "check_action", "check_control_period", "check_copyable", "check_options", "check_seed",
+           "env_signature", "pose6"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -34,32 +39,31 @@ def check_seed(seed: Any, name: str = "seed") -> int | None:
     return int(seed)
 
 
-def check_control_period(control_period: float, time_step: float, refuse: bool, later: str | None = None) -> None:
-    """Simulated time must run at the control period's rate: a ``control_period`` (s) that is not a whole number
-    of physics steps of ``time_step`` (s) is refused with a ValueError naming it (``refuse``), or, in a released
-    id that ran it rounded, warned about (naming the ``later`` id that refuses it)."""
-    if divides(control_period, time_step):
-        return
-    said = (f"control_period {control_period!r} s is not a whole number of physics steps of {time_step!r} s: each "
-            f"step would be simulated over {physics_steps(control_period, time_step) * time_step:g} s")
-    if refuse:
-        raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
-    why = f"; {later} refuses it" if later else ""
-    warnings.warn(f"{said} (this id's released behaviour{why})", UserWarning, stacklevel=3)
+def box(spec: Any) -> gym.spaces.Box:
+    """The Gymnasium Box of a task's :class:`paragym.tasks.base.BoxSpec` (float32)."""
+    return gym.spaces.Box(spec.low, spec.high, spec.shape, np.float32)
 
 
-def pose6(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
-    """A pose as (6,): the position (m) and the roll, pitch, yaw (rad) of the rotation matrix."""
-    from paragym.mechanisms.hybrid import matrix_euler
-
-    return np.concatenate([position, matrix_euler(rotation[None])[0]])
-
-
-def check_options(options: Any) -> dict[str, Any]:
-    """``reset``'s options as a new dict (None: empty), or a TypeError naming them."""
+def check_options(options: Any, known: tuple[str, ...] = ("scenario",)) -> dict[str, Any]:
+    """``reset``'s options as a new dict (None: empty), or a TypeError naming them; a key not in ``known`` is a
+    ValueError naming it (an option a task does not read must not pass silently)."""
     if options is not None and not isinstance(options, dict):
         raise TypeError(f"options must be a dict or None; got {type(options).__name__}")
-    return dict(options or {})
+    options = dict(options or {})
+    for key in options:
+        if key not in known:
+            raise ValueError(f"options has an unknown key {key!r}; reset takes {', '.join(map(repr, known))}")
+    return options
+
+
+def check_copyable(env: Any) -> None:
+    """A TypeError if ``env``'s world holds a PyBullet client: a copy would share it (two envs stepping one
+    simulation, and the original disconnected when the copy is collected)."""
+    world = env.__dict__.get("world")
+    if world is not None and getattr(world, "live", True):
+        raise TypeError(f"{type(env).__name__} with fidelity={env.params.fidelity!r} cannot be copied or pickled: "
+                        "its PyBullet client cannot be; make a new env with the same arguments and reset it with "
+                        "the same seed")
 
 
 _BOUNDS: dict[int, tuple[Any, list[float], list[float]]] = {}
@@ -125,107 +129,150 @@ def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows:
     return np.clip(arr, space.low, space.high)
 
 
-class ParagymEnv(gym.Env):
-    """Shared ``reset``/``step``/``render``/``close``; tasks fill the hooks.
+def env_signature(task: Any, first: tuple[inspect.Parameter, ...] = ()) -> inspect.Signature:
+    """The keyword arguments of a task's env, as ``help()`` and the docs show them: ``render_mode`` and those of
+    its ``Params.from_kwargs`` (``first``: a vector env's own before them)."""
+    own = inspect.Parameter("render_mode", inspect.Parameter.KEYWORD_ONLY, default=None, annotation="str | None")
+    params = [q.replace(kind=inspect.Parameter.KEYWORD_ONLY)
+              for q in list(inspect.signature(task.Params.from_kwargs).parameters.values())[1:]
+              if q.kind is not inspect.Parameter.VAR_KEYWORD]
+    return inspect.Signature([*first, own, *params])
 
-    Every paragym env is the N = 1 case of its task's transition
-    (``paragym.tasks.*_step``): ``reset`` calls the task's ``_start`` and
-    ``step`` its ``_transition``, which one mixin per task gives the single
-    env and the vector env alike, and both read the observation, reward and
-    termination from ``self.state``. A task fills ``_info() -> dict``,
-    ``_render_rgb() -> array`` and ``_close()``; ``_ended()`` says whether a
-    step now would run past the episode's end; in dynamic fidelity
-    ``_body()``, ``commanded_pose()`` and ``step_duration()`` are what KF
-    validation reads (:mod:`paragym.validation.episode`).
+
+class ParagymEnv(gym.Env):
+    """The single env of a task: the N = 1 case of its transition, over the task's contract.
+
+    A subclass per env id sets :attr:`task` (a :class:`paragym.tasks.base.Task`) and :attr:`rules` (one value
+    of the task's ``Rules``) and documents the id in its docstring; it adds no code. The keyword arguments
+    are the task's (``Params.from_kwargs`` checks them, the one place they are), readable as attributes of the
+    env (``env.unwrapped.geometry``).
+
+    Lifecycle, the same for every task: ``step`` before the first ``reset``, after a step that returned
+    ``terminated=True`` (a TimeLimit's truncation is the wrapper's) or after ``close`` raises a RuntimeError saying
+    what to do; an unknown ``reset`` option is a ValueError naming it; an env whose world holds a PyBullet
+    client refuses ``copy.deepcopy`` and pickling with a TypeError (any other copy is independent: a render
+    scene is not copied but built again when drawn).
     """
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 25}
 
-    def __init__(self, render_mode: str | None = None) -> None:
+    #: the task (``paragym.tasks.<task>_step.TASK``) and this id's rules (a value of ``task.Rules``)
+    task: Any = None
+    rules: Any = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.task is not None:
+            cls.__signature__ = env_signature(cls.task)
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None; "
                              f"got {render_mode!r}")
         self.render_mode = render_mode
+        self.params = self.task.Params.from_kwargs(self.rules, **kwargs)
+        self.observation_space, self.action_space = (box(b) for b in self.task.spaces(self.params))
+        self.state = self.task.State.empty(1, self.params)
+        self._render: dict[str, Any] = {}
+        self._evaluation: Any = None
+        self._ended = True  # until the first reset
+        self._closed = False
+        self.world = self.task.make_world(self.params, 1, render_mode)
+
+    def __getattr__(self, name: str) -> Any:
+        """The env's arguments, as its parameters hold them (``env.geometry``, ``env.fidelity``, ...)."""
+        params = self.__dict__.get("params")
+        if params is None or name.startswith("__") or not hasattr(params, name):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        return getattr(params, name)
+
+    def __getstate__(self) -> dict[str, Any]:
+        check_copyable(self)
+        return {**self.__dict__, "_render": {}}
 
     # --- the loop -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
+        self._check_open()
         check_seed(seed)
         options = check_options(options)
         super().reset(seed=seed)
-        scenarios = self._start(_FIRST, [self.np_random], options)
+        task, p = self.task, self.params
+        scenarios = task.draw_scenarios(options.get("scenario", p.scenario), [self.np_random], p, self.world)
+        task.reset(self.state, p, _FIRST, scenarios, [self.np_random], self.world)
+        self._evaluation = task.evaluate(self.state, p, self.world)
+        self._ended = False
         info = self._info()
         info["scenario"] = scenarios[0]
         return self.state.obs[0].copy(), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        self._check_open()
         action = check_action(action, self.action_space)
-        if self._ended():
-            raise RuntimeError("the episode has ended: call reset()")
-        self._transition(action[None], _ONE)
+        if self._ended:
+            raise RuntimeError("call reset() before step()" if self._evaluation is None else
+                               "the episode has ended (a step returned terminated=True): call reset()")
+        self.task.step(self.state, self.params, action[None], _ONE, self.world)
+        self._evaluation = self.task.evaluate(self.state, self.params, self.world)
         s = self.state
-        return s.obs[0].copy(), float(s.reward[0]), bool(s.terminated[0]), False, self._info()
+        self._ended = terminated = bool(s.terminated[0])
+        return s.obs[0].copy(), float(s.reward[0]), terminated, False, self._info()
 
     def render(self) -> np.ndarray | None:
-        if self.render_mode == "rgb_array":
-            return self._render_rgb()
-        if self.render_mode == "human":
-            self._show()  # the PyBullet GUI window shows the scene
-        return None
+        self._check_open()
+        if self.render_mode is None or self._evaluation is None:
+            return None
+        image = self.task.render(self._render, self.state, self.params, self.world, 0, self.render_mode == "human")
+        return image if self.render_mode == "rgb_array" else None
 
     def close(self) -> None:
-        self._close()
+        if self.__dict__.get("_closed", True):
+            return
+        self._closed = True
+        for scene in self._render.values():
+            scene.close()
+        self._render.clear()
+        if self.world is not None:
+            self.world.close()
 
-    # --- the task's state and hooks ------------------------------------------------------------
-    #: the task's state of one robot (N = 1) and the transition's parameters (paragym.tasks.*_step)
-    state: Any = None
-    params: Any = None
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
 
-    def _ended(self) -> bool:
-        """Whether a step now would run past the episode's end (then it raises)."""
-        return bool(self.state.terminated[0])
+    def _info(self) -> dict[str, Any]:
+        """The info of the one robot: the task's numbers, success and failure (:meth:`Task.evaluate`) and its
+        details (:meth:`Task.details`)."""
+        ev = self._evaluation
+        info = {name: value[0].item() if value.ndim == 1 else value[0].copy() for name, value in ev.numbers.items()}
+        info.update(self.task.details(self.state, self.params, self.world, 0))
+        info["is_success"] = bool(ev.success[0])
+        info["failure"] = self.task.failures[int(ev.failure[0])]
+        return info
 
     @property
     def scenario(self) -> Any:
         """The episode's scenario (``info["scenario"]`` of the last reset)."""
         return self.state.scenarios[0]
 
-    def _info(self) -> dict[str, Any]:
-        raise NotImplementedError
-
-    # --- a task's hooks, shared by its single env and its vector env (a mixin defines them) -----
-    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
-        """Draw and check the scenarios of robots ``rows`` (one generator
-        each), start them, and return the scenarios."""
-        raise NotImplementedError
-
-    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        """Step the ``active`` robots of ``self.state`` with ``actions`` (N, ...)."""
-        raise NotImplementedError
-
-    def _render_rgb(self) -> np.ndarray:
-        raise NotImplementedError
-
-    def _show(self) -> None:
-        """Update the GUI in ``render_mode="human"``: pose the scene by drawing
-        it (an env whose scene PyBullet keeps up to date needs nothing)."""
-        self._render_rgb()
+    @property
+    def scene(self) -> Any:
+        """The world's PyBullet scene (None where the world has none, or has not built it yet)."""
+        return getattr(self.world, "scene", None)
 
     # --- what KF validation reads in dynamic fidelity (paragym.validation.episode) ---------------
-    #: the accelerometer array on the validated body: the arguments of
-    #: ``paragym.validation.sensors.AccelerometerArray.paper_layout``
-    sensor_layout: dict[str, float] = {}
-
-    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        """The validated body: (sim client, robot, link, the judged point in the link's frame (m), the
-        dynamics' physics step (s))."""
-        raise NotImplementedError
+    @property
+    def sensor_layout(self) -> dict[str, float]:
+        """The accelerometer array on the validated body: the arguments of
+        ``paragym.validation.sensors.AccelerometerArray.paper_layout`` (the task's)."""
+        return self.task.sensor_layout
 
     def _dynamic_body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        if getattr(self, "fidelity", None) != "dynamic":
+        """The validated body: (sim client, robot, link, the judged point in the link's frame (m), the
+        dynamics' physics step (s)), read from the dynamic world."""
+        if self.params.fidelity != "dynamic":
             raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
                              "fidelity='dynamic'")
-        return self._body()
+        return self.world.body()
 
     @property
     def body_point(self) -> np.ndarray:
@@ -251,27 +298,10 @@ class ParagymEnv(gym.Env):
 
     def commanded_pose(self) -> np.ndarray:
         """The pose of the validated body that the last action commanded: x, y, z (m), roll, pitch, yaw (rad)."""
-        raise NotImplementedError
+        self._dynamic_body()
+        return self.world.commanded_pose(self.state, self.params)
 
     def step_duration(self) -> float:
         """Simulated seconds of the step just taken (whole physics steps)."""
-        raise NotImplementedError
-
-    # --- a PyBullet scene built on the first render, for envs whose step needs none ----
-    _render_scene: Any = None
-
-    def _drawn(self, build: Any, pose: Any) -> np.ndarray:
-        """Build the render scene on first use (``build(gui)``), pose it
-        (``pose(scene)``) and draw it."""
-        if self._render_scene is None:
-            self._render_scene = build(self.render_mode == "human")
-        pose(self._render_scene)
-        return self._render_scene.render()
-
-    def _close_render_scene(self) -> None:
-        if self._render_scene is not None:
-            self._render_scene.close()
-            self._render_scene = None
-
-    def _close(self) -> None:
-        self._close_render_scene()
+        self._dynamic_body()
+        return self.world.step_duration(self.state, self.params)

@@ -7,28 +7,11 @@ scenarios come from :mod:`paragym.tasks.hybrid`.
 
 from __future__ import annotations
 
-import math
-from typing import Any
-
-import numpy as np
-from gymnasium import spaces
-
-from paragym.envs.base import ParagymEnv, check_control_period, pose6
+from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
-from paragym.mechanisms import hybrid
-from paragym.sim.client import physics_steps
-from paragym.sim.hybrid_dynamic import HybridDynamics, HybridDynamicScene
-from paragym.tasks import hybrid_step as task_step
-from paragym.tasks.base import BROKEN_GAP, renamed
-from paragym.tasks.hybrid import (
-    HybridScenario,
-    draw_scenarios,
-    paper_scenario,
-    random_scenario,
-    random_scenarios,
-    resolve_hybrid,
-)
-from paragym.tasks.hybrid_step import HybridParams, HybridState
+from paragym.tasks.base import renamed
+from paragym.tasks.hybrid import HybridScenario, paper_scenario, random_scenario, random_scenarios
+from paragym.tasks.hybrid_step import RULES, TASK
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
            "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",
@@ -36,27 +19,7 @@ __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV
            "random_scenario", "random_scenarios"]
 
 
-class _HybridTask:
-    """The task's hooks, the same for the single env (N = 1) and the vector env."""
-
-    state: HybridState
-    params: HybridParams
-
-    def new_state(self, n: int) -> HybridState:
-        return HybridState.empty(n, self.params.tau, self.params.obs_size)
-
-    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
-        scenarios = draw_scenarios(options.get("scenario", self.scenario_arg), rngs, self.geometry)
-        task_step.reset(self.state, self.params, rows, scenarios)
-        if getattr(self, "world", None) is not None:
-            self.world.reset(self.state)
-        return scenarios
-
-    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        task_step.step(self.state, self.params, actions, active, getattr(self, "world", None))
-
-
-class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
+class HybridSingularityFreeEnv(ParagymEnv):
     """Move a hexapod + tripod's end-effector along a polynomial path without
     singular poses or leg-limit violations.
 
@@ -140,127 +103,7 @@ class HybridSingularityFreeEnv(_HybridTask, ParagymEnv):
       that the physics step does not divide warns.
     """
 
-    version = 0
-    _w_end = 0.0
-    #: v2's rules in dynamic fidelity: orientation tracking, a broken mechanism's end, whole physics steps
-    _v2_rules = False
-
-    def __init__(self, scenario: str | HybridScenario = "random", render_mode: str | None = None,
-                 max_delta_step: float = 0.05, j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05,
-                 w_singular: float = 1.0, w_limit: float = 1.0,
-                 geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
-                 w_end: float | None = None, fidelity: str = "kinematic", dynamics: HybridDynamics | None = None,
-                 control_period: float = 0.05, track_tolerance: float = 0.005,
-                 track_angle_tolerance: float | None = None) -> None:
-        super().__init__(render_mode)
-        if fidelity not in ("kinematic", "dynamic"):
-            raise ValueError(f"fidelity must be 'kinematic' or 'dynamic'; got {fidelity!r}")
-        if dynamics is not None and not isinstance(dynamics, HybridDynamics):
-            raise TypeError(f"dynamics must be a HybridDynamics or None; got {type(dynamics).__name__}")
-        for name, value in (("control_period", control_period), ("track_tolerance", track_tolerance)):
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number; got {value!r}")
-        resolve_hybrid(scenario)
-        if self.version == 0 and w_end is not None:
-            raise ValueError("w_end (the shaping toward a feasible end) is an argument of HybridSingularityFree-v1")
-        w_end = self._w_end if w_end is None else w_end
-        if not (np.isfinite(w_end) and w_end >= 0):
-            raise ValueError(f"w_end must be a number >= 0; got {w_end!r}")
-        for name, value in (("max_delta_step", max_delta_step), ("j_bar", j_bar), ("tau", tau)):
-            if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{name} must be a positive number; got {value!r}")
-        self.scenario_arg, self.geometry = scenario, geometry
-        self.max_delta_step, self.j_bar, self.tau = float(max_delta_step), float(j_bar), float(tau)
-        self.w_offset, self.w_delta, self.w_singular, self.w_limit = w_offset, w_delta, w_singular, w_limit
-        self.params = HybridParams(self.max_delta_step, self.j_bar, float(w_offset), float(w_delta),
-                                   float(w_singular), float(w_limit), geometry, self.tau, self.version,
-                                   float(w_end))
-        self.action_space = spaces.Box(-1.0, 1.0, (4,), np.float32)
-        self.observation_space = spaces.Box(-10.0, 10.0, (self.params.obs_size,), np.float32)
-        self.state = self.new_state(1)
-        self.fidelity = fidelity
-        self.world: task_step.DynamicWorld | None = None
-        if track_angle_tolerance is not None and not self._v2_rules:
-            raise ValueError("track_angle_tolerance is an argument of paragym/HybridSingularityFree-v2")
-        angle = math.radians(1.0) if track_angle_tolerance is None else track_angle_tolerance
-        if not (np.isfinite(angle) and angle > 0):
-            raise ValueError(f"track_angle_tolerance must be a positive angle (rad); got {angle!r}")
-        self._failure: str | None = None
-        if fidelity == "dynamic":
-            dynamics = dynamics or HybridDynamics.fast()
-            check_control_period(control_period, dynamics.time_step, refuse=self._v2_rules,
-                                 later="paragym/HybridSingularityFree-v2")
-            scene = HybridDynamicScene(geometry, dynamics, gui=render_mode == "human")
-            self.world = task_step.DynamicWorld(scene, float(control_period), float(track_tolerance),
-                                                angle if self._v2_rules else None,
-                                                BROKEN_GAP if self._v2_rules else None)
-
-    def _info(self) -> dict[str, Any]:
-        s = self.state
-        return {"step": int(s.k[0]), "u": float(s.u[s.k[0]]), "delta": float(s.delta[0]),
-                "offset": s.offset[0].copy(), "lengths": s.lengths[0].copy(),
-                "mu_hexapod": float(s.mu_h[0]), "mu_tripod": float(s.mu_t[0]),
-                "free": bool(s.free[0]), "within_limits": bool(s.within[0]),
-                "is_success": bool(s.terminated[0] and s.all_free[0]),
-                "max_delta_step": self.max_delta_step, "j_bar": self.j_bar,
-                "tracking_error": 0.0 if self.world is None else self.world.tracking_error,
-                "orientation_error": 0.0 if self.world is None else self.world.orientation_error,
-                "failure": self._failure}
-
-    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
-        self._failure = None
-        return super()._start(rows, rngs, options)
-
-    def _transition(self, actions: np.ndarray, active: np.ndarray) -> None:
-        super()._transition(actions, active)
-        if self._failure is None:  # the first reason the episode fails, kept
-            self._failure = self._failure_now()
-
-    def _failure_now(self) -> str | None:
-        """Why this step is not free: "broken", "tracking", "leg limit" or "singular" (None: it is free)."""
-        s, w = self.state, self.world
-        if w is not None and w.broken:
-            return "broken"
-        if w is not None and not w.tracked[0]:
-            return "tracking"
-        if not s.within[0]:
-            return "leg limit"
-        return None if s.free[0] else "singular"
-
-    # KF validation (dynamic fidelity): the paper's array scaled to platform E
-    sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
-
-    def _body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        scene = self.world.scene
-        return (scene.sim, *scene.e_platform, np.zeros(3), scene.dynamics.time_step)
-
-    def commanded_pose(self) -> np.ndarray:
-        """E's pose of the step: the nominal path plus the action's offset."""
-        t_e = hybrid.pose_matrix(hybrid.home_pose(self.geometry) + self.world.command)[0]
-        return pose6(t_e[:3, 3], t_e[:3, :3])
-
-    def step_duration(self) -> float:
-        h = self._dynamic_body()[4]
-        return h * physics_steps(self.world.control_period, h)
-
-    def _show(self) -> None:
-        if self.world is None:  # the dynamic scene's GUI shows the simulation as it runs
-            self._render_rgb()
-
-    def _render_rgb(self) -> np.ndarray:
-        from paragym.sim.hybrid_scene import HybridScene
-
-        if self.world is not None:  # the simulated robot, not the command
-            return self.world.scene.render()
-
-        solved = hybrid.solve(self.state.pose[:1], self.state.delta[0], self.geometry, validate=False)
-        return self._drawn(lambda gui: HybridScene(self.geometry, gui=gui),
-                           lambda scene: scene.set_state(solved.t_a[0], solved.t_e[0]))
-
-    def _close(self) -> None:
-        self._close_render_scene()
-        if self.world is not None:
-            self.world.scene.close()
+    task, rules = TASK, RULES[0]
 
 
 class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
@@ -309,8 +152,7 @@ class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
       reward, success and end are v0's.
     """
 
-    version = 1
-    _w_end = 0.0
+    rules = RULES[1]
 
 
 class HybridSingularityFreeV2Env(HybridSingularityFreeV1Env):
@@ -350,42 +192,27 @@ class HybridSingularityFreeV2Env(HybridSingularityFreeV1Env):
       fidelity is v1's.
     """
 
-    _v2_rules = True
+    rules = RULES[2]
 
 
-class HybridSingularityFreeVectorEnv(_HybridTask, ParagymVectorEnv):
+class HybridSingularityFreeVectorEnv(ParagymVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeEnv` stepped together:
     the same transition (:mod:`paragym.tasks.hybrid_step`) over N robots.
-    Keyword arguments are the single env's."""
+    Keyword arguments are the single env's (kinematic fidelity)."""
 
-    single_class = HybridSingularityFreeEnv
-
-    def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 **kwargs: Any) -> None:
-        if kwargs.get("fidelity", "kinematic") != "kinematic":
-            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
-                             "for the dynamic fidelity")
-        super().__init__(num_envs, max_episode_steps, render_index, **kwargs)
-
-    def _infos(self) -> dict[str, Any]:
-        s = self.state
-        return self._for_every_robot(is_success=s.terminated & s.all_free, free=s.free.copy())
-
-    def _load_single(self, i: int) -> None:
-        one, s = self.single_env.state, self.state
-        one.pose[0], one.delta[0] = s.pose[i], s.delta[i]
+    task, rules = TASK, RULES[0]
 
 
 class HybridSingularityFreeV1VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeV1Env` stepped together."""
 
-    single_class = HybridSingularityFreeV1Env
+    rules = RULES[1]
 
 
 class HybridSingularityFreeV2VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeV2Env` stepped together (kinematic: v1's)."""
 
-    single_class = HybridSingularityFreeV2Env
+    rules = RULES[2]
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {

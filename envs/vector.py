@@ -18,18 +18,22 @@ Stable-Baselines3 (:mod:`paragym.baselines.sb3_vec`) and TorchRL's
 ``GymWrapper`` expect.
 
 The single env and the vector env of a task are shells over one
-transition, written once over N robots (``paragym.tasks.*_step``): the
+contract, written once over N robots (:class:`paragym.tasks.base.Task`): the
 single env is its N = 1 case, so the numbers agree because the code is the
-same. A reset draws each resetting robot's random numbers from its own
+same. The vector env builds no single env: it checks its keyword arguments
+with the task's ``Params.from_kwargs`` as the single env does, and its info
+holds the numbers, success and failure of :meth:`Task.evaluate`, the one
+place a task decides them. A reset draws each resetting robot's random numbers from its own
 generator (the draws stay per robot to match the single env); the tests
 that accept or reject a drawn scenario then run for all of them at once
 where the task allows (Orthoglide, hybrid).
-PyBullet stays the renderer: ``render()`` draws robot ``render_index`` in the
-single env's scene.
+PyBullet stays the renderer: ``render()`` draws robot ``render_index`` as the
+single env draws its robot.
 """
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 import numpy as np
@@ -37,51 +41,82 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from paragym.envs.base import check_action, check_options, check_seed
+from paragym.envs.base import box, check_action, check_copyable, check_options, check_seed, env_signature
 
 __all__ = ["ParagymVectorEnv", "SameStepVectorEnv"]
 
 
 class ParagymVectorEnv(VectorEnv):
-    """Shared reset/step/render; tasks fill the hooks.
+    """N robots of a task in one call: a generic shell over the task's contract.
 
-    ``reset`` and ``step`` call the task's ``_start(rows, rngs, options)`` and
-    ``_transition(actions, active)`` (``rows``: integer indices of robots;
-    ``active``: the boolean mask of robots that step), the same methods the
-    single env calls (one mixin per task gives both), and read the
-    observations, rewards and terminations from ``self.state`` (the task's
-    state of N robots, ``paragym.tasks.*_step``). A task fills
-    ``_infos() -> dict of (N,) arrays`` and ``_load_single(i)`` (put robot
-    i's state into ``self.single_env`` for rendering).
+    A subclass per env id sets :attr:`task` and :attr:`rules`, as the single env's class does (the two share
+    them); ``reset`` and ``step`` call the task's ``draw_scenarios``, ``reset``, ``step`` and ``evaluate``
+    over the robots that reset or step, and read the observations, rewards and terminations from
+    ``self.state`` (the task's state of N robots). Keyword arguments are the single env's; the fidelities
+    the native vector env runs are the task's ``vector_fidelities``.
+
+    Lifecycle: as the single env's, with ``reset_mask`` an option besides ``scenario``; an ended robot is
+    reset by the next step (autoreset), not refused.
     """
 
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
 
-    #: the task's single env, whose keyword arguments this env takes
-    single_class: type
+    #: the task and this id's rules, the single env's
+    task: Any = None
+    rules: Any = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if cls.task is not None:
+            own = [inspect.Parameter("num_envs", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation="int"),
+                   *(inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d)
+                     for n, d in (("max_episode_steps", None), ("render_index", 0)))]
+            cls.__signature__ = env_signature(cls.task, tuple(own))
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 **kwargs: Any) -> None:
+                 render_mode: str | None = None, **kwargs: Any) -> None:
         if not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer; got {num_envs!r}")
         if not 0 <= render_index < num_envs:
             raise ValueError(f"render_index must lie in [0, {num_envs - 1}]; got {render_index!r}")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be 'rgb_array' or None; got {render_mode!r}")
         self.num_envs = int(num_envs)
-        self.single_env = single_env = self.single_class(**kwargs)
-        self.render_mode = single_env.render_mode
+        self.params = self.task.vector_params(self.rules, kwargs)
+        self.render_mode = render_mode
         self.render_index = int(render_index)
-        self.single_observation_space = single_env.observation_space
-        self.single_action_space = single_env.action_space
+        self.single_observation_space, self.single_action_space = (box(b) for b in self.task.spaces(self.params))
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.max_episode_steps = max_episode_steps
         self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
-        self.params, self.scenario_arg = single_env.params, single_env.scenario_arg
-        self.geometry = single_env.geometry
-        self.state = single_env.new_state(self.num_envs)
+        self.state = self.task.State.empty(self.num_envs, self.params)
+        self.world = self.task.make_world(self.params, self.num_envs, render_mode)
+        self._render: dict[str, Any] = {}
+        self._evaluation: Any = None
         self._elapsed = np.zeros(self.num_envs, np.int64)
         self._autoreset = np.zeros(self.num_envs, bool)
         self._started = False
+        self._closed = False
+        self._failure_names = np.array(self.task.failures, dtype=object)
+
+    def __getattr__(self, name: str) -> Any:
+        """The env's arguments, as its parameters hold them (as the single env's)."""
+        params = self.__dict__.get("params")
+        if params is None or name.startswith("__") or not hasattr(params, name):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        return getattr(params, name)
+
+    def __getstate__(self) -> dict[str, Any]:
+        check_copyable(self)
+        return {**self.__dict__, "_render": {}}
+
+    def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
+        """Draw, check and start the scenarios of robots ``rows`` (one generator each); return them."""
+        task, p = self.task, self.params
+        scenarios = task.draw_scenarios(options.get("scenario", p.scenario), rngs, p, self.world)
+        task.reset(self.state, p, rows, scenarios, rngs, self.world)
+        return scenarios
 
     # --- the loop ---------------------------------------------------------------------
     def reset(self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
@@ -90,7 +125,9 @@ class ParagymVectorEnv(VectorEnv):
         array of ``num_envs``, as gymnasium's vector envs take it). Every
         argument is checked before any robot changes: a bad seed list or mask
         leaves the env as it was."""
-        options = check_options(options)
+        if self._closed:
+            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
+        options = check_options(options, ("scenario", "reset_mask"))
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
         elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
@@ -123,20 +160,24 @@ class ParagymVectorEnv(VectorEnv):
             for i, rng in zip(rows, saved, strict=True):  # a refused scenario leaves the generators as they were
                 self._rngs[i] = rng
             raise
+        self._evaluation = self.task.evaluate(self.state, self.params, self.world)
         self._elapsed[rows] = 0
         self._autoreset[rows] = False
         self._started = True
         return self.state.obs.copy(), self._infos()
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
+        if self._closed:
+            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
         if not self._started:
             raise RuntimeError("call reset() before step()")
         actions = check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
         resetting = np.flatnonzero(self._autoreset)
         active = ~self._autoreset
-        self._transition(actions, active)
+        self.task.step(self.state, self.params, actions, active, self.world)
         if resetting.size:
             self._start(resetting, [self._rngs[i] for i in resetting], {})
+        self._evaluation = self.task.evaluate(self.state, self.params, self.world)
         s = self.state
         obs, reward, terminated = s.obs.copy(), s.reward.copy(), s.terminated.copy()
         self._elapsed += active
@@ -156,32 +197,35 @@ class ParagymVectorEnv(VectorEnv):
         rows = np.flatnonzero(self._autoreset)
         if rows.size:
             self._start(rows, [self._rngs[i] for i in rows], {})
+            self._evaluation = self.task.evaluate(self.state, self.params, self.world)
             self._elapsed[rows] = 0
             self._autoreset[rows] = False
         return rows, self.state.obs[rows].copy()
 
     def render(self) -> np.ndarray | None:
         """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
-        if self.render_mode != "rgb_array":
+        if self.render_mode != "rgb_array" or not self._started:
             return None
-        self._load_single(self.render_index)
-        return self.single_env.render()
+        return self.task.render(self._render, self.state, self.params, self.world, self.render_index, False)
 
     def close_extras(self, **kwargs: Any) -> None:
-        self.single_env.close()
+        if self._closed:
+            return
+        self._closed = True
+        for scene in self._render.values():
+            scene.close()
+        self._render.clear()
+        if self.world is not None:
+            self.world.close()
 
-    # --- the task's hooks ------------------------------------------------------------------
     def _infos(self) -> dict[str, Any]:
-        return {}
-
-    def _for_every_robot(self, **arrays: np.ndarray) -> dict[str, Any]:
-        """Gymnasium's vector info dict: each (N,) array with its ``_key``
-        mask, here true for every robot."""
+        """Gymnasium's vector info dict: the task's numbers, ``is_success`` and ``failure`` of every robot
+        (:meth:`Task.evaluate`), each with its ``_key`` mask, here true for every robot."""
+        ev = self._evaluation
+        arrays = {**{k: v.copy() for k, v in ev.numbers.items()}, "is_success": ev.success.copy(),
+                  "failure": self._failure_names[ev.failure]}
         every = np.ones(self.num_envs, bool)
         return {k: v for name, value in arrays.items() for k, v in ((name, value), (f"_{name}", every))}
-
-    def _load_single(self, i: int) -> None:
-        raise NotImplementedError
 
 
 class SameStepVectorEnv(VectorEnv):

@@ -8,6 +8,9 @@ Importing ``paragym`` registers its environments with Gymnasium (one row per id 
     env = gym.make("paragym/CaPaManCollisionFree-v0")
 """
 
+from types import MappingProxyType
+from typing import Any
+
 from gymnasium.envs.registration import register
 from gymnasium.envs.registration import registry as gym_registry
 
@@ -17,11 +20,17 @@ from paragym.registry import ROWS, EnvRow, check_env_id
 
 __version__ = "0.9.0"
 
-#: env id -> (entry point, max episode steps, one-line description), from :mod:`paragym.registry`
-ENVIRONMENTS: dict[str, tuple[str, int, str]] = {r.id: (r.entry_point, r.max_episode_steps, r.summary) for r in ROWS}
 
-#: env id -> the native vector env (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)
-VECTOR_ENTRY_POINTS: dict[str, str] = {r.id: r.vector_entry_point for r in ROWS if r.vector_entry_point}
+def __getattr__(name: str) -> Any:
+    """Two read-only views of :mod:`paragym.registry`, made when asked (so they hold every row added since):
+    ``ENVIRONMENTS``, env id -> (entry point, max episode steps, one-line description), and
+    ``VECTOR_ENTRY_POINTS``, env id -> the native vector env
+    (``gymnasium.make_vec(..., vectorization_mode="vector_entry_point")``)."""
+    if name == "ENVIRONMENTS":
+        return MappingProxyType({r.id: (r.entry_point, r.max_episode_steps, r.summary) for r in _registry.rows()})
+    if name == "VECTOR_ENTRY_POINTS":
+        return MappingProxyType({r.id: r.vector_entry_point for r in _registry.rows() if r.vector_entry_point})
+    raise AttributeError(f"module 'paragym' has no attribute {name!r}")
 
 
 
@@ -31,9 +40,6 @@ def register_env(row: EnvRow) -> EnvRow:
     registers each of its ids with one row (its env classes and its bench module named in it);
     ``docs/guides/adding-a-task.md`` is the recipe."""
     _registry.add(row)
-    ENVIRONMENTS[row.id] = (row.entry_point, row.max_episode_steps, row.summary)
-    if row.vector_entry_point:
-        VECTOR_ENTRY_POINTS[row.id] = row.vector_entry_point
     if row.id not in gym_registry:
         register(id=row.id, entry_point=row.entry_point, max_episode_steps=row.max_episode_steps,
                  vector_entry_point=row.vector_entry_point)

@@ -118,7 +118,8 @@ def env_page(env_id: str, image: str | None = None) -> str:
               f"| action space | `{action_space}` |",
               f"| observation space | `{observation_space}` |",
               f"| episode length | at most {row.max_episode_steps} steps (`TimeLimit`) |",
-              f"| scenarios | {', '.join(f'`{s}`' for s in row.scenarios)}; the paper's case: `{row.paper_scenario}` |",
+              f"| scenarios | {', '.join(f'`{s}`' for s in row.scenario_names)}; "
+              f"the paper's case: `{row.paper_scenario}` |",
               f"| task | `{row.task}` ({row.summary}) |",
               f"| reference | `{bench.reference}` (`paragym demo {row.name}`) |",
               ""]

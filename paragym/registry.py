@@ -27,7 +27,8 @@ class EnvRow:
         max_episode_steps: the TimeLimit Gymnasium wraps the env in.
         task: the task the id belongs to: its scenarios, metrics and policies are the task's.
         paper_scenario: the ``scenario`` argument of the paper's case.
-        scenarios: every named ``scenario`` argument.
+        scenarios: every named ``scenario`` argument; None (paragym's own rows): the task's own list,
+            ``Task.scenario_names`` (:attr:`scenario_names` reads it).
         summary: one line of what the id is.
         models_from: the id whose shipped models this one plays: a later version whose default mode
             runs that id's episodes bit for bit where its rules do not end them sooner (tested); None:
@@ -42,7 +43,7 @@ class EnvRow:
     max_episode_steps: int
     task: str
     paper_scenario: str
-    scenarios: tuple[str, ...]
+    scenarios: tuple[str, ...] | None
     summary: str
     models_from: str | None = None
     bench: str | None = None
@@ -51,6 +52,17 @@ class EnvRow:
     def bench_module(self) -> str:
         """The module that defines the task's ``BENCH``."""
         return self.bench or f"paragym.baselines.tasks.{self.task}"
+
+    @property
+    def scenario_names(self) -> tuple[str, ...]:
+        """Every named ``scenario`` argument: the row's, else its task's (read from the env class that
+        :attr:`entry_point` names, imported by name as Gymnasium imports it)."""
+        if self.scenarios is not None:
+            return self.scenarios
+        import importlib
+
+        module, cls = self.entry_point.split(":")
+        return tuple(getattr(importlib.import_module(module), cls).task.scenario_names)
 
     @property
     def name(self) -> str:
@@ -63,45 +75,42 @@ class EnvRow:
         return int(self.id.rsplit("-v", 1)[1])
 
 
-_CAPAMAN = ("paper", "random")
-_HYBRID = ("paper", "random")
-_ORTHOGLIDE = ("paper", "random")
-#: paper 004 has three drives and no single "paper" case: its scenario 2, the push, stands for it
-_TRIPOD = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
+# The scenario names are each task's (``Task.scenario_names``): the rows say None. Paper 004 has three drives
+# and no single "paper" case: its scenario 2, the push, stands for it.
 
 ROWS: tuple[EnvRow, ...] = (
     EnvRow("paragym/CaPaManCollisionFree-v0", "paragym.envs.capaman:CaPaManCollisionFreeEnv",
-           "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv", 400, "capaman", "paper", _CAPAMAN,
+           "paragym.envs.capaman:CaPaManCollisionFreeVectorEnv", 400, "capaman", "paper", None,
            "CaPaMan 3-DOF: tour T.C.1->2->3->1 around obstacles, whole manipulator collision-free (paper 000)"),
     EnvRow("paragym/CaPaManCollisionFree-v1", "paragym.envs.capaman:CaPaManCollisionFreeV1Env",
-           "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv", 400, "capaman", "paper", _CAPAMAN,
+           "paragym.envs.capaman:CaPaManCollisionFreeV1VectorEnv", 400, "capaman", "paper", None,
            "CaPaMan v1: the v0 tour with goal-relative observations, a clearance look-ahead and a time penalty"),
     EnvRow("paragym/HybridSingularityFree-v0", "paragym.envs.hybrid:HybridSingularityFreeEnv",
-           "paragym.envs.hybrid:HybridSingularityFreeVectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "paragym.envs.hybrid:HybridSingularityFreeVectorEnv", 100, "hybrid", "paper", None,
            "hexapod + tripod (9 actuators): polynomial path without singular poses or leg-limit violations "
            "(paper 002)"),
     EnvRow("paragym/HybridSingularityFree-v1", "paragym.envs.hybrid:HybridSingularityFreeV1Env",
-           "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "paragym.envs.hybrid:HybridSingularityFreeV1VectorEnv", 100, "hybrid", "paper", None,
            "hybrid v1: the v0 path with the end pose P1, and P1 solved at the current split, in the observation"),
     EnvRow("paragym/HybridSingularityFree-v2", "paragym.envs.hybrid:HybridSingularityFreeV2Env",
-           "paragym.envs.hybrid:HybridSingularityFreeV2VectorEnv", 100, "hybrid", "paper", _HYBRID,
+           "paragym.envs.hybrid:HybridSingularityFreeV2VectorEnv", 100, "hybrid", "paper", None,
            "hybrid v2: v1's task; in dynamic fidelity E's orientation is tracked too and a broken mechanism fails",
            models_from="paragym/HybridSingularityFree-v1"),
     EnvRow("paragym/Orthoglide2PRRKappa-v0", "paragym.envs.orthoglide:Orthoglide2PRRKappaEnv",
-           "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv", 1000, "orthoglide", "paper", _ORTHOGLIDE,
+           "paragym.envs.orthoglide:Orthoglide2PRRKappaVectorEnv", 1000, "orthoglide", "paper", None,
            "2PRR Orthoglide + translating table: track a path, keep the condition number of J low (paper 003)"),
     EnvRow("paragym/Orthoglide2PRRKappa-v1", "paragym.envs.orthoglide:Orthoglide2PRRKappaV1Env",
-           "paragym.envs.orthoglide:Orthoglide2PRRKappaV1VectorEnv", 1000, "orthoglide", "paper", _ORTHOGLIDE,
+           "paragym.envs.orthoglide:Orthoglide2PRRKappaV1VectorEnv", 1000, "orthoglide", "paper", None,
            "2PRR v1: the v0 task, with success that requires tracking in every action mode and fidelity",
            models_from="paragym/Orthoglide2PRRKappa-v0"),
-    EnvRow("paragym/MobileTripodOdometry-v0", "paragym.envs.mobile_tripod:MobileTripodOdometryEnv",
-           "paragym.envs.mobile_tripod:MobileTripodOdometryVectorEnv", 700, "tripod", "push", _TRIPOD,
+    EnvRow("paragym/MobileTripodOdometry-v0", "paragym.envs.tripod:MobileTripodOdometryEnv",
+           "paragym.envs.tripod:MobileTripodOdometryVectorEnv", 700, "tripod", "push", None,
            "mobile tripod: estimate the three drive units under slip from odometry and leg encoders (paper 004)"),
-    EnvRow("paragym/MobileTripodOdometry-v1", "paragym.envs.mobile_tripod:MobileTripodOdometryV1Env",
-           "paragym.envs.mobile_tripod:MobileTripodOdometryV1VectorEnv", 700, "tripod", "push", _TRIPOD,
+    EnvRow("paragym/MobileTripodOdometry-v1", "paragym.envs.tripod:MobileTripodOdometryV1Env",
+           "paragym.envs.tripod:MobileTripodOdometryV1VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v1: per unit, how far to trust the encoders' correction of the odometry (paper 004)"),
-    EnvRow("paragym/MobileTripodOdometry-v2", "paragym.envs.mobile_tripod:MobileTripodOdometryV2Env",
-           "paragym.envs.mobile_tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", _TRIPOD,
+    EnvRow("paragym/MobileTripodOdometry-v2", "paragym.envs.tripod:MobileTripodOdometryV2Env",
+           "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
 )

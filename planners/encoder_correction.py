@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 
 __all__ = ["EncoderCorrection", "EncoderTrustPolicy", "EstimatorPolicy", "FusionEstimator", "OdometryEstimator",
            "faulty_unit"]

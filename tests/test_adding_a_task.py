@@ -49,8 +49,11 @@ def test_a_task_of_one_row_and_one_bench_module_is_found_everywhere(tmp_path):
     assert "paragym/PointReach-v0" in res["envs"]["out"]
     assert "go-straight" in res["policies"]["out"] and "random" in res["policies"]["out"]
     assert res["demo"]["code"] == 0 and list(tmp_path.glob("PointReach-v0_paper_seed0_best.png"))
-    for refused in ("plan", "validate"):  # no offline planner, no dynamic fidelity: one line each, exit code 2
-        assert res[refused]["code"] == 2 and len(res[refused]["err"].strip().splitlines()) == 1, res[refused]
+    # no offline planner, no dynamic fidelity: one line each saying so (a crash would say something else)
+    for refused, why in (("plan", "has no offline planner"), ("validate", "has no dynamic fidelity")):
+        err = res[refused]["err"].strip()
+        assert res[refused]["code"] == 2 and len(err.splitlines()) == 1, res[refused]
+        assert err.startswith(f"paragym: error: paragym/PointReach-v0 {why}"), err
     board = res["leaderboard"]
     assert board["code"] == 0, board["err"]
     table = board["out"].split("paragym/PointReach-v0")[-1]
@@ -87,3 +90,36 @@ def test_an_installed_task_plugin_is_found_by_the_paragym_command(tmp_path):
                           timeout=120, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr[-2000:]
     assert "paragym/PointReach-v0" in proc.stdout
+
+
+EQUAL = r"""
+import sys
+sys.path.insert(0, sys.argv[1])
+import gymnasium as gym
+import numpy as np
+import point_task  # registers paragym/PointReach-v0
+
+native = gym.make_vec("paragym/PointReach-v0", num_envs=3, vectorization_mode="vector_entry_point")
+sync = gym.make_vec("paragym/PointReach-v0", num_envs=3, vectorization_mode="sync")
+a, b = native.reset(seed=5), sync.reset(seed=5)
+np.testing.assert_array_equal(a[0], b[0])
+rng, ended = np.random.default_rng(0), 0
+for _ in range(120):
+    act = rng.uniform(-1.2, 1.2, (3, 2)).astype(np.float32)
+    got, want = native.step(act), sync.step(act)
+    for x, y in zip(got[:4], want[:4], strict=True):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(got[4]["is_success"], want[4]["is_success"])
+    np.testing.assert_array_equal(got[4]["distance"], want[4]["distance"])
+    ended += int(np.sum(got[2] | got[3]))
+print(ended)
+"""
+
+
+def test_the_task_runs_alike_in_its_single_and_native_vector_env():
+    """The recipe's task implements the contract once; its native vector env is the same numbers as
+    gymnasium's SyncVectorEnv over single envs (as every paragym task's, ``tests/test_single_vs_vector.py``).
+    In a process of its own: registering the task here would add an id to the other tests' registry."""
+    proc = subprocess.run([sys.executable, "-c", EQUAL, str(TESTS)], capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert int(proc.stdout.split()[-1]) >= 3  # autoresets on the way

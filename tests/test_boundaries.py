@@ -10,8 +10,8 @@ import paragym
 from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.mobile_tripod import TripodScenario
 from paragym.tasks.orthoglide import OrthoglideScenario
+from paragym.tasks.tripod import TripodScenario
 
 IDS = sorted(paragym.ENVIRONMENTS)
 HYBRID, ORTHO, TRIPOD = ("paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",

@@ -24,11 +24,11 @@ _SCRIPT = textwrap.dedent("""
 
     import numpy as np
 
-    from paragym.mechanisms import hybrid, mobile_tripod
+    from paragym.mechanisms import hybrid, tripod
 
     hybrid.kernel_consts(hybrid.HybridGeometry())  # hybrid._solve_all
     eta0 = np.radians([[60.0, 60.0, 60.0]])
-    mobile_tripod.eta(mobile_tripod.plate_frame_units(eta0), eta0)  # mobile_tripod._eta_all
+    tripod.eta(tripod.plate_frame_units(eta0), eta0)  # tripod._eta_all
     print("\\n".join(sorted(set(compiled))))
 """)
 

@@ -60,7 +60,7 @@ print(hashlib.sha256(np.concatenate([mu_h, mu_t, steps]).tobytes()).hexdigest())
 TRIPOD = """
 import hashlib, numpy as np, gymnasium as gym
 import paragym
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 rng = np.random.default_rng(0)
 local = rng.normal(size=(1000, 3, 3))
 rot, shift = mt.plate_fit(local, rng.uniform(0.5, 1.0, (1000, 3)))

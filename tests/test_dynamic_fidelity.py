@@ -286,7 +286,7 @@ def test_tripod_fast_drive_slips_where_the_slow_one_rolls():
 
     from paragym.sim.tripod_drive import Terrain
     from paragym.sim.tripod_dynamic import TripodDynamics
-    from paragym.tasks.mobile_tripod import drive_scenario
+    from paragym.tasks.tripod import drive_scenario
 
     slow = drive_scenario("random", np.random.default_rng(0))  # a heading of -2.93 rad
     slow = dataclasses.replace(slow, heading_error=(0.0, 0.0, 0.0), push=None, slip=0.0, distance=4.0,
@@ -306,7 +306,7 @@ def test_tripod_fast_drive_slips_where_the_slow_one_rolls():
 def test_tripod_push_and_slip_come_from_contact():
     import dataclasses
 
-    from paragym.tasks.mobile_tripod import drive_scenario
+    from paragym.tasks.tripod import drive_scenario
 
     push = drive_scenario("push", np.random.default_rng(0))
     with_push = _tripod_drive(push, "dynamic")

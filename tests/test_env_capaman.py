@@ -125,7 +125,8 @@ def test_actions_hold_at_the_joint_stops():
     env = gym.make(ENV_ID, scenario="paper")
     env.reset(seed=0)
     for _ in range(60):
-        env.step(np.ones(3, np.float32))
+        if env.step(np.ones(3, np.float32))[2]:
+            break
     alpha = env.unwrapped.state.alpha[0]
     assert np.all(alpha <= capaman.DEFAULT_GEOMETRY.alpha_max + 1e-12)
 

@@ -19,11 +19,11 @@ import paragym
 from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.mobile_tripod import TripodScenario
 from paragym.tasks.orthoglide import OrthoglideScenario, circle_task
+from paragym.tasks.tripod import TripodScenario
 
 IDS = sorted(paragym.ENVIRONMENTS)
-SCENARIOS = {r.id: ["random", *(n for n in r.scenarios if n != "random")] for r in registry.ROWS}
+SCENARIOS = {r.id: ["random", *(n for n in r.scenario_names if n != "random")] for r in registry.ROWS}
 FAST = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                        HealthCheck.function_scoped_fixture])
 _ENVS: dict[str, gym.Env] = {}

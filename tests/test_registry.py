@@ -1,6 +1,7 @@
 """The registry is the one place that says what an env id is: every row is whole and consistent."""
 
 import importlib
+from pathlib import Path
 
 import gymnasium as gym
 import pytest
@@ -20,8 +21,9 @@ def test_every_row_is_whole_and_registered_as_it_says(row):
     assert (spec.entry_point, spec.max_episode_steps, spec.vector_entry_point) == \
         (row.entry_point, row.max_episode_steps, row.vector_entry_point)
     single = _load(row.entry_point)
-    assert row.vector_entry_point is None or _load(row.vector_entry_point).single_class is single
-    assert row.paper_scenario in row.scenarios and "random" in row.scenarios
+    vector = None if row.vector_entry_point is None else _load(row.vector_entry_point)
+    assert vector is None or (vector.task, vector.rules) == (single.task, single.rules)
+    assert row.paper_scenario in row.scenario_names and "random" in row.scenario_names
     assert row.summary and len(row.summary) < 120
 
 
@@ -67,27 +69,53 @@ def test_an_incomplete_bench_is_named_part_by_part():
 
 
 def test_every_task_module_speaks_one_vocabulary_and_answers_to_its_old_names():
-    """Each task's scenario module has ``<Task>Scenario``, ``paper_scenario()`` and ``random_scenario(rng, ...)``,
-    its step module ``<Task>State`` and ``<Task>Params``; the names of before 0.9 still work, with a warning."""
+    """One name per task across every layer: ``mechanisms/<task>.py``, ``tasks/<task>.py`` (the scenarios:
+    ``<Task>Scenario``, ``SCENARIOS``, ``paper_scenario``, ``random_scenario``, ``validate_scenario``,
+    ``resolve_scenario``, ``draw_scenarios``), ``tasks/<task>_step.py`` (the contract: ``TASK``, ``RULES``,
+    ``<Task>Params``, ``<Task>State``, ``<Task>Rules``), ``sim/<task>_*.py``, ``envs/<task>.py`` and
+    ``baselines/tasks/<task>.py``; no scenario, contract or env module of a task names a scenario function
+    otherwise; the names of before
+    0.9 still work, with a warning."""
     import importlib
+    import inspect
+    import re
     import warnings
 
     import numpy as np
 
-    modules = {"capaman": ("capaman", "CaPaMan"), "hybrid": ("hybrid", "Hybrid"),
-               "orthoglide": ("orthoglide", "Orthoglide"), "tripod": ("mobile_tripod", "Tripod")}
-    for task, (module, prefix) in modules.items():
-        scenarios, step = (importlib.import_module(f"paragym.tasks.{module}{s}") for s in ("", "_step"))
+    root = Path(__file__).resolve().parent.parent
+    words = ("resolve", "draw", "validate", "paper", "random")
+    for task in sorted({r.task for r in registry.ROWS}):
+        prefix = {"capaman": "CaPaMan", "hybrid": "Hybrid", "orthoglide": "Orthoglide", "tripod": "Tripod"}[task]
+        modules = [importlib.import_module(m) for m in (f"paragym.mechanisms.{task}", f"paragym.tasks.{task}",
+                                                         f"paragym.tasks.{task}_step", f"paragym.envs.{task}",
+                                                         f"paragym.baselines.tasks.{task}")]
+        assert list((root / "paragym" / "sim").glob(f"{task}_*.py")), task
+        scenarios, step = modules[1], modules[2]
+        for name in (f"{prefix}Scenario", "SCENARIOS", "paper_scenario", "random_scenario", "validate_scenario",
+                     "resolve_scenario", "draw_scenarios"):
+            assert hasattr(scenarios, name), (task, name)
+        for name in ("TASK", "RULES", f"{prefix}Params", f"{prefix}State", f"{prefix}Rules"):
+            assert hasattr(step, name), (task, name)
         assert isinstance(scenarios.paper_scenario(), getattr(scenarios, f"{prefix}Scenario")), task
-        assert callable(scenarios.random_scenario) and hasattr(step, f"{prefix}State") and \
-            hasattr(step, f"{prefix}Params"), task
-    from paragym.tasks import mobile_tripod, orthoglide
+        for module in (scenarios, step, modules[3]):
+            public = [n for n, f in vars(module).items() if inspect.isfunction(f) and not n.startswith("_")
+                      and f.__module__ == module.__name__]
+            odd = [n for n in public if re.match(rf"({'|'.join(words)})_", n)
+                   and n not in ("resolve_scenario", "draw_scenarios", "validate_scenario", "paper_scenario",
+                                 "random_scenario", "random_scenarios")]
+            assert not odd, (module.__name__, odd)
+    from paragym.tasks import orthoglide, tripod
 
-    assert isinstance(mobile_tripod.random_scenario(np.random.default_rng(0)), mobile_tripod.TripodScenario)
+    assert isinstance(tripod.random_scenario(np.random.default_rng(0)), tripod.TripodScenario)
     with warnings.catch_warnings(record=True) as said:
         warnings.simplefilter("always")
         assert orthoglide.Task is orthoglide.OrthoglideScenario
-        assert mobile_tripod.DriveScenario is mobile_tripod.TripodScenario
-    assert len(said) == 2 and all(w.category is DeprecationWarning for w in said)
+        assert tripod.DriveScenario is tripod.TripodScenario
+        assert orthoglide.draw_tasks is orthoglide.draw_scenarios
+        import paragym.tasks.mobile_tripod as old
+
+        assert old is tripod
+    assert len(said) == 4 and all(w.category is DeprecationWarning for w in said), [str(w.message) for w in said]
     with pytest.raises(AttributeError):
         orthoglide.Nope  # noqa: B018

@@ -15,7 +15,7 @@ from paragym.planners.encoder_correction import (
 )
 from paragym.rollout import run_episode
 from paragym.sim.tripod_drive import TripodDrive
-from paragym.tasks.mobile_tripod import drive_scenario
+from paragym.tasks.tripod import drive_scenario
 
 
 def _final_error(scenario_name: str, kind: type, seed: int = 0) -> tuple[float, list]:
@@ -47,7 +47,7 @@ def test_fusion_beats_the_single_fault_correction_when_all_units_slip():
 
 
 def test_a_single_fault_is_recovered_within_the_encoder_noise():
-    from paragym.mechanisms import mobile_tripod as mt
+    from paragym.mechanisms import tripod as mt
 
     drive = TripodDrive(drive_scenario("push", np.random.default_rng(0)), np.random.default_rng(0))
     est = EncoderCorrection(drive.odometry)

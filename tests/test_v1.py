@@ -43,7 +43,7 @@ def test_tripod_v1_zero_and_negative_actions_are_odometry():
 def test_tripod_v1_trust_moves_a_unit_toward_the_circle_intersection():
     """Full trust in unit 0 moves it trust_rate (0.2) of the way to where the
     encoder distances put it, then by the odometric increment."""
-    from paragym.mechanisms import mobile_tripod as mt
+    from paragym.mechanisms import tripod as mt
 
     env = gym.make(TRIPOD)
     env.reset(seed=0, options={"scenario": "push"})
@@ -76,7 +76,7 @@ def test_tripod_v1_reference_beats_odometry_through_the_action():
 def test_tripod_v1_observation_is_in_the_robot_frame():
     """The observation's layout: residuals against the smoothed encoder
     distances, and the offsets of the estimate from odometry."""
-    from paragym.mechanisms import mobile_tripod as mt
+    from paragym.mechanisms import tripod as mt
 
     env = gym.make(TRIPOD)
     obs, info = env.reset(seed=1)

@@ -171,9 +171,9 @@ def test_the_grid_and_pybullet_disagree_by_at_most_two_cells():
     """CaPaMan: paper 000's grid (5 mm cells, cluster points 10 mm apart), which
     the native vector env uses, against PyBullet's exact signed distance, on
     configurations drawn uniformly and near the task points of random scenes."""
-    from paragym.envs.capaman import _clusters
     from paragym.mechanisms import capaman
     from paragym.sim import occupancy
+    from paragym.tasks.capaman_step import _clusters
 
     env = gym.make("paragym/CaPaManCollisionFree-v0")
     scene, clusters = env.unwrapped.scene, _clusters(capaman.DEFAULT_GEOMETRY)
@@ -218,9 +218,9 @@ def test_the_sb3_adapter_reports_success_at_an_episode_end():
 
 
 def test_a_native_vector_env_builds_no_pybullet_scene_until_it_needs_one():
-    """The vector env takes its parameters from the single env's argument checks, which build no PyBullet scene
-    in the kinematic fidelity; the CaPaMan's own checker scene comes at the first reset, and draws as the single
-    env draws."""
+    """The vector env builds no single env: it checks its arguments as the single env does (the task's
+    ``Params.from_kwargs``), which builds no PyBullet scene in the kinematic fidelity; the CaPaMan's own checker
+    scene comes at the first reset, and draws as the single env draws."""
     import warnings
 
     from paragym import registry
@@ -230,9 +230,8 @@ def test_a_native_vector_env_builds_no_pybullet_scene_until_it_needs_one():
         for task in sorted({r.task for r in registry.ROWS}):
             venv = gym.make_vec(registry.rows_of(task)[-1].id, num_envs=2, vectorization_mode="vector_entry_point",
                                 render_mode="rgb_array").unwrapped
-            one = venv.single_env
-            assert getattr(one, "scene", None) is None and one._render_scene is None, task
-            assert getattr(venv, "_scene", None) is None, task
+            assert not hasattr(venv, "single_env"), task
+            assert getattr(venv.world, "scene", None) is None and not venv._render, task
             venv.close()
         venv = gym.make_vec("paragym/CaPaManCollisionFree-v1", num_envs=2, vectorization_mode="vector_entry_point",
                             render_mode="rgb_array")

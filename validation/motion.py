@@ -54,7 +54,7 @@ def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle
     acceleration by central differences of omega."""
     from scipy.interpolate import CubicSpline
 
-    from paragym.mechanisms.hybrid import euler_matrix
+    from paragym.mechanisms.geometry import euler_matrix
 
     spline = CubicSpline(t_knots, poses, bc_type=((1, np.zeros(6)), (2, np.zeros(6))) if moving_at_end else "clamped")
     end = float(t_knots[-1])

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-__all__ = ["PartShape", "k_jacobi", "k_quat_to_matrix", "matrix_to_quat", "quat_multiply", "quat_to_matrix"]
+__all__ = ["PartShape", "euler_matrix", "k_jacobi", "k_quat_to_matrix", "matrix_euler", "matrix_to_quat", "pose6",
+           "quat_multiply", "quat_to_matrix"]
 
 
 def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
@@ -131,3 +132,23 @@ class PartShape:
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     radius: float = 0.0
     length: float = 0.0
+
+
+def euler_matrix(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll), batched: (N, 3, 3)."""
+    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    flat = np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
+                     sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
+                     -sp, cp * sr, cp * cr], -1)
+    return flat.reshape(flat.shape[:-1] + (3, 3))
+
+
+def matrix_euler(r: np.ndarray) -> np.ndarray:
+    """(roll, pitch, yaw) (N, 3) of rotation matrices (N, 3, 3) (inverse of :func:`euler_matrix`)."""
+    return np.stack([np.arctan2(r[..., 2, 1], r[..., 2, 2]), -np.arcsin(np.clip(r[..., 2, 0], -1, 1)),
+                     np.arctan2(r[..., 1, 0], r[..., 0, 0])], -1)
+
+
+def pose6(position: np.ndarray, rotation: np.ndarray) -> np.ndarray:
+    """A pose as (6,): the position (m) and the roll, pitch, yaw (rad) of the rotation matrix."""
+    return np.concatenate([position, matrix_euler(rotation[None])[0]])

@@ -57,7 +57,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from paragym.mechanisms.geometry import k_jacobi
+from paragym.mechanisms.geometry import euler_matrix, k_jacobi, matrix_euler
 from paragym.units import DEG
 
 __all__ = [
@@ -120,21 +120,6 @@ class HybridGeometry:
 
 
 DEFAULT_GEOMETRY = HybridGeometry()
-
-
-def euler_matrix(roll: np.ndarray, pitch: np.ndarray, yaw: np.ndarray) -> np.ndarray:
-    """R = Rz(yaw) Ry(pitch) Rx(roll), batched: (N, 3, 3)."""
-    cr, sr, cp, sp, cy, sy = np.cos(roll), np.sin(roll), np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
-    flat = np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr,
-                     sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr,
-                     -sp, cp * sr, cp * cr], -1)
-    return flat.reshape(flat.shape[:-1] + (3, 3))
-
-
-def matrix_euler(r: np.ndarray) -> np.ndarray:
-    """(roll, pitch, yaw) (N, 3) of rotation matrices (N, 3, 3) (inverse of :func:`euler_matrix`)."""
-    return np.stack([np.arctan2(r[..., 2, 1], r[..., 2, 2]), -np.arcsin(np.clip(r[..., 2, 0], -1, 1)),
-                     np.arctan2(r[..., 1, 0], r[..., 0, 0])], -1)
 
 
 def pose_matrix(pose: np.ndarray) -> np.ndarray:

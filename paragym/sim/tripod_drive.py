@@ -6,7 +6,7 @@ commanded speed; what really happens differs by the scenario's disturbances
 integrates the wheels' own motion — the commanded speed along the heading
 the unit believes it has — and so is blind to all of them. The plate's true
 pose and the encoder angles eta follow from the units' true positions by the
-forward kinematics (:mod:`paragym.mechanisms.mobile_tripod`); the encoders
+forward kinematics (:mod:`paragym.mechanisms.tripod`); the encoders
 add uniform noise of +-``encoder_noise``. Sampled at ``rate`` (20 Hz). The
 drive's random numbers (the encoder noise of every sample, the slip of
 every step) are drawn when it starts, in a fixed order, so that a drive
@@ -16,7 +16,7 @@ robot (:class:`paragym.sim.tripod_scene.TripodScene`).
 
 The physics of one sample is written once, as a numba kernel over one robot
 of a :class:`DriveState` of N drives (:func:`k_drive_step`); the task's step
-(:mod:`paragym.tasks.mobile_tripod_step`) calls it for every robot, and
+(:mod:`paragym.tasks.tripod_step`) calls it for every robot, and
 :class:`TripodDrive` is one drive (N = 1) for the planners and the CLI.
 """
 
@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 
 __all__ = ["DriveState", "Terrain", "TripodDrive", "k_drive_step", "k_terrain"]
 
@@ -143,7 +143,7 @@ class DriveState:
     def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
               encoder_noise: float, eta0: float = math.radians(40.0)) -> None:
         """Start drive ``i`` on ``scenario`` (a checked
-        :class:`paragym.tasks.mobile_tripod.TripodScenario`) at rest, the legs
+        :class:`paragym.tasks.tripod.TripodScenario`) at rest, the legs
         at ``eta0``, drawing its random numbers from ``rng``: the encoder noise
         of every sample, then (with slip) the slip angles and speeds of every step."""
         steps = int(round(scenario.duration / self.dt))
@@ -234,7 +234,7 @@ class TripodDrive:
     odometric increments (3, 2) of the units.
 
     Args:
-        scenario: a :class:`paragym.tasks.mobile_tripod.TripodScenario`.
+        scenario: a :class:`paragym.tasks.tripod.TripodScenario`.
         rng: the generator of the drive's random numbers.
         geometry: the tripod's legs and plate.
         eta0: the legs' angle at rest (rad).

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 from paragym.mechanisms.geometry import PartShape, matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, physics_steps
 from paragym.sim.tripod_drive import Terrain

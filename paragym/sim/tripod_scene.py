@@ -8,7 +8,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box, Cylinder
 from paragym.sim.tripod_drive import Terrain

@@ -1,16 +1,27 @@
-"""What every task shares: resolving the ``scenario`` argument, and when a mechanism counts as broken.
+"""The task contract, and what every task shares.
+
+A task is a paper's problem written once over N robots. :class:`Task` names
+everything a task supplies, each once; :class:`paragym.envs.base.ParagymEnv`
+(N = 1) and :class:`paragym.envs.vector.ParagymVectorEnv` (N robots) are
+generic shells over it, and the leaderboard and episode validation read what
+its :meth:`Task.evaluate` decides. An env id is a task and one value of the
+task's ``Rules`` (its version's rules, as data); the registry row names the
+task (:mod:`paragym.registry`).
 
 An env, its vector env, a planner and the CLI all take a scenario as a name
-("paper", "random", ...) or as a custom scenario object; this one helper
+("paper", "random", ...) or as a custom scenario object; :func:`resolve_scenario`
 checks it, with one message for every task.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, TypeVar
+from typing import Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkable
 
-__all__ = ["BROKEN_GAP", "renamed", "resolve_scenario"]
+import numpy as np
+
+__all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskParams", "TaskState", "World", "check_choice",
+           "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed", "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -51,3 +62,198 @@ def renamed(module: str, old_to_new: dict[str, str]) -> Callable[[str], Any]:
         raise AttributeError(f"module {module!r} has no attribute {name!r}")
 
     return __getattr__
+
+
+# --- the contract ---------------------------------------------------------------------------------------------------
+
+
+class BoxSpec(NamedTuple):
+    """A space of one robot, as data (the envs make it a float32 ``gymnasium.spaces.Box``): every component
+    within ``[low, high]``, of ``shape``."""
+
+    low: float
+    high: float
+    shape: tuple[int, ...]
+
+
+class Evaluation(NamedTuple):
+    """What a task decides of its N robots after a reset or a step (:meth:`Task.evaluate`).
+
+    Attributes:
+        success: (N,) bool: the robot's episode has ended and succeeded (``info["is_success"]``).
+        failure: (N,) int: why it failed, an index into :attr:`Task.failures` (0: it has not).
+        numbers: the per-robot values every env's info carries, each an (N,) array under a stable name
+            (the vector env's info holds them all; the single env's the row of its one robot).
+    """
+
+    success: np.ndarray
+    failure: np.ndarray
+    numbers: dict[str, np.ndarray]
+
+
+@runtime_checkable
+class TaskParams(Protocol):
+    """A task's parameters: every argument of its env, checked once (:meth:`from_kwargs`)."""
+
+    fidelity: str
+
+    @classmethod
+    def from_kwargs(cls, rules: Any, **kwargs: Any) -> TaskParams:
+        """The parameters of an env id with ``rules`` made with ``kwargs`` (its env's keyword arguments,
+        ``render_mode`` aside): the one place the arguments are checked, each refusal a ValueError or
+        TypeError naming the argument, an unknown one a TypeError naming it."""
+        ...
+
+
+@runtime_checkable
+class TaskState(Protocol):
+    """The state of N robots: arrays with one row per robot; the transition writes ``obs``, ``reward``
+    and ``terminated``; ``scenarios`` holds each robot's scenario."""
+
+    obs: np.ndarray
+    reward: np.ndarray
+    terminated: np.ndarray
+    scenarios: list[Any]
+
+
+@runtime_checkable
+class World(Protocol):
+    """Where a task's robots move besides its kinematic model: a PyBullet scene that checks collisions or a
+    dynamic fidelity. ``None`` where the kinematic model is all there is. A world that simulates one robot
+    under PyBullet's dynamics is what episode validation reads (:mod:`paragym.validation.episode`)."""
+
+    def close(self) -> None:
+        """Disconnect its PyBullet clients."""
+        ...
+
+
+@runtime_checkable
+class Task(Protocol):
+    """Everything a task supplies, each once. One object per task (``paragym.tasks.<task>_step.TASK``).
+
+    Attributes:
+        name: the task's name, as the registry rows and the bench name it.
+        scenario_names: every named ``scenario`` argument (the registry reads them here).
+        failures: the names of ``info["failure"]``, indexed by :attr:`Evaluation.failure` (0: None).
+        Scenario: the scenario's frozen dataclass.
+        Params: the parameters (:class:`TaskParams`), built by ``Params.from_kwargs(rules, **kwargs)``.
+        Rules: the rules of one version, as data; the env id's class holds one value of it.
+        State: the state of N robots (:class:`TaskState`), ``State.empty(n, params)``.
+        vector_fidelities: the fidelities its native vector env runs.
+        sensor_layout: the accelerometer array of KF validation on the validated body
+            (:meth:`paragym.validation.sensors.AccelerometerArray.paper_layout`'s arguments).
+    """
+
+    name: str
+    scenario_names: tuple[str, ...]
+    failures: tuple[str | None, ...]
+    Scenario: ClassVar[type]
+    Params: ClassVar[type]
+    Rules: ClassVar[type]
+    State: ClassVar[type]
+    vector_fidelities: tuple[str, ...]
+    sensor_layout: dict[str, float]
+
+    def paper_scenario(self) -> Any:
+        """The paper's case."""
+        ...
+
+    def random_scenario(self, rng: np.random.Generator, params: Any) -> Any:
+        """One random scenario drawn from ``rng`` that the task can run."""
+        ...
+
+    def validate_scenario(self, scenario: Any, params: Any) -> None:
+        """Raise a ValueError or TypeError naming the field of a custom ``scenario`` that cannot run."""
+        ...
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: Any, world: Any) -> list[Any]:
+        """One checked scenario per generator for the ``scenario`` argument ``choice`` (a name or a custom
+        scenario): what ``reset`` starts."""
+        ...
+
+    def spaces(self, params: Any) -> tuple[BoxSpec, BoxSpec]:
+        """The observation and action spaces of one robot."""
+        ...
+
+    def make_world(self, params: Any, n: int, render_mode: str | None) -> Any:
+        """The :class:`World` of ``n`` robots that ``params.fidelity`` asks for, or None."""
+        ...
+
+    def reset(self, state: Any, params: Any, rows: np.ndarray, scenarios: list[Any],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        """Start robots ``rows`` (integer indices) on ``scenarios`` (one generator each) and evaluate them."""
+        ...
+
+    def step(self, state: Any, params: Any, actions: np.ndarray, active: np.ndarray, world: Any) -> None:
+        """Step the ``active`` robots (an (N,) mask) with ``actions`` (N, ...) inside the action space."""
+        ...
+
+    def evaluate(self, state: Any, params: Any, world: Any) -> Evaluation:
+        """Success, failure and the info's numbers of every robot: decided here only."""
+        ...
+
+    def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
+        """The single env's further info of robot ``i`` (arrays, names: what is not an (N,) number)."""
+        ...
+
+    def render(self, cache: dict[str, Any], state: Any, params: Any, world: Any, i: int, gui: bool) -> np.ndarray:
+        """Robot ``i`` drawn by PyBullet (an RGB array). ``cache`` is the env's: a scene built on the first
+        call is kept there (``cache["scene"]``) and closed with the env."""
+        ...
+
+
+# --- the argument checks every task's Params.from_kwargs uses ---------------------------------------------------------
+
+
+def check_number(name: str, value: Any, low: float = 0.0, *, strict: bool = True, high: float | None = None,
+                 unit: str = "") -> float:
+    """``value`` as a float if it is a finite real number above ``low`` (at or above it unless ``strict``) and
+    at most ``high``, else a ValueError (TypeError for a non-number) naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise TypeError(f"{name} must be a number{unit}; got {value!r:.80}")
+    v = float(value)
+    above = v > low if strict else v >= low
+    if not (np.isfinite(v) and above and (high is None or v <= high)):
+        rel = ">" if strict else ">="
+        upper = f" and <= {high:g}" if high is not None else ""
+        raise ValueError(f"{name} must be a finite number {rel} {low:g}{upper}{unit}; got {value!r}")
+    return v
+
+
+def check_choice(name: str, value: Any, choices: tuple[Any, ...]) -> Any:
+    """``value`` if it is one of ``choices``, else a ValueError naming ``name`` and them."""
+    if not isinstance(value, str | None) or value not in choices:
+        raise ValueError(f"{name} must be {' or '.join(map(repr, choices))}; got {value!r:.80}")
+    return value
+
+
+def check_instance(name: str, value: Any, kind: type, none: bool = True) -> Any:
+    """``value`` if it is a ``kind`` (or None where ``none``), else a TypeError naming ``name``."""
+    if (value is None and none) or isinstance(value, kind):
+        return value
+    raise TypeError(f"{name} must be a {kind.__name__}{' or None' if none else ''}; got {type(value).__name__}")
+
+
+def refuse_unknown(kwargs: dict[str, Any], known: tuple[str, ...] | Any, where: str) -> None:
+    """A TypeError naming the first of ``kwargs`` not in ``known`` (as Python names an unexpected argument)."""
+    for key in kwargs:
+        if key not in known:
+            raise TypeError(f"{where} got an unexpected keyword argument {key!r}")
+
+
+def check_control_period(control_period: float, time_step: float, refuse: bool, later: str | None = None) -> None:
+    """Simulated time must run at the control period's rate: a ``control_period`` (s) that is not a whole number
+    of physics steps of ``time_step`` (s) is refused with a ValueError naming it (``refuse``), or, in a released
+    id that ran it rounded, warned about (naming the ``later`` id that refuses it)."""
+    import warnings
+
+    from paragym.sim.client import divides, physics_steps
+
+    if divides(control_period, time_step):
+        return
+    said = (f"control_period {control_period!r} s is not a whole number of physics steps of {time_step!r} s: each "
+            f"step would be simulated over {physics_steps(control_period, time_step) * time_step:g} s")
+    if refuse:
+        raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
+    why = f"; {later} refuses it" if later else ""
+    warnings.warn(f"{said} (this id's released behaviour{why})", UserWarning, stacklevel=4)

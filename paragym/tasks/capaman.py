@@ -32,10 +32,10 @@ from paragym.mechanisms import capaman
 from paragym.sim import occupancy
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder, Obstacle
-from paragym.tasks.base import resolve_scenario
+from paragym.tasks import base
 from paragym.units import DEG
 
-__all__ = ["CaPaManScenario", "draw_scenario", "paper_scenario", "random_scenario", "resolve_capaman",
+__all__ = ["CaPaManScenario", "draw_scenarios", "paper_scenario", "random_scenario", "resolve_scenario",
            "validate_scenario", "MAX_OBSTACLES", "SCENARIOS", "TOUR"]
 
 SCENARIOS = ("paper", "random")
@@ -102,7 +102,7 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene) -> None:
     """Raise ``ValueError`` if the scenario is malformed, a task point is out
     of range, or the manipulator collides at a task configuration
     (PyBullet's exact check). Leaves the scene's obstacles set."""
-    resolve_scenario(scenario, (), CaPaManScenario)
+    base.resolve_scenario(scenario, (), CaPaManScenario)
     if not 1 <= len(scenario.obstacles) <= MAX_OBSTACLES:
         raise ValueError(f"a scenario has 1 to {MAX_OBSTACLES} obstacles; got {len(scenario.obstacles)}")
     alpha = capaman.check_joint_angles(scenario.alpha, scene.geometry, name="scenario.task_points")
@@ -177,21 +177,32 @@ def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
     raise RuntimeError(f"no feasible random scenario in {max_tries} tries")
 
 
-def resolve_capaman(choice: Any) -> str | CaPaManScenario:
+def resolve_scenario(choice: Any) -> str | CaPaManScenario:
     """The scenario argument's kind checked (:func:`paragym.tasks.base.resolve_scenario`):
     "paper", "random" or a :class:`CaPaManScenario`. Whether a custom one
     can run needs PyBullet: :func:`draw_scenario` checks it at reset."""
-    return resolve_scenario(choice, SCENARIOS, CaPaManScenario)
+    return base.resolve_scenario(choice, SCENARIOS, CaPaManScenario)
 
 
-def draw_scenario(choice: Any, rng: np.random.Generator, scene: CaPaManScene,
-                  clusters: occupancy.ClusterPoints | None = None) -> CaPaManScenario:
-    """An episode's scenario (single env, vector env and CLI alike): the
-    paper's, a random one drawn from ``rng``, or the custom one once
-    :func:`validate_scenario` accepts it. Leaves ``scene``'s obstacles set."""
-    choice = resolve_capaman(choice)
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator], scene: CaPaManScene,
+                   clusters: occupancy.ClusterPoints | None = None) -> list[CaPaManScenario]:
+    """One episode's scenario per generator (single env, vector env and CLI alike): the paper's, random
+    ones drawn from the generators one after another, or the custom one once :func:`validate_scenario`
+    accepts it. Leaves ``scene``'s obstacles set to the last one's."""
+    choice = resolve_scenario(choice)
+    return [_draw_one(choice, rng, scene, clusters) for rng in rngs]
+
+
+def _draw_one(choice: Any, rng: np.random.Generator, scene: CaPaManScene,
+              clusters: occupancy.ClusterPoints | None = None) -> CaPaManScenario:
+    """:func:`draw_scenarios` for one generator (the name of before paragym 0.9: ``draw_scenario``)."""
+    choice = resolve_scenario(choice)
     if choice == "random":
         return random_scenario(rng, scene, clusters)
     scenario = paper_scenario(scene.geometry) if choice == "paper" else choice
     validate_scenario(scenario, scene)
     return scenario
+
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = base.renamed(__name__, {"resolve_capaman": "resolve_scenario", "draw_scenario": "_draw_one"})

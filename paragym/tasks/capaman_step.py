@@ -47,23 +47,39 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
-from typing import NamedTuple, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numba import njit
 
 from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import pose6
 from paragym.sim import occupancy
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
+from paragym.sim.client import physics_steps
 from paragym.sim.obstacles import ENCODING_SIZE
-from paragym.tasks.base import BROKEN_GAP, renamed
+from paragym.tasks import capaman as scenarios_module
+from paragym.tasks.base import (
+    BROKEN_GAP,
+    BoxSpec,
+    Evaluation,
+    check_choice,
+    check_control_period,
+    check_instance,
+    check_number,
+    refuse_unknown,
+    renamed,
+)
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
 from paragym.units import DEG
 
-__all__ = ["LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "SWEEP_STEP",
-           "CaPaManParams", "CaPaManState", "DynamicWorld", "GridWorld", "SceneWorld",
-           "World", "reset", "step"]
+__all__ = ["FAILURES", "LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP", "TASK", "CaPaManParams",
+           "CaPaManRules", "CaPaManState", "CaPaManTask", "DynamicWorld", "GridWorld", "SceneWorld", "World", "reset",
+           "step"]
+
+#: why a robot's episode failed (0: it has not)
+FAILURES = (None, "collision", "broken")
 
 #: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
 #: the 17 parts moves more than 4.7 mm (measured over the joint space, tested), under the 5 mm cell of the
@@ -102,8 +118,31 @@ class KernelArgs(NamedTuple):
     time_penalty: float
 
 @dataclass(frozen=True)
+class CaPaManRules:
+    """The rules of one version of the task (the env id's class holds one of :data:`RULES`).
+
+    Attributes:
+        version: the N of ``-vN``.
+        goal_relative: v1's observation (goal-relative, with the clearance's look-ahead, :data:`OBS_SIZE_V1`)
+            and ``time_penalty`` an argument; else v0's observation, and no time penalty.
+        reach_tolerance, collision_penalty, time_penalty: the defaults of those arguments.
+    """
+
+    version: int
+    goal_relative: bool
+    reach_tolerance: float
+    collision_penalty: float
+    time_penalty: float
+
+
+#: the rules of CaPaManCollisionFree-v0 and -v1
+RULES = {0: CaPaManRules(0, goal_relative=False, reach_tolerance=1 * DEG, collision_penalty=5.0, time_penalty=0.0),
+         1: CaPaManRules(1, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0, time_penalty=0.01)}
+
+
+@dataclass(frozen=True)
 class CaPaManParams:
-    """The env's arguments that shape the transition (see the env's docstring)."""
+    """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     max_joint_step: float = 2 * DEG
     reach_tolerance: float = 1 * DEG
@@ -117,6 +156,48 @@ class CaPaManParams:
     geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
     version: int = 0
     time_penalty: float = 0.0
+    scenario: Any = "random"
+    fidelity: str = "kinematic"
+    collision: str = "pybullet"
+    control_period: float = 0.02
+    dynamics: Any = None
+    rules: CaPaManRules = RULES[0]
+
+    @classmethod
+    def from_kwargs(cls, rules: CaPaManRules, scenario: Any = "random", fidelity: str = "kinematic",
+                    max_joint_step: float = 2 * DEG, reach_tolerance: float | None = None, delta: float = 0.01,
+                    beta: float = 0.1, w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
+                    collision_penalty: float | None = None, clearance_cap: float = 0.05,
+                    control_period: float = 0.02, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                    collision: str = "pybullet", time_penalty: float | None = None, dynamics: Any = None,
+                    **unknown: Any) -> CaPaManParams:
+        """The env's keyword arguments, checked: the one place they are. Whether a custom scenario can run
+        needs PyBullet: it is checked at reset."""
+        from paragym.sim.capaman_dynamic import CaPaManDynamics
+
+        refuse_unknown(unknown, (), "CaPaManCollisionFree")
+        check_instance("dynamics", dynamics, CaPaManDynamics)
+        reach_tolerance = rules.reach_tolerance if reach_tolerance is None else reach_tolerance
+        collision_penalty = rules.collision_penalty if collision_penalty is None else collision_penalty
+        time_penalty = rules.time_penalty if time_penalty is None else time_penalty
+        if not rules.goal_relative and time_penalty != 0.0:
+            raise ValueError("time_penalty is a v1 argument: use paragym/CaPaManCollisionFree-v1")
+        time_penalty = check_number("time_penalty", time_penalty, strict=False)
+        check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
+        check_choice("collision", collision, ("pybullet", "grid"))
+        if collision == "grid" and fidelity != "kinematic":
+            raise ValueError("collision='grid' needs fidelity='kinematic' (the dynamic scene is PyBullet's)")
+        control_period = check_number("control_period", control_period, unit=" of seconds")
+        scenarios_module.resolve_scenario(scenario)
+        for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
+                            ("clearance_cap", clearance_cap)):
+            check_number(name, value)
+        if fidelity == "dynamic":
+            check_control_period(control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
+        return cls(float(max_joint_step), float(reach_tolerance), float(delta), float(beta), float(w_length),
+                   float(w_progress), float(reach_bonus), float(collision_penalty), float(clearance_cap), geometry,
+                   1 if rules.goal_relative else 0, time_penalty, scenario, fidelity, collision, control_period,
+                   dynamics, rules)
 
     @property
     def obs_size(self) -> int:
@@ -165,8 +246,9 @@ class CaPaManState:
     scenarios: list[CaPaManScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, obs_size: int = OBS_SIZE) -> CaPaManState:
-        z = np.zeros
+    def empty(cls, n: int, params: CaPaManParams) -> CaPaManState:
+        """N robots, before their first reset."""
+        z, obs_size = np.zeros, params.obs_size
         return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
                    progress=z(n), just_reached=z(n, bool), clearance=z(n), lookahead=z((n, 3)),
@@ -199,9 +281,30 @@ class GridWorld:
     robot's obstacles as signed distances, read at the cluster points of eq 2
     (10 mm apart) placed by the closed-form kinematics."""
 
-    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float) -> None:
+    #: it holds no simulation: a copy builds its own checker scene when it needs one
+    live = False
+
+    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
+                 gui: bool = False) -> None:
         self.geometry, self.grids, self.clusters = geometry, occupancy.DistanceGrids(n, cap=cap), _clusters(geometry)
         self.part_names = [p.name for p in capaman.part_shapes(geometry)]
+        self.cap, self.draws, self.gui = cap, draws, gui
+        #: the kinematic PyBullet scene that generates and checks scenarios and draws, built on first use
+        self.scene: CaPaManScene | None = None
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios (built on first use) and draws."""
+        if self.scene is None:
+            self.scene = CaPaManScene(self.geometry, gui=self.gui, clearance_cap=self.cap, draws=self.draws)
+        return self.scene
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "scene": None}
+
+    def close(self) -> None:
+        if self.scene is not None:
+            self.scene.close()
+            self.scene = None
 
     def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
         self.grids.set(int(i), scenario.obstacles)
@@ -219,8 +322,21 @@ class GridWorld:
 class SceneWorld:
     """One robot in the kinematic PyBullet scene: its exact signed distance."""
 
+    live = True
+
     def __init__(self, scene: CaPaManScene) -> None:
         self.scene = scene
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios: its own."""
+        return self.scene
+
+    def probe(self) -> SceneWorld:
+        """v1's look-ahead world: itself."""
+        return self
+
+    def close(self) -> None:
+        self.scene.close()
 
     def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
         self.scene.set_obstacles(scenario.obstacles)
@@ -241,6 +357,39 @@ class DynamicWorld(SceneWorld):
         self._moved = False
         #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism)
         self.broken = False
+        self._checker: CaPaManScene | None = None
+        self._probe: SceneWorld | None = None
+
+    def checker(self) -> CaPaManScene:
+        """A second, kinematic scene that generates and checks scenarios (built on first use)."""
+        if self._checker is None:
+            self._checker = CaPaManScene(self.scene.geometry, clearance_cap=self.scene.clearance_cap, draws=False)
+        return self._checker
+
+    def probe(self) -> SceneWorld:
+        """v1's look-ahead world: the kinematic checker scene, at the encoders' angles."""
+        if self._probe is None:
+            self._probe = SceneWorld(self.checker())
+        return self._probe
+
+    def close(self) -> None:
+        self.scene.close()
+        if self._checker is not None:
+            self._checker.close()
+
+    # --- what KF validation reads (paragym.validation.episode) ---
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """Paper 000's accelerometer array on the movable plate, judged about H."""
+        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.dynamics.time_step)
+
+    def commanded_pose(self, state: CaPaManState, params: CaPaManParams) -> np.ndarray:
+        """The plate's pose by the closed-form direct kinematics of the motors' targets."""
+        pose = capaman.forward(state.command[:1], params.geometry, validate=False)
+        return pose6(pose.position[0], pose.rotation[0])
+
+    def step_duration(self, state: CaPaManState, params: CaPaManParams) -> float:
+        h = self.scene.dynamics.time_step
+        return h * physics_steps(self.control_period, h)
 
     def move(self, command: np.ndarray) -> np.ndarray:
         """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
@@ -454,3 +603,107 @@ def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, ro
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {"CaPaManTaskState": "CaPaManState"})
+
+
+class CaPaManTask:
+    """The CaPaMan's contract (:class:`paragym.tasks.base.Task`): paper 000's collision-free tour."""
+
+    name = "capaman"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = CaPaManScenario
+    Params = CaPaManParams
+    Rules = CaPaManRules
+    State = CaPaManState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
+    sensor_layout: dict[str, float] = {}
+
+    def paper_scenario(self) -> CaPaManScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
+        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
+        try:
+            return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
+        finally:
+            if world is None:
+                scene.close()
+
+    def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
+        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
+        try:
+            scenarios_module.validate_scenario(scenario, scene)
+        finally:
+            if world is None:
+                scene.close()
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
+                       world: Any) -> list[CaPaManScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
+
+    def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
+        if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
+                             "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
+        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": "grid"})
+
+    def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
+
+    def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> Any:
+        """The grid (N robots; its checker scene comes when asked), the kinematic PyBullet scene or the
+        dynamics (one robot)."""
+        gui, g = render_mode == "human", params.geometry
+        if params.collision == "grid":
+            return GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
+        if params.fidelity == "kinematic":
+            return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
+                                           draws=render_mode is not None))
+        return DynamicWorld(CaPaManDynamicScene(g, params.dynamics, gui=gui, clearance_cap=params.clearance_cap),
+                            params.control_period)
+
+    @staticmethod
+    def _probe(params: CaPaManParams, world: Any) -> Any:
+        """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
+        if params.version == 0 or isinstance(world, GridWorld):
+            return None if params.version == 0 else world
+        return world.probe()
+
+    def reset(self, state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios, world, self._probe(params, world))
+
+    def step(self, state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world, self._probe(params, world))
+
+    def evaluate(self, state: CaPaManState, params: CaPaManParams, world: Any) -> Evaluation:
+        """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
+        mechanism whole)."""
+        s = state
+        collision = s.clearance <= 0.0
+        broken = np.zeros(len(collision), bool)
+        if isinstance(world, DynamicWorld):
+            broken[0] = world.broken
+        failure = np.where(collision, 1, np.where(broken, 2, 0))
+        return Evaluation((s.reached >= len(TOUR)) & ~collision & ~broken, failure,
+                          {"collision": collision, "clearance": s.clearance, "reached": s.reached,
+                           "target_index": s.target, "path_length": s.path_length})
+
+    def details(self, state: CaPaManState, params: CaPaManParams, world: Any, i: int) -> dict[str, Any]:
+        return {"nearest_part": state.near[i], "alpha": state.alpha[i].copy(), "tool_tip": state.tip[i].copy()}
+
+    def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if isinstance(world, GridWorld):  # the grid does not pose the scene: render does
+            scene = world.checker()
+            scene.set_obstacles(state.scenarios[i].obstacles)
+            scene.set_configuration(state.alpha[i])
+        elif gui:  # PyBullet keeps the GUI's scene posed
+            return None
+        return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
+
+
+#: the CaPaMan task (paper 000)
+TASK = CaPaManTask()

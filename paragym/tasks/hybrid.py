@@ -13,12 +13,12 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import hybrid
-from paragym.tasks.base import renamed, resolve_scenario
+from paragym.tasks import base
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
 __all__ = ["SCENARIOS", "HybridScenario", "paper_scenario", "random_scenario", "random_scenarios",
-           "draw_scenarios", "nominal_rows", "resolve_hybrid"]
+           "draw_scenarios", "nominal_rows", "resolve_scenario", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -169,7 +169,7 @@ def nominal_rows(p0: np.ndarray, p1: np.ndarray, tau: float = 0.01, every: int =
     return p0[:, None] + (p1 - p0)[:, None] * s[None, :, None]
 
 
-def _validate(choice: HybridScenario) -> None:
+def validate_scenario(choice: HybridScenario) -> None:
     """A custom pair that can run: finite poses with angles within +-pi/2, a
     start in the workspace at Delta = 0.5 and a goal that some split Delta
     reaches singularity-free within the leg limits."""
@@ -187,24 +187,25 @@ def _validate(choice: HybridScenario) -> None:
                          "within the leg limits")
 
 
-def resolve_hybrid(choice: Any) -> str | HybridScenario:
+def resolve_scenario(choice: Any) -> str | HybridScenario:
     """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
     "paper", "random", or a :class:`HybridScenario` that can run."""
-    return resolve_scenario(choice, SCENARIOS, HybridScenario, _validate)
+    return base.resolve_scenario(choice, SCENARIOS, HybridScenario, validate_scenario)
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
                    geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> list[HybridScenario]:
     """One episode's scenario per generator (single env, vector env and CLI
     alike): the paper's, random pairs drawn from the generators, or the
-    custom one once :func:`resolve_hybrid` accepts it."""
-    choice = resolve_hybrid(choice)
+    custom one once :func:`resolve_scenario` accepts it."""
+    choice = resolve_scenario(choice)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
-__getattr__ = renamed(__name__, {
+__getattr__ = base.renamed(__name__, {
+    "resolve_hybrid": "resolve_scenario",
     "hybrid_paper_scenario": "paper_scenario",
     "hybrid_random_scenario": "random_scenario",
     "hybrid_random_scenarios": "random_scenarios",

@@ -52,12 +52,29 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import hybrid
-from paragym.tasks.base import renamed
+from paragym.mechanisms.geometry import euler_matrix, matrix_euler, pose6
+from paragym.sim.client import physics_steps
+from paragym.tasks import hybrid as scenarios_module
+from paragym.tasks.base import (
+    BROKEN_GAP,
+    BoxSpec,
+    Evaluation,
+    check_choice,
+    check_control_period,
+    check_instance,
+    check_number,
+    refuse_unknown,
+    renamed,
+)
 from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.trajectories import nominal_path
 
-__all__ = ["OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "DynamicWorld", "HybridParams", "HybridState", "reset",
-           "step"]
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "RULES", "TASK", "DynamicWorld", "HybridParams",
+           "HybridRules", "HybridState", "HybridTask", "reset", "step"]
+
+#: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
+FAILURES = (None, "broken", "tracking", "leg limit", "singular")
+_BROKEN, _TRACKING, _LIMIT, _SINGULAR = 1, 2, 3, 4
 
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
 OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
@@ -84,8 +101,32 @@ class Weights(NamedTuple):
     w_end: float
 
 @dataclass(frozen=True)
+class HybridRules:
+    """The rules of one version of the task (the env id's class holds one of :data:`RULES`).
+
+    Attributes:
+        version: the N of ``-vN``.
+        sees_the_end: the observation shows P1 and how far it is from feasible (:data:`OBS_SIZE_V1`), and
+            ``w_end`` is an argument.
+        strict_dynamics: in dynamic fidelity E's orientation is tracked too (``track_angle_tolerance``), a
+            broken mechanism ends the episode as a failure, and a ``control_period`` the physics step does
+            not divide is refused (else simulated rounded, with a warning).
+    """
+
+    version: int
+    sees_the_end: bool
+    strict_dynamics: bool
+
+
+#: the rules of HybridSingularityFree-v0, -v1 and -v2
+RULES = {0: HybridRules(0, sees_the_end=False, strict_dynamics=False),
+         1: HybridRules(1, sees_the_end=True, strict_dynamics=False),
+         2: HybridRules(2, sees_the_end=True, strict_dynamics=True)}
+
+
+@dataclass(frozen=True)
 class HybridParams:
-    """The env's arguments that shape the transition (see the env's docstring)."""
+    """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     max_delta_step: float = 0.05
     j_bar: float = 0.02
@@ -97,6 +138,47 @@ class HybridParams:
     tau: float = 0.01
     version: int = 0
     w_end: float = 0.0
+    scenario: Any = "random"
+    fidelity: str = "kinematic"
+    dynamics: Any = None
+    control_period: float = 0.05
+    track_tolerance: float = 0.005
+    track_angle_tolerance: float = math.radians(1.0)
+    rules: HybridRules = RULES[0]
+
+    @classmethod
+    def from_kwargs(cls, rules: HybridRules, scenario: Any = "random", max_delta_step: float = 0.05,
+                    j_bar: float = 0.02, w_offset: float = 0.1, w_delta: float = 0.05, w_singular: float = 1.0,
+                    w_limit: float = 1.0, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                    tau: float = 0.01, w_end: float | None = None, fidelity: str = "kinematic",
+                    dynamics: Any = None, control_period: float = 0.05, track_tolerance: float = 0.005,
+                    track_angle_tolerance: float | None = None, **unknown: Any) -> HybridParams:
+        """The env's keyword arguments, checked: the one place they are."""
+        from paragym.sim.hybrid_dynamic import HybridDynamics
+
+        refuse_unknown(unknown, (), "HybridSingularityFree")
+        check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
+        check_instance("dynamics", dynamics, HybridDynamics)
+        control_period = check_number("control_period", control_period)
+        track_tolerance = check_number("track_tolerance", track_tolerance)
+        scenario = scenarios_module.resolve_scenario(scenario)
+        if not rules.sees_the_end and w_end is not None:
+            raise ValueError("w_end (the shaping toward a feasible end) is an argument of HybridSingularityFree-v1")
+        w_end = check_number("w_end", 0.0 if w_end is None else w_end, strict=False)
+        for name, value in (("max_delta_step", max_delta_step), ("j_bar", j_bar), ("tau", tau)):
+            check_number(name, value)
+        if track_angle_tolerance is not None and not rules.strict_dynamics:
+            raise ValueError("track_angle_tolerance is an argument of paragym/HybridSingularityFree-v2")
+        angle = check_number("track_angle_tolerance",
+                             math.radians(1.0) if track_angle_tolerance is None else track_angle_tolerance,
+                             unit=" (rad)")
+        if fidelity == "dynamic":
+            dynamics = dynamics or HybridDynamics.fast()
+            check_control_period(control_period, dynamics.time_step, refuse=rules.strict_dynamics,
+                                 later="paragym/HybridSingularityFree-v2")
+        return cls(float(max_delta_step), float(j_bar), float(w_offset), float(w_delta), float(w_singular),
+                   float(w_limit), geometry, float(tau), 1 if rules.sees_the_end else 0, w_end, scenario, fidelity,
+                   dynamics, control_period, track_tolerance, angle, rules)
 
     @property
     def obs_size(self) -> int:
@@ -136,20 +218,24 @@ class HybridState:
     obs: np.ndarray
     reward: np.ndarray
     phi: np.ndarray
+    #: the first reason each robot's episode failed (an index into :data:`FAILURES`; 0: none yet)
+    reason: np.ndarray
     scenarios: list[HybridScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, tau: float, obs_size: int = OBS_SIZE) -> HybridState:
+    def empty(cls, n: int, params: HybridParams) -> HybridState:
+        """N robots at rest, before their first reset."""
+        tau, obs_size = params.tau, params.obs_size
         u = nominal_path(np.zeros(6), np.zeros(6), tau)[0]
         return cls(u=u, nominal=np.zeros((n, len(u), 6)), k=np.zeros(n, np.int64), delta=np.full(n, 0.5),
                    d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
                    lengths=np.zeros((n, 9)), mu_h=np.zeros(n), mu_t=np.zeros(n), within=np.zeros(n, bool),
                    free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n), phi=np.zeros(n), scenarios=[None] * n)
+                   reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64), scenarios=[None] * n)
 
 
 def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
-    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.hybrid.resolve_hybrid`)
+    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.hybrid.draw_scenarios`)
     at u = 0, Delta = 0.5, no offset; then solve them."""
     for i, scenario in zip(rows, scenarios, strict=True):
         state.scenarios[i] = scenario
@@ -157,7 +243,7 @@ def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios:
     p1 = np.array([sc.p1 for sc in scenarios])
     state.nominal[rows] = nominal_rows(p0, p1, params.tau)
     state.k[rows], state.delta[rows], state.d_delta[rows] = 0, 0.5, 0.0
-    state.offset[rows], state.all_free[rows] = 0.0, True
+    state.offset[rows], state.all_free[rows], state.reason[rows] = 0.0, True, 0
     mask = np.zeros(len(state.k), bool)
     mask[rows] = True
     _advance(state, params, np.zeros((len(state.k), 4)), mask, False)
@@ -172,6 +258,7 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     evaluated where the simulation put it (:class:`DynamicWorld`)."""
     if world is None:
         _advance(state, params, actions, active, True, _ALL)
+        _note_failure(state, active, None)
         return
     _advance(state, params, actions, active, True, _COMMAND)
     world.move(state)
@@ -179,6 +266,18 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     state.all_free &= world.tracked
     if world.broken:  # a broken mechanism ends the episode as a failure
         state.all_free[0], state.terminated[0] = False, True
+    _note_failure(state, active, world)
+
+
+def _note_failure(state: HybridState, active: np.ndarray, world: DynamicWorld | None) -> None:
+    """Keep the first reason each active robot's episode fails: a broken mechanism, E off its command
+    (dynamic fidelity), a leg beyond its limits, a singular stage."""
+    s = state
+    now = np.where(~s.within, _LIMIT, np.where(~s.free, _SINGULAR, 0))
+    if world is not None:
+        now[0] = _BROKEN if world.broken else _TRACKING if not world.tracked[0] else now[0]
+    first = active & (s.reason == 0)
+    s.reason[first] = now[first]
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -234,14 +333,32 @@ class DynamicWorld:
             np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True, np.empty(9), self._work)
         state.lengths[0] = strokes
         state.pose[0, :3] = t_e[:3, 3] - consts[6][:3]
-        state.pose[0, 3:] = hybrid.matrix_euler(t_e[:3, :3])
+        state.pose[0, 3:] = matrix_euler(t_e[:3, :3])
         state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
         self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - self.command[:3]))
-        turn = hybrid.euler_matrix(*self.command[3:]).T @ t_e[:3, :3]
+        turn = euler_matrix(*self.command[3:]).T @ t_e[:3, :3]
         self.orientation_error = float(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0)))
         self.tracked[0] = self.tracking_error <= self.track_tolerance and (
             self.angle_tolerance is None or self.orientation_error <= self.angle_tolerance)
         self.broken = self.broken_gap is not None and self.scene.closure_error() > self.broken_gap
+
+    def close(self) -> None:
+        self.scene.close()
+
+    # --- what KF validation reads (paragym.validation.episode) ---
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """Platform E, judged at its centre."""
+        scene = self.scene
+        return (scene.sim, *scene.e_platform, np.zeros(3), scene.dynamics.time_step)
+
+    def commanded_pose(self, state: HybridState, params: HybridParams) -> np.ndarray:
+        """E's pose of the step: the nominal path plus the action's offset."""
+        t_e = hybrid.pose_matrix(hybrid.home_pose(params.geometry) + self.command)[0]
+        return pose6(t_e[:3, 3], t_e[:3, :3])
+
+    def step_duration(self, state: HybridState, params: HybridParams) -> float:
+        h = self.scene.dynamics.time_step
+        return h * physics_steps(self.control_period, h)
 
 
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
@@ -344,3 +461,92 @@ def _excess(lengths, w):
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {"HybridTaskState": "HybridState"})
+
+
+class HybridTask:
+    """The hybrid task's contract (:class:`paragym.tasks.base.Task`): paper 002's hexapod + tripod along a
+    polynomial path."""
+
+    name = "hybrid"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = HybridScenario
+    Params = HybridParams
+    Rules = HybridRules
+    State = HybridState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the paper's array scaled to platform E
+    sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
+
+    def paper_scenario(self) -> HybridScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: HybridParams) -> HybridScenario:
+        return scenarios_module.random_scenario(rng, params.geometry)
+
+    def validate_scenario(self, scenario: HybridScenario, params: HybridParams) -> None:
+        scenarios_module.validate_scenario(scenario)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
+                       world: Any) -> list[HybridScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+
+    def vector_params(self, rules: HybridRules, kwargs: dict[str, Any]) -> HybridParams:
+        params = HybridParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))
+
+    def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        from paragym.sim.hybrid_dynamic import HybridDynamicScene
+
+        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        strict = params.rules.strict_dynamics
+        return DynamicWorld(scene, params.control_period, params.track_tolerance,
+                            params.track_angle_tolerance if strict else None, BROKEN_GAP if strict else None)
+
+    def reset(self, state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
+        """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
+        dynamic fidelity, tracked (and the mechanism whole, v2)."""
+        s = state
+        return Evaluation(s.terminated & s.all_free, s.reason,
+                          {"step": s.k, "u": s.u[s.k], "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t,
+                           "free": s.free, "within_limits": s.within})
+
+    def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
+        return {"offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
+                "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
+                "tracking_error": 0.0 if world is None else world.tracking_error,
+                "orientation_error": 0.0 if world is None else world.orientation_error}
+
+    def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated robot, not the command; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        if "scene" not in cache:
+            from paragym.sim.hybrid_scene import HybridScene
+
+            cache["scene"] = HybridScene(params.geometry, gui=gui)
+        solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
+        cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
+        return cache["scene"].render()
+
+
+#: the hybrid task (paper 002)
+TASK = HybridTask()

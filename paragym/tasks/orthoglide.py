@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 
 from paragym.mechanisms import orthoglide as og
-from paragym.tasks.base import renamed, resolve_scenario
+from paragym.tasks import base
 
-__all__ = ["SCENARIOS", "OrthoglideScenario", "circle_task", "draw_tasks", "random_scenario", "random_scenarios",
-           "paper_scenario", "resolve_task", "servable", "start_table_position"]
+__all__ = ["SCENARIOS", "OrthoglideScenario", "circle_task", "draw_scenarios", "paper_scenario", "random_scenario",
+           "random_scenarios", "resolve_scenario", "servable", "start_table_position", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -181,7 +181,7 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
     return kap, r1[best]
 
 
-def _validate(choice: OrthoglideScenario, geometry: og.OrthoglideGeometry) -> None:
+def validate_scenario(choice: OrthoglideScenario, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> None:
     """A custom task that can run: finite, increasing times (at least two)
     with points and velocities (K, 2), whose first point the manipulator
     reaches."""
@@ -203,24 +203,26 @@ def _validate(choice: OrthoglideScenario, geometry: og.OrthoglideGeometry) -> No
         raise ValueError("scenario's first point is outside the reachable set")
 
 
-def resolve_task(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> str | OrthoglideScenario:
+def resolve_scenario(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> str | OrthoglideScenario:
     """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
     "paper", "random", or a :class:`OrthoglideScenario` that can run."""
-    return resolve_scenario(choice, SCENARIOS, OrthoglideScenario, lambda task: _validate(task, geometry))
+    return base.resolve_scenario(choice, SCENARIOS, OrthoglideScenario, lambda task: validate_scenario(task, geometry))
 
 
-def draw_tasks(choice: Any, rngs: list[np.random.Generator],
-               geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> list[OrthoglideScenario]:
-    """One episode's task per generator (single env, vector env and CLI
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
+                   geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> list[OrthoglideScenario]:
+    """One episode's path per generator (single env, vector env and CLI
     alike): the paper's circle, random paths drawn from the generators, or
-    the custom task once :func:`resolve_task` accepts it."""
-    choice = resolve_task(choice, geometry)
+    the custom path once :func:`resolve_scenario` accepts it."""
+    choice = resolve_scenario(choice, geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario() if choice == "paper" else choice] * len(rngs)
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
-__getattr__ = renamed(__name__, {
+__getattr__ = base.renamed(__name__, {
+    "resolve_task": "resolve_scenario",
+    "draw_tasks": "draw_scenarios",
     "Task": "OrthoglideScenario",
     "paper_task": "paper_scenario",
     "orthoglide_random_task": "random_scenario",

@@ -25,6 +25,7 @@ p_k, task rate t_k, J and n at k):
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -33,11 +34,21 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import orthoglide as og
-from paragym.tasks.base import BROKEN_GAP
+from paragym.sim.client import divides, physics_steps
+from paragym.tasks import orthoglide as scenarios_module
+from paragym.tasks.base import (
+    BROKEN_GAP,
+    BoxSpec,
+    Evaluation,
+    check_choice,
+    check_instance,
+    check_number,
+    refuse_unknown,
+)
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "DynamicWorld", "OrthoglideParams", "OrthoglideState",
-           "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "RULES", "TASK", "DynamicWorld", "OrthoglideParams",
+           "OrthoglideRules", "OrthoglideState", "OrthoglideTask", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -47,8 +58,29 @@ _LIMIT, _MODE, _SINGULAR, _TRACKING, _BROKEN = 1, 2, 3, 4, 5
 
 
 @dataclass(frozen=True)
+class OrthoglideRules:
+    """The rules of one version of the task (the env id's class holds one of :data:`RULES`).
+
+    Attributes:
+        version: the N of ``-vN``.
+        tracking: success requires tracking: kappa and n are taken where the joints put the tool in every
+            mode, and a step beyond ``track_tolerance`` fails, as does a broken mechanism (dynamic fidelity).
+        exact_time: the dynamic fidelity simulates each path step over exactly its duration (else rounded to
+            whole physics steps, with a warning).
+    """
+
+    version: int
+    tracking: bool
+    exact_time: bool
+
+
+#: the rules of Orthoglide2PRRKappa-v0 and -v1
+RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True)}
+
+
+@dataclass(frozen=True)
 class OrthoglideParams:
-    """The env's arguments that shape the transition (see the env's docstring)."""
+    """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     joint_mode: bool = False
     max_null_rate: float = 0.5  # m/s along n per unit of action
@@ -60,6 +92,33 @@ class OrthoglideParams:
     version: int = 0
     #: v1: the largest tracking error (m) of a step that counts as tracking; beyond it the robot fails
     track_tolerance: float = 0.005
+    scenario: Any = "random"
+    action_mode: str = "null_space"
+    fidelity: str = "kinematic"
+    dynamics: Any = None
+    rules: OrthoglideRules = RULES[0]
+
+    @classmethod
+    def from_kwargs(cls, rules: OrthoglideRules, scenario: Any = "random", action_mode: str = "null_space",
+                    max_null_rate: float = 0.5, max_joint_rate: float = 0.5, w_track: float = 1.0,
+                    limit_penalty: float = 10.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                    fidelity: str = "kinematic", dynamics: Any = None, track_tolerance: float | None = None,
+                    **unknown: Any) -> OrthoglideParams:
+        """The env's keyword arguments, checked: the one place they are."""
+        from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+
+        refuse_unknown(unknown, (), "Orthoglide2PRRKappa")
+        if not rules.tracking and track_tolerance is not None:
+            raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1")
+        track_tolerance = check_number("track_tolerance", 0.005 if track_tolerance is None else track_tolerance,
+                                       unit=" of metres")
+        check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
+        check_instance("dynamics", dynamics, OrthoglideDynamics)
+        check_choice("action_mode", action_mode, ("null_space", "joint_velocity"))
+        scenario = scenarios_module.resolve_scenario(scenario, geometry)
+        return cls(action_mode == "joint_velocity", float(max_null_rate), float(max_joint_rate), float(w_track),
+                   float(limit_penalty), geometry, 1 if rules.tracking else 0, track_tolerance, scenario,
+                   action_mode, fidelity, dynamics, rules)
 
     @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
@@ -97,7 +156,7 @@ class OrthoglideState:
     scenarios: list[OrthoglideScenario | None] = field(default_factory=list)
 
     @classmethod
-    def empty(cls, n: int, points: int = 2) -> OrthoglideState:
+    def empty(cls, n: int, params: Any = None, points: int = 2) -> OrthoglideState:
         """N robots with room for paths of ``points`` points (it grows on reset)."""
         return cls(rho=np.zeros((n, 3)), k=np.zeros(n, np.int64), last=np.zeros(n, np.int64),
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
@@ -115,7 +174,7 @@ class OrthoglideState:
 
 def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
           scenarios: list[OrthoglideScenario]) -> None:
-    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.orthoglide.draw_tasks`):
+    """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.orthoglide.draw_scenarios`):
     at the admissible table position with the lowest kappa at the first path
     point, the sliders by inverse kinematics; then evaluate them."""
     first = np.array([t.points[0] for t in scenarios])
@@ -191,6 +250,28 @@ class DynamicWorld:
         if duration > 0:
             self.scene.drive(self.command, duration, exact=self.exact_time)
         state.rho[0] = self.scene.rho
+
+    def close(self) -> None:
+        self.scene.close()
+
+    # --- what KF validation reads (paragym.validation.episode) ---
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """The tool holder at C on link AC."""
+        scene = self.scene
+        return (scene.sim, scene.ROBOT, scene.links[0], np.array([scene.geometry.link, 0.0, 0.0]),
+                scene.dynamics.time_step)
+
+    def commanded_pose(self, state: OrthoglideState, params: OrthoglideParams) -> np.ndarray:
+        """C and link AC's direction from the commanded joints (paper 003, eqs 1-6), at the link's height."""
+        g, rho = params.geometry, self.command
+        c = og.fixed_point(rho[:1], og.forward(rho[None], g), g)[0]
+        yaw = np.arctan2(c[1], c[0] - (g.slider2_origin + rho[1]))
+        sim, robot, link, _, _ = self.body()
+        return np.array([c[0], c[1], sim.link_frame(robot, link)[0][2], 0.0, 0.0, yaw])
+
+    def step_duration(self, state: OrthoglideState, params: OrthoglideParams) -> float:
+        h, k = self.scene.dynamics.time_step, int(state.k[0])
+        return h * physics_steps(float(state.dt[0, k - 1]), h) if k > 0 else 0.0
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
@@ -271,3 +352,104 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, reason, te
         for c in range(11):
             v = row[c]
             obs[i, c] = 10.0 if v != v else min(10.0, max(-10.0, v))
+
+
+class OrthoglideTask:
+    """The Orthoglide task's contract (:class:`paragym.tasks.base.Task`): paper 003's path tracking with the
+    2PRR and its table."""
+
+    name = "orthoglide"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = OrthoglideScenario
+    Params = OrthoglideParams
+    Rules = OrthoglideRules
+    State = OrthoglideState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
+    #: below
+    sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
+
+    def paper_scenario(self) -> OrthoglideScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: OrthoglideParams) -> OrthoglideScenario:
+        return scenarios_module.random_scenario(rng, params.geometry)
+
+    def validate_scenario(self, scenario: OrthoglideScenario, params: OrthoglideParams) -> None:
+        scenarios_module.validate_scenario(scenario, params.geometry)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: OrthoglideParams,
+                       world: Any) -> list[OrthoglideScenario]:
+        drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+        if world is not None and not world.exact_time:
+            _warn_rounded_time(drawn, world)
+        return drawn
+
+    def vector_params(self, rules: OrthoglideRules, kwargs: dict[str, Any]) -> OrthoglideParams:
+        params = OrthoglideParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native Orthoglide vector env is kinematic: use gymnasium's sync/async vector "
+                             "modes for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: OrthoglideParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-10.0, 10.0, (OBS_SIZE,)),
+                BoxSpec(-1.0, 1.0, (3 if params.joint_mode else 1,)))
+
+    def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
+
+        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        return DynamicWorld(scene, exact_time=params.rules.exact_time)
+
+    def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
+              scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
+        """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
+        in v1 the tracking, and a broken mechanism)."""
+        s = state
+        done = s.k >= s.last
+        return Evaluation(done & ~s.failed, s.reason,
+                          {"kappa": s.kappa, "tracking_error": s.err, "step": s.k})
+
+    def details(self, state: OrthoglideState, params: OrthoglideParams, world: Any, i: int) -> dict[str, Any]:
+        return {"rho": state.rho[i].copy()}
+
+    def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated mechanism, not the command; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        if "scene" not in cache:
+            from paragym.sim.orthoglide_scene import OrthoglideScene
+
+            cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
+        cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
+        return cache["scene"].render()
+
+
+def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
+    """v0 in dynamic fidelity simulates each path step over whole physics steps: say so where that is not the
+    path's own time (its hole; v1 simulates it exactly)."""
+    h = world.scene.dynamics.time_step
+    for path in drawn:
+        dt = np.diff(path.t)
+        if not all(divides(float(d), h) for d in np.unique(dt)):
+            simulated = sum(physics_steps(float(d), h) * h for d in dt)
+            warnings.warn(f"the path's {path.t[-1]:g} s are simulated over {simulated:g} s: the dynamic fidelity "
+                          f"of paragym/Orthoglide2PRRKappa-v0 rounds each path step to whole physics steps of "
+                          f"{h:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly", UserWarning, stacklevel=4)
+
+
+#: the Orthoglide task (paper 003)
+TASK = OrthoglideTask()

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from paragym.mechanisms import mobile_tripod as mt
+from paragym.mechanisms import tripod as mt
 
 
 def _level(eta_deg: float = 40.0) -> tuple[np.ndarray, np.ndarray]:
@@ -61,7 +61,7 @@ def test_the_90_ft_example():
     plate's yaw error depends on the legs' angle, which the paper does not give: 3.6 deg with the
     legs starting at 40 deg and the drive along x (the paper: 2.62 deg)."""
     from paragym.sim.tripod_drive import TripodDrive
-    from paragym.tasks.mobile_tripod import TripodScenario
+    from paragym.tasks.tripod import TripodScenario
 
     for heading in (0.0, math.radians(60)):
         sc = TripodScenario("90 ft", distance=90 * mt.FOOT, heading=heading,

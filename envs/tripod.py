@@ -1,0 +1,215 @@
+"""``paragym/MobileTripodOdometry-v0``: estimate a mobile tripod's drive units under slip (paper 004).
+
+The single env and the native vector env are shells over one transition,
+:mod:`paragym.tasks.tripod_step` (the single env is its N = 1 case),
+whose drive physics is :mod:`paragym.sim.tripod_drive`; the scenarios come
+from :mod:`paragym.tasks.tripod`.
+"""
+
+from __future__ import annotations
+
+from paragym.envs.base import ParagymEnv
+from paragym.envs.vector import ParagymVectorEnv
+from paragym.tasks.tripod import drive_scenario
+from paragym.tasks.tripod_step import RULES, TASK
+
+__all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripodOdometryV1VectorEnv",
+           "MobileTripodOdometryV2Env", "MobileTripodOdometryV2VectorEnv", "MobileTripodOdometryVectorEnv",
+           "drive_scenario"]
+
+
+class MobileTripodOdometryEnv(ParagymEnv):
+    """Keep track of where a mobile parallel robot's three drive units really are.
+
+    ## Description
+    Paper 004 (Shoval and Shoham): three drive units carry legs of fixed
+    length to an upper plate; encoders at the upper revolute joints measure
+    the legs' angles eta, which fix the distances between the units (eq 4),
+    while odometry, blind to slip, pushes and bumps, drifts (eq 5). The
+    robot drives its commanded path; the agent is the estimator.
+
+    ## Action Space
+    ``Box(-1, 1, (6,))``: a correction of the estimated horizontal unit
+    positions, times ``max_correction`` (5 cm), added after the odometric
+    prediction.
+    An action outside the Box is clipped to it (the rule of every paragym env,
+    :func:`paragym.envs.base.check_action`); NaN/inf or a wrong shape raise
+    ``ValueError``, strings and complex numbers ``TypeError``.
+
+    ## Observation Space
+    ``Box(-100, 100, (21,), float32)``:
+
+    ==========  ==========================================================
+    0-8         the three units' odometric positions x, y, z (/ 10 m)
+    9-11        the measured leg angles eta (rad, with encoder noise)
+    12-14       the command: speed (m/s), cos and sin of the heading
+    15-20       the previous estimate of the units' x, y (/ 10 m)
+    ==========  ==========================================================
+
+    ## Rewards
+    ``-10 (mean unit error + plate centre error)`` per step (m): the estimate's
+    units against the true ones, and the plate's centre fitted to the
+    estimate against the true centre.
+
+    ## Starting State
+    At rest, the legs at 40 deg, every estimate exact; ``info["scenario"]``.
+
+    ## Episode End
+    After the drive (20 m at 0.66 m/s: 606 samples at 20 Hz). ``is_success``:
+    the final mean unit error under ``success_error`` (5 cm).
+
+    ## Arguments
+    ``scenario``: one of initial_heading, push, random_slip, rough_terrain,
+    random (default); ``encoder_noise`` (rad, 1 deg); ``max_correction`` (m);
+    ``success_error`` (m); ``geometry`` (r, p: 5 ft each by default).
+    ``fidelity``: "kinematic" (default: the drive units are unicycles and
+    the disturbances are added to their motion,
+    :mod:`paragym.sim.tripod_drive`) or "dynamic"
+    (:mod:`paragym.sim.tripod_dynamic`: the plate, its three legs on
+    encoder joints and the three wheeled drive units on the terrain under
+    PyBullet's dynamics; slip, pushes and bumps come from contact and
+    forces, odometry from the wheel encoders, eta from the leg encoders;
+    the estimate, the observation and the reward are the same functions of
+    them). ``dynamics``: a :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
+    On rough terrain the fidelities differ most: the kinematic units roll
+    over the bumps without slip, the dynamic ones bounce and slip, and
+    their odometry drifts several times further (CHANGELOG.md, 0.8.0).
+
+    ## Version History
+    * v0: initial release.
+      Since paragym 0.6.0 ``fidelity="dynamic"`` is offered; the default,
+      kinematic, is unchanged.
+      Since paragym 0.2.0 a custom scenario that cannot run (NaN, outside
+      the workspace, malformed) and non-dict ``options`` are refused at reset
+      with a ValueError or TypeError naming them; every episode that ran
+      before runs the same (tested against recorded rollouts). Since paragym
+      0.3.0 the native vector env runs every drive the single env runs (it
+      refused drives of more than 8 terrain bumps, or longer than its first),
+      and a custom drive of more than 10 million samples is refused at reset
+      with a ValueError naming it (it could not run: it failed allocating).
+      Its hole, kept so that its episodes replay: a drive that folds the
+      tripod (a leg past horizontal) carries on; since paragym 0.8.0
+      ``info["failure"]`` says "folded". v2 ends it.
+    * v1 (paragym 0.4.0): :class:`MobileTripodOdometryV1Env`, a new action and
+      observation; v0 is unchanged.
+    * v2 (paragym 0.8.0): :class:`MobileTripodOdometryV2Env`, a folded
+      tripod ends the episode as a failure.
+    """
+
+    task, rules = TASK, RULES[0]
+
+
+class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
+    """``paragym/MobileTripodOdometry-v1``: v0's drives, success and end, with
+    an action, an observation and a reward under which learning beats
+    odometry.
+
+    ## Why v1
+    In v0 the action is a correction added to the estimate, so every
+    correction stays in it for the rest of the drive: exploration noise and
+    any bias of a learned policy integrate, and in the directions the
+    encoders cannot see (a rigid shift or turn of all three units) nothing
+    pulls them back. v0's best learned agent ended 58.9 cm off, against
+    12.1 cm for odometry alone and 3.0 cm for the paper's correction. The
+    observation also gave absolute world coordinates, leaving the policy to
+    compute the inter-unit distances itself. The ablation behind v1 is in
+    ``baselines/ABLATION.md``.
+
+    ## Action Space
+    ``Box(-1, 1, (3,))``: for each unit u, the fraction ``clip(a_u, 0, 1)``
+    of the way its estimate moves, before the drive advances, toward where
+    the paper's correction puts it (section 3: on the circles about the other
+    two estimated units whose radii are the encoder distances of eq 4,
+    exponentially smoothed with factor 0.1 per sample, as the reference
+    smooths them; :func:`paragym.mechanisms.tripod.k_relocate`).
+    Then all three move by the odometric increment. Zero or negative: odometry
+    alone. What is learned is the paper's hard part: which unit is faulty,
+    when, and how far to trust the noisy encoders.
+
+    ## Observation Space
+    ``Box(-100, 100, (16,), float32)``, in the robot's frame (x along the
+    commanded heading):
+
+    ==========  ==========================================================
+    0-2         the estimate's inter-unit distances minus the smoothed encoder distances (/ 5 cm)
+    3-5         the odometry's inter-unit distances minus the same (/ 5 cm)
+    6-11        each unit's estimate minus its odometry, x and y (/ 10 cm)
+    12          the drive's progress, step / steps
+    13-15       the measured leg angles eta (rad)
+    ==========  ==========================================================
+
+    ## Rewards
+    v0's reward minus what odometry alone earns at the same sample:
+    ``-10 (unit error + plate error) + 10 (odometry's unit error + its plate
+    error)``. Odometry's error does not depend on the actions, so the best
+    policy is v0's; the drift that no estimator controls drops out of the
+    reward, and the zero action (odometry) earns 0. Its variance made v0 hard
+    to learn from (``baselines/ABLATION.md``).
+
+    ## Starting State, Episode End
+    As v0.
+
+    ## Arguments
+    As v0 (``max_correction`` is not used), and ``trust_rate`` (0.2: the
+    fraction of the way a fully trusted unit moves per sample) and
+    ``relative_reward`` (True; False gives v0's reward, for ablations). ``info["encoder_distances"]``
+    holds the smoothed encoder distances (m).
+
+    ## Version History
+    * v1 (paragym 0.4.0): the action, the observation and the reward above;
+      the drives, the success and the episode's end are v0's.
+    """
+
+    rules = RULES[1]
+
+
+class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
+    """``paragym/MobileTripodOdometry-v2``: v1's task, in which a folded
+    mechanism ends the episode as a failure.
+
+    ## Why v2
+    Some drives fold the tripod: a leg reaches the horizontal (true eta <= 0)
+    and the plate comes down. In v0 and v1 both fidelities carried on as if
+    nothing happened (7 % of random drives fold in kinematic fidelity, 14 of
+    200 seeds; the dynamic fidelity folds on others, since its units slip
+    and bump differently). Ending those episodes changes what v1 did, so it
+    is v2.
+
+    ## Episode End
+    As v1, and when a leg reaches the horizontal: the episode ends there,
+    ``is_success`` is False and ``info["failure"]`` is "folded" (in v0 and v1
+    it says so too, without ending the episode).
+
+    ## Arguments
+    As v1. A dynamics whose physics step does not divide the 0.05 s sample is
+    refused (v0 and v1 round it, and warn).
+
+    ## Action Space, Observation Space, Rewards, Starting State
+    As v1.
+
+    ## Version History
+    * v2 (paragym 0.8.0): the folded end above; drives that do not fold are
+      v1's, bit for bit, and so are v1's shipped models.
+    """
+
+    rules = RULES[2]
+
+
+class MobileTripodOdometryVectorEnv(ParagymVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryEnv` stepped together:
+    the same transition (:mod:`paragym.tasks.tripod_step`) over N
+    robots. Keyword arguments are the single env's (kinematic fidelity)."""
+
+    task, rules = TASK, RULES[0]
+
+
+class MobileTripodOdometryV1VectorEnv(MobileTripodOdometryVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryV1Env` stepped together."""
+
+    rules = RULES[1]
+
+
+class MobileTripodOdometryV2VectorEnv(MobileTripodOdometryVectorEnv):
+    """``num_envs`` copies of :class:`MobileTripodOdometryV2Env` stepped together."""
+
+    rules = RULES[2]

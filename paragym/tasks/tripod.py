@@ -1,0 +1,167 @@
+"""The mobile tripod's drives (paper 004, section 4): the paper's named disturbances and random mixtures.
+
+A :class:`TripodScenario` is the straight drive the tripod makes and what
+disturbs it. Used by the env, the vector env, the planner and the CLI alike.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from paragym.sim.tripod_drive import Terrain
+from paragym.tasks import base
+
+__all__ = ["SCENARIOS", "TripodScenario", "draw_scenarios", "drive_scenario", "paper_scenario", "random_scenario",
+           "resolve_scenario", "validate_scenario"]
+
+#: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
+MAX_SAMPLES = 10_000_000
+#: the paper's named drives (section 4) and seeded random mixtures
+SCENARIOS = ("initial_heading", "push", "random_slip", "rough_terrain", "random")
+
+
+@dataclass(frozen=True)
+class TripodScenario:
+    """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
+
+    ``heading_error`` (3,) rad: each unit's true heading minus the one it
+    believes; ``push`` (unit, time s, inward distance m) or None;
+    ``slip`` m/s: the largest random slip velocity of each unit per sample
+    (uniform in [0, slip] in a random direction); ``terrain``.
+    """
+
+    name: str
+    speed: float = 0.66
+    heading: float = 0.0
+    distance: float = 20.0
+    heading_error: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    push: tuple[int, float, float] | None = None
+    slip: float = 0.0
+    terrain: Terrain = field(default_factory=Terrain)
+    seed: int | None = None
+
+    @property
+    def duration(self) -> float:
+        return self.distance / self.speed
+
+
+def validate_scenario(scenario: TripodScenario, name: str = "scenario", dt: float = 0.05) -> TripodScenario:
+    """Refuse (ValueError/TypeError naming the field) a drive that could not be
+    simulated: non-finite or non-positive speed or distance, a drive shorter
+    than one sample or longer than :data:`MAX_SAMPLES`, heading errors that are not three finite angles within
+    +-90 deg, a push on a unit other than 0, 1, 2 or at a time outside the
+    drive, a negative or non-finite slip, terrain bumps that are not
+    (x, y, height, radius) with a radius of at least 1 mm (a thinner one
+    underflows the Gaussian) and a height within +-0.5 m."""
+    if not isinstance(scenario, TripodScenario):
+        raise TypeError(f"{name} must be a TripodScenario; got {type(scenario).__name__}")
+
+    def real(value: Any, what: str) -> float:
+        if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+            raise TypeError(f"{name}.{what} must be a real number; got {value!r}")
+        if not np.isfinite(value):
+            raise ValueError(f"{name}.{what} must be finite; got {value!r}")
+        return float(value)
+
+    if real(scenario.speed, "speed") <= 0:
+        raise ValueError(f"{name}.speed must be > 0 m/s; got {scenario.speed!r}")
+    if real(scenario.distance, "distance") <= 0:
+        raise ValueError(f"{name}.distance must be > 0 m; got {scenario.distance!r}")
+    if scenario.distance / scenario.speed < dt:
+        raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, less than one sample ({dt} s)")
+    if scenario.distance / scenario.speed / dt > MAX_SAMPLES:
+        raise ValueError(f"{name} lasts {scenario.distance / scenario.speed:.3g} s, more than {MAX_SAMPLES:,} samples "
+                         f"at {1 / dt:g} Hz: a drive that long cannot be simulated")
+    real(scenario.heading, "heading")
+    errors = np.asarray(scenario.heading_error, dtype=object)
+    if errors.shape != (3,):
+        raise ValueError(f"{name}.heading_error must be three angles (rad); got {scenario.heading_error!r}")
+    for k, value in enumerate(errors):
+        if abs(real(value, f"heading_error[{k}]")) > np.pi / 2:
+            raise ValueError(f"{name}.heading_error[{k}] must lie within +-pi/2 rad; got {value!r}")
+    if scenario.push is not None:
+        if not isinstance(scenario.push, tuple | list) or len(scenario.push) != 3:
+            raise ValueError(f"{name}.push must be (unit, time s, inward distance m) or None; got {scenario.push!r}")
+        unit, when, how_far = scenario.push
+        if isinstance(unit, bool) or not isinstance(unit, int | np.integer) or unit not in (0, 1, 2):
+            raise ValueError(f"{name}.push unit must be 0, 1 or 2; got {unit!r}")
+        if not 0 <= real(when, "push time") <= scenario.duration:
+            raise ValueError(f"{name}.push time must lie within the drive, 0-{scenario.duration:.3g} s; got {when!r}")
+        if abs(real(how_far, "push distance")) > 1.0:
+            raise ValueError(f"{name}.push distance must be within +-1 m; got {how_far!r}")
+    if real(scenario.slip, "slip") < 0:
+        raise ValueError(f"{name}.slip must be >= 0 m/s; got {scenario.slip!r}")
+    if not isinstance(scenario.terrain, Terrain):
+        raise TypeError(f"{name}.terrain must be a Terrain; got {type(scenario.terrain).__name__}")
+    for k, bump in enumerate(scenario.terrain.bumps):
+        if len(bump) != 4:
+            raise ValueError(f"{name}.terrain.bumps[{k}] must be (x, y, height, radius); got {bump!r}")
+        for j, what in enumerate(("x", "y", "height", "radius")):
+            real(bump[j], f"terrain.bumps[{k}].{what}")
+        if not bump[3] >= 1e-3:
+            raise ValueError(f"{name}.terrain.bumps[{k}] radius must be at least 1 mm; got {bump[3]!r}")
+        if not abs(bump[2]) <= 0.5:
+            raise ValueError(f"{name}.terrain.bumps[{k}] height must lie within +-0.5 m; got {bump[2]!r}")
+    return scenario
+
+
+
+def drive_scenario(name: str, rng: np.random.Generator) -> TripodScenario:
+    """The paper's named drives (section 4) and seeded random mixtures."""
+    base.resolve_scenario(name, SCENARIOS, TripodScenario)  # an unknown name: the one message
+    if name == "initial_heading":  # a 2 deg initial heading error on one unit; 20 m at 0.66 m/s
+        return TripodScenario(name, heading_error=(math.radians(2.0), 0.0, 0.0))
+    if name == "push":  # unit 1 pushed 2.5 cm toward the centre at t = 15 s
+        return TripodScenario(name, push=(0, 15.0, 0.025))
+    if name == "random_slip":  # random odometric errors up to 1 cm/s on all three units at once
+        return TripodScenario(name, slip=0.01)
+    if name == "rough_terrain":  # bumps and holes on the way
+        bumps = tuple((float(x), float(y), float(h), 0.4) for x, y, h in
+                      zip(np.linspace(2, 18, 8), rng.uniform(-1.5, 1.5, 8), rng.choice([-1, 1], 8) * 0.08,
+                          strict=True))
+        return TripodScenario(name, terrain=Terrain(bumps))
+    # "random": a seeded mixture of every disturbance
+    errors = np.zeros(3)
+    errors[rng.integers(3)] = math.radians(rng.uniform(-2, 2))
+    push = (int(rng.integers(3)), float(rng.uniform(5, 25)), float(rng.uniform(0.01, 0.03))) \
+        if rng.random() < 0.5 else None
+    bumps = tuple((float(rng.uniform(2, 18)), float(rng.uniform(-2, 2)), float(rng.choice([-1, 1]) * 0.06), 0.4)
+                  for _ in range(int(rng.integers(0, 5))))
+    return TripodScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
+                         push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
+
+
+def paper_scenario() -> TripodScenario:
+    """The benchmark's paper case: paper 004's scenario 2, the push (its three drives have no single one)."""
+    return drive_scenario("push", np.random.default_rng(0))  # the push draws nothing
+
+
+def random_scenario(rng: np.random.Generator) -> TripodScenario:
+    """A seeded random mixture of every disturbance: heading error, push, slip and bumps."""
+    return drive_scenario("random", rng)
+
+
+def resolve_scenario(choice: Any) -> str | TripodScenario:
+    """The scenario argument, checked (:func:`paragym.tasks.base.resolve_scenario`):
+    a name of :data:`SCENARIOS` or a :class:`TripodScenario` that can run."""
+    return base.resolve_scenario(choice, SCENARIOS, TripodScenario, validate_scenario)
+
+
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator]) -> list[TripodScenario]:
+    """One episode's drive per generator (single env, vector env and CLI alike): a named or
+    random one drawn from each generator, or the custom one once checked."""
+    choice = resolve_scenario(choice)
+    return [drive_scenario(choice, rng) if isinstance(choice, str) else choice for rng in rngs]
+
+
+def _draw_drive(choice: Any, rng: np.random.Generator) -> TripodScenario:
+    """:func:`draw_scenarios` for one generator (the name of before paragym 0.9: ``draw_drive``)."""
+    return draw_scenarios(choice, [rng])[0]
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+__getattr__ = base.renamed(__name__, {"DriveScenario": "TripodScenario", "resolve_drive": "resolve_scenario",
+                                      "draw_drive": "_draw_drive", "validate_drive_scenario": "validate_scenario"})

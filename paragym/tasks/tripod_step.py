@@ -1,0 +1,571 @@
+"""The mobile tripod task's transition, written once over N robots (paper 004).
+
+The state of N robots (:class:`TripodState`) is their drives
+(:class:`paragym.sim.tripod_drive.DriveState`) and the agent's estimates.
+:func:`reset` starts the chosen rows' drives and :func:`step` advances the
+active rows one sample, in one numba kernel that runs the drive's physics
+(:func:`paragym.sim.tripod_drive.k_drive_step`) and then the estimate, the
+observation and the reward, so that the single env (N = 1) and the native
+vector env run the same code (:mod:`paragym.envs.tripod` are shells
+over this module).
+
+One step: the drive advances a sample; the estimate moves by the odometric
+increment plus the agent's correction (action times ``max_correction``), its
+height from the terrain; the encoders read the true eta plus noise. Reward:
+-10 (mean unit error + plate centre error), m, the estimate's horizontal unit
+positions against the true ones. Terminated at the drive's end.
+
+Version 1 (``TripodParams.version == 1``) changes what the agent does and
+sees and earns; the drive and the end are v0's. Before the drive advances,
+each unit u of the estimate moves the fraction ``trust_rate * clip(a_u, 0, 1)``
+of the way
+to where the paper's correction would put it (section 3,
+:func:`paragym.mechanisms.tripod.k_relocate`: on the circles about the
+other two units with the encoder distances of eq 4, exponentially smoothed
+with ``smoothing`` per sample as the reference smooths them); then the whole
+estimate moves by the odometric increment. A zero or negative action is
+odometry alone, and a correction is never accumulated by the action itself.
+The observation is in the robot's frame (:data:`OBS_SIZE_V1`). The reward
+is v0's minus what odometry alone would earn at the same sample: the
+drift that no estimator controls drops out of it, so the optimal policy is
+v0's and the zero action earns 0.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from paragym.mechanisms import tripod as mt
+from paragym.mechanisms.geometry import pose6
+from paragym.sim.client import physics_steps
+from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
+from paragym.tasks import tripod as scenarios_module
+from paragym.tasks.base import (
+    BoxSpec,
+    Evaluation,
+    check_choice,
+    check_control_period,
+    check_instance,
+    check_number,
+    refuse_unknown,
+    renamed,
+)
+from paragym.tasks.tripod import TripodScenario
+
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "RULES", "TASK",
+           "DynamicWorld", "TripodParams", "TripodRules", "TripodState", "TripodTask", "reset", "step"]
+
+#: why a robot's episode failed (0: it has not)
+FAILURES = (None, "folded")
+
+OBS_SIZE = 9 + 3 + 3 + 6
+POS_SCALE = 10.0  # m per observation unit
+#: v1: the residuals of the estimate's and the odometry's inter-unit distances against the smoothed encoder
+#: distances (3 + 3, / RESIDUAL_SCALE), each unit's estimate minus its odometry in the robot's frame (6, /
+#: OFFSET_SCALE), the drive's progress t / duration (1), the measured eta (3, rad)
+OBS_SIZE_V1 = 3 + 3 + 6 + 1 + 3
+RESIDUAL_SCALE = 0.05  # m per observation unit
+OFFSET_SCALE = 0.1  # m per observation unit
+
+
+@dataclass(frozen=True)
+class TripodRules:
+    """The rules of one version of the task (the env id's class holds one of :data:`RULES`).
+
+    Attributes:
+        version: the N of ``-vN``.
+        trust_action: the action is per unit trust in the paper's correction, the observation is in the
+            robot's frame and the reward is relative to odometry (:data:`OBS_SIZE_V1`); ``trust_rate`` and
+            ``relative_reward`` are arguments. Else v0's correction, observation and reward.
+        fold_ends: a folded mechanism (a leg at or past horizontal, true eta <= 0) ends the episode as a
+            failure, and in dynamic fidelity a physics step that does not divide the sample is refused (else
+            simulated rounded, with a warning).
+    """
+
+    version: int
+    trust_action: bool
+    fold_ends: bool
+
+
+#: the rules of MobileTripodOdometry-v0, -v1 and -v2
+RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(1, trust_action=True, fold_ends=False),
+         2: TripodRules(2, trust_action=True, fold_ends=True)}
+
+
+@dataclass(frozen=True)
+class TripodParams:
+    """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
+
+    encoder_noise: float = math.radians(1.0)
+    max_correction: float = 0.05
+    geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY
+    version: int = 0
+    smoothing: float = 0.1
+    trust_rate: float = 0.2
+    relative_reward: bool = True
+    #: v2: a folded mechanism (a leg at or past horizontal, true eta <= 0) ends the episode as a failure
+    fold_ends: bool = False
+    success_error: float = 0.05
+    scenario: Any = "random"
+    fidelity: str = "kinematic"
+    dynamics: Any = None
+    rules: TripodRules = RULES[0]
+
+    @classmethod
+    def from_kwargs(cls, rules: TripodRules, scenario: Any = "random", encoder_noise: float = math.radians(1.0),
+                    max_correction: float = 0.05, success_error: float = 0.05,
+                    geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY, trust_rate: float | None = None,
+                    relative_reward: bool | None = None, fidelity: str = "kinematic", dynamics: Any = None,
+                    **unknown: Any) -> TripodParams:
+        """The env's keyword arguments, checked: the one place they are. A custom drive is checked at reset."""
+        from paragym.sim.tripod_dynamic import TripodDynamics
+
+        refuse_unknown(unknown, (), "MobileTripodOdometry")
+        check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
+        check_instance("dynamics", dynamics, TripodDynamics)
+        if not rules.trust_action and (trust_rate is not None or relative_reward is not None):
+            raise ValueError("trust_rate and relative_reward are v1 arguments: use paragym/MobileTripodOdometry-v1")
+        trust_rate = check_number("trust_rate", 0.2 if trust_rate is None else trust_rate, high=1.0)
+        relative_reward = True if relative_reward is None else relative_reward
+        if isinstance(scenario, str):
+            scenarios_module.resolve_scenario(scenario)
+        encoder_noise = check_number("encoder_noise", encoder_noise, strict=False, unit=" rad")
+        if fidelity == "dynamic":
+            check_control_period(DriveState.empty(1).dt, (dynamics or TripodDynamics()).time_step,
+                                 refuse=rules.fold_ends, later="paragym/MobileTripodOdometry-v2")
+        return cls(encoder_noise, float(max_correction), geometry, 1 if rules.trust_action else 0,
+                   trust_rate=trust_rate, relative_reward=bool(relative_reward), fold_ends=rules.fold_ends,
+                   success_error=success_error, scenario=scenario, fidelity=fidelity, dynamics=dynamics, rules=rules)
+
+    @property
+    def obs_size(self) -> int:
+        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
+
+    @property
+    def action_size(self) -> int:
+        return 6 if self.version == 0 else 3
+
+
+@dataclass
+class TripodState:
+    """N robots: their drives, the agent's estimates of the units (N, 3, 3),
+    the encoders' readings now and at the last sample (N, 3), the smoothed
+    encoder distances (N, 3; v1), the errors, and the observation and reward
+    of their last step."""
+
+    drive: DriveState
+    estimate: np.ndarray
+    eta: np.ndarray
+    last_eta: np.ndarray
+    smoothed: np.ndarray
+    unit_error: np.ndarray
+    plate_error: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    #: whether the mechanism has folded in this episode (a leg at or past horizontal: true eta <= 0)
+    folded: np.ndarray
+
+    @classmethod
+    def empty(cls, n: int, params: TripodParams) -> TripodState:
+        """N robots, before their first reset."""
+        obs_size = params.obs_size
+        return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
+                   last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
+                   plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
+                   reward=np.zeros(n), folded=np.zeros(n, bool))
+
+    @property
+    def scenarios(self) -> list[TripodScenario | None]:
+        return self.drive.scenarios
+
+
+def reset(state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
+          rngs: list[np.random.Generator]) -> None:
+    """Start ``rows`` on checked ``scenarios`` (:func:`paragym.tasks.tripod.draw_scenarios`),
+    each drawing its drive's random numbers from its generator; every estimate
+    starts exact."""
+    for i, scenario, rng in zip(rows, scenarios, rngs, strict=True):
+        state.drive.start(int(i), scenario, rng, params.geometry, params.encoder_noise)
+        state.estimate[i] = state.drive.odometry[i]
+    mask = np.zeros(len(state.estimate), bool)
+    mask[rows] = True
+    state.smoothed[rows] = np.nan  # v1: the first reading starts the average
+    state.folded[rows] = False
+    _advance(state, params, np.zeros((len(state.estimate), params.action_size)), mask, False)
+    state.last_eta[rows] = state.eta[rows]
+
+
+def step(state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
+         world: DynamicWorld | None = None) -> None:
+    """Advance the ``active`` robots (N,) one sample with ``actions`` inside
+    the Box (the env clips): corrections (N, 6) in v0, trust in the paper's
+    correction per unit (N, 3) in v1. ``world``: the dynamics of one robot
+    (dynamic fidelity), which advances the drive before the estimate moves
+    (:class:`DynamicWorld`)."""
+    if world is None:
+        _advance(state, params, actions, active, True)
+    else:
+        moved = world.move(state)
+        _advance(state, params, actions, active, True, moved, world.increment)
+    state.folded |= active & (state.drive.eta.min(axis=1) <= 0.0)
+    if params.fold_ends:
+        state.terminated |= state.folded
+
+
+class DynamicWorld:
+    """One robot's drive under PyBullet's dynamics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`).
+
+    It replaces :func:`paragym.sim.tripod_drive.k_drive_step` sample by
+    sample: the units drive for one sample's time on their wheels; the true
+    units become the simulated ones, eta the leg encoders', and each unit's
+    odometry moves by its own wheel encoders' travel along the heading it
+    believes (so the units' odometric increments differ: ``increment``
+    (1, 3, 2)). The scenario's disturbances act through the physics: its
+    heading errors misalign the units, its push is a force of
+    ``push_force`` x depth N on the pushed unit toward the robot's centre for
+    0.1 s, its slip (a slippery floor) sets each unit's wheel friction every
+    second from the drive's own slip numbers (no new draws: a seed gives the
+    same encoder noise in both fidelities): a slip speed s (m/s) lowers it
+    from ``friction`` toward ``slip_friction``, reached at 1 cm/s, the
+    paper's; and its terrain is the ground's heightfield over the drive's
+    path.
+    """
+
+    def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False) -> None:
+        from paragym.sim.tripod_dynamic import TripodDynamics
+
+        self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
+        self.scene: Any = None
+        self._terrain: Any = None
+        self.increment = np.zeros((1, 3, 2))
+        self._push_left = 0
+
+    def reset(self, state: TripodState) -> None:
+        """Build the scene for the drive's terrain (kept when it is the same) and put the robot at its start."""
+        from paragym.sim.tripod_dynamic import TripodDynamicScene
+
+        d = state.drive
+        scenario = d.scenarios[0]
+        heading, reach = float(d.heading[0]), scenario.distance + 4.0  # the path, and the robot's span about it
+        ends = np.array([[0.0, 0.0], [reach * math.cos(heading), reach * math.sin(heading)]])
+        region = (float(ends[:, 0].min() - 4), float(ends[:, 0].max() + 4), float(ends[:, 1].min() - 4),
+                  float(ends[:, 1].max() + 4))
+        if self.scene is None or (scenario.terrain, region if scenario.terrain.bumps else None) != self._terrain:
+            if self.scene is not None:
+                self.scene.close()
+            self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region)
+            self._terrain = (scenario.terrain, region if scenario.terrain.bumps else None)
+        self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0])
+        self.scene.set_friction(np.full(3, self.dynamics.friction))
+        self._push_left = 0
+        self.increment[:] = 0.0
+
+    def move(self, state: TripodState) -> np.ndarray:
+        """Advance the drive one sample if it has not ended; returns which robots moved (1,)."""
+        d, dyn = state.drive, self.dynamics
+        if d.k[0] >= d.steps[0]:
+            return np.zeros(1, bool)
+        scenario, k = d.scenarios[0], int(d.k[0])
+        if scenario.slip > 0 and k % int(round(1.0 / d.dt)) == 0:
+            share = np.minimum(1.0, d.slip_speed[0, k] / 0.01)
+            self.scene.set_friction(dyn.friction - (dyn.friction - dyn.slip_friction) * share)
+        push = None
+        if d.t[0] < d.push[0, 1] <= d.t[0] + d.dt:  # (NaN: no push)
+            self._push_left = int(round(0.1 / dyn.time_step))
+        if self._push_left:
+            unit = int(d.push[0, 0])
+            inward = d.true[0].mean(axis=0) - d.true[0, unit]
+            inward[2] = 0.0
+            push = (unit, dyn.push_force * d.push[0, 2] * inward / np.linalg.norm(inward))
+        used = min(physics_steps(d.dt, dyn.time_step), self._push_left)
+        travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
+        self._push_left -= used
+        heading = float(d.heading[0])
+        self.increment[0, :, 0], self.increment[0, :, 1] = travel * math.cos(heading), travel * math.sin(heading)
+        bumps, count = d.bumps[0], int(d.bump_count[0])
+        true = self.scene.units_true
+        for u in range(3):
+            d.odometry[0, u, :2] += self.increment[0, u]
+            d.odometry[0, u, 2] = k_terrain(d.odometry[0, u, 0], d.odometry[0, u, 1], bumps, count)[0]
+            d.true[0, u, :2] = true[u, :2]
+            d.true[0, u, 2], d.gradient[0, u, 0], d.gradient[0, u, 1] = k_terrain(true[u, 0], true[u, 1], bumps,
+                                                                                 count)
+        d.eta[0] = self.scene.eta
+        d.t[0] += d.dt
+        d.k[0] += 1
+        return np.ones(1, bool)
+
+    def close(self) -> None:
+        if self.scene is not None:
+            self.scene.close()
+
+    # --- what KF validation reads (paragym.validation.episode) ---
+    _commanded_eta: np.ndarray | None = None
+
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """The upper plate, judged at its centre."""
+        scene = self.scene
+        return scene.sim, scene.ROBOT, scene.plate_link, np.zeros(3), self.dynamics.time_step
+
+    def commanded_pose(self, state: TripodState, params: TripodParams) -> np.ndarray:
+        """The plate the policy claims: fitted to its estimated units, on the legs' angles they imply (paper
+        004, eqs 4-5; least squares where no legs reach). The robot drives the commanded path whatever the
+        policy does; the policy is the estimator."""
+        if state.drive.k[0] == 0 or self._commanded_eta is None:  # a new episode: the legs as they start
+            self._commanded_eta = state.drive.eta[0].copy()
+        units = state.estimate[0] + [0.0, 0.0, self.dynamics.unit_height]
+        self._commanded_eta = mt.eta(units[None], self._commanded_eta[None], self.geometry)[0][0]
+        rotation, centre = mt.plate_fit(units, self._commanded_eta, self.geometry)
+        return pose6(centre[0], rotation[0])
+
+    def step_duration(self, state: TripodState, params: TripodParams) -> float:
+        h = self.dynamics.time_step
+        return h * physics_steps(state.drive.dt, h)
+
+
+_NONE = np.zeros(0, bool)
+_NO_INCREMENT = np.zeros((0, 3, 2))
+
+
+def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows: np.ndarray,
+             move: bool, moved: np.ndarray = _NONE, increment: np.ndarray = _NO_INCREMENT) -> None:
+    """``moved`` and ``increment``: a dynamic world advanced the drives already (which of them, and each
+    unit's odometric increment (N, 3, 2)); empty, the kernel advances them (:func:`k_drive_step`)."""
+    s, d = state, state.drive
+    external = len(moved) > 0
+    if params.version == 1:
+        _advance_v1_kernel(s.estimate, s.eta, s.last_eta, s.smoothed, s.unit_error, s.plate_error, s.terminated,
+                           s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, params.smoothing,
+                           params.trust_rate, params.relative_reward, external, moved, increment,
+                           d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
+        return
+    _advance_kernel(s.estimate, s.eta, s.last_eta, s.unit_error, s.plate_error, s.terminated, s.obs, s.reward,
+                    np.ascontiguousarray(actions, np.float64), rows, move, external, moved, increment,
+                    params.max_correction, d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
+
+
+@njit(cache=True, error_model="numpy")
+def _errors(units, true):
+    """The mean horizontal unit error and the plate centre's error (m) of ``units`` (3, 3) against ``true``."""
+    dx0, dy0 = units[0, 0] - true[0, 0], units[0, 1] - true[0, 1]
+    dx1, dy1 = units[1, 0] - true[1, 0], units[1, 1] - true[1, 1]
+    dx2, dy2 = units[2, 0] - true[2, 0], units[2, 1] - true[2, 1]
+    unit = (math.sqrt(dx0 * dx0 + dy0 * dy0) + math.sqrt(dx1 * dx1 + dy1 * dy1)
+            + math.sqrt(dx2 * dx2 + dy2 * dy2)) / 3.0
+    return unit, math.hypot((dx0 + dx1 + dx2) / 3.0, (dy0 + dy1 + dy2) / 3.0)
+
+
+@njit(cache=True, error_model="numpy")
+def _score(i, estimate, true, unit_error, plate_error, reward):
+    """Robot ``i``'s errors (m) and reward: -10 (mean unit error + plate centre error)."""
+    unit_error[i], plate_error[i] = _errors(estimate[i], true[i])
+    reward[i] = -10.0 * (unit_error[i] + plate_error[i])
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, terminated, obs, reward, actions, rows,
+                    move, external, moved, increment, max_correction, steps, noise, geo, true, odometry, gradient, eta,
+                    t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
+    """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
+    advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity."""
+    row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
+    for i in range(len(k)):
+        if not rows[i]:
+            continue
+        if move and (moved[i] if external else k[i] < steps[i]):
+            ox, oy = 0.0, 0.0
+            if not external:
+                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
+                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
+            for u in range(3):
+                if external:
+                    ox, oy = increment[i, u, 0], increment[i, u, 1]
+                estimate[i, u, 0] += ox + actions[i, 2 * u] * max_correction
+                estimate[i, u, 1] += oy + actions[i, 2 * u + 1] * max_correction
+                estimate[i, u, 2] = k_terrain(estimate[i, u, 0], estimate[i, u, 1], bumps[i], bump_count[i])[0]
+            for u in range(3):
+                last_eta[i, u] = eta_read[i, u]
+        for u in range(3):
+            eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
+        _score(i, estimate, true, unit_error, plate_error, reward)
+        terminated[i] = k[i] >= steps[i]
+        # observation: odometric units (/ 10 m), measured eta, the command, the estimate's xy (/ 10 m)
+        for u in range(3):
+            for c in range(3):
+                row[3 * u + c] = odometry[i, u, c] / POS_SCALE
+            row[9 + u] = eta_read[i, u]
+            row[15 + 2 * u], row[16 + 2 * u] = estimate[i, u, 0] / POS_SCALE, estimate[i, u, 1] / POS_SCALE
+        row[12], row[13], row[14] = speed[i], math.cos(heading[i]), math.sin(heading[i])
+        for c in range(OBS_SIZE):
+            obs[i, c] = min(100.0, max(-100.0, row[c]))
+
+
+@njit(cache=True, error_model="numpy")
+def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward,
+                       actions, rows, move, smoothing, trust_rate, relative, external, moved, increment, steps, noise,
+                       geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
+                       bump_count, slip_angle, slip_speed, dt):
+    """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``external``,
+    ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
+    row = np.empty(OBS_SIZE_V1)
+    plate = np.empty((3, 3))
+    for i in range(len(k)):
+        if not rows[i]:
+            continue
+        if move and (moved[i] if external else k[i] < steps[i]):
+            for u in range(3):  # the agent's trust in the paper's correction, unit by unit, on what it saw
+                w = trust_rate * min(1.0, max(0.0, actions[i, u]))
+                if w > 0.0:
+                    x, y = mt.k_relocate(estimate[i], u, smoothed[i])
+                    estimate[i, u, 0] += w * (x - estimate[i, u, 0])
+                    estimate[i, u, 1] += w * (y - estimate[i, u, 1])
+            ox, oy = 0.0, 0.0
+            if not external:
+                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
+                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
+            for u in range(3):
+                if external:
+                    ox, oy = increment[i, u, 0], increment[i, u, 1]
+                estimate[i, u, 0] += ox
+                estimate[i, u, 1] += oy
+                estimate[i, u, 2] = k_terrain(estimate[i, u, 0], estimate[i, u, 1], bumps[i], bump_count[i])[0]
+                last_eta[i, u] = eta_read[i, u]
+        for u in range(3):
+            eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
+            plate[u, 0], plate[u, 1], plate[u, 2] = mt.k_unit(eta_read[i, u], u, geo)
+        measured = mt.k_distances(plate)
+        for c in range(3):  # exponential smoothing of the encoder distances (the first reading starts it)
+            smoothed[i, c] = measured[c] if math.isnan(smoothed[i, c]) else \
+                smoothed[i, c] + smoothing * (measured[c] - smoothed[i, c])
+        _score(i, estimate, true, unit_error, plate_error, reward)
+        if relative:  # v1: against odometry alone (the same optimum, less variance)
+            odo_unit, odo_plate = _errors(odometry[i], true[i])
+            reward[i] += 10.0 * (odo_unit + odo_plate)
+        terminated[i] = k[i] >= steps[i]
+        # observation, in the robot's frame (x along the commanded heading)
+        own = mt.k_distances(estimate[i])
+        odo = mt.k_distances(odometry[i])
+        ch, sh = math.cos(heading[i]), math.sin(heading[i])
+        for c in range(3):
+            row[c] = (own[c] - smoothed[i, c]) / RESIDUAL_SCALE
+            row[3 + c] = (odo[c] - smoothed[i, c]) / RESIDUAL_SCALE
+            ex, ey = estimate[i, c, 0] - odometry[i, c, 0], estimate[i, c, 1] - odometry[i, c, 1]
+            row[6 + 2 * c] = (ch * ex + sh * ey) / OFFSET_SCALE
+            row[7 + 2 * c] = (-sh * ex + ch * ey) / OFFSET_SCALE
+            row[13 + c] = eta_read[i, c]
+        row[12] = k[i] / max(steps[i], 1)
+        for c in range(OBS_SIZE_V1):
+            obs[i, c] = min(100.0, max(-100.0, row[c]))
+
+#: the names of before paragym 0.9, answered with a DeprecationWarning
+class TripodTask:
+    """The mobile tripod's contract (:class:`paragym.tasks.base.Task`): paper 004's estimation of the drive
+    units under slip."""
+
+    name = "tripod"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = TripodScenario
+    Params = TripodParams
+    Rules = TripodRules
+    State = TripodState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
+    sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
+
+    def paper_scenario(self) -> TripodScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: TripodParams) -> TripodScenario:
+        return scenarios_module.random_scenario(rng)
+
+    def validate_scenario(self, scenario: TripodScenario, params: TripodParams) -> None:
+        scenarios_module.validate_scenario(scenario)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
+                       world: Any) -> list[TripodScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs)
+
+    def vector_params(self, rules: TripodRules, kwargs: dict[str, Any]) -> TripodParams:
+        params = TripodParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native tripod vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
+                BoxSpec(-1.0, 1.0, (params.action_size,)))
+
+    def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human")
+
+    def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios, rngs)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
+        """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
+        in v2, the mechanism never folded)."""
+        s = state
+        folded_fails = s.folded & params.fold_ends
+        return Evaluation(s.terminated & (s.unit_error < params.success_error) & ~folded_fails,
+                          s.folded.astype(np.int64),
+                          {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t})
+
+    def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
+        s, d = state, state.drive
+        info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
+                "eta": s.eta[i].copy(), "detected_fault": detected_fault(state, params, i)}
+        if params.version == 1:  # the smoothed encoder distances that v1's correction steers to
+            info["encoder_distances"] = s.smoothed[i].copy()
+        return info
+
+    def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated robot, not the kinematic model; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        d = state.drive
+        if "scene" not in cache:
+            from paragym.sim.tripod_scene import TripodScene
+
+            cache["scene"] = TripodScene(d.scenarios[i].terrain, gui=gui)
+        _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
+        cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
+        return cache["scene"].render()
+
+
+def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
+    """The paper's reading of eq 4 against eq 5 for robot ``i``'s current estimate: which unit looks faulty,
+    and whether eta says it went inward or outward."""
+    s = state
+    if s.drive.k[i] == 0:
+        return None
+    target = mt.distances(mt.plate_frame_units(s.eta[i], params.geometry))[0]
+    diff = np.abs(mt.distances(s.estimate[i])[0] - target)
+    order = np.argsort(diff, kind="stable")
+    if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
+        return None
+    k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
+    return k, "inward (bump or push)" if s.eta[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
+
+
+#: the mobile tripod task (paper 004)
+TASK = TripodTask()
+
+
+__getattr__ = renamed(__name__, {"TripodTaskState": "TripodState"})

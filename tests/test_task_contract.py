@@ -1,0 +1,190 @@
+"""One task contract (issue 39): every task implements :class:`paragym.tasks.base.Task`, the env classes are
+generic shells over it, success is decided in one function per task, and one lifecycle holds for every id and
+fidelity."""
+
+from __future__ import annotations
+
+import copy
+import importlib
+import pickle
+import re
+import warnings
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from paragym import registry
+from paragym.envs.base import ParagymEnv
+from paragym.envs.vector import ParagymVectorEnv
+from paragym.tasks.base import Evaluation, Task
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def _cls(entry_point: str) -> type:
+    module, name = entry_point.split(":")
+    return getattr(importlib.import_module(module), name)
+
+
+def _task(name: str):
+    return importlib.import_module(f"paragym.tasks.{name}_step").TASK
+
+
+@pytest.mark.parametrize("row", registry.ROWS, ids=lambda r: r.name)
+def test_every_id_is_a_task_and_its_rules(row):
+    single, vector = _cls(row.entry_point), _cls(row.vector_entry_point)
+    assert issubclass(single, ParagymEnv) and issubclass(vector, ParagymVectorEnv)
+    assert single.task is vector.task and single.rules == vector.rules, row.id
+    assert isinstance(single.task, Task) and single.task.name == row.task
+    assert isinstance(single.rules, single.task.Rules) and single.rules.version == row.version
+    assert row.scenarios is None and row.scenario_names == single.task.scenario_names  # read from the task
+    # the class adds no code: the shells do it all
+    assert {k for k in vars(single) if not k.startswith("__")} <= {"task", "rules", "metadata"}, single
+    assert {k for k in vars(vector) if not k.startswith("__")} <= {"task", "rules"}, vector
+
+
+def test_the_shells_hold_no_task_hooks_flags_or_single_envs():
+    base = (ROOT / "envs" / "base.py").read_text()
+    vector = (ROOT / "envs" / "vector.py").read_text()
+    assert "NotImplementedError" not in base and "NotImplementedError" not in vector
+    assert "single_env" not in vector and "single_class" not in vector
+    for path in [*(ROOT / "envs").glob("*.py"), *(ROOT / "paragym" / "tasks").glob("*.py")]:
+        text = path.read_text()
+        assert not re.search(r"_v2_rules|_defaults\b|\bversion = \d", text), path
+
+
+def test_an_env_refuses_an_unknown_argument_by_name():
+    for row in registry.newest():
+        with pytest.raises(TypeError, match="'bogus'"):
+            gym.make(row, bogus=1)
+        with pytest.raises(TypeError, match="'bogus'"):
+            gym.make_vec(row, num_envs=2, vectorization_mode="vector_entry_point", bogus=1)
+
+
+# --- success decided once -------------------------------------------------------------------------------------------
+
+
+def test_success_is_decided_in_one_place(monkeypatch):
+    """Break the Orthoglide's ``evaluate`` in its one place: the single env, the vector env and the
+    leaderboard's episode all report the broken success."""
+    from paragym.baselines.leaderboard import evaluate as board
+    from paragym.baselines.policies import get_policy
+    from paragym.tasks.orthoglide import circle_task
+
+    env_id = "paragym/Orthoglide2PRRKappa-v1"
+    short = circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
+
+    def outcome() -> tuple[bool, bool, bool]:
+        env = gym.make(env_id, scenario=short)
+        env.reset(seed=0)
+        while True:
+            *_, terminated, truncated, info = env.step(np.zeros(1, np.float32))
+            if terminated or truncated:
+                break
+        venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=short)
+        venv.reset(seed=0)
+        for _ in range(4):
+            *_, vinfo = venv.step(np.zeros((2, 1), np.float32))
+        board._ENVS.clear()
+        row = board.evaluate_episode(get_policy(env_id, "zero"), 0, 0)
+        return info["is_success"], bool(vinfo["is_success"][0]), row.success
+
+    task = _task("orthoglide")
+    honest = outcome()
+    real = type(task).evaluate
+
+    def broken(self, state, params, world):
+        ev = real(self, state, params, world)
+        return Evaluation(~ev.success, ev.failure, ev.numbers)
+
+    monkeypatch.setattr(type(task), "evaluate", broken)
+    assert outcome() == tuple(not s for s in honest), honest
+
+
+# --- one lifecycle, every id and fidelity ----------------------------------------------------------------------------
+
+
+def _short_scenario(task: str):
+    """A scenario that ends within a few zero actions."""
+    from paragym.sim.obstacles import Cylinder
+    from paragym.tasks.capaman import CaPaManScenario
+    from paragym.tasks.orthoglide import circle_task
+    from paragym.tasks.tripod import TripodScenario
+
+    if task == "capaman":  # the three T.P.s the same: each step reaches the next one
+        point = (1.4, 1.4, 1.4)
+        return CaPaManScenario("same", (Cylinder((0.1, 0.1, 0.04), 0.005, 0.08),), (point, point, point))
+    if task == "orthoglide":
+        return circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
+    if task == "tripod":
+        return TripodScenario("short", distance=0.1)
+    return "paper"  # the hybrid's path has 100 samples
+
+
+CASES = [(row.id, fidelity) for row in registry.ROWS for fidelity in ("kinematic", "dynamic")]
+
+
+def _make(env_id: str, fidelity: str, **kwargs) -> gym.Env:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gym.make(env_id, fidelity=fidelity, scenario=_short_scenario(registry.task_of(env_id)),
+                        disable_env_checker=True, **kwargs)
+
+
+@pytest.mark.parametrize("env_id, fidelity", CASES)
+def test_one_lifecycle(env_id, fidelity):
+    env = _make(env_id, fidelity)
+    zero = np.zeros(env.action_space.shape, np.float32)
+    with pytest.raises(RuntimeError, match=r"call reset\(\) before step\(\)"):
+        env.unwrapped.step(zero)  # (Gymnasium's OrderEnforcing wrapper says it first)
+    with pytest.raises(ValueError, match="unknown key 'bogus'"):
+        env.reset(seed=0, options={"bogus": 1})
+    env.reset(seed=0)
+    for _ in range(200):
+        terminated = env.step(zero)[2]
+        if terminated:
+            break
+    assert terminated, "the short scenario ends"
+    with pytest.raises(RuntimeError, match="the episode has ended"):
+        env.step(zero)
+    env.reset(seed=1, options={"scenario": _short_scenario(registry.task_of(env_id))})
+    env.step(zero)  # a reset starts the next one
+    env.close()
+    env.close()  # closing twice is harmless
+    for call in (lambda: env.step(zero), lambda: env.reset(seed=0)):
+        with pytest.raises(RuntimeError, match="is closed: make a new env"):
+            call()
+
+
+@pytest.mark.parametrize("env_id, fidelity", CASES)
+def test_a_copy_is_independent_or_refused(env_id, fidelity):
+    env = _make(env_id, fidelity)
+    env.reset(seed=3)
+    u = env.unwrapped
+    zero = np.zeros(env.action_space.shape, np.float32)
+    if u.world is not None and getattr(u.world, "live", True):  # a PyBullet client of its own: refused
+        for copier in (copy.deepcopy, pickle.dumps):
+            with pytest.raises(TypeError, match="cannot be copied or pickled"):
+                copier(u)
+    else:
+        twin = copy.deepcopy(u)
+        again = pickle.loads(pickle.dumps(u))
+        a, b, c = u.step(zero), twin.step(zero), again.step(zero)
+        np.testing.assert_array_equal(a[0], b[0])
+        np.testing.assert_array_equal(a[0], c[0])
+        twin.close()
+        again.close()
+        u.step(zero) if not a[2] else u.reset(seed=3)  # the original lives on after its copies are closed
+    env.close()
+
+
+def test_the_vector_env_refuses_unknown_options_and_a_closed_env():
+    venv = gym.make_vec("paragym/HybridSingularityFree-v2", num_envs=2, vectorization_mode="vector_entry_point")
+    with pytest.raises(ValueError, match="unknown key 'bogus'"):
+        venv.reset(seed=0, options={"bogus": 1})
+    venv.reset(seed=0)
+    venv.close()
+    with pytest.raises(RuntimeError, match="is closed"):
+        venv.reset(seed=0)
