@@ -40,7 +40,7 @@ from paragym.mechanisms import capaman
 from paragym.rollout import run_episode
 from paragym.sim import occupancy
 from paragym.tasks.capaman import TOUR
-from paragym.tasks.capaman_step import _clusters
+from paragym.tasks.capaman_worlds import _clusters
 from paragym.units import DEG
 
 

@@ -156,7 +156,7 @@ class ParagymEnv(gym.Env):
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 25}
 
-    #: the task (``paragym.tasks.<task>_step.TASK``) and this id's rules (a value of ``task.Rules``)
+    #: the task (``paragym.tasks.<task>_task.TASK``) and this id's rules (a value of ``task.Rules``)
     task: Any = None
     rules: Any = None
 

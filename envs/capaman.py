@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
-from paragym.tasks.capaman_step import RULES, SWEEP_STEP, TASK
+from paragym.tasks.capaman_step import SWEEP_STEP
+from paragym.tasks.capaman_task import RULES, TASK
 
 __all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeV1Env", "CaPaManCollisionFreeV1VectorEnv",
            "CaPaManCollisionFreeVectorEnv"]

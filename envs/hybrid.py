@@ -11,7 +11,7 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
 from paragym.tasks.hybrid import HybridScenario, paper_scenario, random_scenario, random_scenarios
-from paragym.tasks.hybrid_step import RULES, TASK
+from paragym.tasks.hybrid_task import RULES, TASK
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
            "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",

@@ -11,7 +11,8 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
 from paragym.tasks.orthoglide import random_scenario, random_scenarios
-from paragym.tasks.orthoglide_step import KAPPA_LIMIT, RULES, TASK
+from paragym.tasks.orthoglide_step import KAPPA_LIMIT
+from paragym.tasks.orthoglide_task import RULES, TASK
 
 __all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
            "Orthoglide2PRRKappaVectorEnv", "random_scenario", "random_scenarios"]

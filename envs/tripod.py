@@ -11,7 +11,7 @@ from __future__ import annotations
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.tripod import drive_scenario
-from paragym.tasks.tripod_step import RULES, TASK
+from paragym.tasks.tripod_task import RULES, TASK
 
 __all__ = ["MobileTripodOdometryEnv", "MobileTripodOdometryV1Env", "MobileTripodOdometryV1VectorEnv",
            "MobileTripodOdometryV2Env", "MobileTripodOdometryV2VectorEnv", "MobileTripodOdometryVectorEnv",

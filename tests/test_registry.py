@@ -71,8 +71,9 @@ def test_an_incomplete_bench_is_named_part_by_part():
 def test_every_task_module_speaks_one_vocabulary_and_answers_to_its_old_names():
     """One name per task across every layer: ``mechanisms/<task>.py``, ``tasks/<task>.py`` (the scenarios:
     ``<Task>Scenario``, ``SCENARIOS``, ``paper_scenario``, ``random_scenario``, ``validate_scenario``,
-    ``resolve_scenario``, ``draw_scenarios``), ``tasks/<task>_step.py`` (the contract: ``TASK``, ``RULES``,
-    ``<Task>Params``, ``<Task>State``, ``<Task>Rules``), ``sim/<task>_*.py``, ``envs/<task>.py`` and
+    ``resolve_scenario``, ``draw_scenarios``), ``tasks/<task>_step.py`` (the transition: ``RULES``,
+    ``<Task>Params``, ``<Task>State``, ``<Task>Rules``), ``tasks/<task>_worlds.py`` (its PyBullet worlds),
+    ``tasks/<task>_task.py`` (the contract, ``TASK``), ``sim/<task>_*.py``, ``envs/<task>.py`` and
     ``baselines/tasks/<task>.py``; no scenario, contract or env module of a task names a scenario function
     otherwise; the names of before
     0.9 still work, with a warning."""
@@ -87,18 +88,20 @@ def test_every_task_module_speaks_one_vocabulary_and_answers_to_its_old_names():
     words = ("resolve", "draw", "validate", "paper", "random")
     for task in sorted({r.task for r in registry.ROWS}):
         prefix = {"capaman": "CaPaMan", "hybrid": "Hybrid", "orthoglide": "Orthoglide", "tripod": "Tripod"}[task]
-        modules = [importlib.import_module(m) for m in (f"paragym.mechanisms.{task}", f"paragym.tasks.{task}",
-                                                         f"paragym.tasks.{task}_step", f"paragym.envs.{task}",
-                                                         f"paragym.baselines.tasks.{task}")]
+        names = (f"paragym.mechanisms.{task}", f"paragym.tasks.{task}", f"paragym.tasks.{task}_step",
+                 f"paragym.envs.{task}", f"paragym.baselines.tasks.{task}", f"paragym.tasks.{task}_task",
+                 f"paragym.tasks.{task}_worlds")
+        modules = [importlib.import_module(m) for m in names]
         assert list((root / "paragym" / "sim").glob(f"{task}_*.py")), task
         scenarios, step = modules[1], modules[2]
         for name in (f"{prefix}Scenario", "SCENARIOS", "paper_scenario", "random_scenario", "validate_scenario",
                      "resolve_scenario", "draw_scenarios"):
             assert hasattr(scenarios, name), (task, name)
-        for name in ("TASK", "RULES", f"{prefix}Params", f"{prefix}State", f"{prefix}Rules"):
+        for name in ("RULES", f"{prefix}Params", f"{prefix}State", f"{prefix}Rules"):
             assert hasattr(step, name), (task, name)
+        assert hasattr(modules[5], "TASK") and hasattr(modules[6], "DynamicWorld"), task
         assert isinstance(scenarios.paper_scenario(), getattr(scenarios, f"{prefix}Scenario")), task
-        for module in (scenarios, step, modules[3]):
+        for module in (scenarios, step, modules[3], modules[5]):
             public = [n for n, f in vars(module).items() if inspect.isfunction(f) and not n.startswith("_")
                       and f.__module__ == module.__name__]
             odd = [n for n in public if re.match(rf"({'|'.join(words)})_", n)

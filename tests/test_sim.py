@@ -196,7 +196,7 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     """The batched clearance (blocks skipped when their sphere misses a robot's
     cells below the cap) equals a lookup of every cluster point, for robots
     in any order, near the task points and anywhere."""
-    from paragym.tasks.capaman_step import _clusters
+    from paragym.tasks.capaman_worlds import _clusters
 
     clusters = _clusters(G)
     rng = np.random.default_rng(3)

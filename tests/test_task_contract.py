@@ -29,7 +29,7 @@ def _cls(entry_point: str) -> type:
 
 
 def _task(name: str):
-    return importlib.import_module(f"paragym.tasks.{name}_step").TASK
+    return importlib.import_module(f"paragym.tasks.{name}_task").TASK
 
 
 @pytest.mark.parametrize("row", registry.ROWS, ids=lambda r: r.name)

@@ -173,7 +173,7 @@ def test_the_grid_and_pybullet_disagree_by_at_most_two_cells():
     configurations drawn uniformly and near the task points of random scenes."""
     from paragym.mechanisms import capaman
     from paragym.sim import occupancy
-    from paragym.tasks.capaman_step import _clusters
+    from paragym.tasks.capaman_worlds import _clusters
 
     env = gym.make("paragym/CaPaManCollisionFree-v0")
     scene, clusters = env.unwrapped.scene, _clusters(capaman.DEFAULT_GEOMETRY)

@@ -129,7 +129,7 @@ class World(Protocol):
 
 @runtime_checkable
 class Task(Protocol):
-    """Everything a task supplies, each once. One object per task (``paragym.tasks.<task>_step.TASK``).
+    """Everything a task supplies, each once. One object per task (``paragym.tasks.<task>_task.TASK``).
 
     Attributes:
         name: the task's name, as the registry rows and the bench name it.

@@ -46,24 +46,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property, lru_cache
-from typing import Any, NamedTuple, Protocol
+from functools import cached_property
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
 from paragym.mechanisms import capaman
-from paragym.mechanisms.geometry import pose6
-from paragym.sim import occupancy
-from paragym.sim.capaman_dynamic import CaPaManDynamicScene
-from paragym.sim.capaman_scene import CaPaManScene
-from paragym.sim.client import physics_steps
 from paragym.sim.obstacles import ENCODING_SIZE
 from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import (
-    BROKEN_GAP,
-    BoxSpec,
-    Evaluation,
     check_choice,
     check_control_period,
     check_instance,
@@ -72,11 +64,11 @@ from paragym.tasks.base import (
     renamed,
 )
 from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
+from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, World
 from paragym.units import DEG
 
-__all__ = ["FAILURES", "LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP", "TASK", "CaPaManParams",
-           "CaPaManRules", "CaPaManState", "CaPaManTask", "DynamicWorld", "GridWorld", "SceneWorld", "World", "reset",
-           "step"]
+__all__ = ["FAILURES", "LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP", "CaPaManParams", "CaPaManRules",
+           "CaPaManState", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "collision", "broken")
@@ -96,7 +88,6 @@ OBS_SIZE_V1 = 3 + 3 + 3 + 3 + MAX_OBSTACLES * ENCODING_SIZE + 1 + 3 + 1
 LOOKAHEAD = 3 * DEG
 #: v1: lengths in the observation are multiplied by this (1/m): +-20 cm fill the Box
 LENGTH_SCALE = 5.0
-
 
 
 class KernelArgs(NamedTuple):
@@ -259,152 +250,6 @@ class CaPaManState:
     def target(self) -> np.ndarray:
         """The index of each robot's current target T.P. (N,)."""
         return _TOUR[np.minimum(self.reached, len(TOUR) - 1)]
-
-
-class World(Protocol):
-    """Where the parts are and how far they are from the obstacles."""
-
-    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None: ...
-
-    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
-        """Clearance (M,), tool tip (M, 3) and nearest part of robots ``rows`` at crank angles ``alpha`` (M, 3)."""
-        ...
-
-
-@lru_cache(maxsize=4)
-def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
-    return occupancy.cluster_points(geometry, spacing=0.01)
-
-
-class GridWorld:
-    """Paper 000's own test for N robots: the occupancy grid Psi of each
-    robot's obstacles as signed distances, read at the cluster points of eq 2
-    (10 mm apart) placed by the closed-form kinematics."""
-
-    #: it holds no simulation: a copy builds its own checker scene when it needs one
-    live = False
-
-    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
-                 gui: bool = False) -> None:
-        self.geometry, self.grids, self.clusters = geometry, occupancy.DistanceGrids(n, cap=cap), _clusters(geometry)
-        self.part_names = [p.name for p in capaman.part_shapes(geometry)]
-        self.cap, self.draws, self.gui = cap, draws, gui
-        #: the kinematic PyBullet scene that generates and checks scenarios and draws, built on first use
-        self.scene: CaPaManScene | None = None
-
-    def checker(self) -> CaPaManScene:
-        """The kinematic scene that generates and checks scenarios (built on first use) and draws."""
-        if self.scene is None:
-            self.scene = CaPaManScene(self.geometry, gui=self.gui, clearance_cap=self.cap, draws=self.draws)
-        return self.scene
-
-    def __getstate__(self) -> dict[str, Any]:
-        return {**self.__dict__, "scene": None}
-
-    def close(self) -> None:
-        if self.scene is not None:
-            self.scene.close()
-            self.scene = None
-
-    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
-        self.grids.set(int(i), scenario.obstacles)
-
-    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
-        pose = capaman.forward(alpha, self.geometry, validate=False)
-        clearance, part = occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
-        return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
-
-    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-        """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
-        return occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
-
-
-class SceneWorld:
-    """One robot in the kinematic PyBullet scene: its exact signed distance."""
-
-    live = True
-
-    def __init__(self, scene: CaPaManScene) -> None:
-        self.scene = scene
-
-    def checker(self) -> CaPaManScene:
-        """The kinematic scene that generates and checks scenarios: its own."""
-        return self.scene
-
-    def probe(self) -> SceneWorld:
-        """v1's look-ahead world: itself."""
-        return self
-
-    def close(self) -> None:
-        self.scene.close()
-
-    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
-        self.scene.set_obstacles(scenario.obstacles)
-
-    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
-        tip = self.scene.set_configuration(alpha[0])
-        clearance, near = self.scene.clearance()
-        return np.array([clearance]), tip[None], [near]
-
-
-class DynamicWorld(SceneWorld):
-    """One robot under PyBullet's dynamics: the motors chase the command for
-    ``control_period`` s; the obstacles are rigid bodies."""
-
-    def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
-        super().__init__(scene)
-        self.control_period = control_period
-        self._moved = False
-        #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism)
-        self.broken = False
-        self._checker: CaPaManScene | None = None
-        self._probe: SceneWorld | None = None
-
-    def checker(self) -> CaPaManScene:
-        """A second, kinematic scene that generates and checks scenarios (built on first use)."""
-        if self._checker is None:
-            self._checker = CaPaManScene(self.scene.geometry, clearance_cap=self.scene.clearance_cap, draws=False)
-        return self._checker
-
-    def probe(self) -> SceneWorld:
-        """v1's look-ahead world: the kinematic checker scene, at the encoders' angles."""
-        if self._probe is None:
-            self._probe = SceneWorld(self.checker())
-        return self._probe
-
-    def close(self) -> None:
-        self.scene.close()
-        if self._checker is not None:
-            self._checker.close()
-
-    # --- what KF validation reads (paragym.validation.episode) ---
-    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        """Paper 000's accelerometer array on the movable plate, judged about H."""
-        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.dynamics.time_step)
-
-    def commanded_pose(self, state: CaPaManState, params: CaPaManParams) -> np.ndarray:
-        """The plate's pose by the closed-form direct kinematics of the motors' targets."""
-        pose = capaman.forward(state.command[:1], params.geometry, validate=False)
-        return pose6(pose.position[0], pose.rotation[0])
-
-    def step_duration(self, state: CaPaManState, params: CaPaManParams) -> float:
-        h = self.scene.dynamics.time_step
-        return h * physics_steps(self.control_period, h)
-
-    def move(self, command: np.ndarray) -> np.ndarray:
-        """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
-        self.scene.drive(command[0], self.control_period)
-        self._moved = True
-        self.broken = self.scene.closure_error() > BROKEN_GAP
-        return self.scene.alpha[None]
-
-    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
-        if not self._moved:  # a reset: pose the chain; after a move the dynamics has posed it
-            self.broken = False
-            return super().place(rows, alpha)
-        self._moved = False
-        clearance, near = self.scene.clearance()
-        return np.array([clearance]), self.scene.tip[None], [near]
 
 
 def reset(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
@@ -605,105 +450,3 @@ def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, ro
 __getattr__ = renamed(__name__, {"CaPaManTaskState": "CaPaManState"})
 
 
-class CaPaManTask:
-    """The CaPaMan's contract (:class:`paragym.tasks.base.Task`): paper 000's collision-free tour."""
-
-    name = "capaman"
-    scenario_names = scenarios_module.SCENARIOS
-    failures = FAILURES
-    Scenario = CaPaManScenario
-    Params = CaPaManParams
-    Rules = CaPaManRules
-    State = CaPaManState
-    vector_fidelities = ("kinematic",)
-    #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
-    sensor_layout: dict[str, float] = {}
-
-    def paper_scenario(self) -> CaPaManScenario:
-        return scenarios_module.paper_scenario()
-
-    def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
-        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
-        try:
-            return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
-        finally:
-            if world is None:
-                scene.close()
-
-    def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
-        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
-        try:
-            scenarios_module.validate_scenario(scenario, scene)
-        finally:
-            if world is None:
-                scene.close()
-
-    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
-                       world: Any) -> list[CaPaManScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
-
-    def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
-        if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
-            raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
-                             "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
-        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": "grid"})
-
-    def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
-
-    def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> Any:
-        """The grid (N robots; its checker scene comes when asked), the kinematic PyBullet scene or the
-        dynamics (one robot)."""
-        gui, g = render_mode == "human", params.geometry
-        if params.collision == "grid":
-            return GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
-        if params.fidelity == "kinematic":
-            return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
-                                           draws=render_mode is not None))
-        return DynamicWorld(CaPaManDynamicScene(g, params.dynamics, gui=gui, clearance_cap=params.clearance_cap),
-                            params.control_period)
-
-    @staticmethod
-    def _probe(params: CaPaManParams, world: Any) -> Any:
-        """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
-        if params.version == 0 or isinstance(world, GridWorld):
-            return None if params.version == 0 else world
-        return world.probe()
-
-    def reset(self, state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
-        reset(state, params, rows, scenarios, world, self._probe(params, world))
-
-    def step(self, state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world, self._probe(params, world))
-
-    def evaluate(self, state: CaPaManState, params: CaPaManParams, world: Any) -> Evaluation:
-        """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
-        mechanism whole)."""
-        s = state
-        collision = s.clearance <= 0.0
-        broken = np.zeros(len(collision), bool)
-        if isinstance(world, DynamicWorld):
-            broken[0] = world.broken
-        failure = np.where(collision, 1, np.where(broken, 2, 0))
-        return Evaluation((s.reached >= len(TOUR)) & ~collision & ~broken, failure,
-                          {"collision": collision, "clearance": s.clearance, "reached": s.reached,
-                           "target_index": s.target, "path_length": s.path_length})
-
-    def details(self, state: CaPaManState, params: CaPaManParams, world: Any, i: int) -> dict[str, Any]:
-        return {"nearest_part": state.near[i], "alpha": state.alpha[i].copy(), "tool_tip": state.tip[i].copy()}
-
-    def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
-               gui: bool) -> np.ndarray | None:
-        if isinstance(world, GridWorld):  # the grid does not pose the scene: render does
-            scene = world.checker()
-            scene.set_obstacles(state.scenarios[i].obstacles)
-            scene.set_configuration(state.alpha[i])
-        elif gui:  # PyBullet keeps the GUI's scene posed
-            return None
-        return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
-
-
-#: the CaPaMan task (paper 000)
-TASK = CaPaManTask()

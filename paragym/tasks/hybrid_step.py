@@ -52,13 +52,8 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import hybrid
-from paragym.mechanisms.geometry import euler_matrix, matrix_euler, pose6
-from paragym.sim.client import physics_steps
 from paragym.tasks import hybrid as scenarios_module
 from paragym.tasks.base import (
-    BROKEN_GAP,
-    BoxSpec,
-    Evaluation,
     check_choice,
     check_control_period,
     check_instance,
@@ -67,10 +62,11 @@ from paragym.tasks.base import (
     renamed,
 )
 from paragym.tasks.hybrid import HybridScenario, nominal_rows
+from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "RULES", "TASK", "DynamicWorld", "HybridParams",
-           "HybridRules", "HybridState", "HybridTask", "reset", "step"]
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "RULES", "HybridParams", "HybridRules", "HybridState",
+           "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
 FAILURES = (None, "broken", "tracking", "leg limit", "singular")
@@ -81,7 +77,6 @@ OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
 #: v1: v0's observation, then P1 (6), P1's strokes (9) and measures (2) at the current Delta, and its
 #: stroke excess with the excess's change one Delta step up and down (3)
 OBS_SIZE_V1 = OBS_SIZE + 6 + 9 + 2 + 3
-
 
 
 class Weights(NamedTuple):
@@ -283,84 +278,6 @@ def _note_failure(state: HybridState, active: np.ndarray, world: DynamicWorld | 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
 
 
-class DynamicWorld:
-    """One robot under PyBullet's dynamics (:class:`paragym.sim.hybrid_dynamic.HybridDynamicScene`).
-
-    A step drives the nine actuators from their last targets to the strokes
-    of the commanded pose, linearly over ``control_period`` s of simulated
-    time, under their force limits. The robot is then measured: T_A and T_E
-    from the platforms' simulated poses, the strokes from the actuators'
-    joints, the singularity measures from the simulated stages
-    (:func:`paragym.mechanisms.hybrid.k_measure`). The state's pose becomes
-    E's simulated pose and its offset E's simulated position minus the
-    nominal path, so that the reward's offset term sees a platform that sags
-    or lags. ``tracked`` is False once E's position is more than
-    ``track_tolerance`` (m) from the commanded one, or, with
-    ``angle_tolerance`` (rad; v2), E's orientation more than that from the
-    commanded one: that step is not free (in kinematic fidelity both errors
-    are 0, so the definition is the same). ``broken_gap`` (m; v2): a ball
-    joint open by more than that is a broken mechanism (``broken``)."""
-
-    def __init__(self, scene: Any, control_period: float, track_tolerance: float,
-                 angle_tolerance: float | None = None, broken_gap: float | None = None) -> None:
-        self.scene, self.control_period, self.track_tolerance = scene, control_period, track_tolerance
-        self.angle_tolerance, self.broken_gap = angle_tolerance, broken_gap
-        self.tracked = np.ones(1, bool)
-        self.tracking_error = 0.0
-        #: E's orientation error (rad): the angle of the rotation from its commanded to its simulated attitude
-        self.orientation_error = 0.0
-        self.broken = False
-        #: the last step's commanded displacement of E from home (6,): the pose the actuators were driven to
-        self.command = np.zeros(6)
-        self._work = np.empty((5, 6, 6))
-
-    def reset(self, state: HybridState) -> None:
-        """Put the simulated robot at the state's (solved) start pose, at rest."""
-        self.scene.reset(state.pose[0], float(state.delta[0]))
-        self.tracked[0], self.tracking_error, self.orientation_error, self.broken = True, 0.0, 0.0, False
-        self.command = state.pose[0].copy()
-
-    def move(self, state: HybridState) -> None:
-        """Drive to the commanded strokes (``state.lengths``) and measure."""
-        g = self.scene.geometry
-        self.command = state.pose[0].copy()
-        self.scene.drive(state.lengths[0], self.control_period)
-        t_a, t_e, strokes = self.scene.measure()
-        t_t = np.linalg.solve(t_a, t_e)
-        consts = hybrid.kernel_consts(g)
-        state.mu_h[0], state.mu_t[0] = hybrid.k_measure(
-            np.ascontiguousarray(t_a[:3, :3]), np.ascontiguousarray(t_a[:3, 3]), np.ascontiguousarray(t_t[:3, :3]),
-            np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True, np.empty(9), self._work)
-        state.lengths[0] = strokes
-        state.pose[0, :3] = t_e[:3, 3] - consts[6][:3]
-        state.pose[0, 3:] = matrix_euler(t_e[:3, :3])
-        state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
-        self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - self.command[:3]))
-        turn = euler_matrix(*self.command[3:]).T @ t_e[:3, :3]
-        self.orientation_error = float(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0)))
-        self.tracked[0] = self.tracking_error <= self.track_tolerance and (
-            self.angle_tolerance is None or self.orientation_error <= self.angle_tolerance)
-        self.broken = self.broken_gap is not None and self.scene.closure_error() > self.broken_gap
-
-    def close(self) -> None:
-        self.scene.close()
-
-    # --- what KF validation reads (paragym.validation.episode) ---
-    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        """Platform E, judged at its centre."""
-        scene = self.scene
-        return (scene.sim, *scene.e_platform, np.zeros(3), scene.dynamics.time_step)
-
-    def commanded_pose(self, state: HybridState, params: HybridParams) -> np.ndarray:
-        """E's pose of the step: the nominal path plus the action's offset."""
-        t_e = hybrid.pose_matrix(hybrid.home_pose(params.geometry) + self.command)[0]
-        return pose6(t_e[:3, 3], t_e[:3, :3])
-
-    def step_duration(self, state: HybridState, params: HybridParams) -> float:
-        h = self.scene.dynamics.time_step
-        return h * physics_steps(self.control_period, h)
-
-
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     s = state
@@ -463,90 +380,3 @@ def _excess(lengths, w):
 __getattr__ = renamed(__name__, {"HybridTaskState": "HybridState"})
 
 
-class HybridTask:
-    """The hybrid task's contract (:class:`paragym.tasks.base.Task`): paper 002's hexapod + tripod along a
-    polynomial path."""
-
-    name = "hybrid"
-    scenario_names = scenarios_module.SCENARIOS
-    failures = FAILURES
-    Scenario = HybridScenario
-    Params = HybridParams
-    Rules = HybridRules
-    State = HybridState
-    vector_fidelities = ("kinematic",)
-    #: KF validation (dynamic fidelity): the paper's array scaled to platform E
-    sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
-
-    def paper_scenario(self) -> HybridScenario:
-        return scenarios_module.paper_scenario()
-
-    def random_scenario(self, rng: np.random.Generator, params: HybridParams) -> HybridScenario:
-        return scenarios_module.random_scenario(rng, params.geometry)
-
-    def validate_scenario(self, scenario: HybridScenario, params: HybridParams) -> None:
-        scenarios_module.validate_scenario(scenario)
-
-    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
-                       world: Any) -> list[HybridScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs, params.geometry)
-
-    def vector_params(self, rules: HybridRules, kwargs: dict[str, Any]) -> HybridParams:
-        params = HybridParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
-                             "for the dynamic fidelity")
-        return params
-
-    def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))
-
-    def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
-        if params.fidelity != "dynamic":
-            return None
-        from paragym.sim.hybrid_dynamic import HybridDynamicScene
-
-        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
-        strict = params.rules.strict_dynamics
-        return DynamicWorld(scene, params.control_period, params.track_tolerance,
-                            params.track_angle_tolerance if strict else None, BROKEN_GAP if strict else None)
-
-    def reset(self, state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
-        reset(state, params, rows, scenarios)
-        if world is not None:
-            world.reset(state)
-
-    def step(self, state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
-
-    def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
-        """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
-        dynamic fidelity, tracked (and the mechanism whole, v2)."""
-        s = state
-        return Evaluation(s.terminated & s.all_free, s.reason,
-                          {"step": s.k, "u": s.u[s.k], "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t,
-                           "free": s.free, "within_limits": s.within})
-
-    def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
-        return {"offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
-                "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
-                "tracking_error": 0.0 if world is None else world.tracking_error,
-                "orientation_error": 0.0 if world is None else world.orientation_error}
-
-    def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
-               gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated robot, not the command; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        if "scene" not in cache:
-            from paragym.sim.hybrid_scene import HybridScene
-
-            cache["scene"] = HybridScene(params.geometry, gui=gui)
-        solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
-        cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
-        return cache["scene"].render()
-
-
-#: the hybrid task (paper 002)
-TASK = HybridTask()

@@ -25,7 +25,6 @@ p_k, task rate t_k, J and n at k):
 from __future__ import annotations
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Any
@@ -34,21 +33,19 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import orthoglide as og
-from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
 from paragym.tasks.base import (
     BROKEN_GAP,
-    BoxSpec,
-    Evaluation,
     check_choice,
     check_instance,
     check_number,
     refuse_unknown,
 )
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
+from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "RULES", "TASK", "DynamicWorld", "OrthoglideParams",
-           "OrthoglideRules", "OrthoglideState", "OrthoglideTask", "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "RULES", "OrthoglideParams", "OrthoglideRules",
+           "OrthoglideState", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -218,62 +215,6 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
 
 
-class DynamicWorld:
-    """One robot under PyBullet's dynamics (:class:`paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`).
-
-    A step's joints (the least-norm motion and the agent's null-space motion,
-    or the agent's joint rates, added to the last command, as a controller
-    integrates its own reference) become the three motors' targets, reached
-    linearly over the path's time step; the encoders then replace the
-    state's joints. The evaluation takes the tool point from them (the
-    forward kinematics of the measured joints, where the closed chain put
-    C): J, kappa and n there, and the tracking error from the path point,
-    which the reward's ``w_track`` term charges in both action modes (in
-    kinematic null-space mode it is 0 by construction, so the definition is
-    the same)."""
-
-    def __init__(self, scene: Any, exact_time: bool = False) -> None:
-        self.scene = scene
-        self.command = np.zeros(3)
-        #: simulate each path step over exactly its duration (v1), else over whole physics steps (v0: the
-        #: duration rounded to the physics step)
-        self.exact_time = exact_time
-
-    def reset(self, state: OrthoglideState) -> None:
-        """Put the simulated robot at the state's joints, at rest."""
-        self.scene.reset(state.rho[0])
-        self.command = state.rho[0].copy()
-
-    def move(self, state: OrthoglideState, duration: float) -> None:
-        """Drive to the commanded joints over ``duration`` s and read the encoders."""
-        self.command = state.rho[0].copy()
-        if duration > 0:
-            self.scene.drive(self.command, duration, exact=self.exact_time)
-        state.rho[0] = self.scene.rho
-
-    def close(self) -> None:
-        self.scene.close()
-
-    # --- what KF validation reads (paragym.validation.episode) ---
-    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        """The tool holder at C on link AC."""
-        scene = self.scene
-        return (scene.sim, scene.ROBOT, scene.links[0], np.array([scene.geometry.link, 0.0, 0.0]),
-                scene.dynamics.time_step)
-
-    def commanded_pose(self, state: OrthoglideState, params: OrthoglideParams) -> np.ndarray:
-        """C and link AC's direction from the commanded joints (paper 003, eqs 1-6), at the link's height."""
-        g, rho = params.geometry, self.command
-        c = og.fixed_point(rho[:1], og.forward(rho[None], g), g)[0]
-        yaw = np.arctan2(c[1], c[0] - (g.slider2_origin + rho[1]))
-        sim, robot, link, _, _ = self.body()
-        return np.array([c[0], c[1], sim.link_frame(robot, link)[0][2], 0.0, 0.0, yaw])
-
-    def step_duration(self, state: OrthoglideState, params: OrthoglideParams) -> float:
-        h, k = self.scene.dynamics.time_step, int(state.k[0])
-        return h * physics_steps(float(state.dt[0, k - 1]), h) if k > 0 else 0.0
-
-
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     s = state
@@ -354,102 +295,3 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, reason, te
             obs[i, c] = 10.0 if v != v else min(10.0, max(-10.0, v))
 
 
-class OrthoglideTask:
-    """The Orthoglide task's contract (:class:`paragym.tasks.base.Task`): paper 003's path tracking with the
-    2PRR and its table."""
-
-    name = "orthoglide"
-    scenario_names = scenarios_module.SCENARIOS
-    failures = FAILURES
-    Scenario = OrthoglideScenario
-    Params = OrthoglideParams
-    Rules = OrthoglideRules
-    State = OrthoglideState
-    vector_fidelities = ("kinematic",)
-    #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
-    #: below
-    sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
-
-    def paper_scenario(self) -> OrthoglideScenario:
-        return scenarios_module.paper_scenario()
-
-    def random_scenario(self, rng: np.random.Generator, params: OrthoglideParams) -> OrthoglideScenario:
-        return scenarios_module.random_scenario(rng, params.geometry)
-
-    def validate_scenario(self, scenario: OrthoglideScenario, params: OrthoglideParams) -> None:
-        scenarios_module.validate_scenario(scenario, params.geometry)
-
-    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: OrthoglideParams,
-                       world: Any) -> list[OrthoglideScenario]:
-        drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry)
-        if world is not None and not world.exact_time:
-            _warn_rounded_time(drawn, world)
-        return drawn
-
-    def vector_params(self, rules: OrthoglideRules, kwargs: dict[str, Any]) -> OrthoglideParams:
-        params = OrthoglideParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native Orthoglide vector env is kinematic: use gymnasium's sync/async vector "
-                             "modes for the dynamic fidelity")
-        return params
-
-    def spaces(self, params: OrthoglideParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-10.0, 10.0, (OBS_SIZE,)),
-                BoxSpec(-1.0, 1.0, (3 if params.joint_mode else 1,)))
-
-    def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> DynamicWorld | None:
-        if params.fidelity != "dynamic":
-            return None
-        from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
-
-        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
-        return DynamicWorld(scene, exact_time=params.rules.exact_time)
-
-    def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
-              scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: Any) -> None:
-        reset(state, params, rows, scenarios)
-        if world is not None:
-            world.reset(state)
-
-    def step(self, state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
-
-    def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
-        """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
-        in v1 the tracking, and a broken mechanism)."""
-        s = state
-        done = s.k >= s.last
-        return Evaluation(done & ~s.failed, s.reason,
-                          {"kappa": s.kappa, "tracking_error": s.err, "step": s.k})
-
-    def details(self, state: OrthoglideState, params: OrthoglideParams, world: Any, i: int) -> dict[str, Any]:
-        return {"rho": state.rho[i].copy()}
-
-    def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: Any, i: int,
-               gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated mechanism, not the command; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        if "scene" not in cache:
-            from paragym.sim.orthoglide_scene import OrthoglideScene
-
-            cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
-        cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
-        return cache["scene"].render()
-
-
-def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
-    """v0 in dynamic fidelity simulates each path step over whole physics steps: say so where that is not the
-    path's own time (its hole; v1 simulates it exactly)."""
-    h = world.scene.dynamics.time_step
-    for path in drawn:
-        dt = np.diff(path.t)
-        if not all(divides(float(d), h) for d in np.unique(dt)):
-            simulated = sum(physics_steps(float(d), h) * h for d in dt)
-            warnings.warn(f"the path's {path.t[-1]:g} s are simulated over {simulated:g} s: the dynamic fidelity "
-                          f"of paragym/Orthoglide2PRRKappa-v0 rounds each path step to whole physics steps of "
-                          f"{h:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly", UserWarning, stacklevel=4)
-
-
-#: the Orthoglide task (paper 003)
-TASK = OrthoglideTask()

@@ -41,13 +41,9 @@ import numpy as np
 from numba import njit
 
 from paragym.mechanisms import tripod as mt
-from paragym.mechanisms.geometry import pose6
-from paragym.sim.client import physics_steps
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks import tripod as scenarios_module
 from paragym.tasks.base import (
-    BoxSpec,
-    Evaluation,
     check_choice,
     check_control_period,
     check_instance,
@@ -56,9 +52,10 @@ from paragym.tasks.base import (
     renamed,
 )
 from paragym.tasks.tripod import TripodScenario
+from paragym.tasks.tripod_worlds import DynamicWorld
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "RULES", "TASK",
-           "DynamicWorld", "TripodParams", "TripodRules", "TripodState", "TripodTask", "reset", "step"]
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "RULES",
+           "TripodParams", "TripodRules", "TripodState", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "folded")
@@ -218,117 +215,6 @@ def step(state: TripodState, params: TripodParams, actions: np.ndarray, active: 
         state.terminated |= state.folded
 
 
-class DynamicWorld:
-    """One robot's drive under PyBullet's dynamics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`).
-
-    It replaces :func:`paragym.sim.tripod_drive.k_drive_step` sample by
-    sample: the units drive for one sample's time on their wheels; the true
-    units become the simulated ones, eta the leg encoders', and each unit's
-    odometry moves by its own wheel encoders' travel along the heading it
-    believes (so the units' odometric increments differ: ``increment``
-    (1, 3, 2)). The scenario's disturbances act through the physics: its
-    heading errors misalign the units, its push is a force of
-    ``push_force`` x depth N on the pushed unit toward the robot's centre for
-    0.1 s, its slip (a slippery floor) sets each unit's wheel friction every
-    second from the drive's own slip numbers (no new draws: a seed gives the
-    same encoder noise in both fidelities): a slip speed s (m/s) lowers it
-    from ``friction`` toward ``slip_friction``, reached at 1 cm/s, the
-    paper's; and its terrain is the ground's heightfield over the drive's
-    path.
-    """
-
-    def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False) -> None:
-        from paragym.sim.tripod_dynamic import TripodDynamics
-
-        self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
-        self.scene: Any = None
-        self._terrain: Any = None
-        self.increment = np.zeros((1, 3, 2))
-        self._push_left = 0
-
-    def reset(self, state: TripodState) -> None:
-        """Build the scene for the drive's terrain (kept when it is the same) and put the robot at its start."""
-        from paragym.sim.tripod_dynamic import TripodDynamicScene
-
-        d = state.drive
-        scenario = d.scenarios[0]
-        heading, reach = float(d.heading[0]), scenario.distance + 4.0  # the path, and the robot's span about it
-        ends = np.array([[0.0, 0.0], [reach * math.cos(heading), reach * math.sin(heading)]])
-        region = (float(ends[:, 0].min() - 4), float(ends[:, 0].max() + 4), float(ends[:, 1].min() - 4),
-                  float(ends[:, 1].max() + 4))
-        if self.scene is None or (scenario.terrain, region if scenario.terrain.bumps else None) != self._terrain:
-            if self.scene is not None:
-                self.scene.close()
-            self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region)
-            self._terrain = (scenario.terrain, region if scenario.terrain.bumps else None)
-        self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0])
-        self.scene.set_friction(np.full(3, self.dynamics.friction))
-        self._push_left = 0
-        self.increment[:] = 0.0
-
-    def move(self, state: TripodState) -> np.ndarray:
-        """Advance the drive one sample if it has not ended; returns which robots moved (1,)."""
-        d, dyn = state.drive, self.dynamics
-        if d.k[0] >= d.steps[0]:
-            return np.zeros(1, bool)
-        scenario, k = d.scenarios[0], int(d.k[0])
-        if scenario.slip > 0 and k % int(round(1.0 / d.dt)) == 0:
-            share = np.minimum(1.0, d.slip_speed[0, k] / 0.01)
-            self.scene.set_friction(dyn.friction - (dyn.friction - dyn.slip_friction) * share)
-        push = None
-        if d.t[0] < d.push[0, 1] <= d.t[0] + d.dt:  # (NaN: no push)
-            self._push_left = int(round(0.1 / dyn.time_step))
-        if self._push_left:
-            unit = int(d.push[0, 0])
-            inward = d.true[0].mean(axis=0) - d.true[0, unit]
-            inward[2] = 0.0
-            push = (unit, dyn.push_force * d.push[0, 2] * inward / np.linalg.norm(inward))
-        used = min(physics_steps(d.dt, dyn.time_step), self._push_left)
-        travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
-        self._push_left -= used
-        heading = float(d.heading[0])
-        self.increment[0, :, 0], self.increment[0, :, 1] = travel * math.cos(heading), travel * math.sin(heading)
-        bumps, count = d.bumps[0], int(d.bump_count[0])
-        true = self.scene.units_true
-        for u in range(3):
-            d.odometry[0, u, :2] += self.increment[0, u]
-            d.odometry[0, u, 2] = k_terrain(d.odometry[0, u, 0], d.odometry[0, u, 1], bumps, count)[0]
-            d.true[0, u, :2] = true[u, :2]
-            d.true[0, u, 2], d.gradient[0, u, 0], d.gradient[0, u, 1] = k_terrain(true[u, 0], true[u, 1], bumps,
-                                                                                 count)
-        d.eta[0] = self.scene.eta
-        d.t[0] += d.dt
-        d.k[0] += 1
-        return np.ones(1, bool)
-
-    def close(self) -> None:
-        if self.scene is not None:
-            self.scene.close()
-
-    # --- what KF validation reads (paragym.validation.episode) ---
-    _commanded_eta: np.ndarray | None = None
-
-    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
-        """The upper plate, judged at its centre."""
-        scene = self.scene
-        return scene.sim, scene.ROBOT, scene.plate_link, np.zeros(3), self.dynamics.time_step
-
-    def commanded_pose(self, state: TripodState, params: TripodParams) -> np.ndarray:
-        """The plate the policy claims: fitted to its estimated units, on the legs' angles they imply (paper
-        004, eqs 4-5; least squares where no legs reach). The robot drives the commanded path whatever the
-        policy does; the policy is the estimator."""
-        if state.drive.k[0] == 0 or self._commanded_eta is None:  # a new episode: the legs as they start
-            self._commanded_eta = state.drive.eta[0].copy()
-        units = state.estimate[0] + [0.0, 0.0, self.dynamics.unit_height]
-        self._commanded_eta = mt.eta(units[None], self._commanded_eta[None], self.geometry)[0][0]
-        rotation, centre = mt.plate_fit(units, self._commanded_eta, self.geometry)
-        return pose6(centre[0], rotation[0])
-
-    def step_duration(self, state: TripodState, params: TripodParams) -> float:
-        h = self.dynamics.time_step
-        return h * physics_steps(state.drive.dt, h)
-
-
 _NONE = np.zeros(0, bool)
 _NO_INCREMENT = np.zeros((0, 3, 2))
 
@@ -463,109 +349,6 @@ def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate
         for c in range(OBS_SIZE_V1):
             obs[i, c] = min(100.0, max(-100.0, row[c]))
 
+
 #: the names of before paragym 0.9, answered with a DeprecationWarning
-class TripodTask:
-    """The mobile tripod's contract (:class:`paragym.tasks.base.Task`): paper 004's estimation of the drive
-    units under slip."""
-
-    name = "tripod"
-    scenario_names = scenarios_module.SCENARIOS
-    failures = FAILURES
-    Scenario = TripodScenario
-    Params = TripodParams
-    Rules = TripodRules
-    State = TripodState
-    vector_fidelities = ("kinematic",)
-    #: KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
-    sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
-
-    def paper_scenario(self) -> TripodScenario:
-        return scenarios_module.paper_scenario()
-
-    def random_scenario(self, rng: np.random.Generator, params: TripodParams) -> TripodScenario:
-        return scenarios_module.random_scenario(rng)
-
-    def validate_scenario(self, scenario: TripodScenario, params: TripodParams) -> None:
-        scenarios_module.validate_scenario(scenario)
-
-    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
-                       world: Any) -> list[TripodScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs)
-
-    def vector_params(self, rules: TripodRules, kwargs: dict[str, Any]) -> TripodParams:
-        params = TripodParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native tripod vector env is kinematic: use gymnasium's sync/async vector modes "
-                             "for the dynamic fidelity")
-        return params
-
-    def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
-                BoxSpec(-1.0, 1.0, (params.action_size,)))
-
-    def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> DynamicWorld | None:
-        if params.fidelity != "dynamic":
-            return None
-        return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human")
-
-    def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
-        reset(state, params, rows, scenarios, rngs)
-        if world is not None:
-            world.reset(state)
-
-    def step(self, state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
-
-    def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
-        """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
-        in v2, the mechanism never folded)."""
-        s = state
-        folded_fails = s.folded & params.fold_ends
-        return Evaluation(s.terminated & (s.unit_error < params.success_error) & ~folded_fails,
-                          s.folded.astype(np.int64),
-                          {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t})
-
-    def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
-        s, d = state, state.drive
-        info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
-                "eta": s.eta[i].copy(), "detected_fault": detected_fault(state, params, i)}
-        if params.version == 1:  # the smoothed encoder distances that v1's correction steers to
-            info["encoder_distances"] = s.smoothed[i].copy()
-        return info
-
-    def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: Any, i: int,
-               gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated robot, not the kinematic model; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        d = state.drive
-        if "scene" not in cache:
-            from paragym.sim.tripod_scene import TripodScene
-
-            cache["scene"] = TripodScene(d.scenarios[i].terrain, gui=gui)
-        _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
-        cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
-        return cache["scene"].render()
-
-
-def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
-    """The paper's reading of eq 4 against eq 5 for robot ``i``'s current estimate: which unit looks faulty,
-    and whether eta says it went inward or outward."""
-    s = state
-    if s.drive.k[i] == 0:
-        return None
-    target = mt.distances(mt.plate_frame_units(s.eta[i], params.geometry))[0]
-    diff = np.abs(mt.distances(s.estimate[i])[0] - target)
-    order = np.argsort(diff, kind="stable")
-    if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
-        return None
-    k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
-    return k, "inward (bump or push)" if s.eta[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
-
-
-#: the mobile tripod task (paper 004)
-TASK = TripodTask()
-
-
 __getattr__ = renamed(__name__, {"TripodTaskState": "TripodState"})

@@ -1,0 +1,124 @@
+"""The CaPaMan's contract (:class:`paragym.tasks.base.Task`, paper 000): the one object the single env, the
+vector env, the leaderboard and validation read the task from."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+from paragym.sim.capaman_scene import CaPaManScene
+from paragym.tasks import capaman as scenarios_module
+from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.capaman import TOUR, CaPaManScenario
+from paragym.tasks.capaman_step import FAILURES, RULES, CaPaManParams, CaPaManRules, CaPaManState, reset, step
+from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, _clusters
+
+__all__ = ["RULES", "TASK", "CaPaManTask"]
+
+
+class CaPaManTask:
+    """The CaPaMan's contract (:class:`paragym.tasks.base.Task`): paper 000's collision-free tour."""
+
+    name = "capaman"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = CaPaManScenario
+    Params = CaPaManParams
+    Rules = CaPaManRules
+    State = CaPaManState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
+    sensor_layout: dict[str, float] = {}
+
+    def paper_scenario(self) -> CaPaManScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
+        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
+        try:
+            return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
+        finally:
+            if world is None:
+                scene.close()
+
+    def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
+        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
+        try:
+            scenarios_module.validate_scenario(scenario, scene)
+        finally:
+            if world is None:
+                scene.close()
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
+                       world: Any) -> list[CaPaManScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
+
+    def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
+        if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
+                             "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
+        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": "grid"})
+
+    def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
+
+    def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> Any:
+        """The grid (N robots; its checker scene comes when asked), the kinematic PyBullet scene or the
+        dynamics (one robot)."""
+        gui, g = render_mode == "human", params.geometry
+        if params.collision == "grid":
+            return GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
+        if params.fidelity == "kinematic":
+            return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
+                                           draws=render_mode is not None))
+        return DynamicWorld(CaPaManDynamicScene(g, params.dynamics, gui=gui, clearance_cap=params.clearance_cap),
+                            params.control_period)
+
+    @staticmethod
+    def _probe(params: CaPaManParams, world: Any) -> Any:
+        """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
+        if params.version == 0 or isinstance(world, GridWorld):
+            return None if params.version == 0 else world
+        return world.probe()
+
+    def reset(self, state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios, world, self._probe(params, world))
+
+    def step(self, state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world, self._probe(params, world))
+
+    def evaluate(self, state: CaPaManState, params: CaPaManParams, world: Any) -> Evaluation:
+        """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
+        mechanism whole)."""
+        s = state
+        collision = s.clearance <= 0.0
+        broken = np.zeros(len(collision), bool)
+        if isinstance(world, DynamicWorld):
+            broken[0] = world.broken
+        failure = np.where(collision, 1, np.where(broken, 2, 0))
+        return Evaluation((s.reached >= len(TOUR)) & ~collision & ~broken, failure,
+                          {"collision": collision, "clearance": s.clearance, "reached": s.reached,
+                           "target_index": s.target, "path_length": s.path_length})
+
+    def details(self, state: CaPaManState, params: CaPaManParams, world: Any, i: int) -> dict[str, Any]:
+        return {"nearest_part": state.near[i], "alpha": state.alpha[i].copy(), "tool_tip": state.tip[i].copy()}
+
+    def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if isinstance(world, GridWorld):  # the grid does not pose the scene: render does
+            scene = world.checker()
+            scene.set_obstacles(state.scenarios[i].obstacles)
+            scene.set_configuration(state.alpha[i])
+        elif gui:  # PyBullet keeps the GUI's scene posed
+            return None
+        return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
+
+
+#: the CaPaMan task (paper 000)
+TASK = CaPaManTask()
+
+

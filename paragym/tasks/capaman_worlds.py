@@ -1,0 +1,181 @@
+"""The CaPaMan's worlds (paper 000): where the parts are and how far they are from the obstacles.
+
+* :class:`GridWorld` (N robots): the closed-form kinematics and paper 000's
+  occupancy grid Psi at the cluster points of eq 2 (numpy, all robots at once);
+* :class:`SceneWorld` (one robot): PyBullet's exact signed distance in the
+  kinematic scene;
+* :class:`DynamicWorld` (one robot): the closed chain under PyBullet's
+  dynamics; the motors chase the command for a control period and the
+  encoders say where the cranks got.
+
+The transition (:mod:`paragym.tasks.capaman_step`) asks them; each also holds
+the kinematic scene that generates and checks scenarios.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any, Protocol
+
+import numpy as np
+
+from paragym.mechanisms import capaman
+from paragym.mechanisms.geometry import pose6
+from paragym.sim import occupancy
+from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+from paragym.sim.capaman_scene import CaPaManScene
+from paragym.sim.client import physics_steps
+from paragym.tasks.base import BROKEN_GAP
+from paragym.tasks.capaman import CaPaManScenario
+
+#: the state and parameters the worlds read are the transition's (paragym.tasks.capaman_step), typed Any
+#: here: the transition imports the worlds, not the other way
+__all__ = ["DynamicWorld", "GridWorld", "SceneWorld", "World"]
+
+
+class World(Protocol):
+    """Where the parts are and how far they are from the obstacles."""
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None: ...
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        """Clearance (M,), tool tip (M, 3) and nearest part of robots ``rows`` at crank angles ``alpha`` (M, 3)."""
+        ...
+
+
+@lru_cache(maxsize=4)
+def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
+    return occupancy.cluster_points(geometry, spacing=0.01)
+
+
+class GridWorld:
+    """Paper 000's own test for N robots: the occupancy grid Psi of each
+    robot's obstacles as signed distances, read at the cluster points of eq 2
+    (10 mm apart) placed by the closed-form kinematics."""
+
+    #: it holds no simulation: a copy builds its own checker scene when it needs one
+    live = False
+
+    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
+                 gui: bool = False) -> None:
+        self.geometry, self.grids, self.clusters = geometry, occupancy.DistanceGrids(n, cap=cap), _clusters(geometry)
+        self.part_names = [p.name for p in capaman.part_shapes(geometry)]
+        self.cap, self.draws, self.gui = cap, draws, gui
+        #: the kinematic PyBullet scene that generates and checks scenarios and draws, built on first use
+        self.scene: CaPaManScene | None = None
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios (built on first use) and draws."""
+        if self.scene is None:
+            self.scene = CaPaManScene(self.geometry, gui=self.gui, clearance_cap=self.cap, draws=self.draws)
+        return self.scene
+
+    def __getstate__(self) -> dict[str, Any]:
+        return {**self.__dict__, "scene": None}
+
+    def close(self) -> None:
+        if self.scene is not None:
+            self.scene.close()
+            self.scene = None
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        self.grids.set(int(i), scenario.obstacles)
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        pose = capaman.forward(alpha, self.geometry, validate=False)
+        clearance, part = occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
+        return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
+
+    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
+        return occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
+
+
+class SceneWorld:
+    """One robot in the kinematic PyBullet scene: its exact signed distance."""
+
+    live = True
+
+    def __init__(self, scene: CaPaManScene) -> None:
+        self.scene = scene
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios: its own."""
+        return self.scene
+
+    def probe(self) -> SceneWorld:
+        """v1's look-ahead world: itself."""
+        return self
+
+    def close(self) -> None:
+        self.scene.close()
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        self.scene.set_obstacles(scenario.obstacles)
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        tip = self.scene.set_configuration(alpha[0])
+        clearance, near = self.scene.clearance()
+        return np.array([clearance]), tip[None], [near]
+
+
+class DynamicWorld(SceneWorld):
+    """One robot under PyBullet's dynamics: the motors chase the command for
+    ``control_period`` s; the obstacles are rigid bodies."""
+
+    def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
+        super().__init__(scene)
+        self.control_period = control_period
+        self._moved = False
+        #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism)
+        self.broken = False
+        self._checker: CaPaManScene | None = None
+        self._probe: SceneWorld | None = None
+
+    def checker(self) -> CaPaManScene:
+        """A second, kinematic scene that generates and checks scenarios (built on first use)."""
+        if self._checker is None:
+            self._checker = CaPaManScene(self.scene.geometry, clearance_cap=self.scene.clearance_cap, draws=False)
+        return self._checker
+
+    def probe(self) -> SceneWorld:
+        """v1's look-ahead world: the kinematic checker scene, at the encoders' angles."""
+        if self._probe is None:
+            self._probe = SceneWorld(self.checker())
+        return self._probe
+
+    def close(self) -> None:
+        self.scene.close()
+        if self._checker is not None:
+            self._checker.close()
+
+    # --- what KF validation reads (paragym.validation.episode) ---
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """Paper 000's accelerometer array on the movable plate, judged about H."""
+        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.dynamics.time_step)
+
+    def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
+        """The plate's pose by the closed-form direct kinematics of the motors' targets."""
+        pose = capaman.forward(state.command[:1], params.geometry, validate=False)
+        return pose6(pose.position[0], pose.rotation[0])
+
+    def step_duration(self, state: Any, params: Any) -> float:
+        h = self.scene.dynamics.time_step
+        return h * physics_steps(self.control_period, h)
+
+    def move(self, command: np.ndarray) -> np.ndarray:
+        """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
+        self.scene.drive(command[0], self.control_period)
+        self._moved = True
+        self.broken = self.scene.closure_error() > BROKEN_GAP
+        return self.scene.alpha[None]
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        if not self._moved:  # a reset: pose the chain; after a move the dynamics has posed it
+            self.broken = False
+            return super().place(rows, alpha)
+        self._moved = False
+        clearance, near = self.scene.clearance()
+        return np.array([clearance]), self.scene.tip[None], [near]
+
+

@@ -1,0 +1,108 @@
+"""The hybrid's contract (:class:`paragym.tasks.base.Task`, paper 002): the one object the single env, the
+vector env, the leaderboard and validation read the task from."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from paragym.mechanisms import hybrid
+from paragym.tasks import hybrid as scenarios_module
+from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation
+from paragym.tasks.hybrid import HybridScenario
+from paragym.tasks.hybrid_step import FAILURES, RULES, HybridParams, HybridRules, HybridState, reset, step
+from paragym.tasks.hybrid_worlds import DynamicWorld
+
+__all__ = ["RULES", "TASK", "HybridTask"]
+
+
+class HybridTask:
+    """The hybrid task's contract (:class:`paragym.tasks.base.Task`): paper 002's hexapod + tripod along a
+    polynomial path."""
+
+    name = "hybrid"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = HybridScenario
+    Params = HybridParams
+    Rules = HybridRules
+    State = HybridState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the paper's array scaled to platform E
+    sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
+
+    def paper_scenario(self) -> HybridScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: HybridParams) -> HybridScenario:
+        return scenarios_module.random_scenario(rng, params.geometry)
+
+    def validate_scenario(self, scenario: HybridScenario, params: HybridParams) -> None:
+        scenarios_module.validate_scenario(scenario)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
+                       world: Any) -> list[HybridScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+
+    def vector_params(self, rules: HybridRules, kwargs: dict[str, Any]) -> HybridParams:
+        params = HybridParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))
+
+    def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        from paragym.sim.hybrid_dynamic import HybridDynamicScene
+
+        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        strict = params.rules.strict_dynamics
+        return DynamicWorld(scene, params.control_period, params.track_tolerance,
+                            params.track_angle_tolerance if strict else None, BROKEN_GAP if strict else None)
+
+    def reset(self, state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
+        """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
+        dynamic fidelity, tracked (and the mechanism whole, v2)."""
+        s = state
+        return Evaluation(s.terminated & s.all_free, s.reason,
+                          {"step": s.k, "u": s.u[s.k], "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t,
+                           "free": s.free, "within_limits": s.within})
+
+    def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
+        return {"offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
+                "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
+                "tracking_error": 0.0 if world is None else world.tracking_error,
+                "orientation_error": 0.0 if world is None else world.orientation_error}
+
+    def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated robot, not the command; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        if "scene" not in cache:
+            from paragym.sim.hybrid_scene import HybridScene
+
+            cache["scene"] = HybridScene(params.geometry, gui=gui)
+        solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
+        cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
+        return cache["scene"].render()
+
+
+#: the hybrid task (paper 002)
+TASK = HybridTask()
+
+

@@ -1,0 +1,130 @@
+"""The Orthoglide's contract (:class:`paragym.tasks.base.Task`, paper 003): the one object the single env, the
+vector env, the leaderboard and validation read the task from."""
+
+from __future__ import annotations
+
+import warnings
+from typing import Any
+
+import numpy as np
+
+from paragym.sim.client import divides, physics_steps
+from paragym.tasks import orthoglide as scenarios_module
+from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.orthoglide import OrthoglideScenario
+from paragym.tasks.orthoglide_step import (
+    FAILURES,
+    OBS_SIZE,
+    RULES,
+    OrthoglideParams,
+    OrthoglideRules,
+    OrthoglideState,
+    reset,
+    step,
+)
+from paragym.tasks.orthoglide_worlds import DynamicWorld
+
+__all__ = ["RULES", "TASK", "OrthoglideTask"]
+
+
+class OrthoglideTask:
+    """The Orthoglide task's contract (:class:`paragym.tasks.base.Task`): paper 003's path tracking with the
+    2PRR and its table."""
+
+    name = "orthoglide"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = OrthoglideScenario
+    Params = OrthoglideParams
+    Rules = OrthoglideRules
+    State = OrthoglideState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
+    #: below
+    sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
+
+    def paper_scenario(self) -> OrthoglideScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: OrthoglideParams) -> OrthoglideScenario:
+        return scenarios_module.random_scenario(rng, params.geometry)
+
+    def validate_scenario(self, scenario: OrthoglideScenario, params: OrthoglideParams) -> None:
+        scenarios_module.validate_scenario(scenario, params.geometry)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: OrthoglideParams,
+                       world: Any) -> list[OrthoglideScenario]:
+        drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+        if world is not None and not world.exact_time:
+            _warn_rounded_time(drawn, world)
+        return drawn
+
+    def vector_params(self, rules: OrthoglideRules, kwargs: dict[str, Any]) -> OrthoglideParams:
+        params = OrthoglideParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native Orthoglide vector env is kinematic: use gymnasium's sync/async vector "
+                             "modes for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: OrthoglideParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-10.0, 10.0, (OBS_SIZE,)),
+                BoxSpec(-1.0, 1.0, (3 if params.joint_mode else 1,)))
+
+    def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
+
+        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        return DynamicWorld(scene, exact_time=params.rules.exact_time)
+
+    def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
+              scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
+        """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
+        in v1 the tracking, and a broken mechanism)."""
+        s = state
+        done = s.k >= s.last
+        return Evaluation(done & ~s.failed, s.reason,
+                          {"kappa": s.kappa, "tracking_error": s.err, "step": s.k})
+
+    def details(self, state: OrthoglideState, params: OrthoglideParams, world: Any, i: int) -> dict[str, Any]:
+        return {"rho": state.rho[i].copy()}
+
+    def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated mechanism, not the command; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        if "scene" not in cache:
+            from paragym.sim.orthoglide_scene import OrthoglideScene
+
+            cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
+        cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
+        return cache["scene"].render()
+
+
+def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
+    """v0 in dynamic fidelity simulates each path step over whole physics steps: say so where that is not the
+    path's own time (its hole; v1 simulates it exactly)."""
+    h = world.scene.dynamics.time_step
+    for path in drawn:
+        dt = np.diff(path.t)
+        if not all(divides(float(d), h) for d in np.unique(dt)):
+            simulated = sum(physics_steps(float(d), h) * h for d in dt)
+            warnings.warn(f"the path's {path.t[-1]:g} s are simulated over {simulated:g} s: the dynamic fidelity "
+                          f"of paragym/Orthoglide2PRRKappa-v0 rounds each path step to whole physics steps of "
+                          f"{h:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly", UserWarning, stacklevel=4)
+
+
+#: the Orthoglide task (paper 003)
+TASK = OrthoglideTask()
+
+

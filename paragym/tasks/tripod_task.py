@@ -1,0 +1,123 @@
+"""The mobile tripod's contract (:class:`paragym.tasks.base.Task`, paper 004): the one object the single env,
+the vector env, the leaderboard and validation read the task from."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from paragym.mechanisms import tripod as mt
+from paragym.tasks import tripod as scenarios_module
+from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.tripod import TripodScenario
+from paragym.tasks.tripod_step import FAILURES, RULES, TripodParams, TripodRules, TripodState, reset, step
+from paragym.tasks.tripod_worlds import DynamicWorld
+
+__all__ = ["RULES", "TASK", "TripodTask", "detected_fault"]
+
+
+class TripodTask:
+    """The mobile tripod's contract (:class:`paragym.tasks.base.Task`): paper 004's estimation of the drive
+    units under slip."""
+
+    name = "tripod"
+    scenario_names = scenarios_module.SCENARIOS
+    failures = FAILURES
+    Scenario = TripodScenario
+    Params = TripodParams
+    Rules = TripodRules
+    State = TripodState
+    vector_fidelities = ("kinematic",)
+    #: KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
+    sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
+
+    def paper_scenario(self) -> TripodScenario:
+        return scenarios_module.paper_scenario()
+
+    def random_scenario(self, rng: np.random.Generator, params: TripodParams) -> TripodScenario:
+        return scenarios_module.random_scenario(rng)
+
+    def validate_scenario(self, scenario: TripodScenario, params: TripodParams) -> None:
+        scenarios_module.validate_scenario(scenario)
+
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
+                       world: Any) -> list[TripodScenario]:
+        return scenarios_module.draw_scenarios(choice, rngs)
+
+    def vector_params(self, rules: TripodRules, kwargs: dict[str, Any]) -> TripodParams:
+        params = TripodParams.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError("the native tripod vector env is kinematic: use gymnasium's sync/async vector modes "
+                             "for the dynamic fidelity")
+        return params
+
+    def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
+        return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
+                BoxSpec(-1.0, 1.0, (params.action_size,)))
+
+    def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        if params.fidelity != "dynamic":
+            return None
+        return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human")
+
+    def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
+              rngs: list[np.random.Generator], world: Any) -> None:
+        reset(state, params, rows, scenarios, rngs)
+        if world is not None:
+            world.reset(state)
+
+    def step(self, state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
+             world: Any) -> None:
+        step(state, params, actions, active, world)
+
+    def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
+        """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
+        in v2, the mechanism never folded)."""
+        s = state
+        folded_fails = s.folded & params.fold_ends
+        return Evaluation(s.terminated & (s.unit_error < params.success_error) & ~folded_fails,
+                          s.folded.astype(np.int64),
+                          {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t})
+
+    def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
+        s, d = state, state.drive
+        info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
+                "eta": s.eta[i].copy(), "detected_fault": detected_fault(state, params, i)}
+        if params.version == 1:  # the smoothed encoder distances that v1's correction steers to
+            info["encoder_distances"] = s.smoothed[i].copy()
+        return info
+
+    def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: Any, i: int,
+               gui: bool) -> np.ndarray | None:
+        if world is not None:  # the simulated robot, not the kinematic model; its GUI shows it as it runs
+            return None if gui else world.scene.render()
+        d = state.drive
+        if "scene" not in cache:
+            from paragym.sim.tripod_scene import TripodScene
+
+            cache["scene"] = TripodScene(d.scenarios[i].terrain, gui=gui)
+        _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
+        cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
+        return cache["scene"].render()
+
+
+def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
+    """The paper's reading of eq 4 against eq 5 for robot ``i``'s current estimate: which unit looks faulty,
+    and whether eta says it went inward or outward."""
+    s = state
+    if s.drive.k[i] == 0:
+        return None
+    target = mt.distances(mt.plate_frame_units(s.eta[i], params.geometry))[0]
+    diff = np.abs(mt.distances(s.estimate[i])[0] - target)
+    order = np.argsort(diff, kind="stable")
+    if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
+        return None
+    k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
+    return k, "inward (bump or push)" if s.eta[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
+
+
+#: the mobile tripod task (paper 004)
+TASK = TripodTask()
+
+
