@@ -66,16 +66,19 @@ def check_copyable(env: Any) -> None:
                         "the same seed")
 
 
-_BOUNDS: dict[int, tuple[Any, list[float], list[float]]] = {}
+_BOUNDS: dict[int, tuple[Any, float | None, float | None, list[float], list[float]]] = {}
 
 
-def _bounds(space: gym.spaces.Box) -> tuple[list[float], list[float]]:
-    """The Box's bounds as flat Python floats (kept per space: a step checks them)."""
+def _bounds(space: gym.spaces.Box) -> tuple[float | None, float | None, list[float], list[float]]:
+    """The Box's bounds as flat Python floats (kept per space: a step checks them), and its one low and one
+    high where every component shares them (None where not)."""
     got = _BOUNDS.get(id(space))
     if got is None or got[0] is not space:
-        got = (space, space.low.astype(float).ravel().tolist(), space.high.astype(float).ravel().tolist())
+        low, high = space.low.astype(float).ravel().tolist(), space.high.astype(float).ravel().tolist()
+        same = len(set(low)) == 1 and len(set(high)) == 1
+        got = (space, low[0] if same else None, high[0] if same else None, low, high)
         _BOUNDS[id(space)] = got
-    return got[1], got[2]
+    return got[1:]
 
 
 def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows: int | None = None) -> np.ndarray:
@@ -94,9 +97,13 @@ def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows:
     """
     want = space.shape if rows is None else (rows, *space.shape)
     if rows is None and type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == want:
-        low, high = _bounds(space)
+        lo, hi, low, high = _bounds(space)
         values = action.ravel().tolist()
-        if all(lo <= v <= hi for v, lo, hi in zip(values, low, high, strict=True)):
+        if lo is not None:  # one bound for every component (every paragym Box): min, max, and NaN by its sum
+            total = sum(values)
+            if lo <= min(values) and max(values) <= hi and total == total:
+                return action.astype(np.float64)
+        elif all(lo <= v <= hi for v, lo, hi in zip(values, low, high, strict=True)):
             return action.astype(np.float64)
     if action is None:
         raise TypeError(f"{name} must be an array of real numbers; got None")
@@ -207,7 +214,8 @@ class ParagymEnv(gym.Env):
         return self.state.obs[0].copy(), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        self._check_open()
+        if self._closed:
+            self._check_open()
         action = check_action(action, self.action_space)
         if self._ended:
             raise RuntimeError("call reset() before step()" if self._evaluation is None else
@@ -215,8 +223,8 @@ class ParagymEnv(gym.Env):
         self.task.step(self.state, self.params, action[None], _ONE, self.world)
         self._evaluation = self.task.evaluate(self.state, self.params, self.world)
         s = self.state
-        self._ended = terminated = bool(s.terminated[0])
-        return s.obs[0].copy(), float(s.reward[0]), terminated, False, self._info()
+        self._ended = terminated = s.terminated.item(0)
+        return s.obs[0].copy(), s.reward.item(0), terminated, False, self._info()
 
     def render(self) -> np.ndarray | None:
         self._check_open()
@@ -243,10 +251,10 @@ class ParagymEnv(gym.Env):
         """The info of the one robot: the task's numbers, success and failure (:meth:`Task.evaluate`) and its
         details (:meth:`Task.details`)."""
         ev = self._evaluation
-        info = {name: value[0].item() if value.ndim == 1 else value[0].copy() for name, value in ev.numbers.items()}
+        info = {name: value.item(0) for name, value in ev.numbers.items()}
         info.update(self.task.details(self.state, self.params, self.world, 0))
-        info["is_success"] = bool(ev.success[0])
-        info["failure"] = self.task.failures[int(ev.failure[0])]
+        info["is_success"] = ev.success.item(0)
+        info["failure"] = self.task.failures[ev.failure.item(0)]
         return info
 
     @property

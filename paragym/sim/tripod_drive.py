@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -120,6 +120,7 @@ class DriveState:
     slip_speed: np.ndarray
     dt: float = 0.05
     scenarios: list[Any] = field(default_factory=list)
+    _kernel: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def empty(cls, n: int, rate: float = 20.0) -> DriveState:
@@ -139,6 +140,7 @@ class DriveState:
         extra = bumps - self.bumps.shape[1]
         if extra > 0:
             self.bumps = np.pad(self.bumps, ((0, 0), (0, extra), (0, 0)), constant_values=1.0)
+        self._kernel = None
 
     def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
               encoder_noise: float, eta0: float = math.radians(40.0)) -> None:
@@ -169,16 +171,38 @@ class DriveState:
         self.eta[i], _ = mt.eta(self.true[i], eta, geometry)  # the branch continuous with the legs at eta0
 
     def kernel_args(self) -> tuple[Any, ...]:
-        """The arrays :func:`k_drive_step` takes, in its order."""
-        return (self.true, self.odometry, self.gradient, self.eta, self.t, self.k, self.speed, self.heading,
-                self.heading_error, self.push, self.bumps, self.bump_count, self.slip_angle, self.slip_speed,
-                self.dt)
+        """The arrays :func:`k_drive_step` takes, a plain tuple in :class:`DriveArrays`' order (made once per
+        allocation: numba's dispatcher types a plain tuple in C, a NamedTuple in Python)."""
+        if self._kernel is None:
+            self._kernel = tuple(DriveArrays(self.true, self.odometry, self.gradient, self.eta, self.t, self.k,
+                                             self.speed, self.heading, self.heading_error, self.push, self.bumps,
+                                             self.bump_count, self.slip_angle, self.slip_speed, self.dt))
+        return self._kernel
+
+
+class DriveArrays(NamedTuple):
+    """What :func:`k_drive_step` reads and writes of N drives (:class:`DriveState`'s), in its order."""
+
+    true: np.ndarray
+    odometry: np.ndarray
+    gradient: np.ndarray
+    eta: np.ndarray
+    t: np.ndarray
+    k: np.ndarray
+    speed: np.ndarray
+    heading: np.ndarray
+    heading_error: np.ndarray
+    push: np.ndarray
+    bumps: np.ndarray
+    bump_count: np.ndarray
+    slip_angle: np.ndarray
+    slip_speed: np.ndarray
+    dt: float
 
 
 @njit(cache=True, error_model="numpy")
-def k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
-                 bump_count, slip_angle, slip_speed, dt):
-    """Advance drive ``i`` one sample; returns the odometric increment (the
+def k_drive_step(i, geo, drive):
+    """Advance drive ``i`` of ``drive`` (:class:`DriveArrays`' tuple) one sample; returns the odometric increment (the
     same for all three units: the commanded way along the commanded heading).
 
     Each unit rolls ``speed dt`` along its true heading (heading + its
@@ -187,6 +211,8 @@ def k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, he
     the pushed unit toward the robot's centre; then the terrain sets the
     heights and the gradient, and eta follows (:func:`mt.k_eta`, from the last
     eta so that the branch stays continuous)."""
+    true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
+        slip_speed, dt = drive
     way = speed[i] * dt
     ox, oy = way * math.cos(heading[i]), way * math.sin(heading[i])
     kk = k[i]
@@ -222,10 +248,8 @@ def k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, he
 
 
 @njit(cache=True, error_model="numpy")
-def _step_one(geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count,
-              slip_angle, slip_speed, dt):
-    return k_drive_step(0, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
-                        bump_count, slip_angle, slip_speed, dt)
+def _step_one(geo, drive):
+    return k_drive_step(0, geo, drive)
 
 
 class TripodDrive:
@@ -277,5 +301,5 @@ class TripodDrive:
 
     def step(self) -> np.ndarray:
         """Advance one sample (:func:`k_drive_step`); returns the odometric increments (3, 2) of the units."""
-        ox, oy = _step_one(self._geo, *self.state.kernel_args())
+        ox, oy = _step_one(self._geo, self.state.kernel_args())
         return np.array([[ox, oy], [ox, oy], [ox, oy]])

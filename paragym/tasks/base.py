@@ -77,13 +77,14 @@ class BoxSpec(NamedTuple):
 
 
 class Evaluation(NamedTuple):
-    """What a task decides of its N robots after a reset or a step (:meth:`Task.evaluate`).
+    """What a task decides of its N robots after a reset or a step (:meth:`Task.evaluate`). The arrays are the
+    state's buffers, rewritten by the next call: copy what you keep.
 
     Attributes:
         success: (N,) bool: the robot's episode has ended and succeeded (``info["is_success"]``).
         failure: (N,) int: why it failed, an index into :attr:`Task.failures` (0: it has not).
-        numbers: the per-robot values every env's info carries, each an (N,) array under a stable name
-            (the vector env's info holds them all; the single env's the row of its one robot).
+        numbers: the per-robot numbers every env's info carries, each an (N,) array under a stable name
+            (the vector env's info holds them all; the single env's the number of its one robot).
     """
 
     success: np.ndarray

@@ -209,6 +209,26 @@ class CaPaManParams:
                           float(g.alpha_max), float(self.time_penalty))
 
 
+class KernelState(NamedTuple):
+    """The state's arrays the kernels read and write (:class:`CaPaManState`'s), in their order."""
+
+    tp: np.ndarray
+    tc: np.ndarray
+    code: np.ndarray
+    alpha: np.ndarray
+    tip: np.ndarray
+    reached: np.ndarray
+    path_length: np.ndarray
+    step_length: np.ndarray
+    progress: np.ndarray
+    just_reached: np.ndarray
+    clearance: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    lookahead: np.ndarray
+
+
 @dataclass
 class CaPaManState:
     """N robots: task points T.P. and task configurations T.C. (N, 3, 3), the
@@ -235,6 +255,22 @@ class CaPaManState:
     reward: np.ndarray
     near: list[str | None] = field(default_factory=list)
     scenarios: list[CaPaManScenario | None] = field(default_factory=list)
+    #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
+    success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    evaluation: Any = field(default=None, repr=False, compare=False)
+    failure: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
+    collision: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    target_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
+    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
+
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays the kernels read and write, as a plain tuple in :class:`KernelState`'s order (made once:
+        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
+        if self._kernel is None:
+            self._kernel = tuple(KernelState(self.tp, self.tc, self.code, self.alpha, self.tip, self.reached,
+                                             self.path_length, self.step_length, self.progress, self.just_reached,
+                                             self.clearance, self.terminated, self.obs, self.reward, self.lookahead))
+        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: CaPaManParams) -> CaPaManState:
@@ -244,7 +280,8 @@ class CaPaManState:
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
                    progress=z(n), just_reached=z(n, bool), clearance=z(n), lookahead=z((n, 3)),
                    terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n), near=[None] * n,
-                   scenarios=[None] * n)
+                   scenarios=[None] * n, success=z(n, bool), failure=z(n, np.int64), collision=z(n, bool),
+                   target_index=z(n, np.int64))
 
     @property
     def target(self) -> np.ndarray:
@@ -348,13 +385,10 @@ def _place(state: CaPaManState, world: World, rows: np.ndarray, alpha: np.ndarra
 
 
 def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: np.ndarray, move: bool) -> None:
-    s = state
-    _finish_kernel(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.path_length, s.step_length, s.progress,
-                   s.just_reached, s.clearance, s.terminated, s.obs, s.reward, old, rows, move, params.kernel_args,
-                   _TOUR)
+    arrays = state.kernel_arrays()
+    _finish_kernel(arrays, old, rows, move, params.kernel_args, _TOUR)
     if params.version == 1:
-        _observe_v1(s.tp, s.tc, s.code, s.alpha, s.tip, s.reached, s.clearance, s.lookahead, s.obs, rows,
-                    params.kernel_args, _TOUR)
+        _observe_v1(arrays, rows, params.kernel_args, _TOUR)
 
 
 @njit(cache=True, error_model="numpy")
@@ -368,12 +402,12 @@ def _command(command, actions, p):
 
 
 @njit(cache=True, error_model="numpy")
-def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance,
-                   terminated, obs, reward, old, rows, move, p, tour):
+def _finish_kernel(arrays, old, rows, move, p, tour):
     """After the world has placed the robots of ``rows``: the step's length and
     progress toward the target, reaching, the reward, the end and the observation.
-    ``p``: max_joint_step, reach_tolerance, delta, beta, w_length, w_progress,
-    reach_bonus, collision_penalty, clearance_cap, alpha_min, alpha_max, time_penalty."""
+    ``arrays``: the state's, in :class:`KernelState`'s order; ``p``: :class:`KernelArgs`."""
+    tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
+        obs, reward, lookahead = arrays
     n_tour = len(tour)
     mid, half = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2
     for i in range(alpha.shape[0]):
@@ -417,8 +451,10 @@ def _finish_kernel(tp, tc, code, alpha, tip, reached, path_length, step_length, 
 
 
 @njit(cache=True, error_model="numpy")
-def _observe_v1(tp, tc, code, alpha, tip, reached, clearance, lookahead, obs, rows, p, tour):
+def _observe_v1(arrays, rows, p, tour):
     """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
+    tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
+        obs, reward, lookahead = arrays
     n_tour = len(tour)
     mid, half, cap = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2, p.clearance_cap
     m = code.shape[1] // 8

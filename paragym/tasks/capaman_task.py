@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
@@ -95,14 +96,13 @@ class CaPaManTask:
         """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
         mechanism whole)."""
         s = state
-        collision = s.clearance <= 0.0
-        broken = np.zeros(len(collision), bool)
-        if isinstance(world, DynamicWorld):
-            broken[0] = world.broken
-        failure = np.where(collision, 1, np.where(broken, 2, 0))
-        return Evaluation((s.reached >= len(TOUR)) & ~collision & ~broken, failure,
-                          {"collision": collision, "clearance": s.clearance, "reached": s.reached,
-                           "target_index": s.target, "path_length": s.path_length})
+        _decide(s.clearance, s.reached, isinstance(world, DynamicWorld) and world.broken, _TOUR, s.collision,
+                s.failure, s.success, s.target_index)
+        if s.evaluation is None:  # the same buffers every call
+            numbers = {"collision": s.collision, "clearance": s.clearance, "reached": s.reached,
+                       "target_index": s.target_index, "path_length": s.path_length}
+            s.evaluation = Evaluation(s.success, s.failure, numbers)
+        return s.evaluation
 
     def details(self, state: CaPaManState, params: CaPaManParams, world: Any, i: int) -> dict[str, Any]:
         return {"nearest_part": state.near[i], "alpha": state.alpha[i].copy(), "tool_tip": state.tip[i].copy()}
@@ -116,6 +116,22 @@ class CaPaManTask:
         elif gui:  # PyBullet keeps the GUI's scene posed
             return None
         return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
+
+
+_TOUR = np.asarray(TOUR, np.int64)
+
+
+@njit(cache=True)
+def _decide(clearance, reached, broken, tour, collision, failure, success, target_index):
+    """Success of every robot: the tour complete with no collision, and robot 0's mechanism whole where
+    ``broken`` says it is not (dynamic fidelity); the failure: a collision (1), else a broken mechanism (2).
+    Also each robot's current target T.C."""
+    n_tour = len(tour)
+    for i in range(len(clearance)):
+        collision[i] = clearance[i] <= 0.0
+        failure[i] = 1 if collision[i] else 2 if (i == 0 and broken) else 0
+        success[i] = reached[i] >= n_tour and failure[i] == 0
+        target_index[i] = tour[min(reached[i], n_tour - 1)]
 
 
 #: the CaPaMan task (paper 000)

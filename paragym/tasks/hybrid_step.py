@@ -187,7 +187,30 @@ class HybridParams:
         weights = Weights(float(self.max_delta_step), float(self.j_bar), float(self.w_offset), float(self.w_delta),
                           float(self.w_singular), float(self.w_limit), float(g.l_min), float(g.l_max),
                           float(g.singularity_threshold), float(self.w_end))
-        return (*hybrid.kernel_consts(g), weights, POSE_SCALE)
+        return (hybrid.kernel_consts(g), weights, POSE_SCALE)
+
+
+class KernelState(NamedTuple):
+    """The state's arrays :func:`_advance_kernel` reads and writes (:class:`HybridState`'s), in its order."""
+
+    u: np.ndarray
+    nominal: np.ndarray
+    k: np.ndarray
+    delta: np.ndarray
+    d_delta: np.ndarray
+    offset: np.ndarray
+    all_free: np.ndarray
+    pose: np.ndarray
+    lengths: np.ndarray
+    mu_h: np.ndarray
+    mu_t: np.ndarray
+    within: np.ndarray
+    free: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+    phi: np.ndarray
+    reason: np.ndarray
 
 
 @dataclass
@@ -216,6 +239,20 @@ class HybridState:
     #: the first reason each robot's episode failed (an index into :data:`FAILURES`; 0: none yet)
     reason: np.ndarray
     scenarios: list[HybridScenario | None] = field(default_factory=list)
+    #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
+    success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    evaluation: Any = field(default=None, repr=False, compare=False)
+    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
+
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays the kernel reads and writes, as a plain tuple in :class:`KernelState`'s order (made once:
+        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
+        if self._kernel is None:
+            self._kernel = tuple(KernelState(self.u, self.nominal, self.k, self.delta, self.d_delta, self.offset,
+                                             self.all_free, self.pose, self.lengths, self.mu_h, self.mu_t,
+                                             self.within, self.free, self.terminated, self.obs, self.reward,
+                                             self.phi, self.reason))
+        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: HybridParams) -> HybridState:
@@ -226,7 +263,8 @@ class HybridState:
                    d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
                    lengths=np.zeros((n, 9)), mu_h=np.zeros(n), mu_t=np.zeros(n), within=np.zeros(n, bool),
                    free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64), scenarios=[None] * n)
+                   reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64), scenarios=[None] * n,
+                   success=np.zeros(n, bool))
 
 
 def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
@@ -253,26 +291,15 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     evaluated where the simulation put it (:class:`DynamicWorld`)."""
     if world is None:
         _advance(state, params, actions, active, True, _ALL)
-        _note_failure(state, active, None)
         return
     _advance(state, params, actions, active, True, _COMMAND)
     world.move(state)
+    if state.reason[0] == 0:  # the first reason the episode fails: the dynamics' before the kernel's
+        state.reason[0] = _BROKEN if world.broken else 0 if world.tracked[0] else _TRACKING
     _advance(state, params, actions, active, True, _EVALUATE)
     state.all_free &= world.tracked
     if world.broken:  # a broken mechanism ends the episode as a failure
         state.all_free[0], state.terminated[0] = False, True
-    _note_failure(state, active, world)
-
-
-def _note_failure(state: HybridState, active: np.ndarray, world: DynamicWorld | None) -> None:
-    """Keep the first reason each active robot's episode fails: a broken mechanism, E off its command
-    (dynamic fidelity), a leg beyond its limits, a singular stage."""
-    s = state
-    now = np.where(~s.within, _LIMIT, np.where(~s.free, _SINGULAR, 0))
-    if world is not None:
-        now[0] = _BROKEN if world.broken else _TRACKING if not world.tracked[0] else now[0]
-    first = active & (s.reason == 0)
-    s.reason[first] = now[first]
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -280,23 +307,22 @@ _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its c
 
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
-    s = state
-    _advance_kernel(s.u, s.nominal, s.k, s.delta, s.d_delta, s.offset, s.all_free, s.pose, s.lengths, s.mu_h,
-                    s.mu_t, s.within, s.free, s.terminated, s.obs, s.reward, s.phi,
-                    np.ascontiguousarray(actions, np.float64), rows, move, params.version, stage,
-                    *params.kernel_args)
+    _advance_kernel(state.kernel_arrays(), np.ascontiguousarray(actions, np.float64), rows, move, params.version,
+                    stage, *params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free,
-                    terminated, obs, reward, phi, actions, rows, move, version, stage,
-                    base, plat, top, axes, tri_base, pinv_t, home, sc, w, scale):
-    """The transition of every robot with ``rows[i]`` (module docstring).
+def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scale):
+    """The transition of every robot with ``rows[i]`` (module docstring). ``arrays``: the state's, in
+    :class:`KernelState`'s order; ``consts``: the geometry, :func:`paragym.mechanisms.hybrid.kernel_consts`.
     ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
     L_min, L_max, singularity threshold, w_end (v1). ``stage``: 0 the whole
     step; 1 the command only (move and solve the commanded pose's strokes);
     2 the evaluation only, of the pose, strokes, measures and offset a
     simulation wrote into the state (dynamic fidelity: :class:`DynamicWorld`)."""
+    u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free, terminated, obs, \
+        reward, phi, reason = arrays
+    base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
     work = np.empty((5, 6, 6))
     size = obs.shape[1]
@@ -326,6 +352,8 @@ def _advance_kernel(u, nominal, k, delta, d_delta, offset, all_free, pose, lengt
         within[i] = out == 0
         free[i] = within[i] and mu_h[i] >= w.singularity_threshold and mu_t[i] >= w.singularity_threshold
         all_free[i] = all_free[i] and free[i]
+        if move and reason[i] == 0:  # the first reason the episode fails (a dynamic one was noted before)
+            reason[i] = _LIMIT if not within[i] else 0 if free[i] else _SINGULAR
         terminated[i] = k[i] >= last
         thr = 2 * w.singularity_threshold
         close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr

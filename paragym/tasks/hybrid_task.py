@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
@@ -79,12 +80,15 @@ class HybridTask:
         """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
         dynamic fidelity, tracked (and the mechanism whole, v2)."""
         s = state
-        return Evaluation(s.terminated & s.all_free, s.reason,
-                          {"step": s.k, "u": s.u[s.k], "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t,
-                           "free": s.free, "within_limits": s.within})
+        _decide(s.terminated, s.all_free, s.success)
+        if s.evaluation is None:  # the same buffers every call
+            numbers = {"step": s.k, "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t, "free": s.free,
+                       "within_limits": s.within}
+            s.evaluation = Evaluation(s.success, s.reason, numbers)
+        return s.evaluation
 
     def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
-        return {"offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
+        return {"u": float(state.u[state.k[i]]), "offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
                 "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
                 "tracking_error": 0.0 if world is None else world.tracking_error,
                 "orientation_error": 0.0 if world is None else world.orientation_error}
@@ -100,6 +104,13 @@ class HybridTask:
         solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
         cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
         return cache["scene"].render()
+
+
+@njit(cache=True)
+def _decide(terminated, all_free, success):
+    """Success of every robot: u = 1 reached with every pose of the episode free."""
+    for i in range(len(terminated)):
+        success[i] = terminated[i] and all_free[i]
 
 
 #: the hybrid task (paper 002)

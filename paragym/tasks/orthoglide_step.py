@@ -27,7 +27,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -119,10 +119,48 @@ class OrthoglideParams:
 
     @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
-        """The numbers the kernel takes (made once: a step must not rebuild them)."""
+        """The numbers the kernel takes, as a plain tuple in :class:`KernelParams`' order (made once: a step
+        must not rebuild them; numba's dispatcher types a plain tuple in C, a NamedTuple in Python)."""
         g = self.geometry
-        return (og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode, self.max_null_rate,
-                self.max_joint_rate, self.w_track, self.limit_penalty, self.version, self.track_tolerance)
+        return tuple(KernelParams(og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode,
+                                  self.max_null_rate, self.max_joint_rate, self.w_track, self.limit_penalty,
+                                  self.version, self.track_tolerance))
+
+
+class KernelParams(NamedTuple):
+    """The parameters :func:`_advance_kernel` reads, by name (numba compiles a NamedTuple): the geometry's
+    numbers (``og.params``), the joint limits (m), the action mode and scales, the reward's weights, the
+    rules' version and the tracking tolerance (m)."""
+
+    p: Any
+    lo: np.ndarray
+    hi: np.ndarray
+    joint_mode: bool
+    max_null_rate: float
+    max_joint_rate: float
+    w_track: float
+    limit_penalty: float
+    version: int
+    track_tolerance: float
+
+
+class KernelState(NamedTuple):
+    """The state's arrays :func:`_advance_kernel` reads and writes (:class:`OrthoglideState`'s)."""
+
+    rho: np.ndarray
+    k: np.ndarray
+    last: np.ndarray
+    path: np.ndarray
+    dt: np.ndarray
+    j: np.ndarray
+    n: np.ndarray
+    kappa: np.ndarray
+    err: np.ndarray
+    failed: np.ndarray
+    reason: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
 
 
 @dataclass
@@ -151,6 +189,9 @@ class OrthoglideState:
     obs: np.ndarray
     reward: np.ndarray
     scenarios: list[OrthoglideScenario | None] = field(default_factory=list)
+    #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
+    success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    evaluation: Any = field(default=None, repr=False, compare=False)
 
     @classmethod
     def empty(cls, n: int, params: Any = None, points: int = 2) -> OrthoglideState:
@@ -159,7 +200,8 @@ class OrthoglideState:
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
                    n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
                    reason=np.zeros(n, np.int64), terminated=np.zeros(n, bool),
-                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n), scenarios=[None] * n)
+                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n), scenarios=[None] * n,
+                   success=np.zeros(n, bool))
 
     def _room(self, points: int) -> None:
         """Grow the path arrays to hold ``points`` points."""
@@ -167,6 +209,18 @@ class OrthoglideState:
         if extra > 0:
             self.path = np.pad(self.path, ((0, 0), (0, extra), (0, 0)))
             self.dt = np.pad(self.dt, ((0, 0), (0, extra)))
+            self._kernel = None
+
+    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
+
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays the kernel reads and writes, as a plain tuple in :class:`KernelState`'s order (made once
+        per allocation)."""
+        if self._kernel is None:
+            self._kernel = tuple(KernelState(self.rho, self.k, self.last, self.path, self.dt, self.j, self.n,
+                                             self.kappa, self.err, self.failed, self.reason, self.terminated, self.obs,
+                                             self.reward))
+        return self._kernel
 
 
 def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
@@ -217,16 +271,12 @@ _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its c
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
-    s = state
-    _advance_kernel(s.rho, s.k, s.last, s.path, s.dt, s.j, s.n, s.kappa, s.err, s.failed, s.reason, s.terminated,
-                    s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, stage,
-                    *params.kernel_args)
+    _advance_kernel(state.kernel_arrays(), np.ascontiguousarray(actions, np.float64), rows, move, stage,
+                    params.kernel_args)
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, actions, rows,
-                    move, stage, p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty,
-                    version, track_tolerance):
+def _advance_kernel(arrays, actions, rows, move, stage, params):
     """The transition of every robot with ``rows[i]`` (see the module docstring):
     move it if ``move``, then evaluate it at its path point. ``stage``: 0 the
     whole step; 1 the move only (the motors' command); 2 the evaluation only,
@@ -234,6 +284,8 @@ def _advance_kernel(rho, k, last, path, dt, j, n, kappa, err, failed, reason, te
     the tool point those joints give, and the tracking error in either mode.
     ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
+    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward = arrays
+    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, version, track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
             continue

@@ -7,6 +7,7 @@ import warnings
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
@@ -92,9 +93,11 @@ class OrthoglideTask:
         """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
         in v1 the tracking, and a broken mechanism)."""
         s = state
-        done = s.k >= s.last
-        return Evaluation(done & ~s.failed, s.reason,
-                          {"kappa": s.kappa, "tracking_error": s.err, "step": s.k})
+        _decide(s.k, s.last, s.failed, s.success)
+        if s.evaluation is None:  # the same buffers every call
+            numbers = {"kappa": s.kappa, "tracking_error": s.err, "step": s.k}
+            s.evaluation = Evaluation(s.success, s.reason, numbers)
+        return s.evaluation
 
     def details(self, state: OrthoglideState, params: OrthoglideParams, world: Any, i: int) -> dict[str, Any]:
         return {"rho": state.rho[i].copy()}
@@ -109,6 +112,13 @@ class OrthoglideTask:
             cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
         cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
         return cache["scene"].render()
+
+
+@njit(cache=True)
+def _decide(k, last, failed, success):
+    """Success of every robot: the path's end reached (``k >= last``) and no failure on the way."""
+    for i in range(len(k)):
+        success[i] = k[i] >= last[i] and not failed[i]
 
 
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:

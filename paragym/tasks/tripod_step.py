@@ -34,8 +34,8 @@ v0's and the zero action earns 0.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -148,6 +148,20 @@ class TripodParams:
         return 6 if self.version == 0 else 3
 
 
+class KernelState(NamedTuple):
+    """The state's arrays the kernels read and write (:class:`TripodState`'s), in their order."""
+
+    estimate: np.ndarray
+    eta: np.ndarray
+    last_eta: np.ndarray
+    smoothed: np.ndarray
+    unit_error: np.ndarray
+    plate_error: np.ndarray
+    terminated: np.ndarray
+    obs: np.ndarray
+    reward: np.ndarray
+
+
 @dataclass
 class TripodState:
     """N robots: their drives, the agent's estimates of the units (N, 3, 3),
@@ -167,6 +181,19 @@ class TripodState:
     reward: np.ndarray
     #: whether the mechanism has folded in this episode (a leg at or past horizontal: true eta <= 0)
     folded: np.ndarray
+    #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
+    success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
+    evaluation: Any = field(default=None, repr=False, compare=False)
+    failure: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
+    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
+
+    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
+        """The arrays the kernels read and write, as a plain tuple in :class:`KernelState`'s order (made once:
+        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
+        if self._kernel is None:
+            self._kernel = tuple(KernelState(self.estimate, self.eta, self.last_eta, self.smoothed, self.unit_error,
+                                             self.plate_error, self.terminated, self.obs, self.reward))
+        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: TripodParams) -> TripodState:
@@ -175,7 +202,8 @@ class TripodState:
         return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
                    last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
                    plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n), folded=np.zeros(n, bool))
+                   reward=np.zeros(n), folded=np.zeros(n, bool), success=np.zeros(n, bool),
+                   failure=np.zeros(n, np.int64))
 
     @property
     def scenarios(self) -> list[TripodScenario | None]:
@@ -223,17 +251,16 @@ def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows
              move: bool, moved: np.ndarray = _NONE, increment: np.ndarray = _NO_INCREMENT) -> None:
     """``moved`` and ``increment``: a dynamic world advanced the drives already (which of them, and each
     unit's odometric increment (N, 3, 2)); empty, the kernel advances them (:func:`k_drive_step`)."""
-    s, d = state, state.drive
+    d = state.drive
     external = len(moved) > 0
+    actions = np.ascontiguousarray(actions, np.float64)
+    geo = mt.kernel_consts(params.geometry)
     if params.version == 1:
-        _advance_v1_kernel(s.estimate, s.eta, s.last_eta, s.smoothed, s.unit_error, s.plate_error, s.terminated,
-                           s.obs, s.reward, np.ascontiguousarray(actions, np.float64), rows, move, params.smoothing,
-                           params.trust_rate, params.relative_reward, external, moved, increment,
-                           d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
+        _advance_v1_kernel(state.kernel_arrays(), actions, rows, move, params.smoothing, params.trust_rate,
+                           params.relative_reward, external, moved, increment, d.steps, d.noise, geo, d.kernel_args())
         return
-    _advance_kernel(s.estimate, s.eta, s.last_eta, s.unit_error, s.plate_error, s.terminated, s.obs, s.reward,
-                    np.ascontiguousarray(actions, np.float64), rows, move, external, moved, increment,
-                    params.max_correction, d.steps, d.noise, mt.kernel_consts(params.geometry), *d.kernel_args())
+    _advance_kernel(state.kernel_arrays(), actions, rows, move, external, moved, increment, params.max_correction,
+                    d.steps, d.noise, geo, d.kernel_args())
 
 
 @njit(cache=True, error_model="numpy")
@@ -255,11 +282,13 @@ def _score(i, estimate, true, unit_error, plate_error, reward):
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, terminated, obs, reward, actions, rows,
-                    move, external, moved, increment, max_correction, steps, noise, geo, true, odometry, gradient, eta,
-                    t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, slip_speed, dt):
+def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max_correction, steps, noise, geo, drive):
     """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
-    advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity."""
+    advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity. ``arrays``:
+    the state's, in :class:`KernelState`'s order; ``drive``: the drives', :class:`DriveArrays`' order."""
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward = arrays
+    true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
+        slip_speed, dt = drive
     row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
     for i in range(len(k)):
         if not rows[i]:
@@ -267,8 +296,7 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
         if move and (moved[i] if external else k[i] < steps[i]):
             ox, oy = 0.0, 0.0
             if not external:
-                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
-                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
+                ox, oy = k_drive_step(i, geo, drive)
             for u in range(3):
                 if external:
                     ox, oy = increment[i, u, 0], increment[i, u, 1]
@@ -293,12 +321,13 @@ def _advance_kernel(estimate, eta_read, last_eta, unit_error, plate_error, termi
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward,
-                       actions, rows, move, smoothing, trust_rate, relative, external, moved, increment, steps, noise,
-                       geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps,
-                       bump_count, slip_angle, slip_speed, dt):
-    """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``external``,
-    ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
+def _advance_v1_kernel(arrays, actions, rows, move, smoothing, trust_rate, relative, external, moved, increment,
+                       steps, noise, geo, drive):
+    """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``arrays``, ``drive``,
+    ``external``, ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward = arrays
+    true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
+        slip_speed, dt = drive
     row = np.empty(OBS_SIZE_V1)
     plate = np.empty((3, 3))
     for i in range(len(k)):
@@ -313,8 +342,7 @@ def _advance_v1_kernel(estimate, eta_read, last_eta, smoothed, unit_error, plate
                     estimate[i, u, 1] += w * (y - estimate[i, u, 1])
             ox, oy = 0.0, 0.0
             if not external:
-                ox, oy = k_drive_step(i, geo, true, odometry, gradient, eta, t, k, speed, heading, heading_error,
-                                      push, bumps, bump_count, slip_angle, slip_speed, dt)
+                ox, oy = k_drive_step(i, geo, drive)
             for u in range(3):
                 if external:
                     ox, oy = increment[i, u, 0], increment[i, u, 1]

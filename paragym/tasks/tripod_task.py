@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
@@ -75,10 +76,11 @@ class TripodTask:
         """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
         in v2, the mechanism never folded)."""
         s = state
-        folded_fails = s.folded & params.fold_ends
-        return Evaluation(s.terminated & (s.unit_error < params.success_error) & ~folded_fails,
-                          s.folded.astype(np.int64),
-                          {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t})
+        _decide(s.terminated, s.unit_error, s.folded, params.success_error, params.fold_ends, s.success, s.failure)
+        if s.evaluation is None:  # the same buffers every call
+            numbers = {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t}
+            s.evaluation = Evaluation(s.success, s.failure, numbers)
+        return s.evaluation
 
     def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
         s, d = state, state.drive
@@ -100,6 +102,15 @@ class TripodTask:
         _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
         cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
         return cache["scene"].render()
+
+
+@njit(cache=True)
+def _decide(terminated, unit_error, folded, success_error, fold_ends, success, failure):
+    """Success of every robot: the drive's end reached with the mean unit error below ``success_error``, and
+    (``fold_ends``) the mechanism never folded; the failure is the fold (1), whichever the rules."""
+    for i in range(len(terminated)):
+        failure[i] = 1 if folded[i] else 0
+        success[i] = terminated[i] and unit_error[i] < success_error and not (fold_ends and folded[i])
 
 
 def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
