@@ -188,3 +188,21 @@ def test_the_vector_env_refuses_unknown_options_and_a_closed_env():
     venv.close()
     with pytest.raises(RuntimeError, match="is closed"):
         venv.reset(seed=0)
+
+
+def test_kernels_take_named_tuples_not_dozens_of_arguments():
+    """Every numba kernel of the task layer (and the tripod's drive) takes at most 14 parameters: a state's
+    arrays travel as one tuple named by a NamedTuple (``KernelState``), not as 30 positional arguments."""
+    import inspect
+
+    from numba.core.registry import CPUDispatcher
+
+    modules = [importlib.import_module(f"paragym.tasks.{t}{s}") for t in ("capaman", "hybrid", "orthoglide", "tripod")
+               for s in ("_step", "_task", "_worlds")] + [importlib.import_module("paragym.sim.tripod_drive")]
+    seen = {}
+    for module in modules:
+        for name, obj in vars(module).items():
+            if isinstance(obj, CPUDispatcher) and obj.py_func.__module__ == module.__name__:
+                seen[f"{module.__name__}.{name}"] = len(inspect.signature(obj.py_func).parameters)
+    assert len(seen) >= 10, seen
+    assert max(seen.values()) <= 14, {k: v for k, v in seen.items() if v > 14}
