@@ -20,8 +20,8 @@ import numpy as np
 from paragym.mechanisms.geometry import pose6
 from paragym.tasks.base import check_control_period
 
-__all__ = ["ParagymEnv", "box", "check_action", "check_control_period", "check_copyable", "check_options", "check_seed",
-           "env_signature", "pose6"]
+__all__ = ["ParagymEnv", "TaskShell", "box", "check_action", "check_control_period", "check_copyable", "check_options",
+           "check_seed", "env_signature", "pose6"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -146,7 +146,43 @@ def env_signature(task: Any, first: tuple[inspect.Parameter, ...] = ()) -> inspe
     return inspect.Signature([*first, own, *params])
 
 
-class ParagymEnv(gym.Env):
+class TaskShell:
+    """What the single and the vector env share over a task: its arguments read as attributes, copies that
+    refuse a PyBullet client, and closing once."""
+
+    params: Any = None
+    world: Any = None
+    _render: dict[str, Any]
+    _closed: bool = True
+
+    def __getattr__(self, name: str) -> Any:
+        """The env's arguments, as its parameters hold them (``env.geometry``, ``env.fidelity``, ...)."""
+        params = self.__dict__.get("params")
+        if params is None or name.startswith("__") or not hasattr(params, name):
+            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
+        return getattr(params, name)
+
+    def __getstate__(self) -> dict[str, Any]:
+        check_copyable(self)
+        return {**self.__dict__, "_render": {}}
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
+
+    def _close_all(self) -> None:
+        """Close the render scenes and the world, once."""
+        if self.__dict__.get("_closed", True):
+            return
+        self._closed = True
+        for scene in self._render.values():
+            scene.close()
+        self._render.clear()
+        if self.world is not None:
+            self.world.close()
+
+
+class ParagymEnv(TaskShell, gym.Env):
     """The single env of a task: the N = 1 case of its transition, over the task's contract.
 
     A subclass per env id sets :attr:`task` (a :class:`paragym.tasks.base.Task`) and :attr:`rules` (one value
@@ -186,17 +222,6 @@ class ParagymEnv(gym.Env):
         self._closed = False
         self.world = self.task.make_world(self.params, 1, render_mode)
 
-    def __getattr__(self, name: str) -> Any:
-        """The env's arguments, as its parameters hold them (``env.geometry``, ``env.fidelity``, ...)."""
-        params = self.__dict__.get("params")
-        if params is None or name.startswith("__") or not hasattr(params, name):
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        return getattr(params, name)
-
-    def __getstate__(self) -> dict[str, Any]:
-        check_copyable(self)
-        return {**self.__dict__, "_render": {}}
-
     # --- the loop -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -234,18 +259,7 @@ class ParagymEnv(gym.Env):
         return image if self.render_mode == "rgb_array" else None
 
     def close(self) -> None:
-        if self.__dict__.get("_closed", True):
-            return
-        self._closed = True
-        for scene in self._render.values():
-            scene.close()
-        self._render.clear()
-        if self.world is not None:
-            self.world.close()
-
-    def _check_open(self) -> None:
-        if self._closed:
-            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
+        self._close_all()
 
     def _info(self) -> dict[str, Any]:
         """The info of the one robot: the task's numbers, success and failure (:meth:`Task.evaluate`) and its

@@ -41,12 +41,12 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from paragym.envs.base import box, check_action, check_copyable, check_options, check_seed, env_signature
+from paragym.envs.base import TaskShell, box, check_action, check_options, check_seed, env_signature
 
 __all__ = ["ParagymVectorEnv", "SameStepVectorEnv"]
 
 
-class ParagymVectorEnv(VectorEnv):
+class ParagymVectorEnv(TaskShell, VectorEnv):
     """N robots of a task in one call: a generic shell over the task's contract.
 
     A subclass per env id sets :attr:`task` and :attr:`rules`, as the single env's class does (the two share
@@ -100,17 +100,6 @@ class ParagymVectorEnv(VectorEnv):
         self._closed = False
         self._failure_names = np.array(self.task.failures, dtype=object)
 
-    def __getattr__(self, name: str) -> Any:
-        """The env's arguments, as its parameters hold them (as the single env's)."""
-        params = self.__dict__.get("params")
-        if params is None or name.startswith("__") or not hasattr(params, name):
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {name!r}")
-        return getattr(params, name)
-
-    def __getstate__(self) -> dict[str, Any]:
-        check_copyable(self)
-        return {**self.__dict__, "_render": {}}
-
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         """Draw, check and start the scenarios of robots ``rows`` (one generator each); return them."""
         task, p = self.task, self.params
@@ -125,8 +114,7 @@ class ParagymVectorEnv(VectorEnv):
         array of ``num_envs``, as gymnasium's vector envs take it). Every
         argument is checked before any robot changes: a bad seed list or mask
         leaves the env as it was."""
-        if self._closed:
-            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
+        self._check_open()
         options = check_options(options, ("scenario", "reset_mask"))
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
@@ -168,7 +156,7 @@ class ParagymVectorEnv(VectorEnv):
 
     def step(self, actions: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict[str, Any]]:
         if self._closed:
-            raise RuntimeError(f"{type(self).__name__} is closed: make a new env")
+            self._check_open()
         if not self._started:
             raise RuntimeError("call reset() before step()")
         actions = check_action(actions, self.single_action_space, "actions", rows=self.num_envs)
@@ -209,14 +197,7 @@ class ParagymVectorEnv(VectorEnv):
         return self.task.render(self._render, self.state, self.params, self.world, self.render_index, False)
 
     def close_extras(self, **kwargs: Any) -> None:
-        if self._closed:
-            return
-        self._closed = True
-        for scene in self._render.values():
-            scene.close()
-        self._render.clear()
-        if self.world is not None:
-            self.world.close()
+        self._close_all()
 
     def _infos(self) -> dict[str, Any]:
         """Gymnasium's vector info dict: the task's numbers, ``is_success`` and ``failure`` of every robot

@@ -23,7 +23,7 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.registry import EnvRow
 from paragym.rollout import Episode
-from paragym.tasks.base import Evaluation, check_number, refuse_unknown, resolve_scenario
+from paragym.tasks.base import Evaluation, TaskBase, check_number, refuse_unknown, resolve_scenario
 
 STEP = 0.05  # m per step at full action
 REACH = 0.05  # m: success within this of the goal
@@ -95,15 +95,13 @@ class PointState:
                    [None] * n)
 
 
-class PointTask:
+class PointTask(TaskBase):
     """The task's contract (:class:`paragym.tasks.base.Task`), over N robots."""
 
     name = "point"
     scenario_names = ("paper", "random")
     failures = (None,)
     Scenario, Params, Rules, State = PointScenario, PointParams, PointRules, PointState
-    vector_fidelities = ("kinematic",)
-    sensor_layout: dict[str, float] = {}
 
     def paper_scenario(self) -> PointScenario:
         return paper_scenario()
@@ -120,9 +118,6 @@ class PointTask:
         if choice == "random":
             return [random_scenario(rng) for rng in rngs]
         return [paper_scenario() if choice == "paper" else choice] * len(rngs)
-
-    def vector_params(self, rules: PointRules, kwargs: dict[str, Any]) -> PointParams:
-        return PointParams.from_kwargs(rules, **kwargs)
 
     def spaces(self, params: PointParams) -> tuple[spaces.Box, spaces.Box]:
         return spaces.Box(-3.0, 3.0, (4,), np.float32), spaces.Box(-1.0, 1.0, (2,), np.float32)

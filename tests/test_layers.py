@@ -16,7 +16,7 @@ FOLDERS = {"paragym": "paragym", "envs": "paragym.envs", "planners": "paragym.pl
 #: packages that share a layer (envs, planners, validation) do not import each other.
 LAYERS = [
     ("paragym.registry", "paragym.machine"),  # one row per env id; what results depend on: every layer may read them
-    ("paragym", "paragym.units", "paragym.trajectories", "paragym.rollout"),  # registration and plain data
+    ("paragym", "paragym.units", "paragym.trajectories", "paragym.rollout", "paragym.kernels"),  # plain data
     ("paragym.mechanisms",),  # the papers' math
     ("paragym.sim",),  # PyBullet
     ("paragym.tasks",),  # each task's scenario: dataclass, validation, the paper's case, the random generator

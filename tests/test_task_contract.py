@@ -192,7 +192,8 @@ def test_the_vector_env_refuses_unknown_options_and_a_closed_env():
 
 def test_kernels_take_named_tuples_not_dozens_of_arguments():
     """Every numba kernel of the task layer (and the tripod's drive) takes at most 14 parameters: a state's
-    arrays travel as one tuple named by a NamedTuple (``KernelState``), not as 30 positional arguments."""
+    arrays travel as one tuple their state names (``KERNEL_FIELDS``, :mod:`paragym.kernels`), not as 30
+    positional arguments."""
     import inspect
 
     from numba.core.registry import CPUDispatcher

@@ -25,11 +25,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import lru_cache
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numba import njit
 
+from paragym.kernels import KernelArrays
 from paragym.mechanisms import tripod as mt
 
 __all__ = ["DriveState", "Terrain", "TripodDrive", "k_drive_step", "k_terrain"]
@@ -95,12 +96,16 @@ def _start(geometry: mt.TripodGeometry, eta0: float) -> tuple[np.ndarray, np.nda
 
 
 @dataclass
-class DriveState:
+class DriveState(KernelArrays):
     """N drives: the units' true and odometric positions (N, 3, 3), the
     terrain's gradient under the true units (N, 3, 2), the true eta (N, 3),
     time and sample, each drive's command and disturbances, and its random
     numbers (``noise`` (N, S, 3) per sample, ``slip_angle``, ``slip_speed``
     (N, S, 3) per step; S as long as the longest drive)."""
+
+    #: what :func:`k_drive_step` reads and writes, in its order (:class:`paragym.kernels.KernelArrays`)
+    KERNEL_FIELDS = ("true", "odometry", "gradient", "eta", "t", "k", "speed", "heading", "heading_error", "push",
+                     "bumps", "bump_count", "slip_angle", "slip_speed", "dt")
 
     true: np.ndarray
     odometry: np.ndarray
@@ -120,7 +125,6 @@ class DriveState:
     slip_speed: np.ndarray
     dt: float = 0.05
     scenarios: list[Any] = field(default_factory=list)
-    _kernel: tuple[Any, ...] | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def empty(cls, n: int, rate: float = 20.0) -> DriveState:
@@ -140,7 +144,7 @@ class DriveState:
         extra = bumps - self.bumps.shape[1]
         if extra > 0:
             self.bumps = np.pad(self.bumps, ((0, 0), (0, extra), (0, 0)), constant_values=1.0)
-        self._kernel = None
+        self.reallocated()
 
     def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
               encoder_noise: float, eta0: float = math.radians(40.0)) -> None:
@@ -170,39 +174,14 @@ class DriveState:
             self.slip_speed[i, :steps] = rng.uniform(0, scenario.slip, (steps, 3))
         self.eta[i], _ = mt.eta(self.true[i], eta, geometry)  # the branch continuous with the legs at eta0
 
-    def kernel_args(self) -> tuple[Any, ...]:
-        """The arrays :func:`k_drive_step` takes, a plain tuple in :class:`DriveArrays`' order (made once per
-        allocation: numba's dispatcher types a plain tuple in C, a NamedTuple in Python)."""
-        if self._kernel is None:
-            self._kernel = tuple(DriveArrays(self.true, self.odometry, self.gradient, self.eta, self.t, self.k,
-                                             self.speed, self.heading, self.heading_error, self.push, self.bumps,
-                                             self.bump_count, self.slip_angle, self.slip_speed, self.dt))
-        return self._kernel
 
 
-class DriveArrays(NamedTuple):
-    """What :func:`k_drive_step` reads and writes of N drives (:class:`DriveState`'s), in its order."""
-
-    true: np.ndarray
-    odometry: np.ndarray
-    gradient: np.ndarray
-    eta: np.ndarray
-    t: np.ndarray
-    k: np.ndarray
-    speed: np.ndarray
-    heading: np.ndarray
-    heading_error: np.ndarray
-    push: np.ndarray
-    bumps: np.ndarray
-    bump_count: np.ndarray
-    slip_angle: np.ndarray
-    slip_speed: np.ndarray
-    dt: float
 
 
 @njit(cache=True, error_model="numpy")
 def k_drive_step(i, geo, drive):
-    """Advance drive ``i`` of ``drive`` (:class:`DriveArrays`' tuple) one sample; returns the odometric increment (the
+    """Advance drive ``i`` of ``drive`` (the tuple of ``DriveState.KERNEL_FIELDS``) one sample; returns the
+    odometric increment (the
     same for all three units: the commanded way along the commanded heading).
 
     Each unit rolls ``speed dt`` along its true heading (heading + its
@@ -301,5 +280,5 @@ class TripodDrive:
 
     def step(self) -> np.ndarray:
         """Advance one sample (:func:`k_drive_step`); returns the odometric increments (3, 2) of the units."""
-        ox, oy = _step_one(self._geo, self.state.kernel_args())
+        ox, oy = _step_one(self._geo, self.state.kernel_arrays())
         return np.array([[ox, oy], [ox, oy], [ox, oy]])

@@ -20,8 +20,9 @@ from typing import Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkab
 
 import numpy as np
 
-__all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskParams", "TaskState", "World", "check_choice",
-           "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed", "resolve_scenario"]
+__all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
+           "check_choice", "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed",
+           "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -201,6 +202,27 @@ class Task(Protocol):
         """Robot ``i`` drawn by PyBullet (an RGB array). ``cache`` is the env's: a scene built on the first
         call is kept there (``cache["scene"]``) and closed with the env."""
         ...
+
+
+class TaskBase:
+    """What most tasks' contracts share, which a task may keep or override: the native vector env runs the
+    kinematic fidelity with the single env's arguments; no further info; no accelerometer layout."""
+
+    name: str = ""
+    Params: ClassVar[type]
+    vector_fidelities: tuple[str, ...] = ("kinematic",)
+    sensor_layout: dict[str, float] = {}
+
+    def vector_params(self, rules: Any, kwargs: dict[str, Any]) -> Any:
+        """The single env's parameters, refused (ValueError) in a fidelity the native vector env does not run."""
+        params = self.Params.from_kwargs(rules, **kwargs)
+        if params.fidelity not in self.vector_fidelities:
+            raise ValueError(f"the native {self.name} vector env is {' or '.join(self.vector_fidelities)}: use "
+                             f"gymnasium's sync/async vector modes for the {params.fidelity} fidelity")
+        return params
+
+    def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
+        return {}
 
 
 # --- the argument checks every task's Params.from_kwargs uses ---------------------------------------------------------

@@ -52,6 +52,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from paragym.kernels import KernelArrays
 from paragym.mechanisms import capaman
 from paragym.sim.obstacles import ENCODING_SIZE
 from paragym.tasks import capaman as scenarios_module
@@ -209,33 +210,17 @@ class CaPaManParams:
                           float(g.alpha_max), float(self.time_penalty))
 
 
-class KernelState(NamedTuple):
-    """The state's arrays the kernels read and write (:class:`CaPaManState`'s), in their order."""
-
-    tp: np.ndarray
-    tc: np.ndarray
-    code: np.ndarray
-    alpha: np.ndarray
-    tip: np.ndarray
-    reached: np.ndarray
-    path_length: np.ndarray
-    step_length: np.ndarray
-    progress: np.ndarray
-    just_reached: np.ndarray
-    clearance: np.ndarray
-    terminated: np.ndarray
-    obs: np.ndarray
-    reward: np.ndarray
-    lookahead: np.ndarray
-
-
 @dataclass
-class CaPaManState:
+class CaPaManState(KernelArrays):
     """N robots: task points T.P. and task configurations T.C. (N, 3, 3), the
     obstacles' encoding, crank angles, command and tool tip (N, 3), the tour's
     progress, path length, last step's length and progress, the clearance
     (m) and its nearest part, the clearance's look-ahead (N, 3; v1), and the
     observation and reward of the last step."""
+
+    #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
+    KERNEL_FIELDS = ("tp", "tc", "code", "alpha", "tip", "reached", "path_length", "step_length", "progress",
+                     "just_reached", "clearance", "terminated", "obs", "reward", "lookahead")
 
     tp: np.ndarray
     tc: np.ndarray
@@ -261,16 +246,7 @@ class CaPaManState:
     failure: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
     collision: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     target_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
-    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
 
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """The arrays the kernels read and write, as a plain tuple in :class:`KernelState`'s order (made once:
-        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
-        if self._kernel is None:
-            self._kernel = tuple(KernelState(self.tp, self.tc, self.code, self.alpha, self.tip, self.reached,
-                                             self.path_length, self.step_length, self.progress, self.just_reached,
-                                             self.clearance, self.terminated, self.obs, self.reward, self.lookahead))
-        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: CaPaManParams) -> CaPaManState:
@@ -405,7 +381,7 @@ def _command(command, actions, p):
 def _finish_kernel(arrays, old, rows, move, p, tour):
     """After the world has placed the robots of ``rows``: the step's length and
     progress toward the target, reaching, the reward, the end and the observation.
-    ``arrays``: the state's, in :class:`KernelState`'s order; ``p``: :class:`KernelArgs`."""
+    ``arrays``: the state's, in ``KERNEL_FIELDS``' order; ``p``: :class:`KernelArgs`."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
         obs, reward, lookahead = arrays
     n_tour = len(tour)

@@ -11,7 +11,7 @@ from numba import njit
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks import capaman as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
 from paragym.tasks.capaman import TOUR, CaPaManScenario
 from paragym.tasks.capaman_step import FAILURES, RULES, CaPaManParams, CaPaManRules, CaPaManState, reset, step
 from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, _clusters
@@ -19,7 +19,7 @@ from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, _c
 __all__ = ["RULES", "TASK", "CaPaManTask"]
 
 
-class CaPaManTask:
+class CaPaManTask(TaskBase):
     """The CaPaMan's contract (:class:`paragym.tasks.base.Task`): paper 000's collision-free tour."""
 
     name = "capaman"
@@ -29,7 +29,6 @@ class CaPaManTask:
     Params = CaPaManParams
     Rules = CaPaManRules
     State = CaPaManState
-    vector_fidelities = ("kinematic",)
     #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
     sensor_layout: dict[str, float] = {}
 

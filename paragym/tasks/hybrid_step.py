@@ -51,6 +51,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from paragym.kernels import KernelArrays
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
 from paragym.tasks.base import (
@@ -190,34 +191,15 @@ class HybridParams:
         return (hybrid.kernel_consts(g), weights, POSE_SCALE)
 
 
-class KernelState(NamedTuple):
-    """The state's arrays :func:`_advance_kernel` reads and writes (:class:`HybridState`'s), in its order."""
-
-    u: np.ndarray
-    nominal: np.ndarray
-    k: np.ndarray
-    delta: np.ndarray
-    d_delta: np.ndarray
-    offset: np.ndarray
-    all_free: np.ndarray
-    pose: np.ndarray
-    lengths: np.ndarray
-    mu_h: np.ndarray
-    mu_t: np.ndarray
-    within: np.ndarray
-    free: np.ndarray
-    terminated: np.ndarray
-    obs: np.ndarray
-    reward: np.ndarray
-    phi: np.ndarray
-    reason: np.ndarray
-
-
 @dataclass
-class HybridState:
+class HybridState(KernelArrays):
     """N robots: where they are on their nominal paths (``u`` (K,) is shared:
     every path has the same samples), the split, the offset, what the last
     solve found, and the observation and reward of their last step."""
+
+    #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
+    KERNEL_FIELDS = ("u", "nominal", "k", "delta", "d_delta", "offset", "all_free", "pose", "lengths", "mu_h",
+                     "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason")
 
     u: np.ndarray
     nominal: np.ndarray
@@ -242,17 +224,7 @@ class HybridState:
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
-    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
 
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """The arrays the kernel reads and writes, as a plain tuple in :class:`KernelState`'s order (made once:
-        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
-        if self._kernel is None:
-            self._kernel = tuple(KernelState(self.u, self.nominal, self.k, self.delta, self.d_delta, self.offset,
-                                             self.all_free, self.pose, self.lengths, self.mu_h, self.mu_t,
-                                             self.within, self.free, self.terminated, self.obs, self.reward,
-                                             self.phi, self.reason))
-        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: HybridParams) -> HybridState:
@@ -314,7 +286,7 @@ def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows
 @njit(cache=True, error_model="numpy")
 def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scale):
     """The transition of every robot with ``rows[i]`` (module docstring). ``arrays``: the state's, in
-    :class:`KernelState`'s order; ``consts``: the geometry, :func:`paragym.mechanisms.hybrid.kernel_consts`.
+    ``KERNEL_FIELDS``' order; ``consts``: the geometry, :func:`paragym.mechanisms.hybrid.kernel_consts`.
     ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
     L_min, L_max, singularity threshold, w_end (v1). ``stage``: 0 the whole
     step; 1 the command only (move and solve the commanded pose's strokes);

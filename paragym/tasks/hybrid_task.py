@@ -10,7 +10,7 @@ from numba import njit
 
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
-from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation
+from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.hybrid_step import FAILURES, RULES, HybridParams, HybridRules, HybridState, reset, step
 from paragym.tasks.hybrid_worlds import DynamicWorld
@@ -18,7 +18,7 @@ from paragym.tasks.hybrid_worlds import DynamicWorld
 __all__ = ["RULES", "TASK", "HybridTask"]
 
 
-class HybridTask:
+class HybridTask(TaskBase):
     """The hybrid task's contract (:class:`paragym.tasks.base.Task`): paper 002's hexapod + tripod along a
     polynomial path."""
 
@@ -29,7 +29,6 @@ class HybridTask:
     Params = HybridParams
     Rules = HybridRules
     State = HybridState
-    vector_fidelities = ("kinematic",)
     #: KF validation (dynamic fidelity): the paper's array scaled to platform E
     sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
 
@@ -45,13 +44,6 @@ class HybridTask:
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
                        world: Any) -> list[HybridScenario]:
         return scenarios_module.draw_scenarios(choice, rngs, params.geometry)
-
-    def vector_params(self, rules: HybridRules, kwargs: dict[str, Any]) -> HybridParams:
-        params = HybridParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native hybrid vector env is kinematic: use gymnasium's sync/async vector modes "
-                             "for the dynamic fidelity")
-        return params
 
     def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))

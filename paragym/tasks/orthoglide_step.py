@@ -32,6 +32,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from paragym.kernels import KernelArrays
 from paragym.mechanisms import orthoglide as og
 from paragym.tasks import orthoglide as scenarios_module
 from paragym.tasks.base import (
@@ -144,27 +145,8 @@ class KernelParams(NamedTuple):
     track_tolerance: float
 
 
-class KernelState(NamedTuple):
-    """The state's arrays :func:`_advance_kernel` reads and writes (:class:`OrthoglideState`'s)."""
-
-    rho: np.ndarray
-    k: np.ndarray
-    last: np.ndarray
-    path: np.ndarray
-    dt: np.ndarray
-    j: np.ndarray
-    n: np.ndarray
-    kappa: np.ndarray
-    err: np.ndarray
-    failed: np.ndarray
-    reason: np.ndarray
-    terminated: np.ndarray
-    obs: np.ndarray
-    reward: np.ndarray
-
-
 @dataclass
-class OrthoglideState:
+class OrthoglideState(KernelArrays):
     """N robots: joints, progress along their paths, what was evaluated at
     their path points, and the observation and reward of their last step.
 
@@ -173,6 +155,10 @@ class OrthoglideState:
     each robot's last path index (paths may differ in length: the arrays are
     as long as the longest). ``j`` (N, 6) is J row-major.
     """
+
+    #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
+    KERNEL_FIELDS = ("rho", "k", "last", "path", "dt", "j", "n", "kappa", "err", "failed", "reason", "terminated",
+                     "obs", "reward")
 
     rho: np.ndarray
     k: np.ndarray
@@ -209,18 +195,9 @@ class OrthoglideState:
         if extra > 0:
             self.path = np.pad(self.path, ((0, 0), (0, extra), (0, 0)))
             self.dt = np.pad(self.dt, ((0, 0), (0, extra)))
-            self._kernel = None
+            self.reallocated()
 
-    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
 
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """The arrays the kernel reads and writes, as a plain tuple in :class:`KernelState`'s order (made once
-        per allocation)."""
-        if self._kernel is None:
-            self._kernel = tuple(KernelState(self.rho, self.k, self.last, self.path, self.dt, self.j, self.n,
-                                             self.kappa, self.err, self.failed, self.reason, self.terminated, self.obs,
-                                             self.reward))
-        return self._kernel
 
 
 def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,

@@ -11,7 +11,7 @@ from numba import njit
 
 from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
 from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
     FAILURES,
@@ -28,7 +28,7 @@ from paragym.tasks.orthoglide_worlds import DynamicWorld
 __all__ = ["RULES", "TASK", "OrthoglideTask"]
 
 
-class OrthoglideTask:
+class OrthoglideTask(TaskBase):
     """The Orthoglide task's contract (:class:`paragym.tasks.base.Task`): paper 003's path tracking with the
     2PRR and its table."""
 
@@ -39,7 +39,6 @@ class OrthoglideTask:
     Params = OrthoglideParams
     Rules = OrthoglideRules
     State = OrthoglideState
-    vector_fidelities = ("kinematic",)
     #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
     #: below
     sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
@@ -59,13 +58,6 @@ class OrthoglideTask:
         if world is not None and not world.exact_time:
             _warn_rounded_time(drawn, world)
         return drawn
-
-    def vector_params(self, rules: OrthoglideRules, kwargs: dict[str, Any]) -> OrthoglideParams:
-        params = OrthoglideParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native Orthoglide vector env is kinematic: use gymnasium's sync/async vector "
-                             "modes for the dynamic fidelity")
-        return params
 
     def spaces(self, params: OrthoglideParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-10.0, 10.0, (OBS_SIZE,)),

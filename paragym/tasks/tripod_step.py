@@ -35,11 +35,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 from numba import njit
 
+from paragym.kernels import KernelArrays
 from paragym.mechanisms import tripod as mt
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks import tripod as scenarios_module
@@ -148,26 +149,16 @@ class TripodParams:
         return 6 if self.version == 0 else 3
 
 
-class KernelState(NamedTuple):
-    """The state's arrays the kernels read and write (:class:`TripodState`'s), in their order."""
-
-    estimate: np.ndarray
-    eta: np.ndarray
-    last_eta: np.ndarray
-    smoothed: np.ndarray
-    unit_error: np.ndarray
-    plate_error: np.ndarray
-    terminated: np.ndarray
-    obs: np.ndarray
-    reward: np.ndarray
-
-
 @dataclass
-class TripodState:
+class TripodState(KernelArrays):
     """N robots: their drives, the agent's estimates of the units (N, 3, 3),
     the encoders' readings now and at the last sample (N, 3), the smoothed
     encoder distances (N, 3; v1), the errors, and the observation and reward
     of their last step."""
+
+    #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
+    KERNEL_FIELDS = ("estimate", "eta", "last_eta", "smoothed", "unit_error", "plate_error", "terminated", "obs",
+                     "reward")
 
     drive: DriveState
     estimate: np.ndarray
@@ -185,15 +176,7 @@ class TripodState:
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
     failure: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
-    _kernel: tuple[np.ndarray, ...] | None = field(default=None, repr=False, compare=False)
 
-    def kernel_arrays(self) -> tuple[np.ndarray, ...]:
-        """The arrays the kernels read and write, as a plain tuple in :class:`KernelState`'s order (made once:
-        numba's dispatcher types a plain tuple of arrays in C, a NamedTuple in Python)."""
-        if self._kernel is None:
-            self._kernel = tuple(KernelState(self.estimate, self.eta, self.last_eta, self.smoothed, self.unit_error,
-                                             self.plate_error, self.terminated, self.obs, self.reward))
-        return self._kernel
 
     @classmethod
     def empty(cls, n: int, params: TripodParams) -> TripodState:
@@ -257,10 +240,10 @@ def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows
     geo = mt.kernel_consts(params.geometry)
     if params.version == 1:
         _advance_v1_kernel(state.kernel_arrays(), actions, rows, move, params.smoothing, params.trust_rate,
-                           params.relative_reward, external, moved, increment, d.steps, d.noise, geo, d.kernel_args())
+                           params.relative_reward, external, moved, increment, d.steps, d.noise, geo, d.kernel_arrays())
         return
     _advance_kernel(state.kernel_arrays(), actions, rows, move, external, moved, increment, params.max_correction,
-                    d.steps, d.noise, geo, d.kernel_args())
+                    d.steps, d.noise, geo, d.kernel_arrays())
 
 
 @njit(cache=True, error_model="numpy")
@@ -285,7 +268,7 @@ def _score(i, estimate, true, unit_error, plate_error, reward):
 def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max_correction, steps, noise, geo, drive):
     """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
     advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity. ``arrays``:
-    the state's, in :class:`KernelState`'s order; ``drive``: the drives', :class:`DriveArrays`' order."""
+    the state's, in ``KERNEL_FIELDS``' order; ``drive``: the drives', ``DriveState.KERNEL_FIELDS``' order."""
     estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward = arrays
     true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
         slip_speed, dt = drive

@@ -10,7 +10,7 @@ from numba import njit
 
 from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
 from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_step import FAILURES, RULES, TripodParams, TripodRules, TripodState, reset, step
 from paragym.tasks.tripod_worlds import DynamicWorld
@@ -18,7 +18,7 @@ from paragym.tasks.tripod_worlds import DynamicWorld
 __all__ = ["RULES", "TASK", "TripodTask", "detected_fault"]
 
 
-class TripodTask:
+class TripodTask(TaskBase):
     """The mobile tripod's contract (:class:`paragym.tasks.base.Task`): paper 004's estimation of the drive
     units under slip."""
 
@@ -29,7 +29,6 @@ class TripodTask:
     Params = TripodParams
     Rules = TripodRules
     State = TripodState
-    vector_fidelities = ("kinematic",)
     #: KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
     sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
 
@@ -45,13 +44,6 @@ class TripodTask:
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
                        world: Any) -> list[TripodScenario]:
         return scenarios_module.draw_scenarios(choice, rngs)
-
-    def vector_params(self, rules: TripodRules, kwargs: dict[str, Any]) -> TripodParams:
-        params = TripodParams.from_kwargs(rules, **kwargs)
-        if params.fidelity not in self.vector_fidelities:
-            raise ValueError("the native tripod vector env is kinematic: use gymnasium's sync/async vector modes "
-                             "for the dynamic fidelity")
-        return params
 
     def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
