@@ -29,11 +29,10 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
     """Run a policy's episode in dynamic fidelity and validate what it executed against what it commanded
     (:func:`paragym.validation.episode.validate_episode`); print the report, save Figs 8-9 and a JSON."""
     import json
-    from dataclasses import asdict
 
     from paragym.baselines.policies import get_policy
     from paragym.validation.episode import validate_episode
-    from paragym.validation.report import plot_report
+    from paragym.validation.report import write_report
 
     name = args.policy or bench_of(env_id).reference
     spec = get_policy(env_id, name, args.models)
@@ -48,16 +47,11 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
           f"executed at most {val.position_error * 1000:.2f} mm from its command")
     print(rep.table())
     out = Path(args.out) / (env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}_{name}")
-    paths = plot_report(rep, out, f"{env_id.split('/')[1]}, {args.scenario}, {name}: "
-                                  f"{'PASS' if rep.passed else 'FAIL'}")
-    (out / "report.json").write_text(json.dumps({
-        "env_id": env_id, "scenario": args.scenario, "seed": args.seed, "policy": name,
-        "producer": json.loads(spec.producer()), "passed": rep.passed, "judged": rep.judged,
-        "position_error_m": val.position_error, "success": val.success, "return": val.episode_return,
-        "steps": val.steps, "tolerances": asdict(rep.tolerances), "components": [asdict(c) for c in rep.components]},
-        indent=2, default=repr))
-    print(f"wrote {', '.join(str(p) for p in paths)} and {out / 'report.json'}")
-    return 0 if rep.passed else 1
+    return write_report(rep, out, f"{env_id.split('/')[1]}, {args.scenario}, {name}: "
+                                  f"{'PASS' if rep.passed else 'FAIL'}",
+                        {"env_id": env_id, "scenario": args.scenario, "seed": args.seed, "policy": name,
+                         "producer": json.loads(spec.producer()), "position_error_m": val.position_error,
+                         "success": val.success, "return": val.episode_return, "steps": val.steps})
 
 
 def _scenario(env_id: str, args: argparse.Namespace) -> str:

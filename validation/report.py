@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -21,7 +22,7 @@ from paragym.validation.kalman import KalmanSettings, filter_vectorised, smooth_
 from paragym.validation.motion import RigidMotion
 from paragym.validation.sensors import GRAVITY, AccelerometerArray, angular_velocity_from_z
 
-__all__ = ["ComponentReport", "Tolerances", "ValidationReport", "plot_report", "validate"]
+__all__ = ["ComponentReport", "Tolerances", "ValidationReport", "plot_report", "validate", "write_report"]
 
 COMPONENTS = ("a_Hx", "a_Hy", "a_Hz", "omega_x", "omega_y", "omega_z")
 UNITS = {"a": "m/s^2", "o": "rad/s"}
@@ -248,3 +249,20 @@ def plot_report(report: ValidationReport, out_dir: str | Path, title: str = "") 
         plt.close(fig)
         paths.append(path)
     return paths
+
+
+def write_report(report: ValidationReport, out_dir: str | Path, title: str, facts: dict[str, Any]) -> int:
+    """Save a validation: Figs 8-9 (:func:`plot_report`) and ``report.json`` in ``out_dir``, the verdict with
+    its tolerances and components beside ``facts`` (what was validated, how it was run); say what was written.
+    Returns the command's exit code: 0 when the report passed, else 1. The one writer of every task's
+    validation report (``paragym validate``, the benches' reference plans)."""
+    import json
+    from dataclasses import asdict
+
+    out_dir = Path(out_dir)
+    paths = plot_report(report, out_dir, title)
+    (out_dir / "report.json").write_text(json.dumps({
+        **facts, "passed": report.passed, "judged": report.judged, "tolerances": asdict(report.tolerances),
+        "components": [asdict(c) for c in report.components]}, indent=2, default=repr))
+    print(f"wrote {', '.join(str(p) for p in paths)} and {out_dir / 'report.json'}")
+    return 0 if report.passed else 1

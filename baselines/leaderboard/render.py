@@ -175,10 +175,11 @@ def _dynamic_cells(s: Summary, keys: list[str]) -> list[str]:
             "" if d["kf"] is None else ("PASS" if d["kf"]["passed"] else "FAIL")]
 
 
-
 def write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out: str | Path,
                    markdown_path: str | Path | None, env_ids: list[str] | None = None,
                    policies: list[str] | None = None) -> list[Path]:
+    """Write the leaderboard's reports to ``out``: a picture per env, the CSV and LEADERBOARD.md (at
+    ``markdown_path``, default in ``out``); returns the files written."""
     import os
     import platform
 

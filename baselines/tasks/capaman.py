@@ -17,6 +17,7 @@ V1 = ("paragym/CaPaManCollisionFree-v1",)
 
 
 def metrics(ep: Episode) -> dict[str, float]:
+    """The per-episode numbers the leaderboard averages into the bench's columns."""
     alpha = np.array([i["alpha"] for i in ep.infos])
     clearance = np.array([i["clearance"] for i in ep.infos])
     return {"path_length_rad": float(np.linalg.norm(np.diff(alpha, axis=0), axis=1).sum()),
@@ -25,12 +26,14 @@ def metrics(ep: Episode) -> dict[str, float]:
 
 
 def rrt_ga(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners import RrtGaPlanner, RrtGaPolicy
 
     return RrtGaPolicy(max_joint_step=env.unwrapped.max_joint_step, planner=RrtGaPlanner(seed=seed))
 
 
 def rrt_ga_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners import RrtGaPlanner, RrtGaPolicy
     from paragym.planners.rrt_ga import RrtGaSettings
 
@@ -39,12 +42,14 @@ def rrt_ga_params() -> dict[str, Any]:
 
 
 def grid_path(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners import GridPathPolicy
 
     return GridPathPolicy(max_joint_step=env.unwrapped.max_joint_step)
 
 
 def grid_path_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners import GridPathPolicy
     from paragym.planners.grid_path import GridPathPlanner
 
@@ -53,12 +58,14 @@ def grid_path_params() -> dict[str, Any]:
 
 
 def grid_field(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners import GridFieldPolicy
 
     return GridFieldPolicy(max_joint_step=env.unwrapped.max_joint_step)
 
 
 def grid_field_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners import GridFieldPolicy
     from paragym.planners.grid_path import GridPathPlanner
 
@@ -66,6 +73,7 @@ def grid_field_params() -> dict[str, Any]:
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
+    """The demo's picture of one episode, written to ``path``."""
     from paragym.plots import plot_capaman_episode
 
     return plot_capaman_episode(ep, path)
@@ -119,15 +127,12 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
 
 
 def validate_plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    stem += f"_dt{args.dt:g}"
-    """Plan (RRT + GA), execute in the dynamic simulation, validate, report."""
-    import json
-    from dataclasses import asdict
-
+    """Plan (RRT + GA), execute in the dynamic simulation, validate (paper 000, section 5), report."""
     from paragym.planners import RrtGaPlanner
     from paragym.validation.capaman import validate_capaman
-    from paragym.validation.report import plot_report
+    from paragym.validation.report import write_report
 
+    stem += f"_dt{args.dt:g}"
     obs, info = env.reset(seed=args.seed)
     planner = RrtGaPlanner(seed=args.seed)
     result = planner.solve(info["scenario"])
@@ -142,16 +147,12 @@ def validate_plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) 
     print(f"eq 21 (direct formulas) against eq 17 (least squares), filtered a_H: largest gap {rep.eq21_gap:.2e} m/s^2")
     print(rep.table())
     title = f"{info['scenario'].name} scenario, dt = {traj.dt:.2f} s: {'PASS' if rep.passed else 'FAIL'}"
-    paths = plot_report(rep, out / stem, title)
-    (out / stem / "report.json").write_text(json.dumps({
-        "passed": rep.passed, "judged": rep.judged, "dt_s": traj.dt, "duration_s": traj.duration,
-        "closure_error_m": val.run.closure_error, "eq21_gap": rep.eq21_gap,
-        "tolerances": asdict(rep.tolerances), "components": [asdict(c) for c in rep.components]}, indent=2))
-    print(f"wrote {', '.join(str(p) for p in paths)} and {out / stem / 'report.json'}")
-    return 0 if rep.passed else 1
+    return write_report(rep, out / stem, title, {"dt_s": traj.dt, "duration_s": traj.duration,
+                                                 "closure_error_m": val.run.closure_error, "eq21_gap": rep.eq21_gap})
 
 
 def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
+    """The leaderboard's KF validation of the reference plan on the paper's case: (passed, its summary)."""
     from paragym.planners import RrtGaPlanner
     from paragym.tasks.capaman import paper_scenario
     from paragym.validation.capaman import validate_capaman

@@ -21,6 +21,7 @@ STROKE_MARGIN = 0.001
 
 
 def metrics(ep: Episode) -> dict[str, float]:
+    """The per-episode numbers the leaderboard averages into the bench's columns."""
     mu = np.array([[i["mu_hexapod"], i["mu_tripod"]] for i in ep.infos])
     within = np.array([i["within_limits"] for i in ep.infos])
     free = np.array([i["free"] for i in ep.infos])
@@ -30,18 +31,21 @@ def metrics(ep: Episode) -> dict[str, float]:
 
 
 def polynomial_detour(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners.polynomial_detour import PolynomialDetourPolicy
 
     return PolynomialDetourPolicy()
 
 
 def polynomial_detour_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
 
     return {"planner": init_defaults(PolynomialDetourPlanner)}
 
 
 def polynomial_detour_margin(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
 
     u = env.unwrapped
@@ -49,6 +53,7 @@ def polynomial_detour_margin(env: gym.Env, seed: int) -> Any:
 
 
 def polynomial_detour_margin_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
 
     return {"planner": {**init_defaults(PolynomialDetourPlanner, geometry=None), "stroke_margin": STROKE_MARGIN,
@@ -56,6 +61,7 @@ def polynomial_detour_margin_params() -> dict[str, Any]:
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
+    """The demo's picture of one episode, written to ``path``."""
     from paragym.plots import plot_hybrid_episode
 
     return plot_hybrid_episode(ep, path)
@@ -100,15 +106,12 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
 
 
 def validate_plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
-    stem += f"_{args.duration:g}s"
-    """Plan (paper 002), drive the nine actuators in the dynamic model, compare E, validate."""
-    import json
-    from dataclasses import asdict
-
+    """Plan (paper 002), drive the nine actuators in the dynamic model, compare E, validate, report."""
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
     from paragym.validation.hybrid import validate_hybrid
-    from paragym.validation.report import plot_report
+    from paragym.validation.report import write_report
 
+    stem += f"_{args.duration:g}s"
     obs, info = env.reset(seed=args.seed)
     sc = info["scenario"]
     plan = PolynomialDetourPlanner(sc.geometry).plan(np.array(sc.p0), np.array(sc.p1))
@@ -119,17 +122,14 @@ def validate_plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) 
     print(f"platform E against the plan: position error at most {val.position_error * 1000:.2f} mm, orientation "
           f"{np.degrees(val.orientation_error):.3f} deg; ball-joint gaps at most {val.run.closure_error * 1000:.3f} mm")
     print(rep.table())
-    paths = plot_report(rep, out / stem, f"hybrid, {sc.name} scenario, {args.duration:.1f} s: "
-                                         f"{'PASS' if rep.passed else 'FAIL'}")
-    (out / stem / "report.json").write_text(json.dumps({
-        "passed": rep.passed, "duration_s": args.duration, "position_error_m": val.position_error,
-        "orientation_error_rad": val.orientation_error, "closure_error_m": val.run.closure_error,
-        "components": [asdict(c) for c in rep.components]}, indent=2))
-    print(f"wrote {', '.join(str(p) for p in paths)} and {out / stem / 'report.json'}")
-    return 0 if rep.passed else 1
+    return write_report(rep, out / stem, f"hybrid, {sc.name} scenario, {args.duration:.1f} s: "
+                                         f"{'PASS' if rep.passed else 'FAIL'}",
+                        {"duration_s": args.duration, "position_error_m": val.position_error,
+                         "orientation_error_rad": val.orientation_error, "closure_error_m": val.run.closure_error})
 
 
 def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
+    """The leaderboard's KF validation of the reference plan on the paper's case: (passed, its summary)."""
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
     from paragym.tasks.hybrid import paper_scenario
     from paragym.validation.hybrid import validate_hybrid

@@ -15,6 +15,7 @@ from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
 
 def metrics(ep: Episode) -> dict[str, float]:
+    """The per-episode numbers the leaderboard averages into the bench's columns."""
     kappa = np.array([i["kappa"] for i in ep.infos])
     err = np.array([i["tracking_error"] for i in ep.infos])
     ok = np.isfinite(kappa)
@@ -25,12 +26,14 @@ def metrics(ep: Episode) -> dict[str, float]:
 
 
 def gradient(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners.nullspace_gradient import GradientPolicy
 
     return GradientPolicy(geometry=env.unwrapped.geometry)
 
 
 def gradient_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners.nullspace_gradient import GradientPolicy
 
     return {"policy": init_defaults(GradientPolicy)}
@@ -65,12 +68,14 @@ class FixedTablePolicy:
 
 
 def fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     if env.unwrapped.action_mode != "null_space":
         raise ValueError("the fixed-table policy acts in the env's null_space action mode")
     return FixedTablePolicy(env)
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
+    """The demo's picture of one episode, written to ``path``."""
     from paragym.plots import plot_kappa_episode
 
     return plot_kappa_episode(ep, path)

@@ -24,6 +24,7 @@ TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2")
 
 
 def metrics(ep: Episode) -> dict[str, float]:
+    """The per-episode numbers the leaderboard averages into the bench's columns."""
     err = np.array([i["unit_error"] for i in ep.infos])
     return {"final_unit_error_cm": float(err[-1] * 100), "max_unit_error_cm": float(err.max() * 100)}
 
@@ -51,18 +52,21 @@ def _estimator_params(kind: str) -> Callable[[], dict[str, Any]]:
 
 
 def encoder_trust(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners.encoder_correction import EncoderTrustPolicy
 
     return EncoderTrustPolicy()
 
 
 def encoder_trust_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
     from paragym.planners.encoder_correction import EncoderTrustPolicy
 
     return {"policy": init_defaults(EncoderTrustPolicy)}
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
+    """The demo's picture of one episode, written to ``path``."""
     from paragym.plots import plot_tripod_estimates
 
     true = np.array([i["true_units"] for i in ep.infos])
