@@ -38,7 +38,7 @@ from paragym.baselines.stats import wilson
 from paragym.baselines.training import EVAL_SEED, load_model
 from paragym.mechanisms import capaman
 from paragym.rollout import run_episode
-from paragym.sim import occupancy
+from paragym.sim import capaman_clearance
 from paragym.tasks.capaman import TOUR
 from paragym.tasks.capaman_worlds import _clusters
 from paragym.units import DEG
@@ -61,14 +61,15 @@ class Straight:
 
 def needs_detour(scenario: Any, geometry: capaman.CaPaManGeometry, step: float = 0.5 * DEG) -> bool:
     """Whether some leg's straight joint-space segment between consecutive T.P.s collides on the grid."""
-    grids = occupancy.DistanceGrids(1)
+    grids = capaman_clearance.DistanceGrids(1)
     grids.set(0, scenario.obstacles)
     tp = scenario.alpha
     order = [0, *TOUR]
     for a, b in zip(order[:-1], order[1:], strict=True):
         n = max(2, int(np.ceil(np.abs(tp[b] - tp[a]).max() / step)) + 1)
         line = tp[a] + np.linspace(0.0, 1.0, n)[:, None] * (tp[b] - tp[a])
-        clearance, _ = occupancy.grid_clearance(line, grids, _clusters(geometry), geometry, np.zeros(n, np.int64))
+        clearance, _ = capaman_clearance.grid_clearance(line, grids, _clusters(geometry), geometry,
+                                                        np.zeros(n, np.int64))
         if (clearance <= 0.0).any():
             return True
     return False

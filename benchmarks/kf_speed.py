@@ -17,8 +17,8 @@ import numpy as np
 
 from paragym.planners import RrtGaPlanner
 from paragym.tasks.capaman import paper_scenario
+from paragym.validation.capaman import planned_motion
 from paragym.validation.kalman import filter_filterpy, filter_vectorised, smooth_filterpy, smooth_vectorised
-from paragym.validation.motion import capaman_planned_motion
 from paragym.validation.report import validate
 from paragym.validation.sensors import AccelerometerArray
 
@@ -45,7 +45,7 @@ def main() -> None:
     traj = planner.solve(paper_scenario()).trajectory(args.dt)
     planner.close()
     sensors = AccelerometerArray.paper_layout()
-    motion = capaman_planned_motion(traj, sensors.rate)
+    motion = planned_motion(traj, sensors.rate)
     y = sensors.read(motion, np.random.default_rng(0))
     dt = 1.0 / sensors.rate
     print(f"{traj.duration:.1f} s trajectory, {y.shape[1]} axes at {sensors.rate:.0f} Hz: {len(y)} samples")

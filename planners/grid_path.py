@@ -23,7 +23,7 @@ from scipy.sparse.csgraph import dijkstra
 
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
-from paragym.sim import occupancy
+from paragym.sim import capaman_grid
 from paragym.tasks.capaman import TOUR, CaPaManScenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG
@@ -52,13 +52,13 @@ class GridPathPlanner:
             raise ValueError(f"points_per_axis must be >= 3; got {points_per_axis}")
         self.n = points_per_axis
         self.geometry = geometry
-        self.clusters = occupancy.cluster_points(geometry, spacing)
+        self.clusters = capaman_grid.cluster_points(geometry, spacing)
 
     def field(self, scenario: CaPaManScenario) -> GridField:
         """Dijkstra from each T.P. over the free cells of Theta: the shortest
         free path from any cell to any T.P. (:class:`GridField`)."""
-        grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles)
-        theta, axis = occupancy.joint_matrix(grid, self.clusters, self.n, self.geometry)
+        grid = capaman_grid.OccupancyGrid.from_obstacles(scenario.obstacles)
+        theta, axis = capaman_grid.joint_matrix(grid, self.clusters, self.n, self.geometry)
         # Nodes are checked, edges are not: a free node next to a colliding one is
         # treated as colliding, so an edge never cuts through a collision region
         # one cell or more across.

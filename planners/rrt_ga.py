@@ -5,7 +5,7 @@ Section 2 of paper 000 (Carbone, Gomez-Bravo, Selvi), Figs 1-2, eqs 1-5:
 1. **Theta** (Fig 2): the collision map of an epsilon-grid over the joint
    space Omega = [45, 135] deg^3, from the Cartesian matrix Psi (eq 1) and the
    manipulator's cluster points (eq 2), all grid configurations at once
-   (:func:`paragym.sim.occupancy.joint_matrix`).
+   (:func:`paragym.sim.capaman_grid.joint_matrix`).
 2. **rho**: the joint-space distance from a configuration to the nearest
    colliding one, a Euclidean distance transform of Theta (scipy.ndimage),
    interpolated between grid nodes.
@@ -45,7 +45,7 @@ from scipy import ndimage
 
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
-from paragym.sim import occupancy
+from paragym.sim import capaman_grid
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman import CaPaManScenario, validate_scenario
 from paragym.trajectories import JointPath, JointTrajectory
@@ -140,8 +140,8 @@ def fitness(paths: np.ndarray, segment_free: np.ndarray, rho: np.ndarray, delta:
 
 
 @lru_cache(maxsize=4)
-def _clusters(geometry: capaman.CaPaManGeometry, spacing: float) -> occupancy.ClusterPoints:
-    return occupancy.cluster_points(geometry, spacing)
+def _clusters(geometry: capaman.CaPaManGeometry, spacing: float) -> capaman_grid.ClusterPoints:
+    return capaman_grid.cluster_points(geometry, spacing)
 
 
 class JointSpaceModel:
@@ -161,9 +161,9 @@ class JointSpaceModel:
         t0 = time.perf_counter()
         s, g = settings, geometry
         self.settings, self.geometry = s, g
-        self.grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=s.cell)
+        self.grid = capaman_grid.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=s.cell)
         clusters = _clusters(g, s.cluster_spacing)
-        self.theta, axis = occupancy.joint_matrix(self.grid, clusters, s.theta_points, g)
+        self.theta, axis = capaman_grid.joint_matrix(self.grid, clusters, s.theta_points, g)
         self.lo, self.eps, self.n = axis[0], axis[1] - axis[0], len(axis)
         self.rho_grid = (ndimage.distance_transform_edt(~self.theta, sampling=self.eps) if self.theta.any()
                          else np.full(self.theta.shape, np.inf))
@@ -171,7 +171,7 @@ class JointSpaceModel:
         self.cell_free = (free[:-1, :-1, :-1] & free[1:, :-1, :-1] & free[:-1, 1:, :-1] & free[:-1, :-1, 1:]
                           & free[1:, 1:, :-1] & free[1:, :-1, 1:] & free[:-1, 1:, 1:] & free[1:, 1:, 1:])
         self.task_points = scenario.alpha
-        self.clusters = clusters.subset(occupancy.reachable_parts(self.grid, g))
+        self.clusters = clusters.subset(capaman_grid.reachable_parts(self.grid, g))
         self.step = s.check_step
         self.memo: dict[bytes, bool] = {}
         self.build_seconds = time.perf_counter() - t0
@@ -194,7 +194,7 @@ class JointSpaceModel:
         near = np.linalg.norm(q[:, None] - self.task_points[None], axis=2).min(axis=1) < 2 * self.eps
         exact = ~ok & near
         if exact.any():
-            ok[exact] = ~occupancy.grid_collision(q[exact], self.grid, self.clusters, self.geometry)
+            ok[exact] = ~capaman_grid.grid_collision(q[exact], self.grid, self.clusters, self.geometry)
         return ok
 
     def config_free(self, q0: float, q1: float, q2: float) -> bool:

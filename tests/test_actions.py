@@ -14,7 +14,7 @@ import paragym
 from paragym.envs.capaman import SWEEP_STEP, CaPaManCollisionFreeEnv
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
-from paragym.sim import occupancy
+from paragym.sim import capaman_grid
 
 IDS = sorted(paragym.ENVIRONMENTS)
 
@@ -103,7 +103,7 @@ def test_an_in_box_capaman_step_moves_no_point_further_than_the_grid_resolution(
     cell) in a step of SWEEP_STEP per crank, so checking the end of each such step checks the
     motion at the grid's resolution. Worst case over the joint space, steps at the Box's corners."""
     g = capaman.DEFAULT_GEOMETRY
-    clusters = occupancy.cluster_points(g, spacing=0.005)
+    clusters = capaman_grid.cluster_points(g, spacing=0.005)
     rng = np.random.default_rng(0)
     a0 = rng.uniform(g.alpha_min, g.alpha_max, (1500, 3))
     corner = np.sign(rng.uniform(-1, 1, (1500, 3)))

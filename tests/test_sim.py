@@ -11,7 +11,7 @@ import pytest
 import paragym  # noqa: F401  (registers the envs)
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
-from paragym.sim import occupancy
+from paragym.sim import capaman_clearance, capaman_grid
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box
@@ -83,20 +83,20 @@ def test_grid_test_agrees_with_pybullet(scene, seed):
     penetration deeper than the cluster spacing is never missed."""
     scenario = paper_scenario() if seed is None else random_scenario(np.random.default_rng(seed), scene)
     eps = 0.005
-    grid = occupancy.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=eps)
-    clusters = occupancy.cluster_points(spacing=0.005)
+    grid = capaman_grid.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=eps)
+    clusters = capaman_grid.cluster_points(spacing=0.005)
     rng = np.random.default_rng(10)
     alpha = rng.uniform(G.alpha_min, G.alpha_max, (1500, 3))
-    grid_hit = occupancy.grid_collision(alpha, grid, clusters)
+    grid_hit = capaman_grid.grid_collision(alpha, grid, clusters)
     scene.set_obstacles(scenario.obstacles)
     dist = np.array([(scene.set_configuration(a), scene.clearance()[0])[1] for a in alpha])
     assert grid_hit.any() and (~grid_hit).any()
     assert dist[grid_hit].max() <= 1.6 * eps
     assert dist[~grid_hit].min() >= -clusters.spacing
     # Theta over the reachable parts only equals eq 2 over all parts.
-    theta, axis = occupancy.joint_matrix(grid, clusters, 9)
+    theta, axis = capaman_grid.joint_matrix(grid, clusters, 9)
     full = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
-    np.testing.assert_array_equal(theta.ravel(), occupancy.grid_collision(full, grid, clusters))
+    np.testing.assert_array_equal(theta.ravel(), capaman_grid.grid_collision(full, grid, clusters))
 
 
 @pytest.mark.parametrize("seed", [0, 5])
@@ -105,12 +105,12 @@ def test_joint_matrix_of_the_scenarios_equals_eq_2_everywhere(seed):
     kernel's threaded path) equals eq 2 at every cluster point, obstacles far from and near the axis."""
     from paragym.tasks.capaman import _random_obstacles
 
-    grid = occupancy.OccupancyGrid.from_obstacles(_random_obstacles(np.random.default_rng(seed)))
-    clusters = occupancy.cluster_points(spacing=0.01)
-    theta, axis = occupancy.joint_matrix(grid, clusters, 16)
+    grid = capaman_grid.OccupancyGrid.from_obstacles(_random_obstacles(np.random.default_rng(seed)))
+    clusters = capaman_grid.cluster_points(spacing=0.01)
+    theta, axis = capaman_grid.joint_matrix(grid, clusters, 16)
     full = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
     assert theta.any() and not theta.all()
-    np.testing.assert_array_equal(theta.ravel(), occupancy.grid_collision(full, grid, clusters))
+    np.testing.assert_array_equal(theta.ravel(), capaman_grid.grid_collision(full, grid, clusters))
 
 
 def test_swept_boxes_hold_every_part_over_the_joint_range():
@@ -139,7 +139,7 @@ def _signed_distances_directly(obstacles, resolution=0.005, cap=0.05, unit=0.000
     the grid's own rasterisation, this one, and the values."""
     from scipy import ndimage
 
-    grid = occupancy.OccupancyGrid.from_obstacles(obstacles, resolution, margin=cap + 2 * resolution)
+    grid = capaman_grid.OccupancyGrid.from_obstacles(obstacles, resolution, margin=cap + 2 * resolution)
     shape = grid.occupied.shape
     axes = [grid.origin[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
     centres = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
@@ -158,7 +158,7 @@ def test_signed_distances_equal_the_plain_computation_and_hold_the_cap_on_the_bo
 
     obstacles = _random_obstacles(np.random.default_rng(seed))
     rasterised, occ, expected = _signed_distances_directly(obstacles)
-    values, _ = occupancy.signed_distances(obstacles)
+    values, _ = capaman_clearance.signed_distances(obstacles)
     np.testing.assert_array_equal(rasterised, occ)
     np.testing.assert_array_equal(values, expected)
     # the clearance reads the border for points beyond the grid: it must hold the cap
@@ -200,7 +200,7 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
 
     clusters = _clusters(G)
     rng = np.random.default_rng(3)
-    grids = occupancy.DistanceGrids(4)
+    grids = capaman_clearance.DistanceGrids(4)
     scenarios = [random_scenario(np.random.default_rng(seed), scene, clusters) for seed in range(4)]
     for i, sc in enumerate(scenarios):
         grids.set(i, sc.obstacles)
@@ -209,19 +209,19 @@ def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     alpha = np.where(rng.random((3000, 1)) < 0.3, task + rng.normal(0, 0.1, (3000, 3)),
                      rng.uniform(G.alpha_min, G.alpha_max, (3000, 3)))
     alpha = np.clip(alpha, G.alpha_min, G.alpha_max)
-    value, part = occupancy.grid_clearance(alpha, grids, clusters, G, rows)
+    value, part = capaman_clearance.grid_clearance(alpha, grids, clusters, G, rows)
     expected_value, expected_part = _clearance_at_every_point(alpha, grids, clusters, rows)
     # collisions, and robots whose nearest point is near the cap, where a wrongly skipped block would show
     assert (expected_value < 0).any() and ((expected_value > 0.04) & (expected_value < 0.05)).sum() > 20
     np.testing.assert_array_equal(value, expected_value)
     np.testing.assert_array_equal(part, expected_part)
     # one after another (a short batch) as on numba's threads (a long one): the same answers
-    assert len(alpha) >= occupancy.PARALLEL_FROM > 60
-    short = occupancy.grid_clearance(alpha[:60], grids, clusters, G, rows[:60])
+    assert len(alpha) >= capaman_clearance.PARALLEL_FROM > 60
+    short = capaman_clearance.grid_clearance(alpha[:60], grids, clusters, G, rows[:60])
     np.testing.assert_array_equal(short[0], value[:60])
     np.testing.assert_array_equal(short[1], part[:60])
     # and the blocks skipped read the cap at every point
-    parts, middles, radii, local = occupancy._blocks(clusters)
+    parts, middles, radii, local = capaman_clearance._blocks(clusters)
     centres, quats = capaman.part_frames(alpha, validate=False)
     rot, f32 = quat_to_matrix(quats), np.float32
     reach = _spheres_meet_boxes(centres[:, parts].astype(f32), rot[:, parts].astype(f32), middles.astype(f32),

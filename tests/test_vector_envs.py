@@ -172,7 +172,7 @@ def test_the_grid_and_pybullet_disagree_by_at_most_two_cells():
     the native vector env uses, against PyBullet's exact signed distance, on
     configurations drawn uniformly and near the task points of random scenes."""
     from paragym.mechanisms import capaman
-    from paragym.sim import occupancy
+    from paragym.sim import capaman_clearance
     from paragym.tasks.capaman_worlds import _clusters
 
     env = gym.make("paragym/CaPaManCollisionFree-v0")
@@ -182,13 +182,13 @@ def test_the_grid_and_pybullet_disagree_by_at_most_two_cells():
     for seed in range(3):
         _, info = env.reset(seed=seed)
         sc = info["scenario"]
-        grids = occupancy.DistanceGrids(1)
+        grids = capaman_clearance.DistanceGrids(1)
         grids.set(0, sc.obstacles)
         alpha = np.concatenate([rng.uniform(np.pi / 4, 3 * np.pi / 4, (100, 3)),
                                 sc.alpha[rng.integers(3, size=100)] + rng.normal(0, 0.15, (100, 3))])
         alpha = np.clip(alpha, np.pi / 4, 3 * np.pi / 4)
         for a in alpha:
-            grid.append(occupancy.grid_clearance(a[None], grids, clusters)[0][0])
+            grid.append(capaman_clearance.grid_clearance(a[None], grids, clusters)[0][0])
             scene.set_configuration(a)
             exact.append(scene.clearance()[0])
     grid, exact = np.array(grid), np.array(exact)

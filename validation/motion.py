@@ -3,44 +3,18 @@
 A :class:`~paragym.trajectories.RigidMotion` is any rigid body's motion
 about a reference point (CaPaMan: the plate centre H): pose, twist and their
 derivatives on a time grid, in the world frame (SI). It is generic: planned
-motions (built here from a joint trajectory's analytic derivatives or from a
-pose path) and executed ones (recorded by a dynamic run) of any mechanism are
-validated by the same code.
+motions (built here from a pose path; a task's own, as the CaPaMan's from its
+joint trajectory, in ``validation/<task>.py``) and executed ones (recorded by a
+dynamic run) of any mechanism are validated by the same code.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from paragym.mechanisms import capaman
-from paragym.trajectories import JointTrajectory, RigidMotion
+from paragym.trajectories import RigidMotion
 
-__all__ = ["RigidMotion", "capaman_planned_motion"]
-
-
-def capaman_planned_motion(trajectory: JointTrajectory, rate: float,
-                           geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                           settle: float = 0.0, h: float = 1e-5) -> RigidMotion:
-    """The plate's planned motion (about H) sampled at ``rate`` Hz.
-
-    Pose from the closed-form direct kinematics of alpha(t); twist from the
-    analytic Jacobian and the trajectory's analytic alpha_dot:
-    ``[v; omega] = J(alpha) alpha_dot``; accelerations
-    ``J(alpha) alpha_ddot + dJ/dt alpha_dot`` with dJ/dt by a central
-    difference along the trajectory (step ``h`` s). ``settle`` s of rest are
-    appended (the executed run holds its last targets that long).
-    """
-    t = np.arange(0.0, trajectory.duration + settle + 0.5 / rate, 1.0 / rate)
-    lo, hi = geometry.alpha_min, geometry.alpha_max
-    alpha = np.clip(trajectory.position(t), lo, hi)
-    rate1, rate2 = trajectory.velocity(t), trajectory.acceleration(t)
-    pose = capaman.forward(alpha, geometry, validate=False)
-    j, _ = capaman.jacobian(alpha, geometry, validate=False)
-    j_plus, _ = capaman.jacobian(np.clip(trajectory.position(t + h), lo, hi), geometry, validate=False)
-    j_minus, _ = capaman.jacobian(np.clip(trajectory.position(t - h), lo, hi), geometry, validate=False)
-    twist = np.einsum("nij,nj->ni", j, rate1)
-    acc = np.einsum("nij,nj->ni", j, rate2) + np.einsum("nij,nj->ni", (j_plus - j_minus) / (2 * h), rate1)
-    return RigidMotion(t, pose.position, pose.rotation, twist[:, :3], twist[:, 3:], acc[:, :3], acc[:, 3:])
+__all__ = ["RigidMotion", "pose_path_motion"]
 
 
 def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle: float = 0.0,
@@ -68,3 +42,17 @@ def pose_path_motion(t_knots: np.ndarray, poses: np.ndarray, rate: float, settle
     omega = v[:, 3:4] * rz_ry[:, :, 0] + v[:, 4:5] * rz[:, :, 1] + v[:, 5:6] * np.array([0.0, 0.0, 1.0])
     return RigidMotion(t, p[:, :3], euler_matrix(roll, pitch, yaw), v[:, :3], omega, a[:, :3],
                        np.gradient(omega, t, axis=0))
+
+
+def __getattr__(name: str) -> object:
+    """``capaman_planned_motion``, the name of before paragym 0.9: it is :mod:`paragym.validation.capaman`'s now,
+    with a DeprecationWarning."""
+    if name == "capaman_planned_motion":
+        import warnings
+
+        from paragym.validation import capaman as _capaman
+
+        warnings.warn("paragym.validation.motion.capaman_planned_motion is "
+                      "paragym.validation.capaman.planned_motion since paragym 0.9", DeprecationWarning, stacklevel=2)
+        return _capaman.planned_motion
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -18,8 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from paragym.trajectories import RigidMotion
 from paragym.validation.kalman import KalmanSettings, filter_vectorised, smooth_vectorised
-from paragym.validation.motion import RigidMotion
 from paragym.validation.sensors import GRAVITY, AccelerometerArray, angular_velocity_from_z
 
 __all__ = ["ComponentReport", "Tolerances", "ValidationReport", "plot_report", "validate", "write_report"]

@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from paragym.validation.motion import RigidMotion
+from paragym.trajectories import RigidMotion
 
 __all__ = ["AccelerometerArray", "GRAVITY", "angular_velocity_from_z", "design_rows"]
 

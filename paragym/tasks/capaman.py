@@ -29,7 +29,7 @@ import numpy as np
 from scipy import ndimage
 
 from paragym.mechanisms import capaman
-from paragym.sim import occupancy
+from paragym.sim import capaman_grid
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box, Cylinder, Obstacle
 from paragym.tasks import base
@@ -134,7 +134,7 @@ def _random_obstacles(rng: np.random.Generator) -> list[Obstacle]:
 
 
 def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
-                    clusters: occupancy.ClusterPoints | None = None, min_clearance: float = 0.004,
+                    clusters: capaman_grid.ClusterPoints | None = None, min_clearance: float = 0.004,
                     grid_points: int = 16, max_tries: int = 50) -> CaPaManScenario:
     """A seeded random feasible scenario (see the module docstring).
 
@@ -146,11 +146,11 @@ def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
     PyBullet. Leaves the scene's obstacles set.
     """
     g = scene.geometry
-    clusters = clusters or occupancy.cluster_points(g, spacing=0.01)
+    clusters = clusters or capaman_grid.cluster_points(g, spacing=0.01)
     for _ in range(max_tries):
         obstacles = _random_obstacles(rng)
-        grid = occupancy.OccupancyGrid.from_obstacles(obstacles)
-        theta, axis = occupancy.joint_matrix(grid, clusters, grid_points, g)
+        grid = capaman_grid.OccupancyGrid.from_obstacles(obstacles)
+        theta, axis = capaman_grid.joint_matrix(grid, clusters, grid_points, g)
         blocked = ndimage.binary_dilation(theta, structure=np.ones((3, 3, 3), bool))  # edges stay clear
         labels, count = ndimage.label(~blocked, structure=np.ones((3, 3, 3)))
         if count == 0:
@@ -185,7 +185,7 @@ def resolve_scenario(choice: Any) -> str | CaPaManScenario:
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator], scene: CaPaManScene,
-                   clusters: occupancy.ClusterPoints | None = None) -> list[CaPaManScenario]:
+                   clusters: capaman_grid.ClusterPoints | None = None) -> list[CaPaManScenario]:
     """One episode's scenario per generator (single env, vector env and CLI alike): the paper's, random
     ones drawn from the generators one after another, or the custom one once :func:`validate_scenario`
     accepts it. Leaves ``scene``'s obstacles set to the last one's."""
@@ -194,7 +194,7 @@ def draw_scenarios(choice: Any, rngs: list[np.random.Generator], scene: CaPaManS
 
 
 def _draw_one(choice: Any, rng: np.random.Generator, scene: CaPaManScene,
-              clusters: occupancy.ClusterPoints | None = None) -> CaPaManScenario:
+              clusters: capaman_grid.ClusterPoints | None = None) -> CaPaManScenario:
     """:func:`draw_scenarios` for one generator (the name of before paragym 0.9: ``draw_scenario``)."""
     choice = resolve_scenario(choice)
     if choice == "random":

@@ -21,7 +21,8 @@ import numpy as np
 
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import pose6
-from paragym.sim import occupancy
+from paragym.sim import capaman_grid
+from paragym.sim.capaman_clearance import DistanceGrids, grid_clearance
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
@@ -44,8 +45,8 @@ class World(Protocol):
 
 
 @lru_cache(maxsize=4)
-def _clusters(geometry: capaman.CaPaManGeometry) -> occupancy.ClusterPoints:
-    return occupancy.cluster_points(geometry, spacing=0.01)
+def _clusters(geometry: capaman.CaPaManGeometry) -> capaman_grid.ClusterPoints:
+    return capaman_grid.cluster_points(geometry, spacing=0.01)
 
 
 class GridWorld:
@@ -58,7 +59,7 @@ class GridWorld:
 
     def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
                  gui: bool = False) -> None:
-        self.geometry, self.grids, self.clusters = geometry, occupancy.DistanceGrids(n, cap=cap), _clusters(geometry)
+        self.geometry, self.grids, self.clusters = geometry, DistanceGrids(n, cap=cap), _clusters(geometry)
         self.part_names = [p.name for p in capaman.part_shapes(geometry)]
         self.cap, self.draws, self.gui = cap, draws, gui
         #: the kinematic PyBullet scene that generates and checks scenarios and draws, built on first use
@@ -83,12 +84,12 @@ class GridWorld:
 
     def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
         pose = capaman.forward(alpha, self.geometry, validate=False)
-        clearance, part = occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
+        clearance, part = grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows, pose=pose)
         return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
 
     def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
         """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
-        return occupancy.grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
+        return grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
 
 
 class SceneWorld:
