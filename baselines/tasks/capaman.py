@@ -74,7 +74,7 @@ def grid_field_params() -> dict[str, Any]:
 
 def plot_episode(ep: Episode, path: Path) -> Path:
     """The demo's picture of one episode, written to ``path``."""
-    from paragym.plots import plot_capaman_episode
+    from paragym.plots.capaman import plot_episode as plot_capaman_episode
 
     return plot_capaman_episode(ep, path)
 
@@ -87,7 +87,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
 
     from paragym.mechanisms import capaman
     from paragym.planners import RrtGaPlanner
-    from paragym.plots import plot_capaman_motion
+    from paragym.plots.capaman import plot_motion as plot_capaman_motion
 
     obs, info = env.reset(seed=args.seed)
     scenario = info["scenario"]

@@ -62,7 +62,7 @@ def polynomial_detour_margin_params() -> dict[str, Any]:
 
 def plot_episode(ep: Episode, path: Path) -> Path:
     """The demo's picture of one episode, written to ``path``."""
-    from paragym.plots import plot_hybrid_episode
+    from paragym.plots.hybrid import plot_episode as plot_hybrid_episode
 
     return plot_hybrid_episode(ep, path)
 
@@ -73,7 +73,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
 
     from paragym.mechanisms import hybrid
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-    from paragym.plots import plot_hybrid_plan
+    from paragym.plots.hybrid import plot_plan as plot_hybrid_plan
     from paragym.trajectories import nominal_path
 
     obs, info = env.reset(seed=args.seed)

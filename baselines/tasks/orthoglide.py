@@ -76,7 +76,7 @@ def fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
 
 def plot_episode(ep: Episode, path: Path) -> Path:
     """The demo's picture of one episode, written to ``path``."""
-    from paragym.plots import plot_kappa_episode
+    from paragym.plots.orthoglide import plot_episode as plot_kappa_episode
 
     return plot_kappa_episode(ep, path)
 
@@ -87,7 +87,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     import time
 
     from paragym.planners import nullspace_gradient as ng
-    from paragym.plots import plot_orthoglide_cases
+    from paragym.plots.orthoglide import plot_cases as plot_orthoglide_cases
 
     obs, info = env.reset(seed=args.seed)
     task, g = info["scenario"], env.unwrapped.geometry

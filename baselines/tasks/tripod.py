@@ -67,7 +67,7 @@ def encoder_trust_params() -> dict[str, Any]:
 
 def plot_episode(ep: Episode, path: Path) -> Path:
     """The demo's picture of one episode, written to ``path``."""
-    from paragym.plots import plot_tripod_estimates
+    from paragym.plots.tripod import plot_estimates as plot_tripod_estimates
 
     true = np.array([i["true_units"] for i in ep.infos])
     estimate = np.array([i["estimate"] for i in ep.infos])
@@ -83,7 +83,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     import json
 
     from paragym.planners.encoder_correction import EncoderCorrection, FusionEstimator, OdometryEstimator
-    from paragym.plots import plot_tripod_estimates
+    from paragym.plots.tripod import plot_estimates as plot_tripod_estimates
     from paragym.sim.tripod_drive import TripodDrive
 
     obs, info = env.reset(seed=args.seed)
