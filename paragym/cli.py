@@ -332,23 +332,22 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--gif", action="store_true", help="also write an animated GIF of the episode")
     p.add_argument("--frame-every", type=int, default=4, help="GIF: keep a frame every N steps")
     p.set_defaults(func=_cmd_demo)
-    p = sub.add_parser("plan", help="run the reference planner offline; print its figures and save pictures")
+    task_own = ("after the env id, the options of its task's own (its bench's `options`, e.g. --dt SECONDS); one "
+                "the task does not take is refused, naming those it does")
+    p = sub.add_parser("plan", help="run the reference planner offline; print its figures and save pictures",
+                       epilog=task_own)
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
     p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario (random) and planner seed")
-    p.add_argument("--dt", type=float, default=0.45, help="seconds between via points (paper: 0.09, 0.45, 0.9)")
     p.add_argument("--out", default="runs/plan", help="folder for the PNG and the JSON")
     p.set_defaults(func=_cmd_plan)
     p = sub.add_parser("validate", help="execute in the dynamic simulation and validate with the accelerometer "
                                         "array and the Kalman filter: a policy's episode (--policy), or the "
                                         "reference plan where the task's bench has one; print the report, save "
-                                        "Figs 8-9")
+                                        "Figs 8-9", epilog=task_own)
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
     p.add_argument("--scenario", default=None, help=SCENARIO_HELP)
     p.add_argument("--seed", type=int, default=0, help="scenario, planner and sensor-noise seed")
-    p.add_argument("--dt", type=float, default=0.9,
-                   help="CaPaMan: seconds between via points (paper: 0.09, 0.45, 0.9)")
-    p.add_argument("--duration", type=float, default=2.0, help="hybrid: seconds for the whole path")
     p.add_argument("--policy", default=None,
                    help="validate this policy's episode (a name of `paragym policies ENV`: the reference, a shipped "
                         "model, user-<algo>-seed<N> with --models); without it, the reference plan where the task "
@@ -432,11 +431,36 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+#: the commands that take a task's own options (:attr:`paragym.baselines.tasks.Bench.options`)
+TASK_OPTIONS = ("plan", "validate")
+
+
+def _task_options(parser: argparse.ArgumentParser, args: argparse.Namespace, extra: list[str]) -> None:
+    """Read the options of the env's task (its bench's ``options``) from what the command's own parser left,
+    into ``args``; anything else left is argparse's error, as it would have been."""
+    if args.command not in TASK_OPTIONS:
+        parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    env_id = paragym.check_env_id(args.env_id)
+    own = argparse.ArgumentParser(prog=f"paragym {args.command} {args.env_id}", add_help=False)
+    for option in bench_of(env_id).options:
+        if args.command in option.commands:
+            own.add_argument(option.flag, type=option.type, default=option.default_for(args.command),
+                             help=option.help)
+    left = own.parse_known_args(extra, namespace=args)[1]
+    if left:
+        offered = ", ".join(o.option_strings[0] for o in own._actions) or "none"
+        raise ValueError(f"{env_id} does not take {' '.join(left)} (its task's options for {args.command}: "
+                         f"{offered})")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``paragym`` console script."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
     args.argv = list(sys.argv[1:] if argv is None else argv)
     try:
+        if extra or args.command in TASK_OPTIONS:
+            _task_options(parser, args, extra)
         return args.func(args)
     except KeyboardInterrupt as exc:  # one line, no traceback: what was kept and how to go on
         print(f"\nparagym: {exc}" if str(exc) else "\nparagym: interrupted", file=sys.stderr)

@@ -155,3 +155,17 @@ def test_a_broken_agent_gets_one_line_naming_it(case, tmp_path, capsys):
     assert all(s in lines[0] for s in said), lines[0]
     if case != "action":
         assert str(agent) in lines[0]
+
+
+def test_a_tasks_own_option_is_its_benchs_and_refused_elsewhere(tmp_path, capsys):
+    """``--dt`` is the CaPaMan bench's option (``Bench.options``), not the CLI's: another task refuses it by
+    name, saying which options it takes; an option no command takes stays argparse's error."""
+    from paragym.cli import main
+
+    assert main(["plan", "Orthoglide2PRRKappa-v1", "--dt", "1", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == ("paragym: error: paragym/Orthoglide2PRRKappa-v1 does not take --dt 1 (its task's options for "
+                   "plan: none)"), err
+    with pytest.raises(SystemExit):
+        main(["envs", "--dt", "1"])
+    assert "unrecognized arguments: --dt 1" in capsys.readouterr().err

@@ -31,13 +31,37 @@ from paragym import registry
 from paragym.baselines.stats import mean_ci
 from paragym.rollout import Episode
 
-__all__ = ["Bench", "BuiltIn", "Column", "Target", "bench_of", "init_defaults", "missing", "random_factory", "tightest",
-           "zero_factory"]
+__all__ = ["Bench", "BuiltIn", "Column", "Option", "Target", "bench_of", "init_defaults", "missing",
+           "random_factory", "tightest", "zero_factory"]
 
 #: a policy factory: ``factory(env, seed) -> policy`` (:mod:`paragym.baselines.policies`)
 Factory = Callable[[gym.Env, int], Any]
 #: a CLI adapter: ``run(env, args, out, stem) -> exit code`` (the env made on the chosen scenario)
 Adapter = Callable[[gym.Env, argparse.Namespace, Path, str], int]
+
+
+@dataclass(frozen=True)
+class Option:
+    """A command-line option of a task's own, for its ``plan`` and ``validate`` adapters: ``paragym plan ENV
+    --flag VALUE`` sets ``args.<dest>`` (``--dt`` -> ``args.dt``) for the env's task only.
+
+    Attributes:
+        commands: the commands that take it ("plan", "validate").
+        flag: the option, e.g. "--dt".
+        type: what its value is read as.
+        default: its value when not given, per command (a dict) or for all.
+        help: what it sets, with its unit.
+    """
+
+    commands: tuple[str, ...]
+    flag: str
+    type: type
+    default: Any
+    help: str
+
+    def default_for(self, command: str) -> Any:
+        """The default of ``command``."""
+        return self.default.get(command) if isinstance(self.default, dict) else self.default
 
 
 @dataclass(frozen=True)
@@ -127,6 +151,8 @@ class Bench:
         plot_episode: ``plot_episode(episode, path) -> path``: the demo's picture; None: the episode's
             first frame and its rewards (:func:`paragym.plots.plot_episode`).
         plan: the reference planner's offline run (``paragym plan``); None: the task has none.
+        options: the task's own command-line options of ``plan`` and ``validate`` (:class:`Option`), which its
+            adapters read from ``args``.
         validate_plan: the CLI's plan-execute-validate of the reference plan (``paragym validate`` without
             ``--policy``); None: ``paragym validate`` validates the reference policy's episode.
         validated_plan: ``check(seed) -> (passed, summary)``, the leaderboard's KF validation of the
@@ -152,6 +178,7 @@ class Bench:
     plot_episode: Callable[[Episode, Path], Path] | None = None
     plan: Adapter | None = None
     validate_plan: Adapter | None = None
+    options: tuple[Option, ...] = ()
     validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = None
     solved: tuple[Target, ...] = ()
     dynamic_tolerance: tuple[float, float] = (1e-6, 1e-9)

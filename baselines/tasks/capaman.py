@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, init_defaults, tightest, zero_factory
+from paragym.baselines.tasks import Bench, BuiltIn, Column, Option, Target, init_defaults, tightest, zero_factory
 from paragym.rollout import Episode
 from paragym.sim.capaman_dynamic import CaPaManDynamics
 
@@ -169,6 +169,8 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
 
 BENCH = Bench(
     task="capaman",
+    options=(Option(("plan", "validate"), "--dt", float, {"plan": 0.45, "validate": 0.9},
+                    "seconds between via points (paper: 0.09, 0.45, 0.9)"),),
     metrics=metrics,
     columns=(Column("path_length_rad", "joint path [rad]", ".2f"),
              Column("min_clearance_mm", "min clearance [mm]", ".1f"),

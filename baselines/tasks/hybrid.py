@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, init_defaults, tightest, zero_factory
+from paragym.baselines.tasks import Bench, BuiltIn, Column, Option, Target, init_defaults, tightest, zero_factory
 from paragym.rollout import Episode
 from paragym.sim.hybrid_dynamic import HybridDynamics
 
@@ -145,6 +145,7 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
 
 BENCH = Bench(
     task="hybrid",
+    options=(Option(("validate",), "--duration", float, 2.0, "seconds for the whole path"),),
     metrics=metrics,
     columns=(Column("min_mu", "min singularity measure", ".3f"),
              Column("limit_violations", "leg-limit poses", ".1f", exact=True),
