@@ -1,5 +1,9 @@
 """Train Stable-Baselines3 agents on the paragym envs (``paragym train``).
 
+The run is here; its parts are in modules of their own: the hyper-parameters
+(:mod:`paragym.baselines.config`), the run's files (:mod:`paragym.baselines.run_files`) and loading a model
+(:mod:`paragym.baselines.loading`).
+
 Hyper-parameters come from ``hyperparams/<algo>.yml`` keyed by env id, in
 rl-baselines3-zoo's format (``python -m rl_zoo3.train ... -conf
 hyperparams/ppo.yml`` reads the same files), and paragym's own keys from
@@ -35,131 +39,45 @@ import json
 import os
 import platform
 import time
-from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
-import yaml
 
-import paragym
 from paragym import check_env_id, registry
+
+# the names the training's parts had when they were all here: one module each now, imported for training's
+# callers as before
+from paragym.baselines.config import (  # noqa: F401
+    ALGOS,
+    OWN_KEYS,
+    PARAGYM_KEYS,
+    _read_config,
+    check_algo,
+    hyperparams_table,
+    load_hyperparams,
+    reward_normalization,
+)
+from paragym.baselines.loading import LOADABLE, _algorithm, load_model, model_algorithm  # noqa: F401
+from paragym.baselines.run_files import (  # noqa: F401
+    USER_MODELS,
+    RunFiles,
+    TrainResult,
+    _finished_run,
+    _save_run,
+    count_parameters,
+    env_name,
+    run_files,
+    versions,
+    writable_models_dir,
+    write_atomic,
+)
 from paragym.models import shipped_models_dir, shipped_models_folder
 
 __all__ = ["ALGOS", "EVAL_SEED", "RunFiles", "TrainResult", "load_hyperparams", "run_files", "train"]
 
-ALGOS = ("ppo", "sac", "td3", "tqc")  # tqc: sb3-contrib's Truncated Quantile Critics
-#: what :func:`load_model` loads: the RL algorithms, bc (behaviour cloning; bc.py) and dagger (dagger.py),
-#: both PPO policies
-LOADABLE = (*ALGOS, "bc", "dagger")
 #: the evaluation env during training is seeded from here (the leaderboard uses other seeds)
 EVAL_SEED = 10_000
-#: keys that paragym consumes (rl-zoo's and paragym.yml's); all others go to the SB3 algorithm
-PARAGYM_KEYS = ("n_envs", "n_timesteps", "vec_env", "env_kwargs", "eval_freq", "n_eval_episodes", "init_from",
-                "noise_type", "noise_std", "checkpoint_freq", "normalize")
-#: paragym.yml's keys, which rl-zoo does not know
-OWN_KEYS = ("vec_env", "eval_freq", "n_eval_episodes", "checkpoint_freq", "init_from")
-
-
-def check_algo(algo: str, known: tuple[str, ...] = ALGOS) -> str:
-    """``algo`` lower-cased, or a ValueError naming the ``known`` algorithms."""
-    if isinstance(algo, str) and algo.lower() in ("bc", "dagger") and algo.lower() not in known:
-        raise ValueError(f"{algo.lower()} learns from an expert's demonstrations, not from rewards: paragym train "
-                         f"ENV --algo {algo.lower()} (paragym.baselines.{algo.lower()})")
-    if not isinstance(algo, str) or algo.lower() not in known:
-        raise ValueError(f"unknown algorithm {algo!r}; known: {', '.join(known)}")
-    return algo.lower()
-
-
-def hyperparams_table(name: str) -> dict[str, Any]:
-    return yaml.safe_load(resources.files("paragym.baselines").joinpath("hyperparams", name).read_text())
-
-
-def load_hyperparams(algo: str, env_id: str) -> dict[str, Any]:
-    """The hyper-parameters of ``algo`` for ``env_id``: rl-zoo's from the
-    packaged ``hyperparams/<algo>.yml`` and paragym's own from
-    ``hyperparams/paragym.yml`` (a copy; the caller may change it)."""
-    algo, env_id = check_algo(algo), check_env_id(env_id)
-    table = hyperparams_table(f"{algo}.yml")
-    if env_id not in table:
-        raise ValueError(f"hyperparams/{algo}.yml has no entry for {env_id}")
-    own = (hyperparams_table("paragym.yml").get(algo) or {}).get(env_id) or {}
-    clash = sorted(set(own) & set(table[env_id]))
-    if clash or set(own) - set(OWN_KEYS):
-        raise ValueError(f"hyperparams/paragym.yml: {algo} {env_id} may hold only {', '.join(OWN_KEYS)}")
-    return {"vec_env": "dummy", **dict(table[env_id]), **own}
-
-
-def reward_normalization(hp: dict[str, Any]) -> dict[str, Any] | None:
-    """rl-zoo's ``normalize`` entry as VecNormalize's keyword arguments (None:
-    no normalisation). rl-zoo writes it as a Python literal in a string, which
-    is read here with :func:`ast.literal_eval` (never evaluated). paragym
-    scales only the rewards: a normalised observation would make a saved
-    policy depend on the statistics, so ``norm_obs`` must be False."""
-    import ast
-
-    value = hp.get("normalize", False)
-    if isinstance(value, str):
-        try:
-            value = ast.literal_eval(value)
-        except (ValueError, SyntaxError) as exc:
-            raise ValueError(f"normalize must be a bool or a dict literal; got {value!r}") from exc
-    if value is False or value is None:
-        return None
-    kwargs = {"norm_obs": True, "norm_reward": True} if value is True else dict(value)
-    if not isinstance(value, bool | dict) or kwargs.get("norm_obs", True):
-        raise ValueError(f"normalize must leave the observations alone (norm_obs: False); got {hp['normalize']!r}")
-    return kwargs
-
-
-def env_name(env_id: str) -> str:
-    """The env id without its namespace: the name of its folder under ``models/``."""
-    return check_env_id(env_id).split("/", 1)[1]
-
-
-@dataclass(frozen=True)
-class RunFiles:
-    """Where one (env, algo, seed) run keeps its files."""
-
-    model: Path
-    meta: Path
-    curve_png: Path
-    checkpoints: Path
-
-
-#: where ``paragym train`` writes by default
-USER_MODELS = Path("runs") / "models"
-
-
-def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = USER_MODELS) -> RunFiles:
-    """The files of a run under ``models_dir/<env name>/``."""
-    folder = Path(models_dir) / env_name(env_id)
-    stem = f"{check_algo(algo, LOADABLE)}_seed{int(seed)}"
-    return RunFiles(folder / f"{stem}.zip", folder / f"{stem}.json", folder / f"{stem}.png",
-                    folder / "checkpoints" / stem)
-
-
-@dataclass
-class TrainResult:
-    """A finished run: its files, the trained model and the metadata written with it."""
-
-    files: RunFiles
-    model: Any
-    meta: dict[str, Any]
-    resumed_from: int = 0
-    skipped: bool = False
-
-
-def _algorithm(algo: str) -> type:
-    from stable_baselines3 import PPO, SAC, TD3
-
-    if algo == "tqc":
-        from sb3_contrib import TQC
-
-        return TQC
-    return {"ppo": PPO, "sac": SAC, "td3": TD3, "bc": PPO, "dagger": PPO}[algo]  # imitation: a PPO policy
 
 
 def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dict[str, Any]) -> Any:
@@ -170,12 +88,6 @@ def _make_vec(env_id: str, n_envs: int, seed: int, vec_env: str, env_kwargs: dic
         raise ValueError(f"vec_env must be 'dummy', 'subproc' or 'native'; got {vec_env!r}")
     cls = SubprocVecEnv if vec_env == "subproc" and n_envs > 1 else DummyVecEnv
     return make_vec_env(env_id, n_envs=n_envs, seed=seed, vec_env_cls=cls, env_kwargs=env_kwargs)
-
-
-def write_atomic(path: Path, text: str) -> None:
-    tmp = path.with_suffix(path.suffix + ".tmp")
-    tmp.write_text(text)
-    os.replace(tmp, path)
 
 
 def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, curve: dict[str, list],
@@ -232,12 +144,6 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
     return [eval_cb, RecordAndCheckpoint(int(hp.get("checkpoint_freq", hp["eval_freq"])))]
 
 
-def count_parameters(model: Any) -> dict[str, int]:
-    """Parameters of the whole policy and, for SAC/TD3, of the actor alone."""
-    modules = {"policy": model.policy, "actor": getattr(model, "actor", None)}
-    return {name: int(sum(p.numel() for p in m.parameters())) for name, m in modules.items() if m is not None}
-
-
 def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = USER_MODELS,
           progress_bar: bool = True, threads: int = 1, force: bool = False, verbose: int = 0,
           hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None,
@@ -289,41 +195,6 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     _save_run(files, model, meta, f"{algo.upper()} seed {seed} on {env_name(env_id)}: {total:,} steps, "
                                    f"{seconds / 60:.1f} min")
     return TrainResult(files, model, meta, resumed_from=resumed_from)
-
-
-def _read_config(env_id: str, algo: str, timesteps: int | None, overrides: dict[str, Any] | None,
-                 n_envs: int | None) -> tuple[dict[str, Any], int]:
-    """The run's hyperparameters (the yml's, with ``overrides`` and ``n_envs``) and its total timesteps."""
-    hp = {**load_hyperparams(algo, env_id), **(overrides or {})}
-    total = int(hp["n_timesteps"] if timesteps is None else timesteps)
-    if total <= 0:
-        raise ValueError(f"timesteps must be positive; got {timesteps!r}")
-    if n_envs is not None:
-        if not isinstance(n_envs, int) or n_envs < 1:
-            raise ValueError(f"n_envs must be a positive integer; got {n_envs!r}")
-        hp["n_envs"] = n_envs
-    hp["n_envs"] = int(hp["n_envs"])
-    return hp, total
-
-
-def writable_models_dir(models_dir: str | Path) -> str | Path:
-    """``models_dir``, unless it is the shipped models' folder (read-only)."""
-    if Path(models_dir).resolve() == shipped_models_dir().resolve():
-        raise ValueError(f"{models_dir} holds the shipped models, which are read-only: train into another folder "
-                         f"(the default is {USER_MODELS})")
-    return models_dir
-
-
-def _finished_run(files: RunFiles, algo: str, total: int, force: bool) -> TrainResult | None:
-    """A finished run of the same timesteps, as it is (``skipped``); None to
-    train. A finished run of other timesteps is refused unless ``force``."""
-    if not files.model.exists() or force:
-        return None
-    meta = json.loads(files.meta.read_text()) if files.meta.exists() else {}
-    if meta.get("timesteps") == total:
-        return TrainResult(files, load_model(files.model, algo), meta, skipped=True)
-    raise ValueError(f"{files.model} is already trained ({meta.get('timesteps', 'an unknown number of')} steps); "
-                     f"--force retrains it over that file, or choose another --models folder or --seed")
 
 
 def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, files: RunFiles,
@@ -458,71 +329,3 @@ def _learn(model: Any, algo: str, n_envs: int, remaining: int, fresh: bool, call
     return remaining, time.perf_counter() - t0
 
 
-def _save_run(files: RunFiles, model: Any, meta: dict[str, Any], title: str) -> None:
-    """The model, its JSON (with the model's size) and its curve's picture;
-    the checkpoints go."""
-    from paragym.plots import plot_training_curve
-
-    files.model.parent.mkdir(parents=True, exist_ok=True)
-    model.save(files.model)
-    meta["model_bytes"] = files.model.stat().st_size
-    write_atomic(files.meta, json.dumps(meta, indent=1))
-    plot_training_curve(meta["curve"], files.curve_png, title)
-    for name in ("latest.zip", "replay_buffer.pkl", "curve.json", "evaluations.npz", "vecnormalize.pkl",
-                 "init_from.json"):
-        (files.checkpoints / name).unlink(missing_ok=True)
-    for folder in (files.checkpoints, files.checkpoints.parent):
-        if folder.exists() and not any(folder.iterdir()):
-            folder.rmdir()
-
-
-def versions() -> dict[str, str]:
-    import stable_baselines3
-    import torch
-
-    return {"paragym": paragym.__version__, "stable_baselines3": stable_baselines3.__version__,
-            "torch": torch.__version__, "gymnasium": gym.__version__, "python": platform.python_version()}
-
-
-def model_algorithm(path: str | Path) -> str | None:
-    """The algorithm that saved the SB3 model file ``path``, read from the
-    attributes only it has in the file's ``data`` JSON (PPO's ``clip_range``,
-    TD3's ``policy_delay``, TQC's ``top_quantiles_to_drop_per_net``, SAC's
-    ``target_entropy``); None when the file does not say. Nothing is
-    unpickled."""
-    import zipfile
-
-    try:
-        with zipfile.ZipFile(path) as z:
-            data = json.loads(z.read("data"))
-    except (OSError, KeyError, ValueError, zipfile.BadZipFile):
-        return None
-    marks = (("top_quantiles_to_drop_per_net", "tqc"), ("policy_delay", "td3"), ("target_entropy", "sac"),
-             ("clip_range", "ppo"))
-    return next((algo for key, algo in marks if key in data), None)
-
-
-def load_model(path: str | Path, algo: str | None = None) -> Any:
-    """Load a saved SB3 model on the CPU without unpickling anything from it
-    (:mod:`paragym.baselines.safe_load`: every cloudpickled entry is rebuilt
-    from its readable form, the weights are read as tensors only). The
-    algorithm comes from ``algo``, else the file name (``ppo_seed0.zip``),
-    else the file itself (:func:`model_algorithm`: rl-baselines3-zoo's
-    ``<env>.zip``). A missing, damaged or unsafe file raises a ValueError
-    naming it."""
-    from paragym.baselines.safe_load import safe_custom_objects
-
-    path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"no model file at {path}")
-    if algo is None:
-        algo = path.stem.split("_", 1)[0]
-        if algo.lower() not in LOADABLE:  # rl-zoo names its files after the env: ask the file
-            algo = model_algorithm(path) or algo
-    algo = check_algo(algo, LOADABLE)
-    cls = _algorithm(algo)
-    try:
-        custom = safe_custom_objects(path, cls)
-        return cls.load(path, device="cpu", custom_objects=custom)
-    except Exception as exc:  # zipfile, JSON, torch or key errors for a damaged file; ours for an unsafe one
-        raise ValueError(f"cannot load {algo.upper()} model {path}: {type(exc).__name__}: {exc}") from exc
