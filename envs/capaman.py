@@ -58,6 +58,8 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     ==========  ==========================================================
 
     ## Rewards
+    Every step's info holds the reward's terms, ``reward_<name>`` for length, progress, time, proximity, reach, collision
+    (:data:`paragym.tasks.capaman_step.REWARD_TERMS`, since paragym 0.10); the reward is their sum.
     After the fitness of paper 000 (eqs 3-5), per step:
     ``-w_length * |d alpha|`` (joint-space path length, rad)
     ``- beta * [clearance < delta]`` (too close to an obstacle; the paper's
@@ -119,6 +121,13 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
       episode as "broken" (no released setting opens one that far before a
       collision ends the episode: their rollouts are unchanged); a
       ``control_period`` that the physics step does not divide warns.
+    * paragym 0.10, every version of the task: the env is a shell over the task's contract
+      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
+      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
+      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
+      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
+      reward's terms, and the native vector env's info every number the single env's has. Every
+      episode that follows Gymnasium's API runs as before (the released rollouts replay).
     """
 
     task, rules = TASK, RULES[0]

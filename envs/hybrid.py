@@ -55,6 +55,8 @@ class HybridSingularityFreeEnv(ParagymEnv):
     ==========  ==========================================================
 
     ## Rewards
+    Every step's info holds the reward's terms, ``reward_<name>`` for offset, delta, singular, limit, end_shaping
+    (:data:`paragym.tasks.hybrid_step.REWARD_TERMS`, since paragym 0.10); the reward is their sum.
     Per step: ``-w_offset |offset| / j_bar`` (deviation from the nominal
     path) ``- w_delta |change of Delta| / max_delta_step`` (smoothness)
     ``- w_singular * sum of (0.4 - mu)_+ / 0.4`` over both measures
@@ -101,6 +103,13 @@ class HybridSingularityFreeEnv(ParagymEnv):
       whatever E's orientation; since 0.8.0 ``info["orientation_error"]``
       and ``info["failure"]`` report it, and a custom ``control_period``
       that the physics step does not divide warns.
+    * paragym 0.10, every version of the task: the env is a shell over the task's contract
+      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
+      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
+      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
+      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
+      reward's terms, and the native vector env's info every number the single env's has. Every
+      episode that follows Gymnasium's API runs as before (the released rollouts replay).
     """
 
     task, rules = TASK, RULES[0]

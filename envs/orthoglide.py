@@ -51,6 +51,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     ==========  ==========================================================
 
     ## Rewards
+    Every step's info holds the reward's terms, ``reward_<name>`` for kappa, tracking, failure
+    (:data:`paragym.tasks.orthoglide_step.REWARD_TERMS`, since paragym 0.10); the reward is their sum.
     ``-log(kappa)`` per step (0 at an isotropic pose); in joint-velocity mode
     also ``- w_track * tracking error / 0.01 m``. Reaching a joint limit or a
     singularity (kappa > 100, or leaving the working mode) costs
@@ -94,6 +96,13 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
       warns where that is not the path's time). Since paragym 0.8.0
       ``info["failure"]`` names why an episode failed.
     * v1 (paragym 0.8.0): :class:`Orthoglide2PRRKappaV1Env` closes them.
+    * paragym 0.10, every version of the task: the env is a shell over the task's contract
+      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
+      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
+      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
+      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
+      reward's terms, and the native vector env's info every number the single env's has. Every
+      episode that follows Gymnasium's API runs as before (the released rollouts replay).
     """
 
     task, rules = TASK, RULES[0]

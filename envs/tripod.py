@@ -47,6 +47,8 @@ class MobileTripodOdometryEnv(ParagymEnv):
     ==========  ==========================================================
 
     ## Rewards
+    Every step's info holds the reward's terms, ``reward_<name>`` for estimate, odometry
+    (:data:`paragym.tasks.tripod_step.REWARD_TERMS`, since paragym 0.10); the reward is their sum.
     ``-10 (mean unit error + plate centre error)`` per step (m): the estimate's
     units against the true ones, and the plate's centre fitted to the
     estimate against the true centre.
@@ -94,6 +96,13 @@ class MobileTripodOdometryEnv(ParagymEnv):
       observation; v0 is unchanged.
     * v2 (paragym 0.8.0): :class:`MobileTripodOdometryV2Env`, a folded
       tripod ends the episode as a failure.
+    * paragym 0.10, every version of the task: the env is a shell over the task's contract
+      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
+      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
+      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
+      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
+      reward's terms, and the native vector env's info every number the single env's has. Every
+      episode that follows Gymnasium's API runs as before (the released rollouts replay).
     """
 
     task, rules = TASK, RULES[0]

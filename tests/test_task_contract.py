@@ -159,6 +159,24 @@ def test_one_lifecycle(env_id, fidelity):
 
 
 @pytest.mark.parametrize("env_id, fidelity", CASES)
+def test_the_reward_is_the_sum_of_its_named_terms(env_id, fidelity):
+    """Every step's info holds the reward's terms under stable names (``reward_<name>``, the task's
+    ``REWARD_TERMS``), as Gymnasium's MuJoCo v5 envs do, and the reward is their sum."""
+    env = _make(env_id, fidelity)
+    rng = np.random.default_rng(0)
+    _, info = env.reset(seed=2)
+    names = {k for k in info if k.startswith("reward_")}
+    assert len(names) >= 2, info.keys()
+    for _ in range(200):
+        _, reward, terminated, truncated, info = env.step(rng.uniform(-1, 1, env.action_space.shape).astype(np.float32))
+        assert {k for k in info if k.startswith("reward_")} == names
+        assert abs(sum(info[k] for k in names) - reward) <= 1e-12 * max(1.0, abs(reward)), (info, reward)
+        if terminated or truncated:
+            break
+    env.close()
+
+
+@pytest.mark.parametrize("env_id, fidelity", CASES)
 def test_a_copy_is_independent_or_refused(env_id, fidelity):
     env = _make(env_id, fidelity)
     env.reset(seed=3)

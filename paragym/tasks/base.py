@@ -22,7 +22,7 @@ import numpy as np
 
 __all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
            "check_choice", "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed",
-           "resolve_scenario"]
+           "reward_terms", "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -280,3 +280,9 @@ def check_control_period(control_period: float, time_step: float, refuse: bool, 
         raise ValueError(f"{said}; choose a control_period that is a multiple of the dynamics' time_step")
     why = f"; {later} refuses it" if later else ""
     warnings.warn(f"{said} (this id's released behaviour{why})", UserWarning, stacklevel=4)
+
+
+def reward_terms(terms: np.ndarray, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The info's ``reward_<name>`` of each term: a view of column j of ``terms`` (N, T) per name, as
+    Gymnasium's MuJoCo v5 envs report their reward's parts. The reward is their sum."""
+    return {f"reward_{name}": terms[:, j] for j, name in enumerate(names)}

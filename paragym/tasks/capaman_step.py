@@ -68,11 +68,15 @@ from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
 from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, World
 from paragym.units import DEG
 
-__all__ = ["FAILURES", "LOOKAHEAD", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP", "CaPaManParams", "CaPaManRules",
-           "CaPaManState", "reset", "step"]
+__all__ = ["FAILURES", "LOOKAHEAD", "REWARD_TERMS", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP",
+           "CaPaManParams", "CaPaManRules", "CaPaManState", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "collision", "broken")
+#: the reward's terms (after paper 000's fitness, eqs 3-5), each in the info as ``reward_<name>``: the joint
+#: path's length, the progress to the target, v1's time penalty, the clearance under delta, a T.C. reached, a
+#: collision; their sum is the reward
+REWARD_TERMS = ("length", "progress", "time", "proximity", "reach", "collision")
 
 #: the largest crank motion (rad, each crank) between two collision checks: in a step of 2 deg no point of
 #: the 17 parts moves more than 4.7 mm (measured over the joint space, tested), under the 5 mm cell of the
@@ -220,7 +224,7 @@ class CaPaManState(KernelArrays):
 
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("tp", "tc", "code", "alpha", "tip", "reached", "path_length", "step_length", "progress",
-                     "just_reached", "clearance", "terminated", "obs", "reward", "lookahead")
+                     "just_reached", "clearance", "terminated", "obs", "reward", "lookahead", "terms")
 
     tp: np.ndarray
     tc: np.ndarray
@@ -238,6 +242,7 @@ class CaPaManState(KernelArrays):
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
+    terms: np.ndarray
     near: list[str | None] = field(default_factory=list)
     scenarios: list[CaPaManScenario | None] = field(default_factory=list)
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
@@ -255,7 +260,8 @@ class CaPaManState(KernelArrays):
         return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
                    progress=z(n), just_reached=z(n, bool), clearance=z(n), lookahead=z((n, 3)),
-                   terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n), near=[None] * n,
+                   terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n),
+                   terms=z((n, len(REWARD_TERMS))), near=[None] * n,
                    scenarios=[None] * n, success=z(n, bool), failure=z(n, np.int64), collision=z(n, bool),
                    target_index=z(n, np.int64))
 
@@ -324,6 +330,7 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     _finish(state, params, active, old, True)
     if isinstance(world, DynamicWorld) and world.broken and not state.terminated[0]:
         state.terminated[0] = True  # a broken mechanism ends the episode as a failure, as a collision does
+        state.terms[0, 5] -= params.collision_penalty
         state.reward[0] -= params.collision_penalty
 
 
@@ -383,7 +390,7 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
     progress toward the target, reaching, the reward, the end and the observation.
     ``arrays``: the state's, in ``KERNEL_FIELDS``' order; ``p``: :class:`KernelArgs`."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead = arrays
+        obs, reward, lookahead, terms = arrays
     n_tour = len(tour)
     mid, half = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2
     for i in range(alpha.shape[0]):
@@ -402,16 +409,13 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
             just_reached[i] = after <= p.reach_tolerance and not collision
             if just_reached[i]:
                 reached[i] += 1
-        r = -p.w_length * step_length[i] + p.w_progress * progress[i]
-        if move:
-            r -= p.time_penalty
-        if clearance[i] < p.delta:
-            r -= p.beta
-        if just_reached[i]:
-            r += p.reach_bonus
-        if collision:
-            r -= p.collision_penalty
-        reward[i] = r
+        # the reward and its terms (REWARD_TERMS): length, progress, time, proximity, reach, collision
+        terms[i, 0], terms[i, 1] = -p.w_length * step_length[i], p.w_progress * progress[i]
+        terms[i, 2] = -p.time_penalty if move else 0.0
+        terms[i, 3] = -p.beta if clearance[i] < p.delta else 0.0
+        terms[i, 4] = p.reach_bonus if just_reached[i] else 0.0
+        terms[i, 5] = -p.collision_penalty if collision else 0.0
+        reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2] + terms[i, 3] + terms[i, 4] + terms[i, 5]
         terminated[i] = collision or reached[i] >= n_tour
         # observation: cranks, tip, target T.P. and T.C., obstacles, clearance, progress
         t = tour[min(reached[i], n_tour - 1)]
@@ -430,7 +434,7 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
 def _observe_v1(arrays, rows, p, tour):
     """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead = arrays
+        obs, reward, lookahead, terms = arrays
     n_tour = len(tour)
     mid, half, cap = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2, p.clearance_cap
     m = code.shape[1] // 8

@@ -11,9 +11,18 @@ from numba import njit
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks import capaman as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.capaman import TOUR, CaPaManScenario
-from paragym.tasks.capaman_step import FAILURES, RULES, CaPaManParams, CaPaManRules, CaPaManState, reset, step
+from paragym.tasks.capaman_step import (
+    FAILURES,
+    REWARD_TERMS,
+    RULES,
+    CaPaManParams,
+    CaPaManRules,
+    CaPaManState,
+    reset,
+    step,
+)
 from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, _clusters
 
 __all__ = ["RULES", "TASK", "CaPaManTask"]
@@ -100,6 +109,7 @@ class CaPaManTask(TaskBase):
         if s.evaluation is None:  # the same buffers every call
             numbers = {"collision": s.collision, "clearance": s.clearance, "reached": s.reached,
                        "target_index": s.target_index, "path_length": s.path_length}
+            numbers.update(reward_terms(s.terms, REWARD_TERMS))
             s.evaluation = Evaluation(s.success, s.failure, numbers)
         return s.evaluation
 

@@ -66,12 +66,16 @@ from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "RULES", "HybridParams", "HybridRules", "HybridState",
-           "reset", "step"]
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "RULES", "HybridParams",
+           "HybridRules", "HybridState", "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
 FAILURES = (None, "broken", "tracking", "leg limit", "singular")
 _BROKEN, _TRACKING, _LIMIT, _SINGULAR = 1, 2, 3, 4
+#: the reward's terms, each in the info as ``reward_<name>``: the offset from the path, the split's change, the
+#: closeness to a singularity, the legs out of their limits, v1's shaping toward a feasible end; their sum is the
+#: reward
+REWARD_TERMS = ("offset", "delta", "singular", "limit", "end_shaping")
 
 POSE_SCALE = np.array([0.1, 0.1, 0.1, 0.5, 0.5, 0.5])  # m, m, m, rad, rad, rad: observation units
 OBS_SIZE = 1 + 6 + 6 + 1 + 9 + 2 + 3
@@ -199,7 +203,7 @@ class HybridState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("u", "nominal", "k", "delta", "d_delta", "offset", "all_free", "pose", "lengths", "mu_h",
-                     "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason")
+                     "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason", "terms")
 
     u: np.ndarray
     nominal: np.ndarray
@@ -220,6 +224,7 @@ class HybridState(KernelArrays):
     phi: np.ndarray
     #: the first reason each robot's episode failed (an index into :data:`FAILURES`; 0: none yet)
     reason: np.ndarray
+    terms: np.ndarray
     scenarios: list[HybridScenario | None] = field(default_factory=list)
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
@@ -235,7 +240,8 @@ class HybridState(KernelArrays):
                    d_delta=np.zeros(n), offset=np.zeros((n, 3)), all_free=np.ones(n, bool), pose=np.zeros((n, 6)),
                    lengths=np.zeros((n, 9)), mu_h=np.zeros(n), mu_t=np.zeros(n), within=np.zeros(n, bool),
                    free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64), scenarios=[None] * n,
+                   reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64),
+                   terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
                    success=np.zeros(n, bool))
 
 
@@ -293,7 +299,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
     2 the evaluation only, of the pose, strokes, measures and offset a
     simulation wrote into the state (dynamic fidelity: :class:`DynamicWorld`)."""
     u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free, terminated, obs, \
-        reward, phi, reason = arrays
+        reward, phi, reason, terms = arrays
     base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
     work = np.empty((5, 6, 6))
@@ -330,8 +336,10 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         thr = 2 * w.singularity_threshold
         close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr
         norm = math.sqrt(offset[i, 0] * offset[i, 0] + offset[i, 1] * offset[i, 1] + offset[i, 2] * offset[i, 2])
-        reward[i] = (-w.w_offset * norm / w.j_bar - w.w_delta * abs(d_delta[i]) / w.max_delta_step
-                     - w.w_singular * close - w.w_limit * out)
+        # the reward and its terms (REWARD_TERMS): offset, delta, singular, limit, end shaping (v1, below)
+        terms[i, 0], terms[i, 1] = -w.w_offset * norm / w.j_bar, -(w.w_delta * abs(d_delta[i]) / w.max_delta_step)
+        terms[i, 2], terms[i, 3], terms[i, 4] = -(w.w_singular * close), -(w.w_limit * out), 0.0
+        reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2] + terms[i, 3]
         # observation: u, the nominal pose now and next, Delta, the strokes, both measures, the offset
         nxt = min(k[i] + 1, last)
         row[0] = u[k[i]]
@@ -350,7 +358,8 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
             excess = _excess(end_lengths, w)
             new_phi = 0.0 if terminated[i] else -excess
             if move:
-                reward[i] += w.w_end * (new_phi - phi[i])
+                terms[i, 4] = w.w_end * (new_phi - phi[i])
+                reward[i] += terms[i, 4]
             phi[i] = new_phi
             for c in range(6):
                 row[28 + c] = nominal[i, last, c] / scale[c]

@@ -10,9 +10,9 @@ from numba import njit
 
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
-from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase
+from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.hybrid_step import FAILURES, RULES, HybridParams, HybridRules, HybridState, reset, step
+from paragym.tasks.hybrid_step import FAILURES, REWARD_TERMS, RULES, HybridParams, HybridRules, HybridState, reset, step
 from paragym.tasks.hybrid_worlds import DynamicWorld
 
 __all__ = ["RULES", "TASK", "HybridTask"]
@@ -76,6 +76,7 @@ class HybridTask(TaskBase):
         if s.evaluation is None:  # the same buffers every call
             numbers = {"step": s.k, "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t, "free": s.free,
                        "within_limits": s.within}
+            numbers.update(reward_terms(s.terms, REWARD_TERMS))
             s.evaluation = Evaluation(s.success, s.reason, numbers)
         return s.evaluation
 

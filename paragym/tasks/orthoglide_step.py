@@ -45,13 +45,16 @@ from paragym.tasks.base import (
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "RULES", "OrthoglideParams", "OrthoglideRules",
-           "OrthoglideState", "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "REWARD_TERMS", "RULES", "OrthoglideParams",
+           "OrthoglideRules", "OrthoglideState", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
 #: why a robot failed (``OrthoglideState.reason``; 0: it did not): the names ``info["failure"]`` reports
 FAILURES = (None, "joint limit", "working mode", "singular", "tracking", "broken")
+#: the reward's terms, each in the info as ``reward_<name>``: -log kappa (eq 8), the tracking error's cost, a
+#: failure's penalty; the reward is their sum
+REWARD_TERMS = ("kappa", "tracking", "failure")
 _LIMIT, _MODE, _SINGULAR, _TRACKING, _BROKEN = 1, 2, 3, 4, 5
 
 
@@ -158,7 +161,7 @@ class OrthoglideState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("rho", "k", "last", "path", "dt", "j", "n", "kappa", "err", "failed", "reason", "terminated",
-                     "obs", "reward")
+                     "obs", "reward", "terms")
 
     rho: np.ndarray
     k: np.ndarray
@@ -174,6 +177,7 @@ class OrthoglideState(KernelArrays):
     terminated: np.ndarray
     obs: np.ndarray
     reward: np.ndarray
+    terms: np.ndarray
     scenarios: list[OrthoglideScenario | None] = field(default_factory=list)
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
@@ -186,7 +190,8 @@ class OrthoglideState(KernelArrays):
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
                    n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
                    reason=np.zeros(n, np.int64), terminated=np.zeros(n, bool),
-                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n), scenarios=[None] * n,
+                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
+                   terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
                    success=np.zeros(n, bool))
 
     def _room(self, points: int) -> None:
@@ -240,7 +245,8 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
     _advance(state, params, actions, active, True, _EVALUATE)
     if params.version >= 1 and world.scene.closure_error() > BROKEN_GAP and not state.failed[0]:
         state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
-        state.reward[0] = -params.limit_penalty
+        state.terms[0] = (0.0, 0.0, -params.limit_penalty)
+        state.reward[0] = state.terms[0, 2]
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -261,7 +267,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     the tool point those joints give, and the tracking error in either mode.
     ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
-    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward = arrays
+    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms = arrays
     p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, version, track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
@@ -312,7 +318,13 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
             if reason[i] == 0:
                 reason[i] = _TRACKING
         terminated[i] = failed[i] or k[i] >= last[i]
-        reward[i] = -limit_penalty if failed[i] else -math.log(kappa[i]) - (w_track * err[i] / 0.01 if track else 0.0)
+        if failed[i]:  # the reward and its terms (REWARD_TERMS): kappa, tracking, failure
+            terms[i, 0], terms[i, 1], terms[i, 2] = 0.0, 0.0, -limit_penalty
+            reward[i] = terms[i, 2]
+        else:
+            terms[i, 0], terms[i, 2] = -math.log(kappa[i]), 0.0
+            terms[i, 1] = -(w_track * err[i] / 0.01 if track else 0.0)
+            reward[i] = terms[i, 0] + terms[i, 1]
         px, py = path[i, k[i], 0], path[i, k[i], 1]
         # observation: rho normalised to [-1, 1], the path point now and next, log kappa, n; clipped to +-10
         nxt = min(k[i] + 1, last[i])

@@ -11,11 +11,12 @@ from numba import njit
 
 from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
     FAILURES,
     OBS_SIZE,
+    REWARD_TERMS,
     RULES,
     OrthoglideParams,
     OrthoglideRules,
@@ -88,6 +89,7 @@ class OrthoglideTask(TaskBase):
         _decide(s.k, s.last, s.failed, s.success)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"kappa": s.kappa, "tracking_error": s.err, "step": s.k}
+            numbers.update(reward_terms(s.terms, REWARD_TERMS))
             s.evaluation = Evaluation(s.success, s.reason, numbers)
         return s.evaluation
 

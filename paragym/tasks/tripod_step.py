@@ -55,11 +55,14 @@ from paragym.tasks.base import (
 from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_worlds import DynamicWorld
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "RULES",
-           "TripodParams", "TripodRules", "TripodState", "reset", "step"]
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "REWARD_TERMS",
+           "RULES", "TripodParams", "TripodRules", "TripodState", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "folded")
+#: the reward's terms, each in the info as ``reward_<name>``: the estimate's error, -10 (mean unit error + plate
+#: centre error), and (v1's relative reward) what odometry alone would lose; their sum is the reward
+REWARD_TERMS = ("estimate", "odometry")
 
 OBS_SIZE = 9 + 3 + 3 + 6
 POS_SCALE = 10.0  # m per observation unit
@@ -158,7 +161,7 @@ class TripodState(KernelArrays):
 
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("estimate", "eta", "last_eta", "smoothed", "unit_error", "plate_error", "terminated", "obs",
-                     "reward")
+                     "reward", "terms")
 
     drive: DriveState
     estimate: np.ndarray
@@ -172,6 +175,7 @@ class TripodState(KernelArrays):
     reward: np.ndarray
     #: whether the mechanism has folded in this episode (a leg at or past horizontal: true eta <= 0)
     folded: np.ndarray
+    terms: np.ndarray
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
@@ -185,7 +189,8 @@ class TripodState(KernelArrays):
         return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
                    last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
                    plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
-                   reward=np.zeros(n), folded=np.zeros(n, bool), success=np.zeros(n, bool),
+                   reward=np.zeros(n), folded=np.zeros(n, bool), terms=np.zeros((n, len(REWARD_TERMS))),
+                   success=np.zeros(n, bool),
                    failure=np.zeros(n, np.int64))
 
     @property
@@ -258,10 +263,11 @@ def _errors(units, true):
 
 
 @njit(cache=True, error_model="numpy")
-def _score(i, estimate, true, unit_error, plate_error, reward):
-    """Robot ``i``'s errors (m) and reward: -10 (mean unit error + plate centre error)."""
+def _score(i, estimate, true, unit_error, plate_error, reward, terms):
+    """Robot ``i``'s errors (m) and reward: -10 (mean unit error + plate centre error), its first term."""
     unit_error[i], plate_error[i] = _errors(estimate[i], true[i])
-    reward[i] = -10.0 * (unit_error[i] + plate_error[i])
+    terms[i, 0], terms[i, 1] = -10.0 * (unit_error[i] + plate_error[i]), 0.0
+    reward[i] = terms[i, 0]
 
 
 @njit(cache=True, error_model="numpy")
@@ -269,7 +275,7 @@ def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max
     """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
     advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity. ``arrays``:
     the state's, in ``KERNEL_FIELDS``' order; ``drive``: the drives', ``DriveState.KERNEL_FIELDS``' order."""
-    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward = arrays
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms = arrays
     true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
         slip_speed, dt = drive
     row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
@@ -290,7 +296,7 @@ def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max
                 last_eta[i, u] = eta_read[i, u]
         for u in range(3):
             eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
-        _score(i, estimate, true, unit_error, plate_error, reward)
+        _score(i, estimate, true, unit_error, plate_error, reward, terms)
         terminated[i] = k[i] >= steps[i]
         # observation: odometric units (/ 10 m), measured eta, the command, the estimate's xy (/ 10 m)
         for u in range(3):
@@ -308,7 +314,7 @@ def _advance_v1_kernel(arrays, actions, rows, move, smoothing, trust_rate, relat
                        steps, noise, geo, drive):
     """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``arrays``, ``drive``,
     ``external``, ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
-    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward = arrays
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms = arrays
     true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
         slip_speed, dt = drive
     row = np.empty(OBS_SIZE_V1)
@@ -340,10 +346,11 @@ def _advance_v1_kernel(arrays, actions, rows, move, smoothing, trust_rate, relat
         for c in range(3):  # exponential smoothing of the encoder distances (the first reading starts it)
             smoothed[i, c] = measured[c] if math.isnan(smoothed[i, c]) else \
                 smoothed[i, c] + smoothing * (measured[c] - smoothed[i, c])
-        _score(i, estimate, true, unit_error, plate_error, reward)
+        _score(i, estimate, true, unit_error, plate_error, reward, terms)
         if relative:  # v1: against odometry alone (the same optimum, less variance)
             odo_unit, odo_plate = _errors(odometry[i], true[i])
-            reward[i] += 10.0 * (odo_unit + odo_plate)
+            terms[i, 1] = 10.0 * (odo_unit + odo_plate)
+            reward[i] += terms[i, 1]
         terminated[i] = k[i] >= steps[i]
         # observation, in the robot's frame (x along the commanded heading)
         own = mt.k_distances(estimate[i])

@@ -10,9 +10,9 @@ from numba import njit
 
 from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase
+from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.tripod import TripodScenario
-from paragym.tasks.tripod_step import FAILURES, RULES, TripodParams, TripodRules, TripodState, reset, step
+from paragym.tasks.tripod_step import FAILURES, REWARD_TERMS, RULES, TripodParams, TripodRules, TripodState, reset, step
 from paragym.tasks.tripod_worlds import DynamicWorld
 
 __all__ = ["RULES", "TASK", "TripodTask", "detected_fault"]
@@ -71,6 +71,7 @@ class TripodTask(TaskBase):
         _decide(s.terminated, s.unit_error, s.folded, params.success_error, params.fold_ends, s.success, s.failure)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t}
+            numbers.update(reward_terms(s.terms, REWARD_TERMS))
             s.evaluation = Evaluation(s.success, s.failure, numbers)
         return s.evaluation
 
