@@ -58,8 +58,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     ==========  ==========================================================
 
     ## Rewards
-    Every step's info holds the reward's terms, ``reward_<name>`` for length, progress, time, proximity, reach, collision
-    (:data:`paragym.tasks.capaman_step.REWARD_TERMS`, since paragym 0.10); the reward is their sum.
+    Every step's info holds the reward's terms, ``reward_<name>`` for length, progress, time,
+    proximity, reach, collision (:data:`paragym.tasks.capaman_step.REWARD_TERMS`, since paragym
+    0.10); the reward is their sum.
     After the fitness of paper 000 (eqs 3-5), per step:
     ``-w_length * |d alpha|`` (joint-space path length, rad)
     ``- beta * [clearance < delta]`` (too close to an obstacle; the paper's
