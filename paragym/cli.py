@@ -236,9 +236,8 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
         raise KeyboardInterrupt
 
     def still_asked(row: Any) -> None:
-        """A stop whose KeyboardInterrupt got lost on the way still stops the run, at the next stored
-        episode: in a fresh clone (cold numba cache) a SIGINT during the first episodes once let the
-        run finish with exit code 0."""
+        """A stop whose KeyboardInterrupt got lost on the way (a signal while numba compiles may be) still
+        stops the run, at the next stored episode."""
         if asked:
             raise KeyboardInterrupt
 
@@ -407,7 +406,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true",
                    help="1 seed x 3 episodes instead of 5 x 10, and the paper case in dynamic fidelity on each task's "
                         "newest id for the references and learned seed 0 instead of 3 episodes for every policy "
-                        "(about 60 s on 2 cores; 85-100 s the first time, when the kernels compile)")
+                        "(a smoke run: its tables say so)")
     p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
     p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")
     p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")

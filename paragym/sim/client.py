@@ -10,8 +10,7 @@ a parallel manipulator, the spanning tree of its closed chain, cut open where
 the analytic model closes it. Its joint values come from that model; one
 ``resetJointStatesMultiDof`` call places every part and one
 ``getClosestPoints`` call per obstacle answers clearance for the whole
-manipulator (measured: 5 us for 20 links, against 170 us for a body per
-part).
+manipulator (one call instead of one per part).
 """
 
 from __future__ import annotations
@@ -518,8 +517,8 @@ class PyBulletSim:
         therefore reset (``resetSimulation``, which frees everything) and
         every remaining body is built again from its recipe, with the same
         names and link indices, then the :meth:`on_rebuild` set-ups run
-        again: memory stays bounded, and the rebuild's cost (about 3.5 ms
-        for the CaPaMan) is spread over that many removals. Body ids change
+        again: memory stays bounded, and the rebuild's cost is spread over
+        that many removals. Body ids change
         at a rebuild: address bodies by name."""
         if name not in self._bodies:
             raise ValueError(f"no body named {name!r}; bodies: {', '.join(self._bodies)}")

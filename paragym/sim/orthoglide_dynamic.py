@@ -13,7 +13,7 @@ positions) are what the env reads.
 Masses, force limits and gains are assumptions (paper 003 gives none), set in
 :class:`OrthoglideDynamics`. The time step is 5 ms (two steps of the paths'
 10 ms samples) and the solver runs 30 iterations: one closure (3 rows) on a
-5-dof tree costs little (about 0.15 ms a path sample). The motors reach a
+5-dof tree costs little. The motors reach a
 ramped target one physics step late, so the tool lags the path by the
 distance it travels in one step: on the paper's circle (0.25 m/s) 1.26 mm at
 5 ms, against 0.25 mm at 1 ms and 150 iterations, with kappa within 0.001 of
