@@ -32,6 +32,7 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from results_file import add_record_option, record  # this folder is on the path when it runs
 
 from paragym.baselines.policies import LearnedPolicy, policies_for
 from paragym.baselines.stats import wilson
@@ -42,6 +43,14 @@ from paragym.sim import capaman_clearance
 from paragym.tasks.capaman import TOUR
 from paragym.tasks.capaman_worlds import _clusters
 from paragym.units import DEG
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "The validation scenarios of CaPaManCollisionFree-v1 sorted by whether every leg's straight joint-"
+    "space segment is free on the env's occupancy grid, each policy's success on both kinds of tours (50 "
+    "episodes, Wilson 95 % intervals), and on the tours that need a detour how many of its steps went "
+    "against the target. "
+)
 
 
 class Straight:
@@ -91,6 +100,7 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=50)
     parser.add_argument("--policy", action="append", help="a built-in policy (repeatable; default rrt-ga and zero)")
     parser.add_argument("--model", action="append", default=[], help="a saved SB3 model (repeatable)")
+    add_record_option(parser)
     args = parser.parse_args()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
@@ -112,6 +122,7 @@ def main() -> None:
           f"{int((~detour).sum())} do not")
     print(f"{'policy':28s} {'straight tours':>24s} {'tours with a detour':>26s} "
           f"{'detours: steps against the target':>36s}")
+    table = []
     for name, factory in players.items():
         success, against = [], []
         for s, needs in zip(seeds, detour, strict=True):
@@ -128,7 +139,12 @@ def main() -> None:
             cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
         cells.append(f"{int(steps)}/{int(of)} ({rad:.3f} rad)")
         print(f"{name:28s} {cells[0]:>24s} {cells[1]:>26s} {cells[2]:>36s}", flush=True)
+        table.append([name, *cells])
     env.close()
+    if args.record:
+        record("capaman_detours", "Why the CaPaMan is not solved from scratch: tours that need a detour", PARAGRAPH,
+               ["policy", f"straight tours ({int((~detour).sum())})", f"tours with a detour ({int(detour.sum())})",
+                "detours: steps against the target"], table, order=40, folder=args.record)
 
 
 if __name__ == "__main__":

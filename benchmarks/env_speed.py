@@ -3,8 +3,8 @@
 Measured as Gymnasium's ``benchmark_step`` does (uniformly random actions,
 resets included whenever an episode ends, through ``gym.make``'s wrappers),
 pinned to one core, except that the actions are drawn before the clock
-starts: ``Box.sample`` alone costs about 35 us here, more than a fast env's
-step, and it is the same for every env. Both figures are printed. When
+starts: ``Box.sample`` alone can cost more than a fast env's step, and it is
+the same for every env. Both figures are printed. When
 panda-gym is installed, its PandaReach-v3 (a PyBullet serial arm) is measured
 in the same run as the anchor, and every figure is also given as a ratio to it.
 
@@ -14,12 +14,14 @@ target of at least twice PandaReach-v3's steps/s: each env with its default
 settings and, where the task has them, with its faster opt-in presets
 (``CaPaManDynamics.fast()`` and ``.split()``, ``HybridDynamics.split()``).
 A dynamic row alternates the env and the anchor in three rounds and gives
-the medians of the env's steps/s and of the rounds' ratios: on the 2-core
-development machine the anchor alone moved between 406 and 708 steps/s from
-one run to the next, and a ratio of two measurements taken seconds apart
-moved with it.
+the medians of the env's steps/s and of the rounds' ratios: a machine's load
+moves the anchor from one run to the next, and a ratio of two measurements
+taken seconds apart moves with it.
 
-    python benchmarks/env_speed.py [--seconds 5] [--dynamic-only] [--env ID ...]
+    python benchmarks/env_speed.py [--seconds 5] [--dynamic-only] [--env ID ...] [--record]
+
+``--record`` writes the table to ``benchmarks/results/env_speed.json``, which
+``python docs/build.py`` puts on the speed page.
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ import warnings
 import gymnasium as gym
 import numpy as np
 from gymnasium.utils.performance import benchmark_step
+from results_file import add_record_option, paragraph, record
 
 import paragym
 from paragym import registry
@@ -100,6 +103,7 @@ def main() -> None:
     parser.add_argument("--dynamic-only", action="store_true", help="measure the anchor and the dynamic rows only")
     parser.add_argument("--env", action="append", default=None,
                         help="only this env id's rows (repeatable; the 'paragym/' may be omitted)")
+    add_record_option(parser)
     args = parser.parse_args()
     only = None if args.env is None else {registry.check_env_id(e) for e in args.env}
     if hasattr(os, "sched_setaffinity"):
@@ -159,6 +163,13 @@ def main() -> None:
             verdict = f"{target:14.0f} " + ("ok" if sps >= target else "MISSED")
         print(f"{name:50s} {scenario:8s} {sps:9.0f} {shown} {with_sample:12.0f} {reset_s * 1000:9.2f} {verdict}")
     print("steps/s: pre-drawn actions; 'with sample': gymnasium's benchmark_step, which draws each action in the loop")
+    if args.record:
+        record("env_speed", "Steps per second of every env", paragraph(__doc__, 1),
+               ["environment", "scenario", "steps/s", "x anchor", "with sample (steps/s)", "reset (ms)", "target"],
+               [[name, scenario, f"{sps:,.0f}", "-" if ratio is None else f"{ratio:.1f}", f"{with_sample:,.0f}",
+                 f"{reset_s * 1000:.2f}", "" if target is None else target if isinstance(target, str)
+                 else f"{target:,.0f}"] for name, scenario, sps, with_sample, reset_s, target, ratio in rows],
+               order=10, folder=args.record)
 
 
 if __name__ == "__main__":

@@ -38,12 +38,21 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
+from results_file import add_record_option, record  # this folder is on the path when it runs
 
 import paragym
 from paragym.baselines.sb3_vec import as_sb3_vecenv
 from paragym.baselines.training import console_logger, load_hyperparams
 from paragym.envs.vector import SameStepVectorEnv
 from paragym.registry import check_env_id, newest
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "PPO trained side by side with Stable-Baselines3 (PyTorch), SBX (JAX) and TorchRL on each native env "
+    "with 64 robots and the same settings: env steps/s of the whole learning loop (32,768 timed steps "
+    "after a warm-up) and the share of the time in the updates (sbx-rl 0.28.0, JAX 0.10.2, torchrl "
+    "0.14.1, PyTorch 2.13.0 with two threads). "
+)
 
 #: the settings every learner gets from an env's PPO row
 SHARED = ("n_steps", "n_epochs", "gamma", "gae_lambda", "learning_rate", "clip_range", "ent_coef")
@@ -195,6 +204,7 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads (default %(default)s)")
     parser.add_argument("--learner", action="append", choices=("sb3", "sbx", "torchrl"),
                         help="only these (repeatable)")
+    add_record_option(parser)
     args = parser.parse_args()
     ids = [check_env_id(e) for e in args.env] if args.env else [e for e in newest() if e in paragym.VECTOR_ENTRY_POINTS]
     names = args.learner or ["sb3", "sbx", "torchrl"]
@@ -214,8 +224,12 @@ def main() -> None:
         rows.append((env_id, rates, shares))
     print(f"\nPPO, {args.robots} robots, {args.timesteps:,} timed steps; env steps/s of model.learn and x SB3's")
     print(f"{'environment':34s}" + "".join(f"{n:>12s}{'x sb3':>8s}{'update':>8s}" for n in names))
+    table = []
     for env_id, rates, shares in rows:
         base = rates.get("sb3")
+        table.append([env_id.split("/")[-1]] + [c for n in names for c in (
+            ["-", "-", "-"] if rates[n] is None else
+            [f"{rates[n]:,.0f}", f"{rates[n] / base:.1f}" if base else "-", f"{100 * shares[n]:.0f} %"])])
         cells = []
         for n in names:
             rate = rates[n]
@@ -225,6 +239,10 @@ def main() -> None:
         print(f"{env_id.split('/')[-1]:34s}" + "".join(cells))
     if any(np.isnan(r) for _, rates, _ in rows for r in rates.values() if r is not None):
         raise SystemExit("a rate is NaN")
+    if args.record:
+        record("learner_speed", "The learner: PPO in Stable-Baselines3, SBX and TorchRL", PARAGRAPH,
+               ["environment"] + [c for n in names for c in (f"{n} PPO (steps/s)", "x SB3", "its updates")], table,
+               order=50, folder=args.record)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ import statistics
 import time
 
 import numpy as np
+from results_file import add_record_option, record  # this folder is on the path when it runs
 from tqdm import tqdm
 
 from paragym.planners import PlanningError, RrtGaPlanner
@@ -35,6 +36,13 @@ from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman import paper_scenario, random_scenario
 from paragym.trajectories import JointPath
 from paragym.units import DEG
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "The reference planner (paper 000's RRT + GA) and OMPL's RRTConnect and RRT* (each with "
+    "simplification) on the paper scenario and 50 seeded random ones, all with the same validity model "
+    "and via points. "
+)
 
 MIN_LEG_BUDGET = 0.1  # s: RRT* gets at least this per leg, even when RRT + GA needed less
 LEGS = ((0, 1), (1, 2), (2, 0))
@@ -123,6 +131,7 @@ def main() -> None:
     parser.add_argument("--scenarios", type=int, default=50, help="random scenarios (seeds 0..N-1)")
     parser.add_argument("--paper-runs", type=int, default=10, help="planner seeds on the paper scenario")
     parser.add_argument("--verbose", action="store_true", help="also print every scenario's row")
+    add_record_option(parser)
     args = parser.parse_args()
     try:
         ompl = Ompl()
@@ -180,11 +189,16 @@ def main() -> None:
     print(f"\n{len(scenarios)} scenarios (paper + {args.scenarios} random), the same validity model for all")
     print(f"{'planner':26s} {'success':>8s} {'t median':>9s} {'t p90':>7s} {'length':>7s} "
           f"{'min clear':>10s} {'J mean':>7s}")
+    table = []
     for name in names:
         ok = [r for r in rows[name] if r["ok"]]
         times = [r["time"] for r in ok]
         finite = [r["J"] for r in ok if np.isfinite(r["J"])]
         inf = len(ok) - len(finite)
+        table.append([name, f"{len(ok) / len(rows[name]):.0%}", f"{np.median(times):.2f} s",
+                      f"{np.percentile(times, 90):.2f} s", f"{np.mean([r['length'] for r in ok]):.3f}",
+                      f"{min(r['clearance'] for r in ok) * 1000:.1f} mm",
+                      f"{np.mean(finite):.3f}" + (f" ({inf} with J = inf left out)" if inf else "")])
         print(f"{name:26s} {len(ok) / len(rows[name]):8.0%} {np.median(times):8.2f}s {np.percentile(times, 90):6.2f}s "
               f"{np.mean([r['length'] for r in ok]):7.3f} {min(r['clearance'] for r in ok) * 1000:8.1f}mm "
               f"{np.mean(finite):7.3f}" + (f"  ({inf} with J = inf left out)" if inf else ""))
@@ -202,6 +216,10 @@ def main() -> None:
               "motions at its own resolution (half that, Euclidean)")
     scene.close()
     planner.close()
+    if args.record:
+        record("planner_capaman", "Planning: RRT + GA against OMPL", PARAGRAPH,
+               ["planner", "success", "time median", "time p90", "joint path (rad)", "min clearance", "mean J"],
+               table, order=80, folder=args.record)
 
 
 if __name__ == "__main__":

@@ -34,8 +34,17 @@ import time
 import gymnasium as gym
 import numpy as np
 from env_speed import steps_per_second  # this folder is on the path when the script runs
+from results_file import add_record_option, record  # this folder is on the path when it runs
 
 import paragym
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "The single env, gymnasium's sync and async modes with two copies, and the native vector env at N = "
+    "1, 64, 1024 and 4096 robots, each timed over at least one full episode of every robot (robot-"
+    "steps/s, random scenarios, one core; in brackets the ratio to PandaReach-v3, 391 in that run), with "
+    "the first 20 steps after the reset at N = 4096 and the peak resident memory. "
+)
 
 TARGET_4096 = {"paragym/Orthoglide2PRRKappa-v0": 1_000_000, "paragym/HybridSingularityFree-v0": 1_000_000,
                "paragym/CaPaManCollisionFree-v0": 250_000, "paragym/MobileTripodOdometry-v0": 250_000}
@@ -132,6 +141,7 @@ def main() -> None:
     parser.add_argument("--envs", nargs="*", default=list(paragym.ENVIRONMENTS), help="env ids to measure")
     parser.add_argument("--sizes", nargs="*", type=int, default=list(SIZES),
                         help="numbers of robots of the native env (the targets are for 4096)")
+    add_record_option(parser)
     args = parser.parse_args()
     sizes, big = args.sizes, max(args.sizes)
 
@@ -174,6 +184,9 @@ def main() -> None:
         if not args.skip_ppo and env_id in paragym.VECTOR_ENTRY_POINTS:
             ppo.append((name, ppo_rate(env_id, False), ppo_rate(env_id, True)))
 
+    if args.record:
+        record("speed_at_scale", "At scale: the single env, gymnasium's vector modes and the native env at N robots",
+               PARAGRAPH, header, rows, order=70, folder=args.record)
     widths = [max(len(r[i]) for r in [header, *rows]) for i in range(len(header))]
     print("\nsteps/s (robot-steps/s for vector envs), one core; in brackets: ratio to PandaReach-v3\n")
     for r in [header, ["-" * w for w in widths], *rows]:

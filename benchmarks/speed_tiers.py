@@ -28,8 +28,18 @@ from env_speed import steps_per_second  # this folder is on the path when the sc
 from learner_speed import learner
 from learner_speed import steps_per_second as learning_rate
 from native_speed import anchor_steps_per_second, robot_steps_per_second
+from results_file import add_record_option, record
 
 from paragym.registry import check_env_id, newest
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "For the newest version of every task, the three figures Isaac Lab and EnvPool report, each with its "
+    "ratio to PandaReach-v3 measured before the row: the single env and the native vector env at N = 1024 "
+    "with its autoresets; Stable-Baselines3's PPO collecting its rollouts on the native env with 64 "
+    "robots (the policy's forward pass on every batch); and PPO's model.learn end to end with the env's "
+    "ppo.yml settings (steps/s, in brackets the ratio to PandaReach-v3). "
+)
 
 
 def main() -> None:
@@ -39,6 +49,7 @@ def main() -> None:
     parser.add_argument("--robots", type=int, default=1024, help="N of the native env alone (default %(default)s)")
     parser.add_argument("--timesteps", type=int, default=32_768, help="PPO's timed steps (default %(default)s)")
     parser.add_argument("--ppo-robots", type=int, default=64, help="PPO's robots (default %(default)s)")
+    add_record_option(parser)
     args = parser.parse_args()
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
     ppo = learner("sb3", 2)
@@ -62,9 +73,17 @@ def main() -> None:
     print(f"\n| environment | single env | native, N = {args.robots} | with policy inference (PPO, N = "
           f"{args.ppo_robots}) | during training (PPO, N = {args.ppo_robots}) | anchor (PandaReach-v3) |")
     print("|---|---|---|---|---|---|")
-    for env_id, anchor, single, native, collecting, training in rows:
-        print(f"| {env_id.split('/')[-1]} | {cell(single, anchor)} | {cell(native, anchor)} | "
-              f"{cell(collecting, anchor)} | {cell(training, anchor)} | {f'{anchor:,.0f}' if anchor else '-'} |")
+    table = [[env_id.split("/")[-1], cell(single, anchor), cell(native, anchor), cell(collecting, anchor),
+              cell(training, anchor), f"{anchor:,.0f}" if anchor else "-"]
+             for env_id, anchor, single, native, collecting, training in rows]
+    for r in table:
+        print("| " + " | ".join(r) + " |")
+    if args.record:
+        record("speed_tiers", "Three tiers: the env alone, with policy inference, during training",
+               PARAGRAPH,
+               ["environment", "single env", f"native, N = {args.robots}",
+                f"with policy inference (PPO, N = {args.ppo_robots})", f"during training (PPO, N = {args.ppo_robots})",
+                "anchor (PandaReach-v3)"], table, order=20, folder=args.record)
 
 
 if __name__ == "__main__":

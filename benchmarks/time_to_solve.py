@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from results_file import add_record_option, record  # this folder is on the path when it runs
 
 import paragym
 from paragym.baselines.solve import SolveCheck, stop_when_solved
@@ -45,6 +46,14 @@ from paragym.baselines.stats import mean_ci
 from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import train
 from paragym.registry import check_env_id, newest, row
+
+#: the speed page's paragraph above this script's table (``--record``)
+PARAGRAPH = (
+    "PPO trained from scratch, 3 seeds per task, and the wall-clock minutes of learning on 2 cores until "
+    "the task counts as solved (its bench's solved targets), checked every minute of learning on 20 "
+    "validation episodes; a target against another policy is met when the 95 % interval (Student's t) of "
+    "the paired gap lies wholly on the better side. "
+)
 
 
 def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
@@ -173,6 +182,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("results/time_to_solve"))
     parser.add_argument("--force", action="store_true", help="run again the runs already in OUT")
     parser.add_argument("--report-only", action="store_true", help="train nothing: the report of the runs in OUT")
+    add_record_option(parser)
     args = parser.parse_args()
     if args.seeds < 1 or args.budget <= 0 or args.check_every <= 0:
         parser.error("--seeds, --budget and --check-every must be positive")
@@ -211,6 +221,11 @@ def main() -> None:
             f"{table}\n\n![learning curves](time_to_solve.png)\n"
             + (f"\nNot run yet: {', '.join(missing)}.\n" if missing else ""))
     (args.out / "time_to_solve.md").write_text(text)
+    if args.record:
+        lines = [r for r in table.splitlines() if r.startswith("|")]
+        cells = [[c.strip() for c in r.strip("|").split("|")] for r in lines]
+        record("time_to_solve", "Time to solve: PPO from scratch until the task counts as solved", PARAGRAPH,
+               cells[0], cells[2:], order=30, folder=args.record, figure="reports/time_to_solve.png")
     print("\n" + table + f"\n\nwrote {args.out / 'time_to_solve.md'} and {args.out / 'time_to_solve.png'}")
 
 

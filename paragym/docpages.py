@@ -22,8 +22,8 @@ from typing import Any
 
 from paragym import registry
 
-__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "readme_env_table", "readme_leaderboard_table",
-           "render_frame", "sections", "status", "write_pages"]
+__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "speed_page", "readme_env_table",
+           "readme_leaderboard_table", "render_frame", "sections", "status", "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
@@ -246,3 +246,29 @@ def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | No
     index.write_text(index_page())
     written.append(index)
     return written
+
+
+def speed_page(results: str | Path) -> str:
+    """``docs/speed.md``, made from the benchmarks' result files in ``results`` (``benchmarks/results/*.json``,
+    written by ``benchmarks/results_file.record``): one section per file, in its ``order``, each a title, one
+    paragraph, what produced it (command, date, machine, commit) and its table. No figure is typed in."""
+    import json
+
+    files = [json.loads(p.read_text()) for p in sorted(Path(results).glob("*.json"))]
+    files.sort(key=lambda f: (f.get("order", 50), f["name"]))
+    out = ["# Speed", "",
+           "Every table below is a benchmark's result file (`benchmarks/results/`), written by the script that "
+           "measured it, with the command, the date, the machine and the commit that produced it; "
+           "`python docs/build.py` makes this page from them. Figures move with a machine's load: compare rows "
+           "of one table, or re-run its command. How these figures were investigated in the past is in "
+           "[the speed notes](notes/speed-history.md).", ""]
+    for f in files:
+        out += [f"## {f['title']}", "", f["paragraph"], "",
+                f"`{f['command']}`: {f['date']}, {f['machine']}, commit `{f['commit']}`"
+                + (f"; {f['source']}" if f.get("source") else "") + ".", "",
+                "| " + " | ".join(f["columns"]) + " |", "|" + "---|" * len(f["columns"])]
+        out += ["| " + " | ".join(r) + " |" for r in f["rows"]]
+        out.append("")
+        if f.get("figure"):
+            out += [f"![{f['title']}]({f['figure']})", ""]
+    return "\n".join(out)

@@ -7,15 +7,28 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
+def _recorded(folder: Path, name: str) -> dict:
+    """The result file a benchmark's ``--record`` wrote: what produced it, and its rows."""
+    import json
+
+    data = json.loads((folder / f"{name}.json").read_text())
+    assert data["command"].startswith("python benchmarks/") and data["date"] and data["machine"] and data["commit"]
+    assert data["rows"] and all(len(r) == len(data["columns"]) for r in data["rows"]), data
+    return data
+
+
 def _run(*args: str) -> str:
     res = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
     assert res.returncode == 0, res.stderr[-2000:]
     return res.stdout
 
 
-def test_env_speed_prints_its_rows():
-    """One env's rows, kinematic and dynamic (the whole table is the same code over every id)."""
-    out = _run("benchmarks/env_speed.py", "--seconds", "0.3", "--env", "Orthoglide2PRRKappa-v0")
+def test_env_speed_prints_its_rows(tmp_path):
+    """One env's rows, kinematic and dynamic (the whole table is the same code over every id); ``--record`` writes
+    them for the speed page."""
+    out = _run("benchmarks/env_speed.py", "--seconds", "0.3", "--env", "Orthoglide2PRRKappa-v0", "--record",
+               str(tmp_path))
+    assert len(_recorded(tmp_path, "env_speed")["rows"]) == 3
     rows = [ln for ln in out.splitlines() if ln.startswith("paragym/")]
     assert [r.split()[:2] for r in rows] == [["paragym/Orthoglide2PRRKappa-v0", "random"],
                                               ["paragym/Orthoglide2PRRKappa-v0", "paper"],
@@ -35,8 +48,9 @@ def test_dynamic_floor_prints_both_ceilings_for_every_dynamic_row():
     assert all(len(r) == 11 for r in rows)  # both ceilings (as '-' when panda-gym, the anchor, is not installed)
 
 
-def test_planner_benchmark_prints_its_table():
-    out = _run("benchmarks/planner_capaman.py", "--scenarios", "1", "--paper-runs", "1")
+def test_planner_benchmark_prints_its_table(tmp_path):
+    out = _run("benchmarks/planner_capaman.py", "--scenarios", "1", "--paper-runs", "1", "--record", str(tmp_path))
+    assert _recorded(tmp_path, "planner_capaman")["rows"][0][0] == "RRT+GA"
     assert "RRT + GA on the paper scenario" in out and "RRT+GA " in out
 
 
@@ -45,9 +59,10 @@ def test_kf_speed_prints_the_comparison():
     assert "Kalman filter" in out and "speed-up" in out and "target" in out
 
 
-def test_speed_report_prints_its_table():
+def test_speed_report_prints_its_table(tmp_path):
     out = _run("benchmarks/speed.py", "--seconds", "0.1", "--skip-ppo", "--envs", "paragym/Orthoglide2PRRKappa-v0",
-               "--sizes", "1", "8")
+               "--sizes", "1", "8", "--record", str(tmp_path))
+    assert len(_recorded(tmp_path, "speed_at_scale")["rows"]) == 1
     lines = [ln for ln in out.splitlines() if ln.startswith("Orthoglide2PRRKappa-v0 ") and " | " not in ln]
     assert len(lines) == 1  # the table's row (the progress line before it is joined with " | ")
     cells = lines[0].split()
@@ -61,16 +76,19 @@ def test_native_speed_prints_a_row_per_env_beside_the_anchor():
     assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 7 and row[6].endswith("%")
 
 
-def test_learner_speed_prints_each_learner_beside_sb3():
-    out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512")
+def test_learner_speed_prints_each_learner_beside_sb3(tmp_path):
+    out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512",
+               "--record", str(tmp_path))
+    assert _recorded(tmp_path, "learner_speed")["rows"][0][2] == "1.0"  # x SB3 of SB3
     (row,) = [ln.split() for ln in out.splitlines() if ln.startswith("Orthoglide2PRRKappa-v1 ")]
     assert float(row[1].replace(",", "")) > 0 and row[2] == "1.0" and row[3].endswith("%")  # sb3, x sb3, update
     assert len(row) == 10  # and sbx's and torchrl's three cells each ('-' when not installed)
 
 
-def test_speed_tiers_prints_the_three_tiers_beside_the_anchor():
+def test_speed_tiers_prints_the_three_tiers_beside_the_anchor(tmp_path):
     out = _run("benchmarks/speed_tiers.py", "--env", "Orthoglide2PRRKappa-v1", "--seconds", "0.2", "--robots", "8",
-               "--timesteps", "512", "--ppo-robots", "4")
+               "--timesteps", "512", "--ppo-robots", "4", "--record", str(tmp_path))
+    assert _recorded(tmp_path, "speed_tiers")["rows"][0][0] == "Orthoglide2PRRKappa-v1"
     (row,) = [ln for ln in out.splitlines() if ln.startswith("| Orthoglide2PRRKappa-v1 |")]
     assert len(row.strip("|").split("|")) == 6
 
@@ -84,15 +102,18 @@ def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
     assert (tmp_path / "Orthoglide2PRRKappa-v1-seed0.json").is_file() and (tmp_path / "time_to_solve.png").is_file()
     (row,) = [ln for ln in out.splitlines() if ln.startswith("| Orthoglide2PRRKappa-v1 |")]
     assert "mean_kappa < 1.01 x gradient-c's" in row and " of 1 |" in row
-    again = _run(*args[:4], "2", *args[5:], "--report-only")  # a second seed asked for, not trained
+    again = _run(*args[:4], "2", *args[5:], "--report-only", "--record", str(tmp_path))  # seed 1 not trained
     assert again.count("taken from") == 1 and "seed 1: not run yet" in again and row in again
+    assert _recorded(tmp_path, "time_to_solve")["rows"][0][0] == "Orthoglide2PRRKappa-v1"
 
 
-def test_capaman_detours_splits_success_by_tour():
+def test_capaman_detours_splits_success_by_tour(tmp_path):
     """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes), and
     the grid's expert completes the detour without a step against its target (v1's progress never went below 0
     on its way round)."""
-    out = _run("benchmarks/capaman_detours.py", "--episodes", "4", "--policy", "zero", "--policy", "grid-field")
+    out = _run("benchmarks/capaman_detours.py", "--episodes", "4", "--policy", "zero", "--policy", "grid-field",
+               "--record", str(tmp_path))
+    assert [r[0] for r in _recorded(tmp_path, "capaman_detours")["rows"]][-2:] == ["zero", "grid-field"]
     rows = {ln.split()[0]: ln.split() for ln in out.splitlines() if ln.startswith(("straight ", "grid-field "))}
     done, straight = rows["straight"][1].split("/")
     assert done == straight != "0" and rows["straight"][4].split("/")[0] == "0"

@@ -43,6 +43,22 @@ def test_each_env_page_is_what_the_generator_writes(row):
     assert (DOCS / "envs" / "images" / f"{row.name}.png").is_file()
 
 
+def test_the_speed_page_is_made_from_the_benchmarks_result_files():
+    """docs/speed.md is generated (no figure typed in): each table is a result file saying what produced it."""
+    import json
+
+    from paragym.docpages import speed_page
+
+    results = ROOT / "benchmarks" / "results"
+    assert (DOCS / "speed.md").read_text() == speed_page(results), "docs/speed.md is stale: run python docs/build.py"
+    files = [json.loads(p.read_text()) for p in results.glob("*.json")]
+    assert files
+    for f in files:
+        assert f["command"].startswith("python benchmarks/") and f["date"] and f["machine"] and f["commit"], f["name"]
+        assert f["rows"] and all(len(r) == len(f["columns"]) for r in f["rows"]), f["name"]
+        assert "\n\n" not in f["paragraph"], f"{f['name']}: one paragraph"
+
+
 def test_the_env_index_is_what_the_generator_writes():
     assert (DOCS / "envs" / "index.md").read_text() == index_page(), "docs/envs/index.md is stale"
 
