@@ -241,11 +241,11 @@ class ParagymEnv(TaskShell, gym.Env):
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         if self._closed:
             self._check_open()
-        action = check_action(action, self.action_space)
+        action = check_action(action, self.action_space)[None]
         if self._ended:
             raise RuntimeError("call reset() before step()" if self._evaluation is None else
                                "the episode has ended (a step returned terminated=True): call reset()")
-        self.task.step(self.state, self.params, action[None], _ONE, self.world)
+        self.task.step(self.state, self.params, action, _ONE, self.world)
         self._evaluation = self.task.evaluate(self.state, self.params, self.world)
         s = self.state
         self._ended = terminated = s.terminated.item(0)
@@ -265,11 +265,18 @@ class ParagymEnv(TaskShell, gym.Env):
         """The info of the one robot: the task's numbers, success and failure (:meth:`Task.evaluate`) and its
         details (:meth:`Task.details`)."""
         ev = self._evaluation
-        info = {name: value.item(0) for name, value in ev.numbers.items()}
-        info.update(self.task.details(self.state, self.params, self.world, 0))
-        info["is_success"] = ev.success.item(0)
-        info["failure"] = self.task.failures[ev.failure.item(0)]
+        if ev is not self._read_for:  # the same Evaluation (the state's buffers) every step: its readers, once
+            self._read_for = ev
+            self._readers = tuple((name, value.item) for name, value in ev.numbers.items())
+            self._outcome = ev.success.item, ev.failure.item, self.task.failures, self.task.details
+        success, failure, names, details = self._outcome
+        info = {name: read(0) for name, read in self._readers}
+        info.update(details(self.state, self.params, self.world, 0))
+        info["is_success"] = success(0)
+        info["failure"] = names[failure(0)]
         return info
+
+    _read_for: Any = None
 
     @property
     def scenario(self) -> Any:

@@ -64,9 +64,8 @@ class HybridTask(TaskBase):
         if world is not None:
             world.reset(state)
 
-    def step(self, state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
+    #: the transition itself (:func:`paragym.tasks.hybrid_step.step`: the contract's signature)
+    step = staticmethod(step)
 
     def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
         """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in

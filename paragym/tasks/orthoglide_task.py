@@ -78,9 +78,8 @@ class OrthoglideTask(TaskBase):
         if world is not None:
             world.reset(state)
 
-    def step(self, state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
+    #: the transition itself (:func:`paragym.tasks.orthoglide_step.step`: the contract's signature)
+    step = staticmethod(step)
 
     def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
         """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;

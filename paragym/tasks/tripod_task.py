@@ -60,9 +60,8 @@ class TripodTask(TaskBase):
         if world is not None:
             world.reset(state)
 
-    def step(self, state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
-        step(state, params, actions, active, world)
+    #: the transition itself (:func:`paragym.tasks.tripod_step.step`: the contract's signature)
+    step = staticmethod(step)
 
     def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
         """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
