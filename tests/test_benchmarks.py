@@ -122,8 +122,11 @@ def test_capaman_detours_splits_success_by_tour(tmp_path):
 
 
 def _time_to_solve():
+    """The script as a module, with its folder on the path as when it runs (it imports its siblings)."""
     import importlib.util
 
+    if str(ROOT / "benchmarks") not in sys.path:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
     spec = importlib.util.spec_from_file_location("time_to_solve", ROOT / "benchmarks" / "time_to_solve.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
