@@ -169,3 +169,16 @@ def test_cpu_dependence_writes_its_report(tmp_path):
     assert "host " in out and "blas-sandybridge " in out and "us against" in out, out
     text = report.read_text()
     assert "| `blas-sandybridge` | 1/1 |" in text and "dagger-seed2" in text and "| ratio |" in text, text
+
+
+def test_the_ablation_reads_each_task_from_its_bench():
+    """benchmarks/ablation.py keys nothing by task: its rows, floors and metric are each bench's ``ablation``."""
+    if str(ROOT / "benchmarks") not in sys.path:
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+    import ablation
+
+    found = ablation.ablations()
+    assert sorted(found) == ["capaman", "hybrid", "tripod"]
+    assert all(a.rows and a.beside[1] for a in found.values())
+    source = (ROOT / "benchmarks" / "ablation.py").read_text()
+    assert not [t for t in found if f'"{t}"' in source]

@@ -31,13 +31,50 @@ from paragym import registry
 from paragym.baselines.stats import mean_ci
 from paragym.rollout import Episode
 
-__all__ = ["Bench", "BuiltIn", "Column", "Option", "Target", "bench_of", "init_defaults", "missing",
-           "random_factory", "tightest", "zero_factory"]
+__all__ = ["Ablation", "AblationRow", "Bench", "BuiltIn", "Column", "Option", "Target", "bench_of", "init_defaults",
+           "missing", "random_factory", "tightest", "zero_factory"]
 
 #: a policy factory: ``factory(env, seed) -> policy`` (:mod:`paragym.baselines.policies`)
 Factory = Callable[[gym.Env, int], Any]
 #: a CLI adapter: ``run(env, args, out, stem) -> exit code`` (the env made on the chosen scenario)
 Adapter = Callable[[gym.Env, argparse.Namespace, Path, str], int]
+
+
+@dataclass(frozen=True)
+class AblationRow:
+    """One design change of a task's ablation (``benchmarks/ablation.py``): trained and measured the same way.
+
+    Attributes:
+        label: what the row changes, as the table says it.
+        env_id: the env it trains and is evaluated on.
+        env_kwargs: the env's arguments for the row.
+        overrides: PPO settings over the ablation's protocol.
+        steps: env steps of training.
+    """
+
+    label: str
+    env_id: str
+    env_kwargs: dict[str, Any]
+    overrides: dict[str, Any]
+    steps: int
+
+
+@dataclass(frozen=True)
+class Ablation:
+    """The ablation behind a task's later version: its rows, in the order they were tried, and how it is read.
+
+    Attributes:
+        rows: the design changes (:class:`AblationRow`).
+        beside: the env id and the policies (floors, reference) the table compares with.
+        metric: the task's column: (label, value of an episode from its infos).
+        ppo_from: the env id whose ``ppo.yml`` entry the rows train with; None: the shared protocol
+            (``benchmarks/ablation.py``'s ``PROTOCOL``).
+    """
+
+    rows: tuple[AblationRow, ...]
+    beside: tuple[str, tuple[str, ...]]
+    metric: tuple[str, Callable[[list[dict[str, Any]]], float]]
+    ppo_from: str | None = None
 
 
 @dataclass(frozen=True)
@@ -151,6 +188,8 @@ class Bench:
         plot_episode: ``plot_episode(episode, path) -> path``: the demo's picture; None: the episode's
             first frame and its rewards (:func:`paragym.plots.plot_episode`).
         plan: the reference planner's offline run (``paragym plan``); None: the task has none.
+        ablation: the ablation behind the task's later version (:class:`Ablation`), which
+            ``benchmarks/ablation.py`` runs; None: none.
         options: the task's own command-line options of ``plan`` and ``validate`` (:class:`Option`), which its
             adapters read from ``args``.
         validate_plan: the CLI's plan-execute-validate of the reference plan (``paragym validate`` without
@@ -179,6 +218,7 @@ class Bench:
     plan: Adapter | None = None
     validate_plan: Adapter | None = None
     options: tuple[Option, ...] = ()
+    ablation: Ablation | None = None
     validated_plan: Callable[[int], tuple[bool, dict[str, Any]]] | None = None
     solved: tuple[Target, ...] = ()
     dynamic_tolerance: tuple[float, float] = (1e-6, 1e-9)

@@ -9,9 +9,21 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Option, Target, init_defaults, tightest, zero_factory
+from paragym.baselines.tasks import (
+    Ablation,
+    AblationRow,
+    Bench,
+    BuiltIn,
+    Column,
+    Option,
+    Target,
+    init_defaults,
+    tightest,
+    zero_factory,
+)
 from paragym.rollout import Episode
 from paragym.sim.capaman_dynamic import CaPaManDynamics
+from paragym.units import DEG
 
 V1 = ("paragym/CaPaManCollisionFree-v1",)
 
@@ -167,7 +179,27 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
                         "duration_s": traj.duration}
 
 
+#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task capaman``), its rows in the order they were tried
+ABLATION = Ablation(
+    rows=(
+        AblationRow("v0 (absolute obs, no look-ahead, v0 reward), PPO", "paragym/CaPaManCollisionFree-v0", {}, {},
+                    1_500_000),
+        AblationRow("v1 as released: goal-relative obs + look-ahead, time penalty, 3 deg reach",
+         "paragym/CaPaManCollisionFree-v1", {}, {}, 1_500_000),
+        AblationRow("v1 with v0's reward (no time penalty, collision -5)", "paragym/CaPaManCollisionFree-v1",
+         {"time_penalty": 0.0, "collision_penalty": 5.0}, {}, 1_500_000),
+        AblationRow("v1 with v0's reach tolerance (1 deg)", "paragym/CaPaManCollisionFree-v1",
+                    {"reach_tolerance": 1 * DEG}, {},
+         1_500_000),
+    ),
+    beside=("paragym/CaPaManCollisionFree-v1", ("zero", "rrt-ga")),
+    metric=("collisions", lambda infos: float(infos[-1]["collision"])),
+    ppo_from=None,
+)
+
+
 BENCH = Bench(
+    ablation=ABLATION,
     task="capaman",
     options=(Option(("plan", "validate"), "--dt", float, {"plan": 0.45, "validate": 0.9},
                     "seconds between via points (paper: 0.09, 0.45, 0.9)"),),

@@ -9,7 +9,18 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Option, Target, init_defaults, tightest, zero_factory
+from paragym.baselines.tasks import (
+    Ablation,
+    AblationRow,
+    Bench,
+    BuiltIn,
+    Column,
+    Option,
+    Target,
+    init_defaults,
+    tightest,
+    zero_factory,
+)
 from paragym.rollout import Episode
 from paragym.sim.hybrid_dynamic import HybridDynamics
 
@@ -143,7 +154,26 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
                                "position_error_m": val.position_error}
 
 
+#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task hybrid``), its rows in the order they were tried
+ABLATION = Ablation(
+    rows=(
+        AblationRow("v0, the shipped PPO setup", "paragym/HybridSingularityFree-v0", {}, {}, 2_000_000),
+        AblationRow("v1 as released: P1, P1 solved at the split, its stroke excess and look-ahead in the observation",
+         "paragym/HybridSingularityFree-v1", {}, {}, 2_000_000),
+        AblationRow("v1 + shaping toward a feasible end, w_end 10", "paragym/HybridSingularityFree-v1",
+                    {"w_end": 10.0}, {},
+         2_000_000),
+        AblationRow("the same, longer", "paragym/HybridSingularityFree-v1", {"w_end": 10.0}, {}, 3_000_000),
+        AblationRow("v1 + shaping, w_end 30", "paragym/HybridSingularityFree-v1", {"w_end": 30.0}, {}, 2_000_000),
+    ),
+    beside=("paragym/HybridSingularityFree-v1", ("zero", "polynomial-detour")),
+    metric=("singular/limit poses", lambda infos: float(sum(not i["free"] for i in infos))),
+    ppo_from="paragym/HybridSingularityFree-v1",
+)
+
+
 BENCH = Bench(
+    ablation=ABLATION,
     task="hybrid",
     options=(Option(("validate",), "--duration", float, 2.0, "seconds for the whole path"),),
     metrics=metrics,

@@ -14,7 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, init_defaults, zero_factory
+from paragym.baselines.tasks import Ablation, AblationRow, Bench, BuiltIn, Column, Target, init_defaults, zero_factory
 from paragym.rollout import Episode
 from paragym.sim.tripod_dynamic import TripodDynamics
 
@@ -119,7 +119,32 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     return 0
 
 
+#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task tripod``), its rows in the order they were tried
+ABLATION = Ablation(
+    rows=(
+        AblationRow("v0 (accumulated corrections, world-frame obs), PPO", "paragym/MobileTripodOdometry-v0", {},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -3.0}}, 2_000_000),
+        AblationRow("v1 action and obs, trust 1 per sample, v0's reward", "paragym/MobileTripodOdometry-v1",
+         {"trust_rate": 1.0, "relative_reward": False}, {}, 1_000_000),
+        AblationRow("+ initial action std e^-1", "paragym/MobileTripodOdometry-v1",
+                    {"trust_rate": 1.0, "relative_reward": False},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        AblationRow("+ trust rate 0.2 per sample", "paragym/MobileTripodOdometry-v1", {"relative_reward": False},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        AblationRow("+ reward against odometry (v1 as released)", "paragym/MobileTripodOdometry-v1", {},
+         {"policy_kwargs": {"net_arch": [64, 64], "log_std_init": -1.0}}, 2_000_000),
+        AblationRow("+ gamma 0.999, lambda 0.98, std e^-2", "paragym/MobileTripodOdometry-v1", {},
+         {"gamma": 0.999, "gae_lambda": 0.98, "policy_kwargs": {"net_arch": [64, 64], "log_std_init": -2.0}},
+         3_000_000),
+    ),
+    beside=("paragym/MobileTripodOdometry-v1", ("zero", "encoder-correction")),
+    metric=("final unit error [cm]", lambda infos: infos[-1]["unit_error"] * 100),
+    ppo_from=None,
+)
+
+
 BENCH = Bench(
+    ablation=ABLATION,
     task="tripod",
     metrics=metrics,
     columns=(Column("final_unit_error_cm", "final unit error [cm]", ".2f"),
