@@ -103,6 +103,55 @@ def test_success_is_decided_in_one_place(monkeypatch):
     assert outcome() == tuple(not s for s in honest), honest
 
 
+BROKEN_DECIDE = r"""
+import json, sys
+import gymnasium as gym
+import numpy as np
+import paragym.tasks.orthoglide_step as step_module
+from paragym.baselines.leaderboard import evaluate as board
+from paragym.baselines.policies import get_policy
+from paragym.tasks.orthoglide import circle_task
+
+if sys.argv[1] == "broken":  # the one place success is decided, broken: every consumer must follow
+    honest = step_module.decide
+    step_module.decide = lambda k, last, failed: not honest(k, last, failed)
+env_id, short = "paragym/Orthoglide2PRRKappa-v1", circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
+env = gym.make(env_id, scenario=short)
+env.reset(seed=0)
+while True:
+    *_, terminated, truncated, info = env.step(np.zeros(1, np.float32))
+    if terminated or truncated:
+        break
+venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=short)
+venv.reset(seed=0)
+for _ in range(4):
+    *_, vinfo = venv.step(np.zeros((2, 1), np.float32))
+env = gym.make(env_id, scenario=short)
+board._ENVS[env_id] = env
+row = board.evaluate_episode(get_policy(env_id, "zero"), 0, 0)
+print(json.dumps([info["is_success"], bool(vinfo["is_success"][0]), row.success]))
+"""
+
+
+def test_success_is_decided_by_one_function_of_the_transition():
+    """The decision itself is one function (``paragym.tasks.<task>_step.decide``), which the compiled transition
+    calls: with numba's JIT off, replacing it in that one place changes the single env's, the vector env's and
+    the leaderboard's success alike."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
+    outcome = {}
+    for mode in ("honest", "broken"):
+        proc = subprocess.run([sys.executable, "-c", BROKEN_DECIDE, mode], capture_output=True, text=True, env=env,
+                              timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        outcome[mode] = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert outcome["broken"] == [not s for s in outcome["honest"]], outcome
+
+
 # --- one lifecycle, every id and fidelity ----------------------------------------------------------------------------
 
 

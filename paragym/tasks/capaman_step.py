@@ -69,7 +69,7 @@ from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, Wo
 from paragym.units import DEG
 
 __all__ = ["FAILURES", "LOOKAHEAD", "REWARD_TERMS", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP",
-           "CaPaManParams", "CaPaManRules", "CaPaManState", "reset", "step"]
+           "CaPaManParams", "CaPaManRules", "CaPaManState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "collision", "broken")
@@ -224,7 +224,8 @@ class CaPaManState(KernelArrays):
 
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("tp", "tc", "code", "alpha", "tip", "reached", "path_length", "step_length", "progress",
-                     "just_reached", "clearance", "terminated", "obs", "reward", "lookahead", "terms")
+                     "just_reached", "clearance", "terminated", "obs", "reward", "lookahead", "terms", "collision",
+                     "failure", "success", "target_index")
 
     tp: np.ndarray
     tc: np.ndarray
@@ -328,10 +329,12 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     _place(state, world, rows, new)
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
-    if isinstance(world, DynamicWorld) and world.broken and not state.terminated[0]:
-        state.terminated[0] = True  # a broken mechanism ends the episode as a failure, as a collision does
-        state.terms[0, 5] -= params.collision_penalty
-        state.reward[0] -= params.collision_penalty
+    if isinstance(world, DynamicWorld) and world.broken:
+        if not state.terminated[0]:
+            state.terminated[0] = True  # a broken mechanism ends the episode as a failure, as a collision does
+            state.terms[0, 5] -= params.collision_penalty
+            state.reward[0] -= params.collision_penalty
+        state.failure[0], state.success[0] = decide(state.reached[0], len(TOUR), state.collision[0], True)
 
 
 def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,
@@ -374,6 +377,16 @@ def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: n
         _observe_v1(arrays, rows, params.kernel_args, _TOUR)
 
 
+@njit(cache=True)
+def decide(reached: int, n_tour: int, collision: bool, broken: bool) -> tuple[int, bool]:
+    """A robot's failure (1: a collision, 2: a broken mechanism, 0: none) and whether it has succeeded: the tour
+    T.C.1 -> 2 -> 3 -> 1 complete (``reached >= n_tour``) with no failure. The one place the task decides
+    success: the transition calls it for every robot it evaluates (and for a dynamic robot's broken loop), and
+    :meth:`~paragym.tasks.capaman_task.CaPaManTask.evaluate` reports what it decided."""
+    failure = 1 if collision else 2 if broken else 0
+    return failure, reached >= n_tour and failure == 0
+
+
 @njit(cache=True, error_model="numpy")
 def _command(command, actions, p):
     """The new commands (N, 3): c + a * max_joint_step, inside the joint range."""
@@ -390,7 +403,7 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
     progress toward the target, reaching, the reward, the end and the observation.
     ``arrays``: the state's, in ``KERNEL_FIELDS``' order; ``p``: :class:`KernelArgs`."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead, terms = arrays
+        obs, reward, lookahead, terms, collision_, failure, success, target_index = arrays
     n_tour = len(tour)
     mid, half = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2
     for i in range(alpha.shape[0]):
@@ -417,6 +430,8 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
         terms[i, 5] = -p.collision_penalty if collision else 0.0
         reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2] + terms[i, 3] + terms[i, 4] + terms[i, 5]
         terminated[i] = collision or reached[i] >= n_tour
+        collision_[i], target_index[i] = collision, tour[min(reached[i], n_tour - 1)]
+        failure[i], success[i] = decide(reached[i], n_tour, collision, False)
         # observation: cranks, tip, target T.P. and T.C., obstacles, clearance, progress
         t = tour[min(reached[i], n_tour - 1)]
         for c in range(3):
@@ -434,7 +449,7 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
 def _observe_v1(arrays, rows, p, tour):
     """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead, terms = arrays
+        obs, reward, lookahead, terms, collision_, failure, success, target_index = arrays
     n_tour = len(tour)
     mid, half, cap = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2, p.clearance_cap
     m = code.shape[1] // 8

@@ -6,7 +6,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
@@ -102,10 +101,9 @@ class CaPaManTask(TaskBase):
 
     def evaluate(self, state: CaPaManState, params: CaPaManParams, world: Any) -> Evaluation:
         """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
-        mechanism whole)."""
+        mechanism whole), as :func:`paragym.tasks.capaman_step.decide` decided it for every robot the transition
+        evaluated."""
         s = state
-        _decide(s.clearance, s.reached, isinstance(world, DynamicWorld) and world.broken, _TOUR, s.collision,
-                s.failure, s.success, s.target_index)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"collision": s.collision, "clearance": s.clearance, "reached": s.reached,
                        "target_index": s.target_index, "path_length": s.path_length}
@@ -128,19 +126,6 @@ class CaPaManTask(TaskBase):
 
 
 _TOUR = np.asarray(TOUR, np.int64)
-
-
-@njit(cache=True)
-def _decide(clearance, reached, broken, tour, collision, failure, success, target_index):
-    """Success of every robot: the tour complete with no collision, and robot 0's mechanism whole where
-    ``broken`` says it is not (dynamic fidelity); the failure: a collision (1), else a broken mechanism (2).
-    Also each robot's current target T.C."""
-    n_tour = len(tour)
-    for i in range(len(clearance)):
-        collision[i] = clearance[i] <= 0.0
-        failure[i] = 1 if collision[i] else 2 if (i == 0 and broken) else 0
-        success[i] = reached[i] >= n_tour and failure[i] == 0
-        target_index[i] = tour[min(reached[i], n_tour - 1)]
 
 
 #: the CaPaMan task (paper 000)

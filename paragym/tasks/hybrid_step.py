@@ -67,7 +67,7 @@ from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
 __all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "RULES", "HybridParams",
-           "HybridRules", "HybridState", "reset", "step"]
+           "HybridRules", "HybridState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
 FAILURES = (None, "broken", "tracking", "leg limit", "singular")
@@ -203,7 +203,8 @@ class HybridState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("u", "nominal", "k", "delta", "d_delta", "offset", "all_free", "pose", "lengths", "mu_h",
-                     "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason", "terms")
+                     "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason", "terms",
+                     "success")
 
     u: np.ndarray
     nominal: np.ndarray
@@ -278,9 +279,19 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     state.all_free &= world.tracked
     if world.broken:  # a broken mechanism ends the episode as a failure
         state.all_free[0], state.terminated[0] = False, True
+    state.success[0] = decide(state.terminated[0], state.all_free[0])
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+
+
+@njit(cache=True)
+def decide(terminated: bool, all_free: bool) -> bool:
+    """Whether a robot has succeeded: u = 1 reached with every pose of the episode free (eq 14; in dynamic
+    fidelity tracked, and the mechanism whole in v2). The one place the task decides success: the transition
+    calls it for every robot it evaluates, and :meth:`~paragym.tasks.hybrid_task.HybridTask.evaluate` reports
+    what it decided."""
+    return terminated and all_free
 
 
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
@@ -299,7 +310,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
     2 the evaluation only, of the pose, strokes, measures and offset a
     simulation wrote into the state (dynamic fidelity: :class:`DynamicWorld`)."""
     u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free, terminated, obs, \
-        reward, phi, reason, terms = arrays
+        reward, phi, reason, terms, success = arrays
     base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
     work = np.empty((5, 6, 6))
@@ -333,6 +344,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         if move and reason[i] == 0:  # the first reason the episode fails (a dynamic one was noted before)
             reason[i] = _LIMIT if not within[i] else 0 if free[i] else _SINGULAR
         terminated[i] = k[i] >= last
+        success[i] = decide(terminated[i], all_free[i])
         thr = 2 * w.singularity_threshold
         close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr
         norm = math.sqrt(offset[i, 0] * offset[i, 0] + offset[i, 1] * offset[i, 1] + offset[i, 2] * offset[i, 2])

@@ -6,7 +6,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
@@ -69,9 +68,9 @@ class HybridTask(TaskBase):
 
     def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
         """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
-        dynamic fidelity, tracked (and the mechanism whole, v2)."""
+        dynamic fidelity, tracked (and the mechanism whole, v2), as :func:`paragym.tasks.hybrid_step.decide`
+        decided it for every robot the transition evaluated."""
         s = state
-        _decide(s.terminated, s.all_free, s.success)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"step": s.k, "delta": s.delta, "mu_hexapod": s.mu_h, "mu_tripod": s.mu_t, "free": s.free,
                        "within_limits": s.within}
@@ -96,13 +95,6 @@ class HybridTask(TaskBase):
         solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
         cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
         return cache["scene"].render()
-
-
-@njit(cache=True)
-def _decide(terminated, all_free, success):
-    """Success of every robot: u = 1 reached with every pose of the episode free."""
-    for i in range(len(terminated)):
-        success[i] = terminated[i] and all_free[i]
 
 
 #: the hybrid task (paper 002)

@@ -46,7 +46,7 @@ from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
 __all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "REWARD_TERMS", "RULES", "OrthoglideParams",
-           "OrthoglideRules", "OrthoglideState", "reset", "step"]
+           "OrthoglideRules", "OrthoglideState", "decide", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -161,7 +161,7 @@ class OrthoglideState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("rho", "k", "last", "path", "dt", "j", "n", "kappa", "err", "failed", "reason", "terminated",
-                     "obs", "reward", "terms")
+                     "obs", "reward", "terms", "success")
 
     rho: np.ndarray
     k: np.ndarray
@@ -247,9 +247,18 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
         state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
         state.terms[0] = (0.0, 0.0, -params.limit_penalty)
         state.reward[0] = state.terms[0, 2]
+        state.success[0] = decide(state.k[0], state.last[0], True)
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+
+
+@njit(cache=True)
+def decide(k: int, last: int, failed: bool) -> bool:
+    """Whether a robot has succeeded: the path's end reached (``k >= last``) with no failure on the way. The one
+    place the task decides success: the transition calls it for every robot it evaluates, and
+    :meth:`~paragym.tasks.orthoglide_task.OrthoglideTask.evaluate` reports what it decided."""
+    return k >= last and not failed
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
@@ -267,7 +276,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     the tool point those joints give, and the tracking error in either mode.
     ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
-    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms = arrays
+    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success = arrays
     p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, version, track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
@@ -318,6 +327,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
             if reason[i] == 0:
                 reason[i] = _TRACKING
         terminated[i] = failed[i] or k[i] >= last[i]
+        success[i] = decide(k[i], last[i], failed[i])
         if failed[i]:  # the reward and its terms (REWARD_TERMS): kappa, tracking, failure
             terms[i, 0], terms[i, 1], terms[i, 2] = 0.0, 0.0, -limit_penalty
             reward[i] = terms[i, 2]

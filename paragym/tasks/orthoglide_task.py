@@ -7,7 +7,6 @@ import warnings
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
@@ -83,9 +82,9 @@ class OrthoglideTask(TaskBase):
 
     def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
         """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
-        in v1 the tracking, and a broken mechanism)."""
+        in v1 the tracking, and a broken mechanism), as :func:`paragym.tasks.orthoglide_step.decide` decided it
+        for every robot the transition evaluated."""
         s = state
-        _decide(s.k, s.last, s.failed, s.success)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"kappa": s.kappa, "tracking_error": s.err, "step": s.k}
             numbers.update(reward_terms(s.terms, REWARD_TERMS))
@@ -105,13 +104,6 @@ class OrthoglideTask(TaskBase):
             cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
         cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
         return cache["scene"].render()
-
-
-@njit(cache=True)
-def _decide(k, last, failed, success):
-    """Success of every robot: the path's end reached (``k >= last``) and no failure on the way."""
-    for i in range(len(k)):
-        success[i] = k[i] >= last[i] and not failed[i]
 
 
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:

@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -56,7 +57,7 @@ from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_worlds import DynamicWorld
 
 __all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "REWARD_TERMS",
-           "RULES", "TripodParams", "TripodRules", "TripodState", "reset", "step"]
+           "RULES", "TripodParams", "TripodRules", "TripodState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "folded")
@@ -143,6 +144,13 @@ class TripodParams:
                    trust_rate=trust_rate, relative_reward=bool(relative_reward), fold_ends=rules.fold_ends,
                    success_error=success_error, scenario=scenario, fidelity=fidelity, dynamics=dynamics, rules=rules)
 
+    @cached_property
+    def kernel_args(self) -> tuple[tuple[float, bool], tuple[float, float, bool]]:
+        """What the kernels read of the parameters (made once): the success error and whether a fold ends the
+        episode; v1's smoothing, trust rate and relative reward."""
+        return ((float(self.success_error), bool(self.fold_ends)),
+                (float(self.smoothing), float(self.trust_rate), bool(self.relative_reward)))
+
     @property
     def obs_size(self) -> int:
         return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
@@ -161,7 +169,7 @@ class TripodState(KernelArrays):
 
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("estimate", "eta", "last_eta", "smoothed", "unit_error", "plate_error", "terminated", "obs",
-                     "reward", "terms")
+                     "reward", "terms", "folded", "success", "failure")
 
     drive: DriveState
     estimate: np.ndarray
@@ -226,9 +234,6 @@ def step(state: TripodState, params: TripodParams, actions: np.ndarray, active: 
     else:
         moved = world.move(state)
         _advance(state, params, actions, active, True, moved, world.increment)
-    state.folded |= active & (state.drive.eta.min(axis=1) <= 0.0)
-    if params.fold_ends:
-        state.terminated |= state.folded
 
 
 _NONE = np.zeros(0, bool)
@@ -243,12 +248,13 @@ def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows
     external = len(moved) > 0
     actions = np.ascontiguousarray(actions, np.float64)
     geo = mt.kernel_consts(params.geometry)
+    judge, trust = params.kernel_args
     if params.version == 1:
-        _advance_v1_kernel(state.kernel_arrays(), actions, rows, move, params.smoothing, params.trust_rate,
-                           params.relative_reward, external, moved, increment, d.steps, d.noise, geo, d.kernel_arrays())
+        _advance_v1_kernel(state.kernel_arrays(), actions, rows, move, trust, external, moved, increment, d.steps,
+                           d.noise, geo, d.kernel_arrays(), judge)
         return
     _advance_kernel(state.kernel_arrays(), actions, rows, move, external, moved, increment, params.max_correction,
-                    d.steps, d.noise, geo, d.kernel_arrays())
+                    d.steps, d.noise, geo, d.kernel_arrays(), judge)
 
 
 @njit(cache=True, error_model="numpy")
@@ -270,12 +276,37 @@ def _score(i, estimate, true, unit_error, plate_error, reward, terms):
     reward[i] = terms[i, 0]
 
 
+@njit(cache=True)
+def decide(terminated: bool, unit_error: float, folded: bool, success_error: float, fold_ends: bool) -> bool:
+    """Whether a robot has succeeded: the drive's end reached with the estimate's mean unit error below
+    ``success_error`` and, where a fold ends the episode (v2), the mechanism never folded. The one place the task
+    decides success: the transition calls it for every robot it evaluates, and
+    :meth:`~paragym.tasks.tripod_task.TripodTask.evaluate` reports what it decided."""
+    return terminated and unit_error < success_error and not (fold_ends and folded)
+
+
+@njit(cache=True)
+def _end(i, move, eta, folded, terminated, unit_error, success, failure, judge):
+    """Robot ``i``'s end of a step: whether the mechanism folded (a leg at or past horizontal, true eta <= 0),
+    which ends the episode where the rules say so; the failure (the fold) and the success."""
+    success_error, fold_ends = judge
+    if move and min(eta[i, 0], eta[i, 1], eta[i, 2]) <= 0.0:
+        folded[i] = True
+    if fold_ends and folded[i]:
+        terminated[i] = True
+    failure[i] = 1 if folded[i] else 0
+    success[i] = decide(terminated[i], unit_error[i], folded[i], success_error, fold_ends)
+
+
 @njit(cache=True, error_model="numpy")
-def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max_correction, steps, noise, geo, drive):
-    """The transition of every robot with ``rows[i]`` (module docstring). ``external``: the drives were
+def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max_correction, steps, noise, geo, drive,
+                    judge):
+    """The transition of every robot with ``rows[i]`` (module docstring), ending in :func:`_end` (``judge``: the
+    success error and whether a fold ends the episode). ``external``: the drives were
     advanced already (robots ``moved``, odometric ``increment`` per unit): the dynamic fidelity. ``arrays``:
     the state's, in ``KERNEL_FIELDS``' order; ``drive``: the drives', ``DriveState.KERNEL_FIELDS``' order."""
-    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms = arrays
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms, folded, success, \
+        failure = arrays
     true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
         slip_speed, dt = drive
     row = np.empty(OBS_SIZE)  # one robot's observation before the clip, reused
@@ -298,6 +329,7 @@ def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max
             eta_read[i, u] = eta[i, u] + noise[i, k[i], u]
         _score(i, estimate, true, unit_error, plate_error, reward, terms)
         terminated[i] = k[i] >= steps[i]
+        _end(i, move, eta, folded, terminated, unit_error, success, failure, judge)
         # observation: odometric units (/ 10 m), measured eta, the command, the estimate's xy (/ 10 m)
         for u in range(3):
             for c in range(3):
@@ -310,11 +342,14 @@ def _advance_kernel(arrays, actions, rows, move, external, moved, increment, max
 
 
 @njit(cache=True, error_model="numpy")
-def _advance_v1_kernel(arrays, actions, rows, move, smoothing, trust_rate, relative, external, moved, increment,
-                       steps, noise, geo, drive):
+def _advance_v1_kernel(arrays, actions, rows, move, trust, external, moved, increment, steps, noise, geo, drive,
+                       judge):
     """Version 1's transition of every robot with ``rows[i]`` (module docstring); ``arrays``, ``drive``,
-    ``external``, ``moved``, ``increment``: as :func:`_advance_kernel`'s."""
-    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms = arrays
+    ``external``, ``moved``, ``increment``, ``judge``: as :func:`_advance_kernel`'s; ``trust``: the smoothing, the
+    trust rate and whether the reward is relative to odometry."""
+    smoothing, trust_rate, relative = trust
+    estimate, eta_read, last_eta, smoothed, unit_error, plate_error, terminated, obs, reward, terms, folded, success, \
+        failure = arrays
     true, odometry, gradient, eta, t, k, speed, heading, heading_error, push, bumps, bump_count, slip_angle, \
         slip_speed, dt = drive
     row = np.empty(OBS_SIZE_V1)
@@ -352,6 +387,7 @@ def _advance_v1_kernel(arrays, actions, rows, move, smoothing, trust_rate, relat
             terms[i, 1] = 10.0 * (odo_unit + odo_plate)
             reward[i] += terms[i, 1]
         terminated[i] = k[i] >= steps[i]
+        _end(i, move, eta, folded, terminated, unit_error, success, failure, judge)
         # observation, in the robot's frame (x along the commanded heading)
         own = mt.k_distances(estimate[i])
         odo = mt.k_distances(odometry[i])

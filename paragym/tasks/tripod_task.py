@@ -6,7 +6,6 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit
 
 from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
@@ -65,9 +64,9 @@ class TripodTask(TaskBase):
 
     def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
         """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
-        in v2, the mechanism never folded)."""
+        in v2, the mechanism never folded), as :func:`paragym.tasks.tripod_step.decide` decided it for every robot
+        the transition evaluated."""
         s = state
-        _decide(s.terminated, s.unit_error, s.folded, params.success_error, params.fold_ends, s.success, s.failure)
         if s.evaluation is None:  # the same buffers every call
             numbers = {"unit_error": s.unit_error, "plate_error": s.plate_error, "t": s.drive.t}
             numbers.update(reward_terms(s.terms, REWARD_TERMS))
@@ -94,15 +93,6 @@ class TripodTask(TaskBase):
         _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
         cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
         return cache["scene"].render()
-
-
-@njit(cache=True)
-def _decide(terminated, unit_error, folded, success_error, fold_ends, success, failure):
-    """Success of every robot: the drive's end reached with the mean unit error below ``success_error``, and
-    (``fold_ends``) the mechanism never folded; the failure is the fold (1), whichever the rules."""
-    for i in range(len(terminated)):
-        failure[i] = 1 if folded[i] else 0
-        success[i] = terminated[i] and unit_error[i] < success_error and not (fold_ends and folded[i])
 
 
 def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
