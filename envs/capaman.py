@@ -122,13 +122,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
       episode as "broken" (no released setting opens one that far before a
       collision ends the episode: their rollouts are unchanged); a
       ``control_period`` that the physics step does not divide warns.
-    * paragym 0.10, every version of the task: the env is a shell over the task's contract
-      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
-      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
-      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
-      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
-      reward's terms, and the native vector env's info every number the single env's has. Every
-      episode that follows Gymnasium's API runs as before (the released rollouts replay).
+    * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
+      ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
+      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
     """
 
     task, rules = TASK, RULES[0]

@@ -96,13 +96,9 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
       warns where that is not the path's time). Since paragym 0.8.0
       ``info["failure"]`` names why an episode failed.
     * v1 (paragym 0.8.0): :class:`Orthoglide2PRRKappaV1Env` closes them.
-    * paragym 0.10, every version of the task: the env is a shell over the task's contract
-      (:mod:`paragym.tasks.base`). A step after one that returned ``terminated=True`` raises a
-      RuntimeError (the CaPaMan and the Orthoglide stepped on and charged the penalty again), as do a
-      step or reset after ``close``; an unknown ``reset`` option is refused by name; ``copy.deepcopy``
-      and pickling refuse an env holding a PyBullet client (a copy shared it). The info holds the
-      reward's terms, and the native vector env's info every number the single env's has. Every
-      episode that follows Gymnasium's API runs as before (the released rollouts replay).
+    * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
+      ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
+      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
     """
 
     task, rules = TASK, RULES[0]
