@@ -191,7 +191,9 @@ class Task(Protocol):
         ...
 
     def evaluate(self, state: Any, params: Any, world: Any) -> Evaluation:
-        """Success, failure and the info's numbers of every robot: decided here only."""
+        """Success, failure and the info's numbers of every robot: what every consumer reads. paragym's tasks
+        decide success in one compiled ``decide()`` their transition calls and report its buffers here; a task
+        without kernels may decide here."""
         ...
 
     def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
