@@ -226,6 +226,19 @@ class TaskBase:
     def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
         return {}
 
+    @staticmethod
+    def drawn(cache: dict[str, Any], world: Any, gui: bool, build: Callable[[], Any],
+              pose: Callable[[Any], None]) -> np.ndarray | None:
+        """A render of a task whose dynamic world draws itself and whose kinematic model is drawn by a scene of
+        its own: the world's scene (nothing in the GUI, which shows the simulation as it runs), else the scene
+        kept in ``cache`` (built by ``build()`` on first use), posed by ``pose(scene)``."""
+        if world is not None:
+            return None if gui else world.scene.render()
+        if "scene" not in cache:
+            cache["scene"] = build()
+        pose(cache["scene"])
+        return cache["scene"].render()
+
 
 # --- the argument checks every task's Params.from_kwargs uses ---------------------------------------------------------
 

@@ -3,6 +3,8 @@ vector env, the leaderboard and validation read the task from."""
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -11,7 +13,7 @@ from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
-from paragym.tasks.capaman import TOUR, CaPaManScenario
+from paragym.tasks.capaman import CaPaManScenario
 from paragym.tasks.capaman_step import (
     FAILURES,
     REWARD_TERMS,
@@ -44,20 +46,12 @@ class CaPaManTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
-        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
-        try:
+        with _checker(params, world) as scene:
             return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
-        finally:
-            if world is None:
-                scene.close()
 
     def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
-        scene = world.checker() if world is not None else CaPaManScene(params.geometry, draws=False)
-        try:
+        with _checker(params, world) as scene:
             scenarios_module.validate_scenario(scenario, scene)
-        finally:
-            if world is None:
-                scene.close()
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
                        world: Any) -> list[CaPaManScenario]:
@@ -125,7 +119,17 @@ class CaPaManTask(TaskBase):
         return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
 
 
-_TOUR = np.asarray(TOUR, np.int64)
+@contextmanager
+def _checker(params: CaPaManParams, world: Any) -> Iterator[CaPaManScene]:
+    """The kinematic scene that checks scenarios: the world's, or one of its own for the call (then closed)."""
+    if world is not None:
+        yield world.checker()
+        return
+    scene = CaPaManScene(params.geometry, draws=False)
+    try:
+        yield scene
+    finally:
+        scene.close()
 
 
 #: the CaPaMan task (paper 000)

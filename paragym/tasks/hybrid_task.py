@@ -86,15 +86,13 @@ class HybridTask(TaskBase):
 
     def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated robot, not the command; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        if "scene" not in cache:
-            from paragym.sim.hybrid_scene import HybridScene
+        from paragym.sim.hybrid_scene import HybridScene
 
-            cache["scene"] = HybridScene(params.geometry, gui=gui)
-        solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
-        cache["scene"].set_state(solved.t_a[0], solved.t_e[0])
-        return cache["scene"].render()
+        def pose(scene: Any) -> None:
+            solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
+            scene.set_state(solved.t_a[0], solved.t_e[0])
+
+        return self.drawn(cache, world, gui, lambda: HybridScene(params.geometry, gui=gui), pose)
 
 
 #: the hybrid task (paper 002)

@@ -96,14 +96,10 @@ class OrthoglideTask(TaskBase):
 
     def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated mechanism, not the command; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        if "scene" not in cache:
-            from paragym.sim.orthoglide_scene import OrthoglideScene
+        from paragym.sim.orthoglide_scene import OrthoglideScene
 
-            cache["scene"] = OrthoglideScene(params.geometry, gui=gui)
-        cache["scene"].set_state(state.rho[i].copy(), state.scenarios[i].points)
-        return cache["scene"].render()
+        return self.drawn(cache, world, gui, lambda: OrthoglideScene(params.geometry, gui=gui),
+                          lambda scene: scene.set_state(state.rho[i].copy(), state.scenarios[i].points))
 
 
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:

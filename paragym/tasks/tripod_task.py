@@ -83,16 +83,15 @@ class TripodTask(TaskBase):
 
     def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
-        if world is not None:  # the simulated robot, not the kinematic model; its GUI shows it as it runs
-            return None if gui else world.scene.render()
-        d = state.drive
-        if "scene" not in cache:
-            from paragym.sim.tripod_scene import TripodScene
+        from paragym.sim.tripod_scene import TripodScene
 
-            cache["scene"] = TripodScene(d.scenarios[i].terrain, gui=gui)
-        _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
-        cache["scene"].set_state(d.true[i], centre[0], rotation[0], params.geometry)
-        return cache["scene"].render()
+        d = state.drive
+
+        def pose(scene: Any) -> None:
+            _, rotation, centre = mt.forward(d.true[i:i + 1], eta0=d.eta[i], geometry=params.geometry)
+            scene.set_state(d.true[i], centre[0], rotation[0], params.geometry)
+
+        return self.drawn(cache, world, gui, lambda: TripodScene(d.scenarios[i].terrain, gui=gui), pose)
 
 
 def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
