@@ -20,8 +20,8 @@ import numpy as np
 from paragym.mechanisms.geometry import pose6
 from paragym.tasks.base import check_control_period
 
-__all__ = ["ParagymEnv", "TaskShell", "box", "check_action", "check_control_period", "check_copyable", "check_options",
-           "check_seed", "env_signature", "pose6"]
+__all__ = ["ActionCheck", "ParagymEnv", "TaskShell", "box", "check_action", "check_control_period", "check_copyable",
+           "check_options", "check_seed", "env_signature", "pose6"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -66,21 +66,6 @@ def check_copyable(env: Any) -> None:
                         "the same seed")
 
 
-_BOUNDS: dict[int, tuple[Any, float | None, float | None, list[float], list[float]]] = {}
-
-
-def _bounds(space: gym.spaces.Box) -> tuple[float | None, float | None, list[float], list[float]]:
-    """The Box's bounds as flat Python floats (kept per space: a step checks them), and its one low and one
-    high where every component shares them (None where not)."""
-    got = _BOUNDS.get(id(space))
-    if got is None or got[0] is not space:
-        low, high = space.low.astype(float).ravel().tolist(), space.high.astype(float).ravel().tolist()
-        same = len(set(low)) == 1 and len(set(high)) == 1
-        got = (space, low[0] if same else None, high[0] if same else None, low, high)
-        _BOUNDS[id(space)] = got
-    return got[1:]
-
-
 def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows: int | None = None) -> np.ndarray:
     """The action as float64, clipped to ``space`` (one rule for every env).
 
@@ -91,20 +76,10 @@ def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows:
     shape a ``ValueError``, each naming ``name``. ``rows``: a batch of that
     many actions (a native vector env), whose bad row is named.
 
-    A single float array inside the Box, the common case, is checked in a
-    few Python comparisons (a NaN or an inf fails them too), so that the
-    rule costs about a microsecond a step.
+    The single env checks its actions through :class:`ActionCheck`, which
+    passes a float array inside the Box in a few Python comparisons.
     """
     want = space.shape if rows is None else (rows, *space.shape)
-    if rows is None and type(action) is np.ndarray and action.dtype.kind == "f" and action.shape == want:
-        lo, hi, low, high = _bounds(space)
-        values = action.ravel().tolist()
-        if lo is not None:  # one bound for every component (every paragym Box): min, max, and NaN by its sum
-            total = sum(values)
-            if lo <= min(values) and max(values) <= hi and total == total:
-                return action.astype(np.float64)
-        elif all(lo <= v <= hi for v, lo, hi in zip(values, low, high, strict=True)):
-            return action.astype(np.float64)
     if action is None:
         raise TypeError(f"{name} must be an array of real numbers; got None")
     try:
@@ -134,6 +109,27 @@ def check_action(action: Any, space: gym.spaces.Box, name: str = "action", rows:
             raise ValueError(f"{name} must be finite; row {idx[0]} is {arr[idx[0]]}"
                              + (f" ({len(idx)} rows are not: {idx[:10].tolist()}...)" if len(idx) > 1 else ""))
     return np.clip(arr, space.low, space.high)
+
+
+class ActionCheck:
+    """:func:`check_action` for one robot's actions of ``space``, returned as one batch row (1, ...): the same
+    rule, with the Box's bounds read once. A float array of the Box's shape inside one bound shared by every
+    component (every paragym Box) passes in a few Python comparisons (a NaN or an inf fails them too);
+    anything else goes through :func:`check_action`."""
+
+    def __init__(self, space: gym.spaces.Box) -> None:
+        self.space, self.shape = space, space.shape
+        low, high = set(space.low.astype(float).ravel().tolist()), set(space.high.astype(float).ravel().tolist())
+        self.low, self.high = (low.pop(), high.pop()) if len(low) == len(high) == 1 else (None, None)
+
+    def __call__(self, action: Any) -> np.ndarray:
+        if self.low is not None and type(action) is np.ndarray and action.shape == self.shape \
+                and action.dtype.kind == "f":
+            values = action.ravel().tolist()
+            total = sum(values)
+            if self.low <= min(values) and max(values) <= self.high and total == total:
+                return action.astype(np.float64)[None]
+        return check_action(action, self.space)[None]
 
 
 def env_signature(task: Any, first: tuple[inspect.Parameter, ...] = ()) -> inspect.Signature:
@@ -216,9 +212,10 @@ class ParagymEnv(TaskShell, gym.Env):
         self.params = self.task.Params.from_kwargs(self.rules, **kwargs)
         self.observation_space, self.action_space = (box(b) for b in self.task.spaces(self.params))
         self.state = self.task.State.empty(1, self.params)
+        self._check_action = ActionCheck(self.action_space)
         self._render: dict[str, Any] = {}
         self._evaluation: Any = None
-        self._ended = True  # until the first reset
+        self._ended = True  # until the first reset, after a terminating step and after close
         self._closed = False
         self.world = self.task.make_world(self.params, 1, render_mode)
 
@@ -239,15 +236,15 @@ class ParagymEnv(TaskShell, gym.Env):
         return self.state.obs[0].copy(), info
 
     def step(self, action: np.ndarray) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        if self._closed:
+        if self._ended:
             self._check_open()
-        action = check_action(action, self.action_space)[None]
+        action = self._check_action(action)
         if self._ended:
             raise RuntimeError("call reset() before step()" if self._evaluation is None else
                                "the episode has ended (a step returned terminated=True): call reset()")
-        self.task.step(self.state, self.params, action, _ONE, self.world)
-        self._evaluation = self.task.evaluate(self.state, self.params, self.world)
-        s = self.state
+        task, s = self.task, self.state
+        task.step(s, self.params, action, _ONE, self.world)
+        self._evaluation = task.evaluate(s, self.params, self.world)
         self._ended = terminated = s.terminated.item(0)
         return s.obs[0].copy(), s.reward.item(0), terminated, False, self._info()
 
@@ -260,6 +257,7 @@ class ParagymEnv(TaskShell, gym.Env):
 
     def close(self) -> None:
         self._close_all()
+        self._ended = True  # a step checks whether the env is open only where the episode looks ended
 
     def _info(self) -> dict[str, Any]:
         """The info of the one robot: the task's numbers, success and failure (:meth:`Task.evaluate`) and its

@@ -307,7 +307,8 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     every = bool(active.all())
     rows = np.arange(len(active)) if every else np.flatnonzero(active)
     old = state.alpha.copy()
-    command = _command(state.command, np.ascontiguousarray(actions, np.float64), params.kernel_args)
+    actions = np.ascontiguousarray(actions, np.float64)
+    command = state.call(_command, (state.command, actions, params.kernel_args), params, (actions.ndim,))
     if isinstance(world, DynamicWorld):
         new = world.move(command[rows])
     else:
@@ -371,10 +372,11 @@ def _place(state: CaPaManState, world: World, rows: np.ndarray, alpha: np.ndarra
 
 
 def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: np.ndarray, move: bool) -> None:
-    arrays = state.kernel_arrays()
-    _finish_kernel(arrays, old, rows, move, params.kernel_args, _TOUR)
+    arrays, rows = state.kernel_arrays(), np.ascontiguousarray(rows, np.bool_)
+    old, key = np.ascontiguousarray(old, np.float64), (old.ndim, rows.ndim)
+    state.call(_finish_kernel, (arrays, old, rows, move, params.kernel_args, _TOUR), params, key)
     if params.version == 1:
-        _observe_v1(arrays, rows, params.kernel_args, _TOUR)
+        state.call(_observe_v1, (arrays, rows, params.kernel_args, _TOUR), params, key)
 
 
 @njit(cache=True)

@@ -263,8 +263,9 @@ def decide(k: int, last: int, failed: bool) -> bool:
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
-    _advance_kernel(state.kernel_arrays(), np.ascontiguousarray(actions, np.float64), rows, move, stage,
-                    params.kernel_args)
+    actions, rows = np.ascontiguousarray(actions, np.float64), np.ascontiguousarray(rows, np.bool_)
+    state.call(_advance_kernel, (state.kernel_arrays(), actions, rows, move, stage, params.kernel_args), params,
+               (actions.ndim, rows.ndim))
 
 
 @njit(cache=True, error_model="numpy")

@@ -246,15 +246,17 @@ def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows
     unit's odometric increment (N, 3, 2)); empty, the kernel advances them (:func:`k_drive_step`)."""
     d = state.drive
     external = len(moved) > 0
-    actions = np.ascontiguousarray(actions, np.float64)
+    actions, rows = np.ascontiguousarray(actions, np.float64), np.ascontiguousarray(rows, np.bool_)
+    moved, increment = np.ascontiguousarray(moved, np.bool_), np.ascontiguousarray(increment, np.float64)
     geo = mt.kernel_consts(params.geometry)
     judge, trust = params.kernel_args
+    key = (actions.ndim, rows.ndim, moved.ndim, increment.ndim)
     if params.version == 1:
-        _advance_v1_kernel(state.kernel_arrays(), actions, rows, move, trust, external, moved, increment, d.steps,
-                           d.noise, geo, d.kernel_arrays(), judge)
+        state.call(_advance_v1_kernel, (state.kernel_arrays(), actions, rows, move, trust, external, moved, increment,
+                                        d.steps, d.noise, geo, d.kernel_arrays(), judge), params, key)
         return
-    _advance_kernel(state.kernel_arrays(), actions, rows, move, external, moved, increment, params.max_correction,
-                    d.steps, d.noise, geo, d.kernel_arrays(), judge)
+    state.call(_advance_kernel, (state.kernel_arrays(), actions, rows, move, external, moved, increment,
+                                 params.max_correction, d.steps, d.noise, geo, d.kernel_arrays(), judge), params, key)
 
 
 @njit(cache=True, error_model="numpy")
