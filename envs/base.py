@@ -268,8 +268,9 @@ class ParagymEnv(TaskShell, gym.Env):
             self._readers = tuple((name, value.item) for name, value in ev.numbers.items())
             self._outcome = ev.success.item, ev.failure.item, self.task.failures, self.task.details
         success, failure, names, details = self._outcome
-        info = {name: read(0) for name, read in self._readers}
-        info.update(details(self.state, self.params, self.world, 0))
+        info = details(self.state, self.params, self.world, 0)  # a new dict: the numbers go into it
+        for name, read in self._readers:
+            info[name] = read(0)
         info["is_success"] = success(0)
         info["failure"] = names[failure(0)]
         return info

@@ -58,10 +58,10 @@ class KernelArrays:
         entries = self.__dict__.get("_entries")
         if entries is None:
             entries = self.__dict__["_entries"] = {}
-        got = entries.get((kernel, key))
-        if got is None or got[0] is not owner:
-            got = entries[(kernel, key)] = (owner, entry(kernel, args))
-        return got[1](*args)
+        got = entries.get(kernel)
+        if got is None or got[0] is not owner or got[1] != key:
+            got = entries[kernel] = (owner, key, entry(kernel, args))
+        return got[2](*args)
 
     def reallocated(self) -> None:
         """Say that an array of ``KERNEL_FIELDS`` was replaced by a new one: the tuple is made again."""

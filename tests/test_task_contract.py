@@ -226,6 +226,19 @@ def test_the_reward_is_the_sum_of_its_named_terms(env_id, fidelity):
 
 
 @pytest.mark.parametrize("env_id, fidelity", CASES)
+def test_details_and_numbers_name_different_things(env_id, fidelity):
+    """The single env's info is a task's details with its numbers added: a name in both would lose one."""
+    env = _make(env_id, fidelity)
+    env.reset(seed=4)
+    u = env.unwrapped
+    details = u.task.details(u.state, u.params, u.world, 0)
+    numbers = u.task.evaluate(u.state, u.params, u.world).numbers
+    assert details and not set(details) & set(numbers), (sorted(details), sorted(numbers))
+    assert not set(details) & {"is_success", "failure"}
+    env.close()
+
+
+@pytest.mark.parametrize("env_id, fidelity", CASES)
 def test_a_copy_is_independent_or_refused(env_id, fidelity):
     env = _make(env_id, fidelity)
     env.reset(seed=3)

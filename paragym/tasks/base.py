@@ -197,7 +197,8 @@ class Task(Protocol):
         ...
 
     def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
-        """The single env's further info of robot ``i`` (arrays, names: what is not an (N,) number)."""
+        """The single env's further info of robot ``i`` (arrays, names: what is not an (N,) number), as a new
+        dict: the single env adds the numbers and the outcome to it. Its names differ from the numbers'."""
         ...
 
     def render(self, cache: dict[str, Any], state: Any, params: Any, world: Any, i: int, gui: bool) -> np.ndarray:
