@@ -1,6 +1,6 @@
 """Every env's step time here and at another commit, alternating, pinned to one core.
 
-A change to the shells or the kernels must leave no released env slower. This script checks it out at
+A change to the shells or the kernels must leave no released env slower. This script checks out the commit
 ``REV`` in a temporary git worktree and times both trees in fresh processes, one after the other, ``--rounds``
 times; each process imports paragym from its own tree (the package layout its ``pyproject.toml`` names,
 whatever is installed), is pinned to one core and times each env through ``gym.make``'s wrappers over
@@ -20,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import signal
 import subprocess
 import sys
 import tempfile
@@ -123,6 +124,7 @@ def main() -> None:
         print(json.dumps(time_envs(args.ids, args.steps, args.dynamic)))
         return
     args = parser.parse_args()
+    signal.signal(signal.SIGTERM, lambda *_: sys.exit(1))  # a killed run still removes its worktree
     commit = subprocess.run(["git", "rev-parse", "--short=12", args.rev], cwd=ROOT, capture_output=True, text=True,
                             check=True).stdout.strip()
     with tempfile.TemporaryDirectory(prefix="paragym-against-") as tmp:

@@ -182,3 +182,19 @@ def test_the_ablation_reads_each_task_from_its_bench():
     assert all(a.rows and a.beside[1] for a in found.values())
     source = (ROOT / "benchmarks" / "ablation.py").read_text()
     assert not [t for t in found if f'"{t}"' in source]
+
+
+def test_against_times_both_trees_and_records_them(tmp_path):
+    """``benchmarks/against.py``: one env at HEAD (a git worktree, imported from its own folders) and here,
+    alternating; a speed-up per env, and the result file for the speed page."""
+    if subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True).returncode:
+        import pytest
+
+        pytest.skip("not a git checkout: against.py compares two commits")
+    out = _run("benchmarks/against.py", "HEAD", "--rounds", "1", "--steps", "30", "--env", "Orthoglide2PRRKappa-v1",
+               "--record", str(tmp_path))
+    rows = _recorded(tmp_path, "against")["rows"]
+    assert [r[0] for r in rows] == ["paragym/Orthoglide2PRRKappa-v1"], rows
+    before, here, ratio = map(float, rows[0][1:])
+    assert before > 0 and here > 0 and abs(ratio - before / here) < 1e-3
+    assert "speed-up" in out
