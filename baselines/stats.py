@@ -19,7 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BOOTSTRAP_REPS", "CONFIDENCE", "ahead", "bootstrap_mean_ci", "mean_ci", "separable", "wilson"]
+__all__ = ["BOOTSTRAP_REPS", "CONFIDENCE", "ahead", "bootstrap_mean_ci", "half_width", "mean_ci", "resolvable_drop",
+           "separable", "wilson"]
 
 CONFIDENCE = 0.95
 BOOTSTRAP_REPS = 2000
@@ -69,6 +70,24 @@ def separable(a: tuple[float, float], b: tuple[float, float]) -> bool:
     if not all(np.isfinite(v) for v in (*a, *b)):
         return False
     return a[1] < b[0] or b[1] < a[0]
+
+
+def resolvable_drop(successes: int, n: int) -> float | None:
+    """The smallest success rate below ``successes`` of ``n`` that the tables can tell apart from it: the least
+    d = m / n for which Wilson's interval of ``successes - m`` lies wholly below that of ``successes`` (both of
+    ``n`` episodes; :func:`ahead`). None where no rate can be: at 0 successes, or too few episodes (3 of 3 and
+    0 of 3 overlap). The noise floor of a leaderboard table on success."""
+    top = wilson(successes, n)
+    for m in range(1, successes + 1):
+        if ahead(top, wilson(successes - m, n), +1):
+            return m / n
+    return None
+
+
+def half_width(interval: tuple[float, float]) -> float:
+    """Half an interval's width (nan where it is unknown)."""
+    lo, hi = interval
+    return (hi - lo) / 2 if np.isfinite(lo) and np.isfinite(hi) else float("nan")
 
 
 def ahead(a: tuple[float, float], b: tuple[float, float], sign: int) -> bool:

@@ -245,7 +245,9 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
         _register_agent(text, args.env)
     before = signal.signal(signal.SIGTERM, stop), signal.signal(signal.SIGINT, stop)
     try:
-        run = run_leaderboard(db=args.db, suite=QUICK if args.quick else FULL, env_ids=args.env,
+        suite = QUICK if args.quick else FULL
+        run = run_leaderboard(db=args.db, suite=suite if args.episodes is None else suite.with_episodes(args.episodes),
+                              env_ids=args.env,
                               policies=args.policy, models_dir=args.models,
                               executor="workers" if args.workers > 1 and args.executor == "local" else args.executor,
                               workers=args.workers, ray_address=args.ray_address, out=args.out,
@@ -407,6 +409,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="1 seed x 3 episodes instead of 5 x 10, and the paper case in dynamic fidelity on each task's "
                         "newest id for the references and learned seed 0 instead of 3 episodes for every policy "
                         "(a smoke run: its tables say so)")
+    p.add_argument("--episodes", type=int, default=None, metavar="N",
+                   help="episodes per evaluation seed (full suite: 10 x 5 seeds; quick: 3 x 1): more give a finer "
+                        "noise floor, the smallest difference from #1 a table can tell apart")
     p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
     p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")
     p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")

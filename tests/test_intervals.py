@@ -54,3 +54,64 @@ def test_every_table_shows_intervals_and_a_quick_one_says_it_is_a_smoke_test() -
     assert "success [95% CI]" in quick and "return [95% CI]" in quick and "apart from #1" in quick
     assert "A smoke test, not a ranking" in quick
     assert not smoke_note(EvalSuite("full", (0, 1, 2, 3, 4), 10))
+
+
+def test_the_noise_floor_is_the_least_drop_the_tables_can_resolve() -> None:
+    from paragym.baselines.stats import ahead, resolvable_drop
+
+    for k, n in ((50, 50), (25, 50), (49, 50), (250, 250)):
+        m = round(resolvable_drop(k, n) * n)
+        assert ahead(wilson(k, n), wilson(k - m, n), +1)  # that drop is apart ...
+        assert not ahead(wilson(k, n), wilson(k - m + 1, n), +1)  # ... and one success less is not
+    assert resolvable_drop(50, 50) == pytest.approx(0.16)
+    assert resolvable_drop(250, 250) < resolvable_drop(50, 50) / 3  # more episodes buy a finer floor
+    assert resolvable_drop(3, 3) is None and resolvable_drop(0, 50) is None  # nothing can be apart from these
+
+
+def test_every_table_and_the_csv_carry_the_noise_floor(tmp_path) -> None:
+    from paragym.baselines.leaderboard import write_csv
+    from paragym.baselines.leaderboard.summary import noise_floor
+    from paragym.baselines.stats import half_width
+
+    steady = _rows("steady", [True] * 50, [4.0 + 0.01 * k for k in range(50)])
+    close = _rows("close", [True] * 45 + [False] * 5, [3.9 + 0.02 * k for k in range(50)])
+    other = [EpisodeRow(**{**r.__dict__, "env": "paragym/Orthoglide2PRRKappa-v1"}) for r in steady]
+    summaries = summarise(steady + close + other)
+    (ss, one) = summaries.values()
+    floor = noise_floor(ss)
+    assert floor.episodes == 50 and floor.success_drop == pytest.approx(0.16)
+    assert floor.metric == "mean kappa"
+    assert floor.metric_gap == pytest.approx(half_width(ss[0].primary_ci) + half_width(ss[1].primary_ci))
+    assert ss[1].separable is False  # 0.90 is within 0.16 of 1.00, and the kappas overlap
+    assert noise_floor(one).metric_gap is None  # a table of one policy has nothing to compare with
+    md = markdown(summaries, QUICK, {}, "# header")
+    assert md.count("**Noise floor** (50 episodes per policy)") == md.count("\n## `") == 2
+    assert "success rate at least 0.16 below the leader's 1.00" in md and "--episodes N" in md
+    lines = write_csv(summaries, tmp_path / "board.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    cells = [dict(zip(header, line.split(","), strict=False)) for line in lines[1:3]]
+    assert {c["noise_floor_success_drop"] for c in cells} == {"0.1600"}
+    assert {c["noise_floor_metric"] for c in cells} == {"mean kappa"}
+    assert float(cells[0]["noise_floor_metric_gap"]) == pytest.approx(floor.metric_gap, rel=1e-5)
+
+
+def test_more_episodes_per_seed_buy_a_finer_floor_and_say_so(tmp_path, capsys) -> None:
+    from paragym.baselines.leaderboard import FULL
+    from paragym.cli import main
+
+    assert len(FULL.with_episodes(20).keys()) == 100 and not FULL.with_episodes(20).smoke
+    assert FULL.with_episodes(2).smoke and QUICK.smoke and not FULL.smoke
+    assert FULL.with_episodes(20).options() == " --episodes 20" and QUICK.options() == " --quick"
+    for bad in (0, -1, 2.5, True):
+        with pytest.raises(ValueError, match="episodes must be a positive integer"):
+            FULL.with_episodes(bad)
+    assert main(["leaderboard", "--episodes", "0", "--db", str(tmp_path / "x.sqlite")]) == 2
+    assert "episodes must be a positive integer" in capsys.readouterr().err
+    out = tmp_path / "out"
+    assert main(["leaderboard", "--quick", "--episodes", "4", "--env", ENV, "--policy", "zero", "--policy", "random",
+                 "--db", str(tmp_path / "q.sqlite"), "--out", str(out), "--no-validation", "--no-progress"]) == 0
+    printed = capsys.readouterr().out
+    assert "Noise floor (4 episodes per policy)" in printed
+    md = next(out.rglob("LEADERBOARD.md")).read_text()
+    assert "`paragym leaderboard --quick --episodes 4`" in md and "seeds 0 x 4 episodes per policy" in md
+    assert "**Noise floor** (4 episodes per policy)" in md and "A smoke test, not a ranking" in md

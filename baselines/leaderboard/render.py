@@ -12,7 +12,7 @@ from typing import Any
 import paragym
 from paragym import registry
 from paragym.baselines.leaderboard.suite import EvalSuite
-from paragym.baselines.leaderboard.summary import Summary
+from paragym.baselines.leaderboard.summary import Summary, noise_floor
 from paragym.baselines.store import producer_id
 from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import env_name
@@ -62,8 +62,8 @@ def _apart(s: Summary) -> str:
 
 
 def smoke_note(suite: EvalSuite) -> str:
-    """The warning a table of too few episodes carries ('' for the full suite)."""
-    if suite.name == "full":
+    """The warning a table of fewer episodes than the full suite's carries ('' otherwise)."""
+    if not suite.smoke:
         return ""
     return (f"**A smoke test, not a ranking**: {len(suite.keys())} episodes per policy ({suite.name} suite), so the "
             f"intervals are wide and the order inside them is chance. Rank on the full suite (no --quick).")
@@ -99,7 +99,7 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
                 "Intervals: 95 %, Wilson's for success rates, Student's t for mean returns. "
                 "*apart from #1*: \"yes\" where the leader's success interval lies above the policy's, or, where "
                 "those overlap, the leader's interval of the ranking's next metric lies beyond the policy's; \"no\": "
-                "the two cannot be told apart on these episodes.", ""]
+                "the two cannot be told apart on these episodes.", "", noise_floor(summaries).sentence(), ""]
         dyn = next((s.dynamic for s in summaries if s.dynamic is not None), None)
         if dyn is not None:
             out += [f"Dynamic: {dyn['episodes']} episodes per policy under PyBullet's dynamics "
@@ -150,14 +150,18 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
     keys = sorted({k for ss in all_summaries.values() for s in ss for k in s.metrics})
     writer.writerow(["env", "rank", "policy", "kind", "episodes", "success_rate", "success_ci_low", "success_ci_high",
                      "return_mean", "return_ci_low", "return_ci_high", "return_std", "apart_from_leader",
+                     "noise_floor_success_drop", "noise_floor_metric", "noise_floor_metric_gap",
                      *keys, "wall_seconds_per_episode", "kf_validation", "dynamic_episodes", "dynamic_success_rate",
                      "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode",
                      "producer_sha256", "producer"])
     for ss in all_summaries.values():
+        floor = noise_floor(ss)
+        floor_cells = ["" if floor.success_drop is None else f"{floor.success_drop:.4f}", floor.metric,
+                       "" if floor.metric_gap is None else f"{floor.metric_gap:.6g}"]
         for s in ss:
             writer.writerow([s.env, s.rank, s.policy, s.kind, s.episodes, f"{s.success_rate:.4f}",
                              *(f"{v:.4f}" for v in s.success_ci), f"{s.return_mean:.6g}",
-                             *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s),
+                             *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s), *floor_cells,
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
                              f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys),
                              producer_id(s.producer), s.producer])
@@ -193,7 +197,7 @@ def write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out
         key, sign = bench_of(env).primary
         png = plot_leaderboard(ss, key, bench_of(env).label(key), out / f"{env_name(env)}.png",
                                f"{env}: {ss[0].episodes} episodes per policy ({suite.name} suite"
-                               f"{': a smoke test, not a ranking' if suite.name != 'full' else ''})",
+                               f"{': a smoke test, not a ranking' if suite.smoke else ''})",
                                higher_is_better=sign > 0)
         files.append(png)
         images[env] = os.path.relpath(png, md_path.parent)
@@ -202,7 +206,7 @@ def write_reports(all_summaries: dict[str, list[Summary]], suite: EvalSuite, out
               f"seeds {', '.join(map(str, suite.seeds))} x {suite.episodes} episodes per policy "
               f"(reset seed 100000 + 1000 seed + episode), random scenarios, kinematic fidelity; "
               f"wall times on {platform.machine()} with {os.cpu_count()} cores. Written by `paragym leaderboard"
-              f"{' --quick' if suite.name == 'quick' else ''}`; every episode is a row of the SQLite results database.")
+              f"{suite.options()}`; every episode is a row of the SQLite results database.")
     if smoke_note(suite):
         header += "\n\n" + smoke_note(suite)
     if env_ids or policies:

@@ -17,7 +17,7 @@ from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, Job, Row
 from paragym.baselines.leaderboard.render import smoke_note, terminal_table, write_reports
 from paragym.baselines.leaderboard.results import write_episodes_csv, write_results
 from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
-from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, summarise
+from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, noise_floor, summarise
 from paragym.baselines.policies import PolicySpec, policies_for
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.tasks import bench_of
@@ -135,7 +135,7 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     if smoke_note(suite):
         echo("\n" + smoke_note(suite).replace("**", ""))
     for env, ss in all_summaries.items():
-        echo(f"\n{env}\n{terminal_table(ss)}")
+        echo(f"\n{env}\n{terminal_table(ss)}\n{noise_floor(ss).sentence().replace('**', '').replace('`', '')}")
     return LeaderboardRun(all_summaries, len(jobs), total - len(jobs), files, seconds, len(dynamic_jobs),
                           dynamic_total - len(dynamic_jobs))
 

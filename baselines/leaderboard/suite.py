@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from paragym import registry
@@ -42,6 +42,24 @@ class EvalSuite:
 
     def keys(self) -> list[tuple[int, int]]:
         return [(s, k) for s in self.seeds for k in range(self.episodes)]
+
+    @property
+    def smoke(self) -> bool:
+        """Whether its tables rest on fewer episodes per policy than the full suite's (a smoke test)."""
+        return len(self.keys()) < len(FULL.keys())
+
+    def with_episodes(self, episodes: int) -> EvalSuite:
+        """This suite with ``episodes`` per evaluation seed (a ValueError unless a positive integer): more buy a
+        finer noise floor; the episodes of the shorter suite are its first ones, so a database keeps them."""
+        if isinstance(episodes, bool) or not isinstance(episodes, int) or episodes < 1:
+            raise ValueError(f"episodes must be a positive integer; got {episodes!r}")
+        return replace(self, episodes=episodes)
+
+    def options(self) -> str:
+        """The ``paragym leaderboard`` options that run this suite."""
+        base = QUICK if self.name == "quick" else FULL
+        return (" --quick" if self.name == "quick" else "") + (
+            f" --episodes {self.episodes}" if self.episodes != base.episodes else "")
 
 
 FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))

@@ -11,11 +11,11 @@ import numpy as np
 
 from paragym import registry
 from paragym.baselines.leaderboard.suite import EvalSuite, dynamic_kwargs
-from paragym.baselines.stats import ahead, mean_ci, separable, wilson
+from paragym.baselines.stats import ahead, half_width, mean_ci, resolvable_drop, separable, wilson
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.tasks import bench_of
 
-__all__ = ["Summary", "dynamic_summary", "mark_separable", "summarise"]
+__all__ = ["NoiseFloor", "Summary", "dynamic_summary", "mark_separable", "noise_floor", "summarise"]
 
 
 @dataclass
@@ -101,6 +101,50 @@ def mark_separable(summaries: list[Summary]) -> None:
         ahead_on_primary = not separable(leader.success_ci, s.success_ci) and ahead(leader.primary_ci, s.primary_ci,
                                                                                       sign)
         s.separable = ahead_on_success or ahead_on_primary
+
+
+@dataclass(frozen=True)
+class NoiseFloor:
+    """The smallest differences from the leader that one leaderboard table can resolve with its episodes: below
+    these, "apart from #1" cannot say yes (:func:`noise_floor`)."""
+
+    #: episodes per policy (the leader's)
+    episodes: int
+    #: the leader's success rate
+    leader_success: float
+    #: the least drop in success rate from the leader's that is apart from it (Wilson's intervals of the same
+    #: number of episodes, :func:`paragym.baselines.stats.resolvable_drop`); None where none can be
+    success_drop: float | None
+    #: the ranking's next metric (its label in the table) and how far beyond the leader's mean a policy of equal
+    #: success must lie to be apart: the leader's interval's half-width plus the median other row's (Student's
+    #: t); None where no interval is known
+    metric: str
+    metric_gap: float | None
+
+    def sentence(self) -> str:
+        """The floor in words, as LEADERBOARD.md prints it under a table."""
+        success = (f"a success rate at least {self.success_drop:.2f} below the leader's {self.leader_success:.2f}"
+                   if self.success_drop is not None else
+                   f"no success rate (the leader's {self.leader_success:.2f} is at its floor for "
+                   f"{self.episodes} episodes)")
+        metric = ("" if self.metric_gap is None else
+                  f"; at equal success, a mean {self.metric} about {self.metric_gap:.3g} worse than the leader's")
+        return (f"**Noise floor** ({self.episodes} episodes per policy): apart from #1 needs {success}{metric}. "
+                f"Smaller differences are within chance here; `paragym leaderboard --episodes N` runs N episodes "
+                f"per evaluation seed for a finer floor.")
+
+
+def noise_floor(summaries: list[Summary]) -> NoiseFloor:
+    """The noise floor of one env's ranked summaries (the leader first): on success, at the leader's rate and
+    episode count; on the ranking's next metric, the leader's half-width plus the median half-width of the
+    other rows (two means closer than their half-widths' sum have overlapping intervals, :func:`mark_separable`)."""
+    leader = summaries[0]
+    key = bench_of(leader.env).primary[0]
+    others = [w for w in (half_width(s.primary_ci) for s in summaries[1:]) if math.isfinite(w)]
+    own = half_width(leader.primary_ci)
+    gap = own + float(np.median(others)) if others and math.isfinite(own) else None
+    drop = resolvable_drop(round(leader.success_rate * leader.episodes), leader.episodes)
+    return NoiseFloor(leader.episodes, leader.success_rate, drop, bench_of(leader.env).label(key), gap)
 
 
 def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] | None:
