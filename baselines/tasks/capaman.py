@@ -53,6 +53,31 @@ def rrt_ga_params() -> dict[str, Any]:
             "planner": init_defaults(RrtGaPlanner, settings=RrtGaSettings(), seed="the episode's seed")}
 
 
+class StraightLine:
+    """The CaPaMan's naive controller: every crank straight at the current target T.P., as fast as the action
+    allows (``a = clip((target - alpha) / max_joint_step, -1, 1)``), blind to the obstacles. It reads the target
+    offset from the observation: v0 gives the cranks and the target (indices 0-2 and 6-8), v1 their difference
+    (3-5), each in units of 45 deg."""
+
+    def __init__(self, env: gym.Env) -> None:
+        params = env.unwrapped.params
+        self.offset = (slice(6, 9), slice(0, 3)) if params.version == 0 else (slice(3, 6), None)
+        self.gain = 45 * DEG / params.max_joint_step
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        target, cranks = self.offset
+        delta = obs[target] - (0.0 if cranks is None else obs[cranks])
+        return np.clip(delta * self.gain, -1.0, 1.0).astype(np.float32)
+
+
+def straight_line(env: gym.Env, seed: int) -> StraightLine:
+    """The naive controller (:class:`StraightLine`): a floor."""
+    return StraightLine(env)
+
+
 def grid_path(env: gym.Env, seed: int) -> Any:
     """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners import GridPathPolicy
@@ -222,6 +247,8 @@ BENCH = Bench(
         BuiltIn("grid-field", grid_field, "other", "grid-dijkstra's shortest free paths on Theta, followed from "
                 "wherever the cranks are (DAgger's expert)", grid_field_params, ids=V1),
         BuiltIn("zero", zero_factory, "floor", "stand still at T.P.1"),
+        BuiltIn("straight-line", straight_line, "floor", "the naive controller: each crank straight at the current "
+                "target, blind to the obstacles"),
     ),
     # within 1 mm of the released settings, with joint stops, at a fraction of their cost (paragym.sim.capaman_dynamic)
     dynamics=CaPaManDynamics.split,

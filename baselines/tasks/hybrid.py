@@ -29,6 +29,8 @@ BEFORE_V2 = ("paragym/HybridSingularityFree-v0", "paragym/HybridSingularityFree-
 #: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a
 #: simulated actuator chasing a stroke planned at its limit overshoots it by up to 0.5 mm
 STROKE_MARGIN = 0.001
+#: the ids whose observation shows the end pose's stroke excess and its change with the split (v1's indices 45-47)
+SHOWS_EXCESS = ("paragym/HybridSingularityFree-v1", "paragym/HybridSingularityFree-v2")
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -172,6 +174,27 @@ ABLATION = Ablation(
 )
 
 
+
+class GreedySplit:
+    """The hybrid's naive controller (v1 on): E on the nominal path (zero offset), and the split Delta stepped,
+    a whole ``max_delta_step`` a step, toward the lower stroke excess of the end pose P1 that the observation
+    shows (indices 45-47: e(Delta) and its change one step up and one step down), held where that excess is 0
+    or no step lowers it. One line of arithmetic on the observation, blind to the singularities and to the
+    strokes along the way."""
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        up, down = float(obs[46]), float(obs[47])
+        step = 0.0 if obs[45] <= 0 or min(up, down) >= 0 else (1.0 if up < down else -1.0)
+        return np.array([step, 0.0, 0.0, 0.0], np.float32)
+
+
+def greedy_split(env: gym.Env, seed: int) -> GreedySplit:
+    """The naive controller (:class:`GreedySplit`): a floor."""
+    return GreedySplit()
+
 BENCH = Bench(
     ablation=ABLATION,
     task="hybrid",
@@ -193,6 +216,8 @@ BENCH = Bench(
                 "inside their limits where the path allows", polynomial_detour_margin_params, ids=V2),
         BuiltIn("zero", zero_factory, "floor",
                 "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)"),
+        BuiltIn("greedy-split", greedy_split, "floor", "the naive controller: the nominal path, the split stepped "
+                "toward the end pose's lower stroke excess shown in the observation", ids=SHOWS_EXCESS),
     ),
     dynamics=HybridDynamics.fast,  # the env's default
     demo="polynomial + serial + detour (paper 002)",
