@@ -21,7 +21,7 @@ from paragym.mechanisms.geometry import pose6
 from paragym.tasks.base import check_control_period
 
 __all__ = ["ActionCheck", "ParagymEnv", "TaskShell", "box", "check_action", "check_control_period", "check_copyable",
-           "check_options", "check_seed", "env_signature", "pose6"]
+           "check_options", "check_seed", "check_train_scenarios", "env_signature", "pose6"]
 
 _FIRST = np.zeros(1, np.int64)  # the single env's one robot, as the rows of a batch
 _ONE = np.ones(1, bool)
@@ -133,13 +133,33 @@ class ActionCheck:
 
 
 def env_signature(task: Any, first: tuple[inspect.Parameter, ...] = ()) -> inspect.Signature:
-    """The keyword arguments of a task's env, as ``help()`` and the docs show them: ``render_mode`` and those of
-    its ``Params.from_kwargs`` (``first``: a vector env's own before them)."""
-    own = inspect.Parameter("render_mode", inspect.Parameter.KEYWORD_ONLY, default=None, annotation="str | None")
+    """The keyword arguments of a task's env, as ``help()`` and the docs show them: ``render_mode``,
+    ``train_scenarios`` and those of its ``Params.from_kwargs`` (``first``: a vector env's own before them)."""
+    own = [inspect.Parameter("render_mode", inspect.Parameter.KEYWORD_ONLY, default=None, annotation="str | None"),
+           inspect.Parameter("train_scenarios", inspect.Parameter.KEYWORD_ONLY, default=None,
+                             annotation="int | None")]
     params = [q.replace(kind=inspect.Parameter.KEYWORD_ONLY)
               for q in list(inspect.signature(task.Params.from_kwargs).parameters.values())[1:]
               if q.kind is not inspect.Parameter.VAR_KEYWORD]
-    return inspect.Signature([*first, own, *params])
+    return inspect.Signature([*first, *own, *params])
+
+
+#: the most scenarios ``train_scenarios`` may fix: level l is the scenario ``reset(seed=l)`` draws, and the
+#: leaderboard's evaluation episodes reset from seed 100000 on, so that every level stays unseen there
+MAX_TRAIN_SCENARIOS = 100_000
+
+
+def check_train_scenarios(value: Any) -> int | None:
+    """``train_scenarios`` if it is None or an integer in [1, :data:`MAX_TRAIN_SCENARIOS`], else a TypeError or
+    ValueError naming it."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        raise TypeError(f"train_scenarios must be a positive integer or None; got {value!r:.80}")
+    if not 1 <= value <= MAX_TRAIN_SCENARIOS:
+        raise ValueError(f"train_scenarios must lie in [1, {MAX_TRAIN_SCENARIOS}] (level l is the scenario of "
+                         f"seed l; the leaderboard evaluates from seed 100000); got {value!r}")
+    return int(value)
 
 
 class TaskShell:
@@ -148,8 +168,32 @@ class TaskShell:
 
     params: Any = None
     world: Any = None
+    #: how many fixed scenarios every reset draws from (None: a new one each time; :meth:`draw`)
+    train_scenarios: int | None = None
     _render: dict[str, Any]
     _closed: bool = True
+    _levels: dict[Any, Any]
+
+    def draw(self, choice: Any, rngs: list[np.random.Generator]) -> list[Any]:
+        """One scenario per robot's generator for the ``scenario`` argument ``choice`` (the task's
+        ``draw_scenarios``). With ``train_scenarios`` = K, a finite training set, as Procgen's ``num_levels``: each
+        robot's generator picks a level l in [0, K), and its scenario is the one ``choice`` draws from a generator
+        seeded with l (the scenario ``reset(seed=l)`` starts without K), the same in every process; the rest of the
+        episode's randomness stays the generator's. Evaluate on unseen scenarios without it."""
+        if self.train_scenarios is None:
+            return self.task.draw_scenarios(choice, rngs, self.params, self.world)
+        levels = self.__dict__.setdefault("_levels", {})
+        out = []
+        for rng in rngs:
+            level = int(rng.integers(self.train_scenarios))
+            key = (choice, level) if isinstance(choice, str) else None
+            scenario = levels.get(key) if key else None
+            if scenario is None:
+                scenario = self.task.draw_scenarios(choice, [np.random.default_rng(level)], self.params, self.world)[0]
+                if key:
+                    levels[key] = scenario
+            out.append(scenario)
+        return out
 
     def __getattr__(self, name: str) -> Any:
         """The env's arguments, as its parameters hold them (``env.geometry``, ``env.fidelity``, ...)."""
@@ -204,11 +248,12 @@ class ParagymEnv(TaskShell, gym.Env):
         if cls.task is not None:
             cls.__signature__ = env_signature(cls.task)
 
-    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+    def __init__(self, render_mode: str | None = None, train_scenarios: int | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None; "
                              f"got {render_mode!r}")
         self.render_mode = render_mode
+        self.train_scenarios = check_train_scenarios(train_scenarios)
         self.params = self.task.Params.from_kwargs(self.rules, **kwargs)
         self.observation_space, self.action_space = (box(b) for b in self.task.spaces(self.params))
         self.state = self.task.State.empty(1, self.params)
@@ -227,7 +272,7 @@ class ParagymEnv(TaskShell, gym.Env):
         options = check_options(options)
         super().reset(seed=seed)
         task, p = self.task, self.params
-        scenarios = task.draw_scenarios(options.get("scenario", p.scenario), [self.np_random], p, self.world)
+        scenarios = self.draw(options.get("scenario", p.scenario), [self.np_random])
         task.reset(self.state, p, _FIRST, scenarios, [self.np_random], self.world)
         self._evaluation = task.evaluate(self.state, p, self.world)
         self._ended = False

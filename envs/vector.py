@@ -41,7 +41,15 @@ from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from paragym.envs.base import TaskShell, box, check_action, check_options, check_seed, env_signature
+from paragym.envs.base import (
+    TaskShell,
+    box,
+    check_action,
+    check_options,
+    check_seed,
+    check_train_scenarios,
+    env_signature,
+)
 
 __all__ = ["ParagymVectorEnv", "SameStepVectorEnv"]
 
@@ -74,7 +82,7 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
             cls.__signature__ = env_signature(cls.task, tuple(own))
 
     def __init__(self, num_envs: int, max_episode_steps: int | None = None, render_index: int = 0,
-                 render_mode: str | None = None, **kwargs: Any) -> None:
+                 render_mode: str | None = None, train_scenarios: int | None = None, **kwargs: Any) -> None:
         if not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer; got {num_envs!r}")
         if not 0 <= render_index < num_envs:
@@ -82,6 +90,7 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be 'rgb_array' or None; got {render_mode!r}")
         self.num_envs = int(num_envs)
+        self.train_scenarios = check_train_scenarios(train_scenarios)
         self.params = self.task.vector_params(self.rules, kwargs)
         self.render_mode = render_mode
         self.render_index = int(render_index)
@@ -103,7 +112,7 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
     def _start(self, rows: np.ndarray, rngs: list[np.random.Generator], options: dict[str, Any]) -> list[Any]:
         """Draw, check and start the scenarios of robots ``rows`` (one generator each); return them."""
         task, p = self.task, self.params
-        scenarios = task.draw_scenarios(options.get("scenario", p.scenario), rngs, p, self.world)
+        scenarios = self.draw(options.get("scenario", p.scenario), rngs)
         task.reset(self.state, p, rows, scenarios, rngs, self.world)
         return scenarios
 

@@ -198,3 +198,12 @@ def test_against_times_both_trees_and_records_them(tmp_path):
     before, here, ratio = map(float, rows[0][1:])
     assert before > 0 and here > 0 and abs(ratio - before / here) < 1e-3
     assert "speed-up" in out
+
+
+def test_generalisation_trains_on_k_scenarios_and_reports_the_gap(tmp_path):
+    """``benchmarks/generalisation.py``: PPO on ``train_scenarios=K``, success on the K and on unseen scenarios."""
+    out = _run("benchmarks/generalisation.py", "--levels", "3", "--timesteps", "2000", "--episodes", "4",
+               "--out", str(tmp_path / "models"), "--record", str(tmp_path))
+    (row,) = _recorded(tmp_path, "generalisation")["rows"]
+    assert row[0] == "3" and row[2].endswith("of 3") and row[3].endswith("of 4"), row
+    assert "success unseen" in out
