@@ -11,7 +11,7 @@ from typing import Any
 
 import paragym
 from paragym import registry
-from paragym.baselines.leaderboard.suite import EvalSuite
+from paragym.baselines.leaderboard.suite import FULL, EvalSuite
 from paragym.baselines.leaderboard.summary import Summary, noise_floor
 from paragym.baselines.store import producer_id
 from paragym.baselines.tasks import bench_of
@@ -66,7 +66,8 @@ def smoke_note(suite: EvalSuite) -> str:
     if not suite.smoke:
         return ""
     return (f"**A smoke test, not a ranking**: {len(suite.keys())} episodes per policy ({suite.name} suite), so the "
-            f"intervals are wide and the order inside them is chance. Rank on the full suite (no --quick).")
+            f"intervals are wide and the order inside them is chance. Rank on the full suite's {len(FULL.keys())} "
+            f"episodes per policy or more (no --quick, --episodes 10 or more).")
 
 
 def _dyn(s: Summary, cell: Callable[[dict[str, Any]], str]) -> str:
