@@ -18,7 +18,7 @@ import pytest
 from paragym import registry
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
-from paragym.tasks.base import Evaluation, Task
+from paragym.tasks.base import Task
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -66,55 +66,29 @@ def test_an_env_refuses_an_unknown_argument_by_name():
 # --- success decided once -------------------------------------------------------------------------------------------
 
 
-def test_success_is_decided_in_one_place(monkeypatch):
-    """Break the Orthoglide's ``evaluate`` in its one place: the single env, the vector env and the
-    leaderboard's episode all report the broken success."""
-    from paragym.baselines.leaderboard import evaluate as board
-    from paragym.baselines.policies import get_policy
-    from paragym.tasks.orthoglide import circle_task
-
-    env_id = "paragym/Orthoglide2PRRKappa-v1"
-    short = circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
-
-    def outcome() -> tuple[bool, bool, bool]:
-        env = gym.make(env_id, scenario=short)
-        env.reset(seed=0)
-        while True:
-            *_, terminated, truncated, info = env.step(np.zeros(1, np.float32))
-            if terminated or truncated:
-                break
-        venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point", scenario=short)
-        venv.reset(seed=0)
-        for _ in range(4):
-            *_, vinfo = venv.step(np.zeros((2, 1), np.float32))
-        board._ENVS.clear()
-        row = board.evaluate_episode(get_policy(env_id, "zero"), 0, 0)
-        return info["is_success"], bool(vinfo["is_success"][0]), row.success
-
-    task = _task("orthoglide")
-    honest = outcome()
-    real = type(task).evaluate
-
-    def broken(self, state, params, world):
-        ev = real(self, state, params, world)
-        return Evaluation(~ev.success, ev.failure, ev.numbers)
-
-    monkeypatch.setattr(type(task), "evaluate", broken)
-    assert outcome() == tuple(not s for s in honest), honest
-
-
-BROKEN_DECIDE = r"""
+#: one Orthoglide episode that ends in four zero actions, told by the single env, the vector env and the
+#: leaderboard's evaluate_episode; argv[1] breaks success in one place first: "decide" (the compiled transition's
+#: one function, with numba's JIT off) or "evaluate" (the task's report of it)
+SUCCESS_EVERYWHERE = r"""
 import json, sys
 import gymnasium as gym
 import numpy as np
 import paragym.tasks.orthoglide_step as step_module
 from paragym.baselines.leaderboard import evaluate as board
 from paragym.baselines.policies import get_policy
+from paragym.tasks.base import Evaluation
 from paragym.tasks.orthoglide import circle_task
+from paragym.tasks.orthoglide_task import TASK
 
-if sys.argv[1] == "broken":  # the one place success is decided, broken: every consumer must follow
+if sys.argv[1] == "decide":
     honest = step_module.decide
     step_module.decide = lambda k, last, failed: not honest(k, last, failed)
+if sys.argv[1] == "evaluate":
+    real = type(TASK).evaluate
+    def broken(self, state, params, world):
+        ev = real(self, state, params, world)
+        return Evaluation(~ev.success, ev.failure, ev.numbers)
+    type(TASK).evaluate = broken
 env_id, short = "paragym/Orthoglide2PRRKappa-v1", circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
 env = gym.make(env_id, scenario=short)
 env.reset(seed=0)
@@ -126,30 +100,42 @@ venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point",
 venv.reset(seed=0)
 for _ in range(4):
     *_, vinfo = venv.step(np.zeros((2, 1), np.float32))
-env = gym.make(env_id, scenario=short)
-board._ENVS[env_id] = env
+board._ENVS[env_id] = gym.make(env_id, scenario=short)
 row = board.evaluate_episode(get_policy(env_id, "zero"), 0, 0)
 print(json.dumps([info["is_success"], bool(vinfo["is_success"][0]), row.success]))
 """
+
+
+def _success_everywhere(broken: str, jit: bool) -> dict[str, list[bool]]:
+    """The honest and the ``broken`` outcome of :data:`SUCCESS_EVERYWHERE`, each in a process of its own."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    env = {**os.environ, **({} if jit else {"NUMBA_DISABLE_JIT": "1"})}
+    outcome = {}
+    for mode in ("honest", broken):
+        proc = subprocess.run([sys.executable, "-c", SUCCESS_EVERYWHERE, mode], capture_output=True, text=True,
+                              env=env, timeout=600)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        outcome[mode] = json.loads(proc.stdout.strip().splitlines()[-1])
+    return outcome
+
+
+def test_success_is_decided_in_one_place():
+    """Break the Orthoglide's ``evaluate`` in its one place: the single env, the vector env and the
+    leaderboard's episode all report the broken success."""
+    outcome = _success_everywhere("evaluate", jit=True)
+    assert outcome["evaluate"] == [not s for s in outcome["honest"]], outcome
 
 
 def test_success_is_decided_by_one_function_of_the_transition():
     """The decision itself is one function (``paragym.tasks.<task>_step.decide``), which the compiled transition
     calls: with numba's JIT off, replacing it in that one place changes the single env's, the vector env's and
     the leaderboard's success alike."""
-    import json
-    import os
-    import subprocess
-    import sys
-
-    env = {**os.environ, "NUMBA_DISABLE_JIT": "1"}
-    outcome = {}
-    for mode in ("honest", "broken"):
-        proc = subprocess.run([sys.executable, "-c", BROKEN_DECIDE, mode], capture_output=True, text=True, env=env,
-                              timeout=600)
-        assert proc.returncode == 0, proc.stderr[-3000:]
-        outcome[mode] = json.loads(proc.stdout.strip().splitlines()[-1])
-    assert outcome["broken"] == [not s for s in outcome["honest"]], outcome
+    outcome = _success_everywhere("decide", jit=False)
+    assert outcome["decide"] == [not s for s in outcome["honest"]], outcome
 
 
 # --- one lifecycle, every id and fidelity ----------------------------------------------------------------------------
