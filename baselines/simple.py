@@ -62,20 +62,16 @@ def best_constant(env_id: str, levels: tuple[float, ...] = (0.0, 0.5, 1.0), seed
     return. How a task's best-constant floor was chosen (its bench names the result)."""
     import itertools
 
+    from paragym.rollout import run_episode
+
     env = gym.make(env_id)
+    space = env.action_space
     best: tuple[int, float, tuple[float, ...]] | None = None
-    for action in itertools.product(levels, repeat=int(np.prod(env.action_space.shape))):
-        a = np.asarray(action, env.action_space.dtype).reshape(env.action_space.shape)
-        wins, total = 0, 0.0
-        for seed in seeds:
-            env.reset(seed=seed)
-            while True:
-                _, reward, terminated, truncated, info = env.step(a)
-                total += reward
-                if terminated or truncated:
-                    break
-            wins += bool(info["is_success"])
-        if best is None or (wins, total / len(seeds)) > best[:2]:
-            best = (wins, total / len(seeds), action)
+    for action in itertools.product(levels, repeat=int(np.prod(space.shape))):
+        policy = ConstantPolicy(space, np.reshape(action, space.shape))
+        episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
+        wins, mean = sum(bool(e.success) for e in episodes), float(np.mean([e.episode_return for e in episodes]))
+        if best is None or (wins, mean) > best[:2]:
+            best = (wins, mean, action)
     env.close()
     return best[2], best[0], best[1]

@@ -139,12 +139,13 @@ def noise_floor(summaries: list[Summary]) -> NoiseFloor:
     episode count; on the ranking's next metric, the leader's half-width plus the median half-width of the
     other rows (two means closer than their half-widths' sum have overlapping intervals, :func:`mark_separable`)."""
     leader = summaries[0]
-    key = bench_of(leader.env).primary[0]
+    bench = bench_of(leader.env)
+    key = bench.primary[0]
     others = [w for w in (half_width(s.primary_ci) for s in summaries[1:]) if math.isfinite(w)]
     own = half_width(leader.primary_ci)
     gap = own + float(np.median(others)) if others and math.isfinite(own) else None
     drop = resolvable_drop(round(leader.success_rate * leader.episodes), leader.episodes)
-    return NoiseFloor(leader.episodes, leader.success_rate, drop, bench_of(leader.env).label(key), gap)
+    return NoiseFloor(leader.episodes, leader.success_rate, drop, bench.label(key), gap)
 
 
 def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] | None:
