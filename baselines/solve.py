@@ -69,7 +69,7 @@ class SolveCheck:
         if not isinstance(self.episodes, int) or self.episodes < 1:
             raise ValueError(f"episodes must be a positive integer; got {self.episodes!r}")
         bench = bench_of(self.env_id)
-        self.targets = tuple(self.targets) or bench.solved
+        self.targets = tuple(self.targets) or tuple(t for t in bench.solved if t.applies(self.env_id))
         if not self.targets or not all(isinstance(t, Target) for t in self.targets):
             raise ValueError(f"targets must be Targets; {self.env_id}'s task states none (its bench's solved) "
                              f"and none were given")

@@ -72,10 +72,14 @@ def _section(env_id: str, name: str) -> list[tuple[str, str]]:
 
 
 def status(env_id: str) -> str:
-    """"latest" for the newest version of its task, else "superseded by <id>"; then the fidelities it has."""
-    newest = registry.rows_of(registry.task_of(env_id))[-1].id
+    """"latest" for the newest version of its task, else "superseded by <id>"; "rung k of n" for a rung of its
+    task's difficulty ladder; then the fidelities it has."""
+    row = registry.row(env_id)
     fidelities = "kinematic + dynamic" if "fidelity" in inspect.signature(env_class(env_id)).parameters \
         else "kinematic"
+    if row.rung is not None:
+        return f"rung {row.rung} of {len(registry.ladder_of(row.task))} (0 the easiest); {fidelities}"
+    newest = registry.rows_of(row.task)[-1].id
     return f"{'latest' if newest == env_id else f'superseded by `{newest}`'}; {fidelities}"
 
 

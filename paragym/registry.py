@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "newest", "row", "rows", "rows_of", "task_of"]
+__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows", "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -35,6 +35,9 @@ class EnvRow:
             its own (``models/<Name>-v<N>/``).
         bench: the module of the task's bench (``paragym.baselines.tasks``): what the CLI and the
             leaderboard know of the task; None: ``paragym.baselines.tasks.<task>``.
+        rung: the id's rung on its task's difficulty ladder (0 the easiest, :func:`ladder_of`), an id of its
+            own with its own version line and leaderboard table; None: a version of the task itself
+            (:func:`rows_of`, :func:`newest`).
     """
 
     id: str
@@ -47,6 +50,7 @@ class EnvRow:
     summary: str
     models_from: str | None = None
     bench: str | None = None
+    rung: int | None = None
 
     @property
     def bench_module(self) -> str:
@@ -113,6 +117,11 @@ ROWS: tuple[EnvRow, ...] = (
            "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
+    *(EnvRow(f"paragym/MobileTripodOdometry-{name}-v0", f"paragym.envs.tripod:MobileTripodOdometry{name}Env",
+             f"paragym.envs.tripod:MobileTripodOdometry{name}VectorEnv", 700, "tripod", "random", ("random",),
+             f"mobile tripod ladder, rung {k} ({name.lower()}): v2's task on drives with a 15-40 cm push that "
+             "odometry alone cannot see past", rung=k)
+      for k, name in enumerate(("Easy", "Medium", "Hard"))),
 )
 
 _BY_ID = {r.id: r for r in ROWS}
@@ -159,8 +168,13 @@ def task_of(env_id: str) -> str:
 
 
 def rows_of(task: str) -> tuple[EnvRow, ...]:
-    """The rows of ``task``, oldest version first."""
-    return tuple(sorted((r for r in rows() if r.task == task), key=lambda r: r.version))
+    """The versions of ``task``, oldest first (its ladder's rungs are not among them: :func:`ladder_of`)."""
+    return tuple(sorted((r for r in rows() if r.task == task and r.rung is None), key=lambda r: r.version))
+
+
+def ladder_of(task: str) -> tuple[EnvRow, ...]:
+    """The rungs of ``task``'s difficulty ladder, easiest first (empty: it has none)."""
+    return tuple(sorted((r for r in rows() if r.task == task and r.rung is not None), key=lambda r: r.rung))
 
 
 def newest() -> tuple[str, ...]:

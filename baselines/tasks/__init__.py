@@ -140,13 +140,20 @@ class Target:
       metrics) reaches it (at least it for ``direction`` +1, at most it for -1).
     * With ``against`` (another policy): the policy beats ``factor`` times that policy's figure, episode by
       episode: the Student-t 95 % interval of the mean per-episode gap (better side positive) lies wholly
-      above 0. A mean that is better by chance, or equal to a floor's, does not solve a task."""
+      above 0. A mean that is better by chance, or equal to a floor's, does not solve a task.
+
+    ``ids``: the env ids the target applies to (None: every id of the task)."""
 
     key: str
     direction: int
     value: float | None = None
     against: str | None = None
     factor: float = 1.0
+    ids: tuple[str, ...] | None = None
+
+    def applies(self, env_id: str) -> bool:
+        """Whether this target is one of ``env_id``'s."""
+        return self.ids is None or env_id in self.ids
 
     def __post_init__(self) -> None:
         if self.direction not in (-1, 1):
@@ -269,7 +276,7 @@ def missing(bench: Bench, env_id: str) -> list[str]:
             out.append(f"solved targets that are Targets (got {t!r})")
         elif t.key not in keys | {"success", "return"}:
             out.append(f"a column for the solved target's figure {t.key!r}")
-        elif t.against is not None and t.against not in names:
+        elif t.applies(env_id) and t.against is not None and t.against not in names:
             out.append(f"the policy {t.against!r} that a solved target compares against, on {env_id}")
     rtol, atol = (tuple(bench.dynamic_tolerance) + (None, None))[:2]
     if len(bench.dynamic_tolerance) != 2 or not all(isinstance(v, float) and v >= 0 for v in (rtol, atol)):

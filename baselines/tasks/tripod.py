@@ -19,11 +19,15 @@ from paragym.rollout import Episode
 from paragym.sim.tripod_dynamic import TripodDynamics
 
 V0 = ("paragym/MobileTripodOdometry-v0",)
-#: v1 and v2 act through trust in the paper's correction: the reference is its test of the faulty unit
-TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2")
-#: the best constant trust per unit on v1 and v2: :func:`paragym.baselines.simple.best_constant` over
-#: {0, 0.5, 1}^3 on reset seeds 0-29 (13 of 30 successes on each id; a test searches again)
-BEST_CONSTANT = (0.5, 0.0, 1.0)
+#: the rungs of the tripod's difficulty ladder (:func:`paragym.registry.ladder_of`)
+LADDER = tuple(f"paragym/MobileTripodOdometry-{name}-v0" for name in ("Easy", "Medium", "Hard"))
+#: v1, v2 and the ladder act through trust in the paper's correction: the reference is its test of the faulty unit
+TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2", *LADDER)
+#: the best constant trust per unit of each id: :func:`paragym.baselines.simple.best_constant` over
+#: {0, 0.5, 1}^3 on reset seeds 0-29 (13 of 30 successes on v1 and v2; 7, 4 and 2 on the ladder's rungs; a test
+#: searches again)
+BEST_CONSTANT = {"paragym/MobileTripodOdometry-v1": (0.5, 0.0, 1.0), "paragym/MobileTripodOdometry-v2": (0.5, 0.0, 1.0),
+                 LADDER[0]: (0.0, 0.5, 0.5), LADDER[1]: (1.0, 0.5, 0.0), LADDER[2]: (0.0, 0.5, 0.0)}
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -148,10 +152,22 @@ ABLATION = Ablation(
 
 
 def best_constant_trust(env: gym.Env, seed: int) -> Any:
-    """The best constant action (:data:`BEST_CONSTANT`): a floor."""
+    """The best constant action of the env's id (:data:`BEST_CONSTANT`, read from ``env.spec``): a floor."""
     from paragym.baselines.simple import ConstantPolicy
 
-    return ConstantPolicy(env.action_space, BEST_CONSTANT)
+    env_id = env.spec.id if env.spec is not None else None
+    if env_id not in BEST_CONSTANT:
+        raise ValueError(f"best-constant plays {', '.join(BEST_CONSTANT)} (made with gym.make); got {env_id!r}")
+    return ConstantPolicy(env.action_space, BEST_CONSTANT[env_id])
+
+
+def _best_constant_floors() -> tuple[BuiltIn, ...]:
+    """The best-constant floor of every id that has one, each its own row (its action differs)."""
+    return tuple(BuiltIn("best-constant", best_constant_trust, "floor",
+                         "the best constant action: trust (" + ", ".join(f"{a:g}" for a in BEST_CONSTANT[env_id]) +
+                         ") in the paper's correction of units "
+                         "1-3, the best of {0, 0.5, 1}^3 on reset seeds 0-29", {"action": list(BEST_CONSTANT[env_id])},
+                         ids=(env_id,)) for env_id in BEST_CONSTANT)
 
 BENCH = Bench(
     ablation=ABLATION,
@@ -174,9 +190,7 @@ BENCH = Bench(
                 "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper",
                 _estimator_params("FusionEstimator"), ids=V0),
         BuiltIn("zero", zero_factory, "floor", "= odometry only: no correction (paper 004's uncorrected estimate)"),
-        BuiltIn("best-constant", best_constant_trust, "floor", "the best constant action: trust (0.5, 0, 1) in the "
-                "paper's correction of units 1-3, the best of {0, 0.5, 1}^3 on reset seeds 0-29",
-                {"action": list(BEST_CONSTANT)}, ids=TRUST),
+        *_best_constant_floors(),
     ),
     dynamics=TripodDynamics,  # the env's default
     # the wheels' stick and slip on the terrain make the dynamic drive chaotic: a last-bit difference of libm or
@@ -186,5 +200,7 @@ BENCH = Bench(
     demo="redundant-encoder correction (paper 004)",
     plot_episode=plot_episode,
     plan=plan,
-    solved=(Target("final_unit_error_cm", -1, against="zero"),),  # below raw odometry's error
+    # below raw odometry's error; on the ladder, where odometry always fails, the success of a solved rung
+    solved=(Target("final_unit_error_cm", -1, against="zero", ids=(*V0, *TRUST[:2])),
+            Target("success", +1, 0.8, ids=LADDER)),
 )

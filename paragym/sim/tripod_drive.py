@@ -131,12 +131,13 @@ class DriveState(KernelArrays):
         z = np.zeros
         return cls(true=z((n, 3, 3)), odometry=z((n, 3, 3)), gradient=z((n, 3, 2)), eta=z((n, 3)), t=z(n),
                    k=z(n, np.int64), steps=z(n, np.int64), speed=z(n), heading=z(n), heading_error=z((n, 3)),
-                   push=np.full((n, 3), np.nan), bumps=z((n, 0, 4)), bump_count=z(n, np.int64),
+                   push=np.full((n, 1, 3), np.nan), bumps=z((n, 0, 4)), bump_count=z(n, np.int64),
                    noise=z((n, 1, 3)), slip_angle=z((n, 1, 3)), slip_speed=z((n, 1, 3)), dt=1.0 / rate,
                    scenarios=[None] * n)
 
-    def _room(self, samples: int, bumps: int) -> None:
-        """Grow the random-number and bump arrays to hold ``samples`` samples and ``bumps`` bumps."""
+    def _room(self, samples: int, bumps: int, pushes: int = 1) -> None:
+        """Grow the random-number, bump and push arrays to hold ``samples`` samples, ``bumps`` bumps and
+        ``pushes`` pushes."""
         extra = samples - self.noise.shape[1]
         if extra > 0:
             self.noise, self.slip_angle, self.slip_speed = (np.pad(a, ((0, 0), (0, extra), (0, 0))) for a in
@@ -144,6 +145,9 @@ class DriveState(KernelArrays):
         extra = bumps - self.bumps.shape[1]
         if extra > 0:
             self.bumps = np.pad(self.bumps, ((0, 0), (0, extra), (0, 0)), constant_values=1.0)
+        extra = pushes - self.push.shape[1]
+        if extra > 0:
+            self.push = np.pad(self.push, ((0, 0), (0, extra), (0, 0)), constant_values=np.nan)
         self.reallocated()
 
     def start(self, i: int, scenario: Any, rng: np.random.Generator, geometry: mt.TripodGeometry,
@@ -154,12 +158,15 @@ class DriveState(KernelArrays):
         of every sample, then (with slip) the slip angles and speeds of every step."""
         steps = int(round(scenario.duration / self.dt))
         bumps = scenario.terrain.kernel_bumps
-        self._room(steps + 1, len(bumps))
+        pushes = scenario.pushes
+        self._room(steps + 1, len(bumps), len(pushes))
         self.scenarios[i] = scenario
         self.steps[i], self.k[i], self.t[i] = steps, 0, 0.0
         self.speed[i], self.heading[i], self.heading_error[i] = scenario.speed, scenario.heading, \
             scenario.heading_error
-        self.push[i] = scenario.push if scenario.push is not None else (np.nan, np.nan, np.nan)
+        self.push[i] = np.nan
+        if pushes:
+            self.push[i, :len(pushes)] = pushes
         self.bumps[i], self.bump_count[i] = 1.0, len(bumps)
         self.bumps[i, :len(bumps)] = bumps
         eta, units = _start(geometry, float(eta0))
@@ -186,7 +193,7 @@ def k_drive_step(i, geo, drive):
 
     Each unit rolls ``speed dt`` along its true heading (heading + its
     error); on a slope the wheel rolls along the ground, so the horizontal way
-    is ``speed dt / sqrt(1 + slope^2)``; slip adds its velocity; a push moves
+    is ``speed dt / sqrt(1 + slope^2)``; slip adds its velocity; a push (each of the drive's, in order) moves
     the pushed unit toward the robot's centre; then the terrain sets the
     heights and the gradient, and eta follows (:func:`mt.k_eta`, from the last
     eta so that the branch stays continuous)."""
@@ -203,13 +210,14 @@ def k_drive_step(i, geo, drive):
         v = slip_speed[i, kk, u] * dt
         mx[u] = scale * c + v * math.cos(slip_angle[i, kk, u])
         my[u] = scale * s + v * math.sin(slip_angle[i, kk, u])
-    if t[i] < push[i, 1] <= t[i] + dt:  # (NaN: no push)
-        unit, depth = int(push[i, 0]), push[i, 2]
-        ix = (true[i, 0, 0] + true[i, 1, 0] + true[i, 2, 0]) / 3.0 - true[i, unit, 0]
-        iy = (true[i, 0, 1] + true[i, 1, 1] + true[i, 2, 1]) / 3.0 - true[i, unit, 1]
-        norm = math.sqrt(ix * ix + iy * iy)
-        mx[unit] += depth * ix / norm
-        my[unit] += depth * iy / norm
+    for p in range(push.shape[1]):
+        if t[i] < push[i, p, 1] <= t[i] + dt:  # (NaN: no push)
+            unit, depth = int(push[i, p, 0]), push[i, p, 2]
+            ix = (true[i, 0, 0] + true[i, 1, 0] + true[i, 2, 0]) / 3.0 - true[i, unit, 0]
+            iy = (true[i, 0, 1] + true[i, 1, 1] + true[i, 2, 1]) / 3.0 - true[i, unit, 1]
+            norm = math.sqrt(ix * ix + iy * iy)
+            mx[unit] += depth * ix / norm
+            my[unit] += depth * iy / norm
     for u in range(3):
         true[i, u, 0] += mx[u]
         true[i, u, 1] += my[u]

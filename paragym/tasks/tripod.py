@@ -15,7 +15,7 @@ import numpy as np
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks import base
 
-__all__ = ["SCENARIOS", "TripodScenario", "draw_scenarios", "drive_scenario", "paper_scenario", "random_scenario",
+__all__ = ["LADDER", "SCENARIOS", "TripodRung", "TripodScenario", "draw_scenarios", "ladder_scenario", "drive_scenario", "paper_scenario", "random_scenario",
            "resolve_scenario", "validate_scenario"]
 
 #: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
@@ -29,7 +29,8 @@ class TripodScenario:
     """A drive: speed (m/s), heading (rad), distance (m), and disturbances.
 
     ``heading_error`` (3,) rad: each unit's true heading minus the one it
-    believes; ``push`` (unit, time s, inward distance m) or None;
+    believes; ``push`` (unit, time s, inward distance m) or None, and
+    ``more_pushes``, more of them (:attr:`pushes`: all of them);
     ``slip`` m/s: the largest random slip velocity of each unit per sample
     (uniform in [0, slip] in a random direction); ``terrain``.
     """
@@ -43,10 +44,16 @@ class TripodScenario:
     slip: float = 0.0
     terrain: Terrain = field(default_factory=Terrain)
     seed: int | None = None
+    more_pushes: tuple[tuple[int, float, float], ...] = ()
 
     @property
     def duration(self) -> float:
         return self.distance / self.speed
+
+    @property
+    def pushes(self) -> tuple[tuple[int, float, float], ...]:
+        """Every push of the drive: ``push``, then ``more_pushes``."""
+        return ((self.push,) if self.push is not None else ()) + tuple(self.more_pushes)
 
 
 def validate_scenario(scenario: TripodScenario, name: str = "scenario", dt: float = 0.05) -> TripodScenario:
@@ -83,16 +90,21 @@ def validate_scenario(scenario: TripodScenario, name: str = "scenario", dt: floa
     for k, value in enumerate(errors):
         if abs(real(value, f"heading_error[{k}]")) > np.pi / 2:
             raise ValueError(f"{name}.heading_error[{k}] must lie within +-pi/2 rad; got {value!r}")
-    if scenario.push is not None:
-        if not isinstance(scenario.push, tuple | list) or len(scenario.push) != 3:
-            raise ValueError(f"{name}.push must be (unit, time s, inward distance m) or None; got {scenario.push!r}")
-        unit, when, how_far = scenario.push
+    if not isinstance(scenario.more_pushes, tuple | list):
+        raise ValueError(f"{name}.more_pushes must be a tuple of pushes; got {scenario.more_pushes!r}")
+    pushes = ([("push", scenario.push)] if scenario.push is not None else []) + \
+        [(f"more_pushes[{k}]", p) for k, p in enumerate(scenario.more_pushes)]
+    for what, push in pushes:
+        if not isinstance(push, tuple | list) or len(push) != 3:
+            raise ValueError(f"{name}.{what} must be (unit, time s, inward distance m); got {push!r}")
+        unit, when, how_far = push
         if isinstance(unit, bool) or not isinstance(unit, int | np.integer) or unit not in (0, 1, 2):
-            raise ValueError(f"{name}.push unit must be 0, 1 or 2; got {unit!r}")
-        if not 0 <= real(when, "push time") <= scenario.duration:
-            raise ValueError(f"{name}.push time must lie within the drive, 0-{scenario.duration:.3g} s; got {when!r}")
-        if abs(real(how_far, "push distance")) > 1.0:
-            raise ValueError(f"{name}.push distance must be within +-1 m; got {how_far!r}")
+            raise ValueError(f"{name}.{what} unit must be 0, 1 or 2; got {unit!r}")
+        if not 0 <= real(when, f"{what} time") <= scenario.duration:
+            raise ValueError(f"{name}.{what} time must lie within the drive, 0-{scenario.duration:.3g} s; "
+                             f"got {when!r}")
+        if abs(real(how_far, f"{what} distance")) > 1.0:
+            raise ValueError(f"{name}.{what} distance must be within +-1 m; got {how_far!r}")
     if real(scenario.slip, "slip") < 0:
         raise ValueError(f"{name}.slip must be >= 0 m/s; got {scenario.slip!r}")
     if not isinstance(scenario.terrain, Terrain):
@@ -135,6 +147,55 @@ def drive_scenario(name: str, rng: np.random.Generator) -> TripodScenario:
                          push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
 
 
+@dataclass(frozen=True)
+class TripodRung:
+    """The knobs of one rung of the tripod's difficulty ladder (:func:`ladder_scenario`).
+
+    Attributes:
+        bumps: how many bumps and holes lie across the drive's path.
+        height: the largest bump's height (m); each is drawn in [height / 2, height], up or down.
+        push: each push's inward distance (m), drawn uniformly in [low, high].
+        pushes: how many pushes, each on another unit than the last, in turn through the drive.
+        slip: the largest random slip velocity (m/s), as :attr:`TripodScenario.slip`.
+    """
+
+    bumps: int
+    height: float
+    push: tuple[float, float]
+    pushes: int
+    slip: float
+
+
+#: the tripod's difficulty ladder, easiest first: every drive has pushes large enough that odometry alone ends
+#: outside the 5 cm success error, on two units or more so that no constant trust corrects them all, on
+#: terrain whose bumps and slip hide them in the encoders' noise more on every rung
+LADDER = (TripodRung(bumps=6, height=0.05, push=(0.2, 0.5), pushes=2, slip=0.0),
+          TripodRung(bumps=12, height=0.05, push=(0.2, 0.5), pushes=3, slip=0.002),
+          TripodRung(bumps=20, height=0.05, push=(0.15, 0.5), pushes=4, slip=0.003))
+
+
+def ladder_scenario(rng: np.random.Generator, rung: TripodRung) -> TripodScenario:
+    """A drive of one rung of the ladder (named "random" on the rung's env id), drawn from ``rng`` in this order:
+    the heading, uniform in [-pi, pi); the bumps, each at 3.5-19 m along the path and +-2.2 m across it (no unit
+    starts on one), of radius 0.3-0.6 m and height +-[height / 2, height]; the first pushed unit, then each push's
+    time and distance. The drive's 20-25 s (20 m at 0.66 m/s: 30.3 s) are cut into ``pushes`` equal windows
+    from 3 s, one push in each, 4 s clear of the next; each push is on the next unit in turn. No heading error
+    (the paper's single-fault correction cannot see a misaligned unit)."""
+    heading = float(rng.uniform(-math.pi, math.pi))
+    c, s = math.cos(heading), math.sin(heading)
+    bumps = []
+    for _ in range(rung.bumps):
+        along, across = rng.uniform(3.5, 19.0), rng.uniform(-2.2, 2.2)
+        height = float(rng.choice([-1.0, 1.0]) * rng.uniform(rung.height / 2, rung.height))
+        bumps.append((float(along * c - across * s), float(along * s + across * c), height,
+                      float(rng.uniform(0.3, 0.6))))
+    window = (25.0 - 3.0) / rung.pushes
+    pushes = tuple((int(rng.integers(3)), float(3.0 + j * window + rng.uniform(0.0, window - 4.0)),
+                    float(rng.uniform(*rung.push))) for j in range(rung.pushes))
+    return TripodScenario("random", heading=heading, push=pushes[0], more_pushes=pushes[1:], slip=rung.slip,
+                          terrain=Terrain(tuple(bumps)))
+
+
 def paper_scenario() -> TripodScenario:
     """The benchmark's paper case: paper 004's scenario 2, the push (its three drives have no single one)."""
     return drive_scenario("push", np.random.default_rng(0))  # the push draws nothing
@@ -151,10 +212,13 @@ def resolve_scenario(choice: Any) -> str | TripodScenario:
     return base.resolve_scenario(choice, SCENARIOS, TripodScenario, validate_scenario)
 
 
-def draw_scenarios(choice: Any, rngs: list[np.random.Generator]) -> list[TripodScenario]:
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator], rung: int | None = None) -> list[TripodScenario]:
     """One episode's drive per generator (single env, vector env and CLI alike): a named or
-    random one drawn from each generator, or the custom one once checked."""
+    random one drawn from each generator, or the custom one once checked. On a rung of the ladder
+    (``rung``, an index of :data:`LADDER`) "random" is the rung's drive (:func:`ladder_scenario`)."""
     choice = resolve_scenario(choice)
+    if choice == "random" and rung is not None:
+        return [ladder_scenario(rng, LADDER[rung]) for rng in rngs]
     return [drive_scenario(choice, rng) if isinstance(choice, str) else choice for rng in rngs]
 
 

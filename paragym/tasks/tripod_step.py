@@ -57,7 +57,7 @@ from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_worlds import DynamicWorld
 
 __all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "OFFSET_SCALE", "POS_SCALE", "RESIDUAL_SCALE", "REWARD_TERMS",
-           "RULES", "TripodParams", "TripodRules", "TripodState", "decide", "reset", "step"]
+           "LADDER_RULES", "RULES", "TripodParams", "TripodRules", "TripodState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
 FAILURES = (None, "folded")
@@ -87,16 +87,22 @@ class TripodRules:
         fold_ends: a folded mechanism (a leg at or past horizontal, true eta <= 0) ends the episode as a
             failure, and in dynamic fidelity a physics step that does not divide the sample is refused (else
             simulated rounded, with a warning).
+        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.tripod.LADDER`): its drives are
+            the "random" scenario, and in dynamic fidelity the push's force is calibrated to its distance
+            (:data:`paragym.tasks.tripod_worlds.PUSH_CALIBRATION`); None: a version of the task.
     """
 
     version: int
     trust_action: bool
     fold_ends: bool
+    rung: int | None = None
 
 
 #: the rules of MobileTripodOdometry-v0, -v1 and -v2
 RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(1, trust_action=True, fold_ends=False),
          2: TripodRules(2, trust_action=True, fold_ends=True)}
+#: the rules of the ladder's rungs, MobileTripodOdometry-Easy, -Medium and -Hard (v0 each): v2's, on the rung's drives
+LADDER_RULES = {k: TripodRules(0, trust_action=True, fold_ends=True, rung=k) for k in range(3)}
 
 
 @dataclass(frozen=True)

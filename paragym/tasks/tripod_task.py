@@ -11,10 +11,10 @@ from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.tripod import TripodScenario
-from paragym.tasks.tripod_step import FAILURES, REWARD_TERMS, RULES, TripodParams, TripodRules, TripodState, reset, step
+from paragym.tasks.tripod_step import FAILURES, LADDER_RULES, REWARD_TERMS, RULES, TripodParams, TripodRules, TripodState, reset, step
 from paragym.tasks.tripod_worlds import DynamicWorld
 
-__all__ = ["RULES", "TASK", "TripodTask", "detected_fault"]
+__all__ = ["LADDER_RULES", "RULES", "TASK", "TripodTask", "detected_fault"]
 
 
 class TripodTask(TaskBase):
@@ -35,6 +35,8 @@ class TripodTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: TripodParams) -> TripodScenario:
+        if params.rules.rung is not None:
+            return scenarios_module.ladder_scenario(rng, scenarios_module.LADDER[params.rules.rung])
         return scenarios_module.random_scenario(rng)
 
     def validate_scenario(self, scenario: TripodScenario, params: TripodParams) -> None:
@@ -42,7 +44,7 @@ class TripodTask(TaskBase):
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
                        world: Any) -> list[TripodScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs)
+        return scenarios_module.draw_scenarios(choice, rngs, params.rules.rung)
 
     def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
@@ -51,7 +53,8 @@ class TripodTask(TaskBase):
     def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> DynamicWorld | None:
         if params.fidelity != "dynamic":
             return None
-        return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human")
+        return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human",
+                            calibrated_push=params.rules.rung is not None)
 
     def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
               rngs: list[np.random.Generator], world: Any) -> None:

@@ -23,6 +23,24 @@ from paragym.sim.tripod_drive import k_terrain
 __all__ = ["DynamicWorld"]
 
 
+#: the ladder's push under dynamics (:attr:`paragym.tasks.tripod_step.TripodRules.rung`): (force N, the pushed
+#: unit's mean displacement m) for a 0.1 s push on flat ground, over the three units at headings 0 and 90 deg
+#: (``benchmarks/tripod_push.py``). The released ids' push, ``push_force`` x depth, holds only near the paper's
+#: 2.5 cm: friction holds the unit below about 400 N and it slides ever further above, so a 20 cm push folded
+#: the tripod. A rung pushes with the force whose displacement is the push's distance, read off this table and
+#: scaled by ``push_force`` / 14,000.
+PUSH_CALIBRATION = ((400.0, 0.026), (500.0, 0.064), (600.0, 0.118), (700.0, 0.19), (800.0, 0.277),
+                    (900.0, 0.378), (1000.0, 0.493), (1100.0, 0.624), (1200.0, 0.769), (1300.0, 0.933),
+                    (1400.0, 1.113))
+
+
+def calibrated_push_force(depth: float, push_force: float) -> float:
+    """The force (N) of a ladder rung's push of ``depth`` m (:data:`PUSH_CALIBRATION`), for a dynamics whose
+    ``push_force`` is given (N/m; 14,000 the default)."""
+    forces, moves = np.array(PUSH_CALIBRATION).T
+    return float(np.interp(abs(depth), moves, forces)) * math.copysign(1.0, depth) * push_force / 14000.0
+
+
 class DynamicWorld:
     """One robot's drive under PyBullet's dynamics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`).
 
@@ -32,9 +50,9 @@ class DynamicWorld:
     odometry moves by its own wheel encoders' travel along the heading it
     believes (so the units' odometric increments differ: ``increment``
     (1, 3, 2)). The scenario's disturbances act through the physics: its
-    heading errors misalign the units, its push is a force of
+    heading errors misalign the units, each of its pushes is a force of
     ``push_force`` x depth N on the pushed unit toward the robot's centre for
-    0.1 s, its slip (a slippery floor) sets each unit's wheel friction every
+    0.1 s (on a ladder's rung, ``calibrated_push``: :func:`calibrated_push_force`), its slip (a slippery floor) sets each unit's wheel friction every
     second from the drive's own slip numbers (no new draws: a seed gives the
     same encoder noise in both fidelities): a slip speed s (m/s) lowers it
     from ``friction`` toward ``slip_friction``, reached at 1 cm/s, the
@@ -42,10 +60,13 @@ class DynamicWorld:
     path.
     """
 
-    def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False) -> None:
+    def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False,
+                 calibrated_push: bool = False) -> None:
         from paragym.sim.tripod_dynamic import TripodDynamics
 
         self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
+        self.calibrated_push = calibrated_push
+        self._pushing = 0  # which of the drive's pushes acts
         self.scene: Any = None
         self._terrain: Any = None
         self.increment = np.zeros((1, 3, 2))
@@ -81,13 +102,15 @@ class DynamicWorld:
             share = np.minimum(1.0, d.slip_speed[0, k] / 0.01)
             self.scene.set_friction(dyn.friction - (dyn.friction - dyn.slip_friction) * share)
         push = None
-        if d.t[0] < d.push[0, 1] <= d.t[0] + d.dt:  # (NaN: no push)
-            self._push_left = int(round(0.1 / dyn.time_step))
+        for p in range(d.push.shape[1]):  # a push that starts in this sample replaces one still acting
+            if d.t[0] < d.push[0, p, 1] <= d.t[0] + d.dt:  # (NaN: no push)
+                self._push_left, self._pushing = int(round(0.1 / dyn.time_step)), p
         if self._push_left:
-            unit = int(d.push[0, 0])
+            unit, depth = int(d.push[0, self._pushing, 0]), d.push[0, self._pushing, 2]
             inward = d.true[0].mean(axis=0) - d.true[0, unit]
             inward[2] = 0.0
-            push = (unit, dyn.push_force * d.push[0, 2] * inward / np.linalg.norm(inward))
+            force = calibrated_push_force(depth, dyn.push_force) if self.calibrated_push else dyn.push_force * depth
+            push = (unit, force * inward / np.linalg.norm(inward))
         used = min(physics_steps(d.dt, dyn.time_step), self._push_left)
         travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
         self._push_left -= used
