@@ -1,7 +1,8 @@
-"""Headroom on both sides: the floors' and the reference's success on every scenario family of the newest ids.
+"""Headroom on both sides: the floors' and the reference's success on every scenario family of the newest ids
+and every rung of the difficulty ladders.
 
 A task separates methods when its floors fail, the paper's method succeeds and learned agents sit between.
-For each newest id (or ``--env``) and each of its named scenarios, every floor (zero, random and the task's
+For each newest id and each rung (or ``--env``) and each of its named scenarios, every floor (zero, random and the task's
 naive controller), the reference and the shipped learned agents of training seed 0 play ``--episodes``
 episodes (the leaderboard's reset seeds, 100000 + k), and the table gives each success rate with Wilson's
 95 % interval against issue 40's bounds: zero and random at most 0.10, a naive floor at most 0.30 and its
@@ -58,7 +59,9 @@ def main() -> None:
     add_record_option(parser)
     args = parser.parse_args()
     warnings.filterwarnings("ignore", message=".*is out of date.*")
-    ids = [registry.check_env_id(e) for e in args.env] if args.env else list(registry.newest())
+    ids = [registry.check_env_id(e) for e in args.env] if args.env else [
+        *registry.newest(), *(r.id for task in dict.fromkeys(r.task for r in registry.rows())
+                              for r in registry.ladder_of(task))]
     rows, missed, points = [], 0, []
     for env_id in ids:
         bench = bench_of(env_id)

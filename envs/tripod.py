@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
-from paragym.tasks.tripod import drive_scenario
+from paragym.tasks.tripod import drive_scenario, knob_table
 from paragym.tasks.tripod_task import LADDER_RULES, RULES, TASK
 
 __all__ = ["MobileTripodOdometryEasyEnv", "MobileTripodOdometryEasyVectorEnv", "MobileTripodOdometryEnv",
@@ -230,24 +230,20 @@ class MobileTripodOdometryEasyEnv(MobileTripodOdometryV2Env):
     On v2's drives the floors succeed too often to separate methods: odometry alone (the zero action) ends
     within 5 cm on every ``push``, ``random_slip`` and ``rough_terrain`` drive, and one constant action
     succeeds in 45 % of ``random`` drives, as often as the best learned agent (issue 40). On the ladder every
-    drive has one push large enough (15-40 cm) that odometry ends 7-13 cm off, on terrain that hides it in the
-    encoders' noise more on every rung, so that no constant trust is right for long.
+    drive has two or more pushes of 15-50 cm on units drawn at random, so that odometry ends far outside 5 cm
+    and no constant trust corrects them all, on ground whose bumps and slip hide them in the encoders' noise
+    more on every rung.
 
     ## Description
     Each drive is drawn by :func:`paragym.tasks.tripod.ladder_scenario` from the rung's knobs
     (:data:`paragym.tasks.tripod.LADDER`): a random heading; ``bumps`` bumps and holes of height
-    ``height`` / 2 to ``height`` across the path (3.5-19 m along it, +-2.2 m across, radius 0.3-0.6 m); one
-    unit pushed inward by a distance drawn in ``push`` at 5-25 s; random slip up to ``slip`` m/s per unit.
+    ``height`` / 2 to ``height`` across the path (3.5-19 m along it, +-2.2 m across, radius 0.3-0.6 m);
+    ``pushes`` pushes, each on a unit drawn at random, inward by a distance drawn in ``push``, one in each
+    equal window of 3-25 s and 4 s clear of the next; random slip up to ``slip`` m/s per unit.
 
-    ============  ======  ==========  ===========  ==========
-    rung          bumps   height (m)  push (m)     slip (m/s)
-    ============  ======  ==========  ===========  ==========
-    0 (Easy)      6       0.06        0.20-0.40    0
-    1 (Medium)    15      0.10        0.20-0.40    0.002
-    2 (Hard)      25      0.10        0.15-0.40    0.003
-    ============  ======  ==========  ===========  ==========
+{knobs}
 
-    In dynamic fidelity the push is the force that moves a unit its distance on flat ground
+    In dynamic fidelity a push is the force that moves a unit its distance on flat ground
     (:func:`paragym.tasks.tripod_worlds.calibrated_push_force`): v2's force, linear in the distance, holds only
     near the paper's 2.5 cm and folds the tripod at 20 cm.
 
@@ -265,9 +261,12 @@ class MobileTripodOdometryEasyEnv(MobileTripodOdometryV2Env):
     rules = LADDER_RULES[0]
 
 
+MobileTripodOdometryEasyEnv.__doc__ = MobileTripodOdometryEasyEnv.__doc__.format(knobs=knob_table("    "))
+
+
 class MobileTripodOdometryMediumEnv(MobileTripodOdometryEasyEnv):
     """``paragym/MobileTripodOdometry-Medium-v0``: rung 1 of the tripod's difficulty ladder: the easy rung's
-    push on rougher, slippery ground (15 bumps up to 10 cm, slip up to 2 mm/s).
+    drives with one push more, on rougher and slipping ground.
 
     ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
     As v0 of the easy rung (``paragym/MobileTripodOdometry-Easy-v0``), with rung 1's knobs.
@@ -280,8 +279,8 @@ class MobileTripodOdometryMediumEnv(MobileTripodOdometryEasyEnv):
 
 
 class MobileTripodOdometryHardEnv(MobileTripodOdometryEasyEnv):
-    """``paragym/MobileTripodOdometry-Hard-v0``: rung 2 of the tripod's difficulty ladder: 25 bumps and holes up
-    to 10 cm, slip up to 3 mm/s, and pushes from 15 cm.
+    """``paragym/MobileTripodOdometry-Hard-v0``: rung 2 of the tripod's difficulty ladder: the medium rung's
+    drives with one push more, smaller ones among them, on the roughest and most slipping ground.
 
     ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
     As v0 of the easy rung (``paragym/MobileTripodOdometry-Easy-v0``), with rung 2's knobs.

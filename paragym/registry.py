@@ -119,7 +119,7 @@ ROWS: tuple[EnvRow, ...] = (
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
     *(EnvRow(f"paragym/MobileTripodOdometry-{name}-v0", f"paragym.envs.tripod:MobileTripodOdometry{name}Env",
              f"paragym.envs.tripod:MobileTripodOdometry{name}VectorEnv", 700, "tripod", "random", ("random",),
-             f"mobile tripod ladder, rung {k} ({name.lower()}): v2's task on drives with a 15-40 cm push that "
+             f"mobile tripod ladder, rung {k} ({name.lower()}): v2's task on generated drives whose pushes "
              "odometry alone cannot see past", rung=k)
       for k, name in enumerate(("Easy", "Medium", "Hard"))),
 )

@@ -52,7 +52,7 @@ def test_greedy_split_steps_toward_the_lower_end_excess():
 def test_the_best_constant_is_what_its_search_finds():
     """The shipped constant is re-derived, not typed: the search over {0, 0.5, 1}^3 on reset seeds 0-29."""
     action, wins, _ = best_constant("paragym/MobileTripodOdometry-v2")
-    assert action == BEST_CONSTANT and wins == 13
+    assert action == BEST_CONSTANT["paragym/MobileTripodOdometry-v2"] and wins == 13
     env = gym.make("paragym/MobileTripodOdometry-v2")
     policy = get_policy("paragym/MobileTripodOdometry-v2", "best-constant").factory(env, 0)
-    np.testing.assert_array_equal(policy.act(np.zeros(16, np.float32), {}), BEST_CONSTANT)
+    np.testing.assert_array_equal(policy.act(np.zeros(16, np.float32), {}), BEST_CONSTANT["paragym/MobileTripodOdometry-v2"])

@@ -15,7 +15,7 @@ import numpy as np
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks import base
 
-__all__ = ["LADDER", "SCENARIOS", "TripodRung", "TripodScenario", "draw_scenarios", "ladder_scenario", "drive_scenario", "paper_scenario", "random_scenario",
+__all__ = ["LADDER", "SCENARIOS", "TripodRung", "TripodScenario", "draw_scenarios", "knob_table", "ladder_scenario", "drive_scenario", "paper_scenario", "random_scenario",
            "resolve_scenario", "validate_scenario"]
 
 #: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
@@ -166,12 +166,24 @@ class TripodRung:
     slip: float
 
 
-#: the tripod's difficulty ladder, easiest first: every drive has pushes large enough that odometry alone ends
-#: outside the 5 cm success error, on two units or more so that no constant trust corrects them all, on
-#: terrain whose bumps and slip hide them in the encoders' noise more on every rung
+#: the tripod's difficulty ladder, easiest first: every drive has two or more pushes on units drawn at random,
+#: large enough that odometry alone ends outside the 5 cm success error and that no constant trust corrects them
+#: all; each rung adds a push, bumps and slip that hide the pushes in the encoders' noise
 LADDER = (TripodRung(bumps=6, height=0.05, push=(0.2, 0.5), pushes=2, slip=0.0),
           TripodRung(bumps=12, height=0.05, push=(0.2, 0.5), pushes=3, slip=0.002),
           TripodRung(bumps=20, height=0.05, push=(0.15, 0.5), pushes=4, slip=0.003))
+
+
+def knob_table(indent: str = "") -> str:
+    """The knobs of every rung of :data:`LADDER` as a reStructuredText table (the rung pages show it)."""
+    names = ("Easy", "Medium", "Hard")
+    rows = [("rung", "bumps", "height (m)", "pushes", "push (m)", "slip (m/s)")]
+    rows += [(f"{k} ({names[k]})", str(r.bumps), f"{r.height:g}", str(r.pushes), f"{r.push[0]:g}-{r.push[1]:g}",
+              f"{r.slip:g}") for k, r in enumerate(LADDER)]
+    widths = [max(len(row[c]) for row in rows) for c in range(len(rows[0]))]
+    rule = indent + "  ".join("=" * w for w in widths)
+    lines = [indent + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+    return "\n".join([rule, lines[0], rule, *lines[1:], rule])
 
 
 def ladder_scenario(rng: np.random.Generator, rung: TripodRung) -> TripodScenario:

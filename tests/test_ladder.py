@@ -1,0 +1,140 @@
+"""Difficulty ladders (issue 40): rung ids with seeded, generated scenarios on which the floors fail and the
+paper's method succeeds, registered beside the task's versions without being one."""
+
+from __future__ import annotations
+
+import math
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import paragym  # noqa: F401
+from paragym import registry
+from paragym.baselines.policies import get_policy, policies_for
+from paragym.baselines.simple import best_constant
+from paragym.baselines.solve import SolveCheck
+from paragym.baselines.tasks import tripod as tripod_bench
+from paragym.docpages import status
+from paragym.planners.encoder_correction import EncoderTrustPolicy
+from paragym.rollout import run_episode
+from paragym.tasks.tripod import LADDER, TripodScenario, ladder_scenario, validate_scenario
+from paragym.tasks.tripod_worlds import PUSH_CALIBRATION, calibrated_push_force
+
+TRIPOD_RUNGS = [r.id for r in registry.ladder_of("tripod")]
+
+
+def test_a_rung_is_its_own_id_and_not_a_version_of_its_task():
+    assert TRIPOD_RUNGS == [f"paragym/MobileTripodOdometry-{n}-v0" for n in ("Easy", "Medium", "Hard")]
+    assert [r.rung for r in registry.ladder_of("tripod")] == [0, 1, 2]
+    assert all(r.rung is None for r in registry.rows_of("tripod"))
+    assert registry.newest()[-1] == "paragym/MobileTripodOdometry-v2"  # rungs are not the task's newest version
+    assert registry.first_version(TRIPOD_RUNGS[2]) == "paragym/MobileTripodOdometry-v0"
+    assert status(TRIPOD_RUNGS[1]).startswith("rung 1 of 3")
+    assert set(TRIPOD_RUNGS) <= set(paragym.ENVIRONMENTS) and set(TRIPOD_RUNGS) <= set(paragym.VECTOR_ENTRY_POINTS)
+
+
+@pytest.mark.parametrize("rung", range(3))
+def test_each_rung_draws_its_knobs(rung):
+    knobs = LADDER[rung]
+    for seed in range(200):
+        drive = ladder_scenario(np.random.default_rng(seed), knobs)
+        validate_scenario(drive)
+        pushes = drive.pushes
+        assert len(pushes) == knobs.pushes and len(drive.terrain.bumps) == knobs.bumps
+        assert all(knobs.push[0] <= depth <= knobs.push[1] for _, _, depth in pushes)
+        times = [when for _, when, _ in pushes]
+        assert times == sorted(times) and min(np.diff(times), default=5.0) >= 4.0 and times[-1] <= 25.0
+        assert drive.slip == knobs.slip and drive.heading_error == (0.0, 0.0, 0.0)
+        for x, y, height, radius in drive.terrain.bumps:  # across the path, and none under a unit at the start
+            along = x * math.cos(drive.heading) + y * math.sin(drive.heading)
+            assert 3.5 <= along <= 19.0 and knobs.height / 2 <= abs(height) <= knobs.height and radius >= 0.3
+
+
+@pytest.mark.parametrize("env_id", TRIPOD_RUNGS)
+def test_a_rung_resets_to_its_drives_alike_in_the_single_and_the_vector_env(env_id):
+    rung = registry.row(env_id).rung
+    env = gym.make(env_id)
+    _, info = env.reset(seed=5)
+    assert info["scenario"] == ladder_scenario(np.random.default_rng(5), LADDER[rung])
+    vec = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    vec.reset(seed=5)
+    assert vec.unwrapped.state.drive.scenarios[0] == info["scenario"]
+    env.close()
+    vec.close()
+
+
+@pytest.mark.parametrize("env_id", TRIPOD_RUNGS)
+def test_odometry_alone_fails_every_rung(env_id):
+    """No rung where doing nothing succeeds (v2's random_slip was one): 100 drives, the zero action."""
+    n = 100
+    vec = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
+    vec.reset(seed=1000)
+    succeeded, ended = np.zeros(n, bool), np.zeros(n, bool)
+    while not ended.all():
+        _, _, terminated, truncated, info = vec.step(np.zeros((n, 3), np.float32))
+        done = (terminated | truncated) & ~ended
+        succeeded |= done & info["is_success"]
+        ended |= done
+    assert succeeded.sum() <= 2, succeeded.sum()
+    vec.close()
+
+
+@pytest.mark.parametrize("env_id", TRIPOD_RUNGS)
+def test_the_papers_correction_succeeds_on_every_rung(env_id):
+    env = gym.make(env_id)
+    wins = sum(bool(run_episode(env, EncoderTrustPolicy(), seed=2000 + k).success) for k in range(30))
+    assert wins >= 27, wins
+    env.close()
+
+
+def test_a_drive_takes_more_than_one_push():
+    one = TripodScenario("p", push=(0, 5.0, 0.3))
+    two = TripodScenario("p", push=(0, 5.0, 0.3), more_pushes=((1, 12.0, 0.2),))
+    moved = {}
+    for name, drive in (("one", one), ("two", two)):
+        env = gym.make("paragym/MobileTripodOdometry-v2", scenario=drive, encoder_noise=0.0)
+        ep = run_episode(env, get_policy("paragym/MobileTripodOdometry-v2", "zero").factory(env, 0), seed=0)
+        last = ep.infos[-1]
+        moved[name] = np.linalg.norm((np.asarray(last["true_units"]) - np.asarray(last["odometry"]))[:, :2], axis=1)
+    np.testing.assert_allclose(moved["one"], moved["two"] * [1, 0, 1], atol=1e-9)  # unit 0 as before
+    assert moved["one"][0] == pytest.approx(0.3, abs=1e-6) and moved["two"][1] == pytest.approx(0.2, abs=1e-6)
+    for bad, word in ((((3, 1.0, 0.1),), "more_pushes\\[0\\] unit"), (((0, 99.0, 0.1),), "more_pushes\\[0\\] time"),
+                      (((0, 1.0, 2.0),), "more_pushes\\[0\\] distance"), (((0, 1.0),), "more_pushes\\[0\\] must")):
+        with pytest.raises(ValueError, match=word):
+            validate_scenario(TripodScenario("p", more_pushes=bad))
+
+
+def test_a_rung_pushes_with_the_calibrated_force_in_dynamic_fidelity():
+    forces, moves = np.array(PUSH_CALIBRATION).T
+    assert np.all(np.diff(moves) > 0)  # the table inverts
+    assert calibrated_push_force(0.19, 14000.0) == pytest.approx(700.0)
+    assert calibrated_push_force(0.19, 7000.0) == pytest.approx(350.0)  # a user's push_force scales it
+    rung = gym.make(TRIPOD_RUNGS[0], fidelity="dynamic")
+    released = gym.make("paragym/MobileTripodOdometry-v2", fidelity="dynamic")
+    assert rung.unwrapped.world.calibrated_push and not released.unwrapped.world.calibrated_push
+    rung.close()
+    released.close()
+
+
+def test_the_rungs_rank_their_floors_and_the_reference():
+    for env_id in TRIPOD_RUNGS:
+        kinds = {name: spec.kind for name, spec in policies_for(env_id).items()}
+        assert {"zero": "floor", "random": "floor", "best-constant": "floor",
+                "encoder-correction": "reference"}.items() <= kinds.items()
+        env = gym.make(env_id)
+        policy = get_policy(env_id, "best-constant").factory(env, 0)
+        assert tuple(policy.act(np.zeros(16, np.float32), {})) == tripod_bench.BEST_CONSTANT[env_id]
+        env.close()
+
+
+def test_the_easy_rungs_best_constant_is_what_its_search_finds():
+    action, wins, _ = best_constant(TRIPOD_RUNGS[0])
+    assert action == tripod_bench.BEST_CONSTANT[TRIPOD_RUNGS[0]] and wins == 7
+
+
+def test_a_rung_counts_as_solved_by_its_success():
+    check = SolveCheck(TRIPOD_RUNGS[0], episodes=2)
+    assert [t.describe() for t in check.targets] == ["success >= 0.8"]
+    check = SolveCheck("paragym/MobileTripodOdometry-v2", episodes=2)
+    assert [t.describe() for t in check.targets] == ["final_unit_error_cm < zero's (paired, 95 %)"]
