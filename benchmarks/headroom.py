@@ -1,9 +1,8 @@
-"""Headroom on both sides: the floors' and the reference's success on every scenario family of the newest ids
-and every rung of the difficulty ladders.
+"""Headroom on both sides: floors' and reference's success per scenario family of the newest ids and the rungs.
 
 A task separates methods when its floors fail, the paper's method succeeds and learned agents sit between.
-For each newest id and each rung (or ``--env``) and each of its named scenarios, every floor (zero, random and the task's
-naive controller), the reference and the shipped learned agents of training seed 0 play ``--episodes``
+For each newest id and each rung (or ``--env``) and each of its named scenarios, every floor (zero, random and
+the task's naive controller), the reference and the shipped learned agents of training seed 0 play ``--episodes``
 episodes (the leaderboard's reset seeds, 100000 + k), and the table gives each success rate with Wilson's
 95 % interval against issue 40's bounds: zero and random at most 0.10, a naive floor at most 0.30 and its
 interval below the reference's, the reference at least 0.90 (the learned agents have none). A family that

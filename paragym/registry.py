@@ -13,7 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows", "rows_of", "task_of"]
+__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows", "rows_of",
+           "task_of"]
 
 
 @dataclass(frozen=True)

@@ -55,4 +55,5 @@ def test_the_best_constant_is_what_its_search_finds():
     assert action == BEST_CONSTANT["paragym/MobileTripodOdometry-v2"] and wins == 13
     env = gym.make("paragym/MobileTripodOdometry-v2")
     policy = get_policy("paragym/MobileTripodOdometry-v2", "best-constant").factory(env, 0)
-    np.testing.assert_array_equal(policy.act(np.zeros(16, np.float32), {}), BEST_CONSTANT["paragym/MobileTripodOdometry-v2"])
+    np.testing.assert_array_equal(policy.act(np.zeros(16, np.float32), {}),
+                                  BEST_CONSTANT["paragym/MobileTripodOdometry-v2"])

@@ -15,8 +15,8 @@ import numpy as np
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks import base
 
-__all__ = ["LADDER", "SCENARIOS", "TripodRung", "TripodScenario", "draw_scenarios", "knob_table", "ladder_scenario", "drive_scenario", "paper_scenario", "random_scenario",
-           "resolve_scenario", "validate_scenario"]
+__all__ = ["LADDER", "SCENARIOS", "TripodRung", "TripodScenario", "draw_scenarios", "drive_scenario", "knob_table",
+           "ladder_scenario", "paper_scenario", "random_scenario", "resolve_scenario", "validate_scenario"]
 
 #: the most samples a drive may have (139 h at 20 Hz): the drive's random numbers are drawn when it starts
 MAX_SAMPLES = 10_000_000

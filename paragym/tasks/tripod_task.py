@@ -11,7 +11,17 @@ from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.tripod import TripodScenario
-from paragym.tasks.tripod_step import FAILURES, LADDER_RULES, REWARD_TERMS, RULES, TripodParams, TripodRules, TripodState, reset, step
+from paragym.tasks.tripod_step import (
+    FAILURES,
+    LADDER_RULES,
+    REWARD_TERMS,
+    RULES,
+    TripodParams,
+    TripodRules,
+    TripodState,
+    reset,
+    step,
+)
 from paragym.tasks.tripod_worlds import DynamicWorld
 
 __all__ = ["LADDER_RULES", "RULES", "TASK", "TripodTask", "detected_fault"]

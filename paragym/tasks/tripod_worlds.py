@@ -52,7 +52,8 @@ class DynamicWorld:
     (1, 3, 2)). The scenario's disturbances act through the physics: its
     heading errors misalign the units, each of its pushes is a force of
     ``push_force`` x depth N on the pushed unit toward the robot's centre for
-    0.1 s (on a ladder's rung, ``calibrated_push``: :func:`calibrated_push_force`), its slip (a slippery floor) sets each unit's wheel friction every
+    0.1 s (on a ladder's rung, ``calibrated_push``: :func:`calibrated_push_force`), its slip (a slippery
+    floor) sets each unit's wheel friction every
     second from the drive's own slip numbers (no new draws: a seed gives the
     same encoder noise in both fidelities): a slip speed s (m/s) lowers it
     from ``friction`` toward ``slip_friction``, reached at 1 cm/s, the
