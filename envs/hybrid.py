@@ -10,10 +10,12 @@ from __future__ import annotations
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
-from paragym.tasks.hybrid import HybridScenario, paper_scenario, random_scenario, random_scenarios
-from paragym.tasks.hybrid_task import RULES, TASK
+from paragym.tasks.hybrid import HybridScenario, knob_table, paper_scenario, random_scenario, random_scenarios
+from paragym.tasks.hybrid_task import LADDER_RULES, RULES, TASK
 
-__all__ = ["HybridScenario", "HybridSingularityFreeEnv", "HybridSingularityFreeV1Env",
+__all__ = ["HybridScenario", "HybridSingularityFreeEasyEnv", "HybridSingularityFreeEasyVectorEnv",
+           "HybridSingularityFreeEnv", "HybridSingularityFreeHardEnv", "HybridSingularityFreeHardVectorEnv",
+           "HybridSingularityFreeMediumEnv", "HybridSingularityFreeMediumVectorEnv", "HybridSingularityFreeV1Env",
            "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",
            "HybridSingularityFreeVectorEnv", "paper_scenario",
            "random_scenario", "random_scenarios"]
@@ -218,6 +220,89 @@ class HybridSingularityFreeV2VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeV2Env` stepped together (kinematic: v1's)."""
 
     rules = RULES[2]
+
+
+class HybridSingularityFreeEasyEnv(HybridSingularityFreeV2Env):
+    """``paragym/HybridSingularityFree-Easy-v0``: rung 0 of the hybrid's difficulty ladder: v2's task on paths
+    that break a leg limit in their middle at the starting split.
+
+    ## Why a ladder
+    On v2's random pairs the floors succeed too often to separate methods: the nominal path at the starting
+    split (the zero action) succeeds in 40 % of them, and stepping the split toward the end pose's lower stroke
+    excess (the greedy floor) in 82 %, above PPO (issue 40). On the ladder both end poses are within the limits
+    at the starting split 0.5 and the nominal path there breaks a limit between them, so the split must move
+    away and back (or E detour) before the end, where the observation's end-pose excess says nothing.
+
+    ## Description
+    Each pair of poses is drawn by :func:`paragym.tasks.hybrid.ladder_scenarios` from the rung's knob
+    (:data:`paragym.tasks.hybrid.LADDER`): from v2's box of poses, a pair whose ends are within the limits at
+    0.5 and whose nominal path (every fourth sample) breaks one in its middle, where some of the 11 splits 0,
+    0.1, ..., 1 keep every sample within them; the fewer of them at the hardest sample, the narrower the way
+    through:
+
+{knobs}
+
+    ## Arguments
+    As v2; ``scenario`` "random" (the default) is the rung's pair; "paper" and custom pairs are v2's.
+
+    ## Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v2.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[0]
+
+
+HybridSingularityFreeEasyEnv.__doc__ = HybridSingularityFreeEasyEnv.__doc__.format(knobs=knob_table("    "))
+
+
+class HybridSingularityFreeMediumEnv(HybridSingularityFreeEasyEnv):
+    """``paragym/HybridSingularityFree-Medium-v0``: rung 1 of the hybrid's difficulty ladder: the easy rung's
+    paths where at most three splits get through the hardest sample.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of the easy rung (``paragym/HybridSingularityFree-Easy-v0``), with rung 1's knob.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[1]
+
+
+class HybridSingularityFreeHardEnv(HybridSingularityFreeEasyEnv):
+    """``paragym/HybridSingularityFree-Hard-v0``: rung 2 of the hybrid's difficulty ladder: the easy rung's
+    paths where at most two splits get through the hardest sample.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of the easy rung (``paragym/HybridSingularityFree-Easy-v0``), with rung 2's knob.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[2]
+
+
+class HybridSingularityFreeEasyVectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeEasyEnv` stepped together."""
+
+    rules = LADDER_RULES[0]
+
+
+class HybridSingularityFreeMediumVectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeMediumEnv` stepped together."""
+
+    rules = LADDER_RULES[1]
+
+
+class HybridSingularityFreeHardVectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeHardEnv` stepped together."""
+
+    rules = LADDER_RULES[2]
+
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {

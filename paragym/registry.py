@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows", "rows_of",
-           "task_of"]
+__all__ = ["ROWS", "RUNG_NAMES", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows",
+           "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -80,6 +80,18 @@ class EnvRow:
         return int(self.id.rsplit("-v", 1)[1])
 
 
+#: the names of a ladder's rungs, easiest first: rung k of a task is ``paragym/<Name>-<RUNG_NAMES[k]>-v0``
+RUNG_NAMES = ("Easy", "Medium", "Hard")
+
+
+def _ladder(name: str, module: str, steps: int, task: str, summary: str) -> tuple[EnvRow, ...]:
+    """The rows of a task's ladder: ``paragym/<name>-<rung>-v0``, its classes ``<name><rung>Env`` and
+    ``<name><rung>VectorEnv`` in ``module``; ``summary`` is completed with the rung."""
+    return tuple(EnvRow(f"paragym/{name}-{rung}-v0", f"{module}:{name}{rung}Env", f"{module}:{name}{rung}VectorEnv",
+                        steps, task, "random", ("random",), f"{summary}: rung {k} ({rung.lower()})", rung=k)
+                 for k, rung in enumerate(RUNG_NAMES))
+
+
 # The scenario names are each task's (``Task.scenario_names``): the rows say None. Paper 004 has three drives
 # and no single "paper" case: its scenario 2, the push, stands for it.
 
@@ -118,11 +130,10 @@ ROWS: tuple[EnvRow, ...] = (
            "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
-    *(EnvRow(f"paragym/MobileTripodOdometry-{name}-v0", f"paragym.envs.tripod:MobileTripodOdometry{name}Env",
-             f"paragym.envs.tripod:MobileTripodOdometry{name}VectorEnv", 700, "tripod", "random", ("random",),
-             f"mobile tripod ladder, rung {k} ({name.lower()}): v2's task on generated drives whose pushes "
-             "odometry alone cannot see past", rung=k)
-      for k, name in enumerate(("Easy", "Medium", "Hard"))),
+    *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
+             "hybrid ladder: v2's task on generated paths whose middle breaks a leg limit at the starting split"),
+    *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
+             "mobile tripod ladder: v2's task on generated drives whose pushes odometry alone cannot see past"),
 )
 
 _BY_ID = {r.id: r for r in ROWS}

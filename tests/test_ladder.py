@@ -138,3 +138,46 @@ def test_a_rung_counts_as_solved_by_its_success():
     assert [t.describe() for t in check.targets] == ["success >= 0.8"]
     check = SolveCheck("paragym/MobileTripodOdometry-v2", episodes=2)
     assert [t.describe() for t in check.targets] == ["final_unit_error_cm < zero's (paired, 95 %)"]
+
+
+HYBRID_RUNGS = [r.id for r in registry.ladder_of("hybrid")]
+
+
+@pytest.mark.parametrize("rung", range(3))
+def test_each_hybrid_rung_breaks_a_limit_in_the_middle_of_its_path(rung):
+    from paragym.mechanisms import hybrid
+    from paragym.tasks.hybrid import LADDER as HYBRID_LADDER
+    from paragym.tasks.hybrid import SPLITS, ladder_scenarios, nominal_rows
+
+    knob = HYBRID_LADDER[rung]
+    pairs = ladder_scenarios([np.random.default_rng(seed) for seed in range(20)], knob)
+    for pair in pairs:
+        p0, p1 = np.array([pair.p0]), np.array([pair.p1])
+        assert hybrid.within_limits(p0, 0.5)[0] and hybrid.within_limits(p1, 0.5)[0]  # the ends ask nothing
+        middle = nominal_rows(p0, p1, every=4)[0, 1:-1]
+        failing = middle[~hybrid.within_limits(middle, 0.5)]
+        assert len(failing)  # the nominal path at the starting split breaks a limit between its ends
+        through = hybrid.within_limits(np.repeat(failing, len(SPLITS), 0), np.tile(SPLITS, len(failing)))
+        fewest = through.reshape(len(failing), len(SPLITS)).sum(axis=1).min()
+        assert 1 <= fewest <= knob.most_splits
+
+
+@pytest.mark.parametrize("env_id", HYBRID_RUNGS)
+def test_a_hybrid_rung_separates_its_floors_from_the_papers_method(env_id):
+    from paragym.planners.base import PlanningError
+
+    env = gym.make(env_id)
+
+    def success(name: str, k: int) -> bool:
+        try:
+            return bool(run_episode(env, get_policy(env_id, name).factory(env, k), seed=3000 + k).success)
+        except PlanningError:  # the reference found no plan: a failure, as the leaderboard counts it
+            return False
+
+    wins = {name: sum(success(name, k) for k in range(20)) for name in ("zero", "greedy-split", "polynomial-detour")}
+    assert wins["zero"] == 0 and wins["greedy-split"] <= 2 and wins["polynomial-detour"] >= 18, wins
+    vec = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    vec.reset(seed=3000)
+    assert vec.unwrapped.state.scenarios[0] == env.reset(seed=3000)[1]["scenario"]
+    env.close()
+    vec.close()

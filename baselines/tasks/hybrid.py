@@ -21,16 +21,19 @@ from paragym.baselines.tasks import (
     tightest,
     zero_factory,
 )
+from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.hybrid_dynamic import HybridDynamics
 
-V2 = ("paragym/HybridSingularityFree-v2",)
+#: the rungs of the hybrid's difficulty ladder (:func:`paragym.registry.ladder_of`): v2's rules on their own pairs
+LADDER = tuple(f"paragym/HybridSingularityFree-{rung}-v0" for rung in RUNG_NAMES)
+V2 = ("paragym/HybridSingularityFree-v2", *LADDER)
 BEFORE_V2 = ("paragym/HybridSingularityFree-v0", "paragym/HybridSingularityFree-v1")
 #: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a
 #: simulated actuator chasing a stroke planned at its limit overshoots it by up to 0.5 mm
 STROKE_MARGIN = 0.001
 #: the ids whose observation shows the end pose's stroke excess and its change with the split (v1's indices 45-47)
-SHOWS_EXCESS = ("paragym/HybridSingularityFree-v1", "paragym/HybridSingularityFree-v2")
+SHOWS_EXCESS = ("paragym/HybridSingularityFree-v1", "paragym/HybridSingularityFree-v2", *LADDER)
 
 
 def metrics(ep: Episode) -> dict[str, float]:

@@ -15,12 +15,13 @@ import gymnasium as gym
 import numpy as np
 
 from paragym.baselines.tasks import Ablation, AblationRow, Bench, BuiltIn, Column, Target, init_defaults, zero_factory
+from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.tripod_dynamic import TripodDynamics
 
 V0 = ("paragym/MobileTripodOdometry-v0",)
 #: the rungs of the tripod's difficulty ladder (:func:`paragym.registry.ladder_of`)
-LADDER = tuple(f"paragym/MobileTripodOdometry-{name}-v0" for name in ("Easy", "Medium", "Hard"))
+LADDER = tuple(f"paragym/MobileTripodOdometry-{rung}-v0" for rung in RUNG_NAMES)
 #: v1, v2 and the ladder act through trust in the paper's correction: the reference is its test of the faulty unit
 TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2", *LADDER)
 #: the best constant trust per unit of each id: :func:`paragym.baselines.simple.best_constant` over

@@ -20,6 +20,8 @@ from typing import Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkab
 
 import numpy as np
 
+from paragym.registry import RUNG_NAMES
+
 __all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
            "check_choice", "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed",
            "reward_terms", "resolve_scenario"]
@@ -302,3 +304,21 @@ def reward_terms(terms: np.ndarray, names: tuple[str, ...]) -> dict[str, np.ndar
     """The info's ``reward_<name>`` of each term: a view of column j of ``terms`` (N, T) per name, as
     Gymnasium's MuJoCo v5 envs report their reward's parts. The reward is their sum."""
     return {f"reward_{name}": terms[:, j] for j, name in enumerate(names)}
+
+
+
+def knob_table(ladder: tuple[Any, ...], labels: dict[str, str], indent: str = "") -> str:
+    """The knobs of every rung of ``ladder`` (a task's rung dataclasses, easiest first) as a reStructuredText
+    table whose columns are ``labels`` (field name -> header): the rung pages show it. A pair of numbers reads
+    "low-high"."""
+    def cell(value: Any) -> str:
+        if isinstance(value, tuple):
+            return "-".join(f"{v:g}" for v in value)
+        return f"{value:g}" if isinstance(value, float) else str(value)
+
+    rows = [("rung", *labels.values())]
+    rows += [(f"{k} ({RUNG_NAMES[k]})", *(cell(getattr(r, name)) for name in labels)) for k, r in enumerate(ladder)]
+    widths = [max(len(row[c]) for row in rows) for c in range(len(rows[0]))]
+    rule = indent + "  ".join("=" * w for w in widths)
+    lines = [indent + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
+    return "\n".join([rule, lines[0], rule, *lines[1:], rule])

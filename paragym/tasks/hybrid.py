@@ -17,8 +17,9 @@ from paragym.tasks import base
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
-__all__ = ["SCENARIOS", "HybridScenario", "paper_scenario", "random_scenario", "random_scenarios",
-           "draw_scenarios", "nominal_rows", "resolve_scenario", "validate_scenario"]
+__all__ = ["LADDER", "SCENARIOS", "HybridRung", "HybridScenario", "draw_scenarios", "knob_table", "ladder_scenarios",
+           "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios", "resolve_scenario",
+           "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -155,6 +156,77 @@ def random_scenario(rng: np.random.Generator, geometry: hybrid.HybridGeometry = 
     return random_scenarios([rng], geometry, hard_share, max_tries)[0]
 
 
+@dataclass(frozen=True)
+class HybridRung:
+    """The knobs of one rung of the hybrid's difficulty ladder (:func:`ladder_scenarios`).
+
+    Attributes:
+        most_splits: at the path's hardest sample, at most this many of the 11 splits 0, 0.1, ..., 1 keep the
+            legs within their limits: the fewer, the narrower the way through.
+    """
+
+    most_splits: int
+
+
+#: the hybrid's difficulty ladder, easiest first: on every rung both end poses are within the limits at the
+#: starting split 0.5 and the nominal path there breaks a leg limit in its middle, so that neither doing nothing
+#: nor stepping the split toward the end pose's need (the greedy floor) succeeds; a rung narrows the splits
+#: that get through. (Where P1 itself needs another split, the greedy floor succeeded in 24 of 30: the split it
+#: moves for the end also clears the middle.)
+LADDER = (HybridRung(most_splits=11), HybridRung(most_splits=3), HybridRung(most_splits=2))
+
+
+def knob_table(indent: str = "") -> str:
+    """The knobs of every rung of :data:`LADDER` as a reStructuredText table (the rung pages show it)."""
+    return base.knob_table(LADDER, {"most_splits": "splits through the hardest sample, at most"}, indent)
+
+
+def ladder_scenarios(rngs: list[np.random.Generator], rung: HybridRung,
+                     geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                     max_tries: int = 200_000) -> list[HybridScenario]:
+    """One pair of poses of a rung per generator (named "random" on the rung's env id): candidates drawn 64 at a
+    time from each generator, as :func:`random_scenarios` draws them (the same box), the first that passes
+    taken. A pair passes when P0 and P1 are within the limits at Delta = 0.5; the nominal path (every fourth
+    sample) at 0.5 breaks a limit at some sample strictly between its ends; at every such sample some split of
+    :data:`SPLITS` keeps the legs within limits, at the hardest at most ``most_splits`` of the 11; and eq 14
+    holds in full at P0 (0.5) and at P1 (some split)."""
+    low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
+    high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
+    batch, g = 64, geometry
+    out: list[HybridScenario | None] = [None] * len(rngs)
+    for i, rng in enumerate(rngs):
+        for _ in range(max(1, max_tries // batch)):
+            p0, p1 = rng.uniform(low, high, (batch, 6)), rng.uniform(low, high, (batch, 6))
+            ok = hybrid.within_limits(p0, 0.5, g)
+            ok[ok] = hybrid.within_limits(p1[ok], 0.5, g)
+            idx = np.flatnonzero(ok)
+            if not idx.size:
+                continue
+            nominal = nominal_rows(p0[idx], p1[idx], every=4)[:, 1:-1]  # the middle samples
+            m = nominal.shape[1]
+            at_half = hybrid.within_limits(nominal.reshape(-1, 6), 0.5, g).reshape(-1, m)
+            keep = ~at_half.all(axis=1)
+            idx, nominal, failing = idx[keep], nominal[keep], ~at_half[keep]
+            if not idx.size:
+                continue
+            flat = nominal[failing]  # the samples that break a limit at 0.5: how many splits keep each within
+            counts = hybrid.within_limits(np.repeat(flat, len(SPLITS), 0), np.tile(SPLITS, len(flat)), g)
+            fewest = np.full(len(idx), len(SPLITS))
+            np.minimum.at(fewest, np.nonzero(failing)[0], counts.reshape(len(flat), len(SPLITS)).sum(axis=1))
+            keep = (fewest >= 1) & (fewest <= rung.most_splits)
+            for k in idx[keep]:
+                a, b = p0[k:k + 1], p1[k:k + 1]
+                if hybrid.solve_rows(a, np.full(1, 0.5), g)[4][0] and _some_split(b, lambda p, d: hybrid.solve_rows(
+                        p, d, g)[4])[0]:
+                    out[i] = HybridScenario("random", tuple(map(float, a[0])), tuple(map(float, b[0])), geometry)
+                    break
+            if out[i] is not None:
+                break
+        if out[i] is None:
+            raise RuntimeError(f"no pair of poses of the rung in {max_tries} tries")
+    return out  # type: ignore[return-value]
+
+
 @lru_cache(maxsize=4)
 def _path_shape(tau: float = 0.01) -> np.ndarray:
     """s(u) of the nominal path at its samples (``nominal_path(0, 1, tau)``), read-only."""
@@ -194,11 +266,15 @@ def resolve_scenario(choice: Any) -> str | HybridScenario:
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
-                   geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) -> list[HybridScenario]:
+                   geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, rung: int | None = None
+                   ) -> list[HybridScenario]:
     """One episode's scenario per generator (single env, vector env and CLI
     alike): the paper's, random pairs drawn from the generators, or the
-    custom one once :func:`resolve_scenario` accepts it."""
+    custom one once :func:`resolve_scenario` accepts it. On a rung of the ladder (``rung``, an index of
+    :data:`LADDER`) "random" is the rung's pair (:func:`ladder_scenarios`)."""
     choice = resolve_scenario(choice)
+    if choice == "random" and rung is not None:
+        return ladder_scenarios(rngs, LADDER[rung], geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)

@@ -66,7 +66,7 @@ from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "RULES", "HybridParams",
+__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "LADDER_RULES", "RULES", "HybridParams",
            "HybridRules", "HybridState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
@@ -111,17 +111,23 @@ class HybridRules:
         strict_dynamics: in dynamic fidelity E's orientation is tracked too (``track_angle_tolerance``), a
             broken mechanism ends the episode as a failure, and a ``control_period`` the physics step does
             not divide is refused (else simulated rounded, with a warning).
+        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.hybrid.LADDER`): its pairs of
+            poses are the "random" scenario; None: a version of the task.
     """
 
     version: int
     sees_the_end: bool
     strict_dynamics: bool
+    rung: int | None = None
 
 
 #: the rules of HybridSingularityFree-v0, -v1 and -v2
 RULES = {0: HybridRules(0, sees_the_end=False, strict_dynamics=False),
          1: HybridRules(1, sees_the_end=True, strict_dynamics=False),
          2: HybridRules(2, sees_the_end=True, strict_dynamics=True)}
+#: the rules of the ladder's rungs, HybridSingularityFree-Easy, -Medium and -Hard (v0 each): v2's, on the rung's
+#: pairs of poses
+LADDER_RULES = {k: HybridRules(0, sees_the_end=True, strict_dynamics=True, rung=k) for k in range(3)}
 
 
 @dataclass(frozen=True)

@@ -11,10 +11,20 @@ from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
 from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.hybrid import HybridScenario
-from paragym.tasks.hybrid_step import FAILURES, REWARD_TERMS, RULES, HybridParams, HybridRules, HybridState, reset, step
+from paragym.tasks.hybrid_step import (
+    FAILURES,
+    LADDER_RULES,
+    REWARD_TERMS,
+    RULES,
+    HybridParams,
+    HybridRules,
+    HybridState,
+    reset,
+    step,
+)
 from paragym.tasks.hybrid_worlds import DynamicWorld
 
-__all__ = ["RULES", "TASK", "HybridTask"]
+__all__ = ["LADDER_RULES", "RULES", "TASK", "HybridTask"]
 
 
 class HybridTask(TaskBase):
@@ -35,6 +45,9 @@ class HybridTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: HybridParams) -> HybridScenario:
+        if params.rules.rung is not None:
+            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
+                                                     params.geometry)[0]
         return scenarios_module.random_scenario(rng, params.geometry)
 
     def validate_scenario(self, scenario: HybridScenario, params: HybridParams) -> None:
@@ -42,7 +55,7 @@ class HybridTask(TaskBase):
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
                        world: Any) -> list[HybridScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+        return scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung)
 
     def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))

@@ -176,14 +176,8 @@ LADDER = (TripodRung(bumps=6, height=0.05, push=(0.2, 0.5), pushes=2, slip=0.0),
 
 def knob_table(indent: str = "") -> str:
     """The knobs of every rung of :data:`LADDER` as a reStructuredText table (the rung pages show it)."""
-    names = ("Easy", "Medium", "Hard")
-    rows = [("rung", "bumps", "height (m)", "pushes", "push (m)", "slip (m/s)")]
-    rows += [(f"{k} ({names[k]})", str(r.bumps), f"{r.height:g}", str(r.pushes), f"{r.push[0]:g}-{r.push[1]:g}",
-              f"{r.slip:g}") for k, r in enumerate(LADDER)]
-    widths = [max(len(row[c]) for row in rows) for c in range(len(rows[0]))]
-    rule = indent + "  ".join("=" * w for w in widths)
-    lines = [indent + "  ".join(cell.ljust(w) for cell, w in zip(row, widths, strict=True)).rstrip() for row in rows]
-    return "\n".join([rule, lines[0], rule, *lines[1:], rule])
+    return base.knob_table(LADDER, {"bumps": "bumps", "height": "height (m)", "pushes": "pushes",
+                                    "push": "push (m)", "slip": "slip (m/s)"}, indent)
 
 
 def ladder_scenario(rng: np.random.Generator, rung: TripodRung) -> TripodScenario:
