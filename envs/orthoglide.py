@@ -10,11 +10,13 @@ from __future__ import annotations
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
-from paragym.tasks.orthoglide import random_scenario, random_scenarios
+from paragym.tasks.orthoglide import knob_table, random_scenario, random_scenarios
 from paragym.tasks.orthoglide_step import KAPPA_LIMIT
-from paragym.tasks.orthoglide_task import RULES, TASK
+from paragym.tasks.orthoglide_task import LADDER_RULES, RULES, TASK
 
-__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
+__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEasyEnv", "Orthoglide2PRRKappaEasyVectorEnv", "Orthoglide2PRRKappaEnv",
+           "Orthoglide2PRRKappaHardEnv", "Orthoglide2PRRKappaHardVectorEnv", "Orthoglide2PRRKappaMediumEnv",
+           "Orthoglide2PRRKappaMediumVectorEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
            "Orthoglide2PRRKappaVectorEnv", "random_scenario", "random_scenarios"]
 
 
@@ -158,6 +160,95 @@ class Orthoglide2PRRKappaV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
     """``num_envs`` copies of :class:`Orthoglide2PRRKappaV1Env` stepped together."""
 
     rules = RULES[1]
+
+
+class Orthoglide2PRRKappaEasyEnv(Orthoglide2PRRKappaV1Env):
+    """``paragym/Orthoglide2PRRKappa-Easy-v0``: rung 0 of the Orthoglide's difficulty ladder: v1's task, where
+    success asks for a mean kappa that the least-norm motion never reaches.
+
+    ## Why a ladder
+    v1 asks only that the path be tracked without a failure, which doing nothing does: zero and random succeed
+    on every path, and no fixed bound on kappa can tell them from the paper's gradient (its mean kappa over the
+    path, 1.08 at the median, lies within the zero action's spread, 1.11-1.31, issue 40). On the ladder the
+    bound is the path's own: a share of the way from 1 to the least-norm motion's mean kappa on that path.
+
+    ## Description
+    Each path is drawn by :func:`paragym.tasks.orthoglide.ladder_scenarios` from the rung's knobs
+    (:data:`paragym.tasks.orthoglide.LADDER`): a circle or an ellipse (closed paths, where the table's
+    null-space choice matters: on v1's random lines the paper's gradient cannot beat the least-norm motion on
+    one in five) with its centre in v1's region, radii in ``radius`` and one lap in ``period`` s. At reset the
+    least-norm motion (the zero action in null-space mode, paper 003's case b, kinematic) is run along it by
+    the task's own transition; success asks for a mean kappa over the path points of at most
+    ``1 + share (kappa_least_norm - 1)`` (:func:`paragym.tasks.orthoglide_step.kappa_bounds`):
+
+{knobs}
+
+    ## Episode End
+    As v1 (the path's end, or a failure); ``is_success`` also asks for the mean kappa above.
+    ``info["mean_kappa"]`` is the mean so far, ``info["kappa_bound"]`` the bound.
+
+    ## Arguments
+    As v1; ``scenario`` "random" (the default) is the rung's path; "paper" and custom paths are v1's, with
+    their own bound.
+
+    ## Action Space, Observation Space, Rewards, Starting State
+    As v1.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[0]
+
+
+Orthoglide2PRRKappaEasyEnv.__doc__ = Orthoglide2PRRKappaEasyEnv.__doc__.format(knobs=knob_table("    "))
+
+
+class Orthoglide2PRRKappaMediumEnv(Orthoglide2PRRKappaEasyEnv):
+    """``paragym/Orthoglide2PRRKappa-Medium-v0``: rung 1 of the Orthoglide's difficulty ladder: the easy rung's
+    paths under a tighter bound on the mean kappa.
+
+    ## Description, Episode End, Arguments, Action Space, Observation Space, Rewards, Starting State
+    As v0 of the easy rung (``paragym/Orthoglide2PRRKappa-Easy-v0``), with rung 1's knobs.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[1]
+
+
+class Orthoglide2PRRKappaHardEnv(Orthoglide2PRRKappaEasyEnv):
+    """``paragym/Orthoglide2PRRKappa-Hard-v0``: rung 2 of the Orthoglide's difficulty ladder: the easy rung's
+    paths under the tightest bound on the mean kappa.
+
+    ## Description, Episode End, Arguments, Action Space, Observation Space, Rewards, Starting State
+    As v0 of the easy rung (``paragym/Orthoglide2PRRKappa-Easy-v0``), with rung 2's knobs.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[2]
+
+
+class Orthoglide2PRRKappaEasyVectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaEasyEnv` stepped together."""
+
+    rules = LADDER_RULES[0]
+
+
+class Orthoglide2PRRKappaMediumVectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaMediumEnv` stepped together."""
+
+    rules = LADDER_RULES[1]
+
+
+class Orthoglide2PRRKappaHardVectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaHardEnv` stepped together."""
+
+    rules = LADDER_RULES[2]
+
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {"orthoglide_random_task": "random_scenario"})

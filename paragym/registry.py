@@ -130,10 +130,12 @@ ROWS: tuple[EnvRow, ...] = (
            "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
+    *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
+             "2PRR ladder: v1's task on generated laps, asking a mean kappa the least-norm motion misses"),
     *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
-             "hybrid ladder: v2's task on generated paths whose middle breaks a leg limit at the starting split"),
+             "hybrid ladder: v2's task on generated paths that break a leg limit midway at the start split"),
     *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
-             "mobile tripod ladder: v2's task on generated drives whose pushes odometry alone cannot see past"),
+             "mobile tripod ladder: v2's task on generated drives with pushes odometry alone cannot see"),
 )
 
 _BY_ID = {r.id: r for r in ROWS}

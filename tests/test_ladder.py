@@ -181,3 +181,37 @@ def test_a_hybrid_rung_separates_its_floors_from_the_papers_method(env_id):
     assert vec.unwrapped.state.scenarios[0] == env.reset(seed=3000)[1]["scenario"]
     env.close()
     vec.close()
+
+
+ORTHOGLIDE_RUNGS = [r.id for r in registry.ladder_of("orthoglide")]
+
+
+@pytest.mark.parametrize("env_id", ORTHOGLIDE_RUNGS)
+def test_an_orthoglide_rung_bounds_the_mean_kappa_by_the_least_norm_motions(env_id):
+    """The bound is the rung's share of the least-norm excess on the same path: the zero action (that motion)
+    never meets it, the paper's gradient does."""
+    from paragym.tasks.orthoglide import LADDER as ORTHOGLIDE_LADDER
+
+    share = ORTHOGLIDE_LADDER[registry.row(env_id).rung].share
+    env = gym.make(env_id)
+    wins = {"zero": 0, "gradient-c": 0}
+    for k in range(20):
+        for name in wins:
+            ep = run_episode(env, get_policy(env_id, name).factory(env, k), seed=4000 + k)
+            last = ep.infos[-1]
+            kappa = np.array([i["kappa"] for i in ep.infos])
+            assert last["mean_kappa"] == pytest.approx(kappa.mean(), rel=1e-12)
+            if name == "zero":  # the bound is made from this very motion
+                assert last["kappa_bound"] == pytest.approx(1 + share * (kappa.mean() - 1), rel=1e-12)
+            assert bool(ep.success) == (last["step"] == len(ep.infos) - 1 and last["mean_kappa"] <= last["kappa_bound"]
+                                        and last["failure"] is None)
+            wins[name] += bool(ep.success)
+    assert wins["zero"] == 0 and wins["gradient-c"] >= 18, wins
+    env.close()
+
+
+def test_the_released_orthoglide_ids_ask_for_no_kappa():
+    env = gym.make("paragym/Orthoglide2PRRKappa-v1")
+    _, info = env.reset(seed=0)
+    assert "kappa_bound" not in info and np.isinf(env.unwrapped.state.bound).all()
+    env.close()

@@ -316,3 +316,31 @@ def zero_factory(env: gym.Env, seed: int) -> Any:
     from paragym.baselines.simple import ZeroPolicy
 
     return ZeroPolicy(env.action_space)
+
+
+@dataclass(frozen=True)
+class BestConstant:
+    """A task's best-constant floor as a policy factory: always the action ``actions`` names for the env's id
+    (read from ``env.spec``, so the env must come from ``gym.make``), each found by
+    :func:`paragym.baselines.simple.best_constant` and named by the task's bench."""
+
+    actions: tuple[tuple[str, tuple[float, ...]], ...]
+
+    def __call__(self, env: gym.Env, seed: int) -> Any:
+        from paragym.baselines.simple import ConstantPolicy
+
+        table = dict(self.actions)
+        env_id = env.spec.id if env.spec is not None else None
+        if env_id not in table:
+            raise ValueError(f"best-constant plays {', '.join(table)} (made with gym.make); got {env_id!r}")
+        return ConstantPolicy(env.action_space, table[env_id])
+
+
+def best_constant_floors(actions: dict[str, tuple[float, ...]], what: str) -> tuple[BuiltIn, ...]:
+    """The best-constant floor of every id in ``actions`` (id -> its best constant action), one row each (the
+    action is in its producer): ``what`` says what the action does, e.g. "trust {action} in the paper's
+    correction of units 1-3" ({action} reads as (a, b, c))."""
+    factory = BestConstant(tuple((env_id, tuple(map(float, a))) for env_id, a in actions.items()))
+    return tuple(BuiltIn("best-constant", factory, "floor",
+                         "the best constant action: " + what.format(action="(" + ", ".join(f"{v:g}" for v in a) + ")"),
+                         {"action": [float(v) for v in a]}, ids=(env_id,)) for env_id, a in actions.items())

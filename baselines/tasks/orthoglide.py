@@ -9,9 +9,25 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, init_defaults, zero_factory
+from paragym.baselines.tasks import (
+    Bench,
+    BuiltIn,
+    Column,
+    Target,
+    best_constant_floors,
+    init_defaults,
+    zero_factory,
+)
+from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+
+#: the rungs of the Orthoglide's difficulty ladder (:func:`paragym.registry.ladder_of`)
+LADDER = tuple(f"paragym/Orthoglide2PRRKappa-{rung}-v0" for rung in RUNG_NAMES)
+#: the best constant null-space action of each rung: :func:`paragym.baselines.simple.best_constant` over
+#: {-1, -0.5, -0.25, 0, 0.25, 0.5, 1} on reset seeds 0-29 (no constant succeeds on any rung: the first, -1, has the
+#: highest return; a test searches again). On v0 and v1 the best constant is zero, a floor already.
+BEST_CONSTANT = {env_id: (-1.0,) for env_id in LADDER}
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -130,6 +146,8 @@ BENCH = Bench(
                 "case (a): the table held still (at the env's start; see FixedTablePolicy)"),
         BuiltIn("zero", zero_factory, "floor",
                 "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)"),
+        *best_constant_floors(BEST_CONSTANT, "the table driven along n at {action} of max_null_rate, the best of "
+                              "{{-1, -0.5, -0.25, 0, 0.25, 0.5, 1}} on reset seeds 0-29"),
     ),
     dynamics=OrthoglideDynamics,  # the env's default
     demo="null-space gradient of kappa (paper 003, case c)",

@@ -14,7 +14,17 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from paragym.baselines.tasks import Ablation, AblationRow, Bench, BuiltIn, Column, Target, init_defaults, zero_factory
+from paragym.baselines.tasks import (
+    Ablation,
+    AblationRow,
+    Bench,
+    BuiltIn,
+    Column,
+    Target,
+    best_constant_floors,
+    init_defaults,
+    zero_factory,
+)
 from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.tripod_dynamic import TripodDynamics
@@ -152,24 +162,6 @@ ABLATION = Ablation(
 
 
 
-def best_constant_trust(env: gym.Env, seed: int) -> Any:
-    """The best constant action of the env's id (:data:`BEST_CONSTANT`, read from ``env.spec``): a floor."""
-    from paragym.baselines.simple import ConstantPolicy
-
-    env_id = env.spec.id if env.spec is not None else None
-    if env_id not in BEST_CONSTANT:
-        raise ValueError(f"best-constant plays {', '.join(BEST_CONSTANT)} (made with gym.make); got {env_id!r}")
-    return ConstantPolicy(env.action_space, BEST_CONSTANT[env_id])
-
-
-def _best_constant_floors() -> tuple[BuiltIn, ...]:
-    """The best-constant floor of every id that has one, each its own row (its action differs)."""
-    return tuple(BuiltIn("best-constant", best_constant_trust, "floor",
-                         "the best constant action: trust (" + ", ".join(f"{a:g}" for a in BEST_CONSTANT[env_id]) +
-                         ") in the paper's correction of units "
-                         "1-3, the best of {0, 0.5, 1}^3 on reset seeds 0-29", {"action": list(BEST_CONSTANT[env_id])},
-                         ids=(env_id,)) for env_id in BEST_CONSTANT)
-
 BENCH = Bench(
     ablation=ABLATION,
     task="tripod",
@@ -191,7 +183,8 @@ BENCH = Bench(
                 "unscented Kalman filter fusing odometry and encoders (filterpy); not in the paper",
                 _estimator_params("FusionEstimator"), ids=V0),
         BuiltIn("zero", zero_factory, "floor", "= odometry only: no correction (paper 004's uncorrected estimate)"),
-        *_best_constant_floors(),
+        *best_constant_floors(BEST_CONSTANT, "trust {action} in the paper's correction of units 1-3, the best of "
+                              "{{0, 0.5, 1}}^3 on reset seeds 0-29"),
     ),
     dynamics=TripodDynamics,  # the env's default
     # the wheels' stick and slip on the terrain make the dynamic drive chaotic: a last-bit difference of libm or

@@ -16,8 +16,9 @@ import numpy as np
 from paragym.mechanisms import orthoglide as og
 from paragym.tasks import base
 
-__all__ = ["SCENARIOS", "OrthoglideScenario", "circle_task", "draw_scenarios", "paper_scenario", "random_scenario",
-           "random_scenarios", "resolve_scenario", "servable", "start_table_position", "validate_scenario"]
+__all__ = ["LADDER", "SCENARIOS", "OrthoglideRung", "OrthoglideScenario", "circle_task", "draw_scenarios",
+           "knob_table", "ladder_scenarios", "paper_scenario", "random_scenario", "random_scenarios",
+           "resolve_scenario", "servable", "start_table_position", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -153,6 +154,64 @@ def random_scenarios(rngs: list[np.random.Generator], geometry: og.OrthoglideGeo
     raise RuntimeError(f"no reachable random path in {max_tries} tries")
 
 
+@dataclass(frozen=True)
+class OrthoglideRung:
+    """The knobs of one rung of the Orthoglide's difficulty ladder (:func:`ladder_scenarios`).
+
+    Attributes:
+        share: success asks for a mean kappa at most this share of the way from 1 to the least-norm motion's
+            on the same path (:func:`paragym.tasks.orthoglide_step.kappa_bounds`).
+        radius: the radii of the circles and ellipses (m), drawn uniformly in [low, high].
+        period: the time (s) of one lap.
+    """
+
+    share: float
+    radius: tuple[float, float]
+    period: float
+
+
+#: the Orthoglide's difficulty ladder, easiest first: closed paths (circles and ellipses, where the table's
+#: null-space choice matters: on random lines the paper's gradient cannot beat the least-norm motion on one in
+#: five) and a bound on the mean kappa that the zero action (the least-norm motion) never meets; a rung tightens
+#: the bound
+LADDER = (OrthoglideRung(share=0.7, radius=(0.1, 0.4), period=10.0),
+          OrthoglideRung(share=0.7, radius=(0.2, 0.4), period=7.0),
+          OrthoglideRung(share=0.65, radius=(0.25, 0.4), period=5.0))
+
+
+def knob_table(indent: str = "") -> str:
+    """The knobs of every rung of :data:`LADDER` as a reStructuredText table (the rung pages show it)."""
+    return base.knob_table(LADDER, {"share": "share of the least-norm excess", "radius": "radii (m)",
+                                    "period": "lap (s)"}, indent)
+
+
+def ladder_scenarios(rngs: list[np.random.Generator], rung: OrthoglideRung,
+                     geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, max_tries: int = 100
+                     ) -> list[OrthoglideScenario]:
+    """One path of a rung per generator (named "random" on the rung's env id), drawn from it in this order, again
+    until some admissible table position serves every tenth point (:func:`servable`): circle or ellipse, the
+    centre (x in -0.2-0.4 m, y in 0.3-0.8 m, table frame), the radii in ``radius`` (equal for a circle), the
+    start angle; one lap in ``period`` s, sampled every 10 ms."""
+    times = np.linspace(0.0, rung.period, int(round(rung.period * 100)) + 1)
+    w = 2 * np.pi / rung.period
+    tasks: list[OrthoglideScenario | None] = [None] * len(rngs)
+    for i, rng in enumerate(rngs):
+        for _ in range(max_tries):
+            kind = ("circle", "ellipse")[int(rng.integers(2))]
+            cx, cy = rng.uniform(_CENTRE_LOW, _CENTRE_HIGH)
+            rx = rng.uniform(*rung.radius)
+            ry = rng.uniform(*rung.radius) if kind == "ellipse" else rx
+            ang = rng.uniform(0, 2 * np.pi) + w * times
+            points = np.stack([cx + rx * np.cos(ang), cy + ry * np.sin(ang)], axis=1)
+            if servable(points[::10], geometry).all():
+                velocities = np.stack([-w * rx * np.sin(ang), w * ry * np.cos(ang)], axis=1)
+                tasks[i] = OrthoglideScenario(kind, times, points, velocities)
+                break
+        if tasks[i] is None:
+            raise RuntimeError(f"no reachable path of the rung in {max_tries} tries")
+    return tasks  # type: ignore[return-value]
+
+
 def random_scenario(rng: np.random.Generator, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                     max_tries: int = 100) -> OrthoglideScenario:
     """:func:`random_scenarios` for one generator."""
@@ -210,11 +269,15 @@ def resolve_scenario(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_G
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
-                   geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> list[OrthoglideScenario]:
+                   geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, rung: int | None = None
+                   ) -> list[OrthoglideScenario]:
     """One episode's path per generator (single env, vector env and CLI
     alike): the paper's circle, random paths drawn from the generators, or
-    the custom path once :func:`resolve_scenario` accepts it."""
+    the custom path once :func:`resolve_scenario` accepts it. On a rung of the ladder (``rung``, an index of
+    :data:`LADDER`) "random" is the rung's path (:func:`ladder_scenarios`)."""
     choice = resolve_scenario(choice, geometry)
+    if choice == "random" and rung is not None:
+        return ladder_scenarios(rngs, LADDER[rung], geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario() if choice == "paper" else choice] * len(rngs)

@@ -25,7 +25,7 @@ p_k, task rate t_k, J and n at k):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any, NamedTuple
 
@@ -45,8 +45,9 @@ from paragym.tasks.base import (
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "OBS_SIZE", "REWARD_TERMS", "RULES", "OrthoglideParams",
-           "OrthoglideRules", "OrthoglideState", "decide", "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "LADDER_RULES", "OBS_SIZE", "REWARD_TERMS", "RULES",
+           "OrthoglideParams", "OrthoglideRules", "OrthoglideState", "decide", "kappa_bounds", "least_norm_kappa",
+           "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
@@ -68,15 +69,23 @@ class OrthoglideRules:
             mode, and a step beyond ``track_tolerance`` fails, as does a broken mechanism (dynamic fidelity).
         exact_time: the dynamic fidelity simulates each path step over exactly its duration (else rounded to
             whole physics steps, with a warning).
+        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.orthoglide.LADDER`): its paths
+            are the "random" scenario, and success asks for a mean kappa at most the rung's share of the way
+            from 1 to the least-norm motion's (:func:`kappa_bounds`); None: a version of the task, whose success
+            asks for no kappa.
     """
 
     version: int
     tracking: bool
     exact_time: bool
+    rung: int | None = None
 
 
 #: the rules of Orthoglide2PRRKappa-v0 and -v1
 RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True)}
+#: the rules of the ladder's rungs, Orthoglide2PRRKappa-Easy, -Medium and -Hard (v0 each): v1's, on the rung's
+#: paths and with its bound on the mean kappa
+LADDER_RULES = {k: OrthoglideRules(0, tracking=True, exact_time=True, rung=k) for k in range(3)}
 
 
 @dataclass(frozen=True)
@@ -122,6 +131,13 @@ class OrthoglideParams:
                    action_mode, fidelity, dynamics, rules)
 
     @cached_property
+    def least_norm(self) -> OrthoglideParams:
+        """These parameters for the least-norm motion (null-space mode, kinematic, v1's rules): what the zero
+        action does in null-space mode, paper 003's case (b); made once."""
+        return replace(self, joint_mode=False, action_mode="null_space", fidelity="kinematic", dynamics=None,
+                       version=1, rules=RULES[1])
+
+    @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
         """The numbers the kernel takes, as a plain tuple in :class:`KernelParams`' order (made once: a step
         must not rebuild them; numba's dispatcher types a plain tuple in C, a NamedTuple in Python)."""
@@ -161,7 +177,7 @@ class OrthoglideState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("rho", "k", "last", "path", "dt", "j", "n", "kappa", "err", "failed", "reason", "terminated",
-                     "obs", "reward", "terms", "success")
+                     "obs", "reward", "terms", "success", "kappa_sum", "mean_kappa", "bound")
 
     rho: np.ndarray
     k: np.ndarray
@@ -182,6 +198,11 @@ class OrthoglideState(KernelArrays):
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
+    #: the sum of kappa over the path points evaluated so far (N,), and their mean, which success may bound
+    kappa_sum: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    mean_kappa: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    #: the highest mean kappa of a success (N,): inf but on a rung of the ladder (:func:`kappa_bounds`)
+    bound: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
 
     @classmethod
     def empty(cls, n: int, params: Any = None, points: int = 2) -> OrthoglideState:
@@ -192,7 +213,8 @@ class OrthoglideState(KernelArrays):
                    reason=np.zeros(n, np.int64), terminated=np.zeros(n, bool),
                    obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
                    terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
-                   success=np.zeros(n, bool))
+                   success=np.zeros(n, bool), kappa_sum=np.zeros(n), mean_kappa=np.zeros(n),
+                   bound=np.full(n, np.inf))
 
     def _room(self, points: int) -> None:
         """Grow the path arrays to hold ``points`` points."""
@@ -223,9 +245,34 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
         state.scenarios[i] = task
     rho, _ = og.inverse(r1, first, params.geometry)
     state.rho[rows], state.k[rows], state.failed[rows], state.reason[rows] = rho, 0, False, 0
+    state.kappa_sum[rows] = 0.0
+    state.bound[rows] = np.inf if params.rules.rung is None else kappa_bounds(params, scenarios)
     mask = np.zeros(len(state.k), bool)
     mask[rows] = True
     _advance(state, params, np.zeros((len(state.k), 3 if params.joint_mode else 1)), mask, False)
+
+
+def least_norm_kappa(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> np.ndarray:
+    """The mean kappa over the path points of each of ``scenarios`` (M,) under the least-norm motion from the
+    env's start (:attr:`OrthoglideParams.least_norm`: the zero action in null-space mode, kinematic), run by this
+    module's own transition; inf where that motion fails."""
+    own = params.least_norm
+    n = len(scenarios)
+    shadow = OrthoglideState.empty(n)
+    reset(shadow, own, np.arange(n), scenarios)
+    zeros, active = np.zeros((n, 1)), ~shadow.terminated
+    while active.any():
+        _advance(shadow, own, zeros, active, True)
+        active = ~shadow.terminated
+    return np.where(shadow.failed, np.inf, shadow.mean_kappa)
+
+
+def kappa_bounds(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> np.ndarray:
+    """A rung's highest mean kappa of a success on each of ``scenarios``: the rung's ``share`` of the way from 1
+    (an isotropic mechanism) to the least-norm motion's mean kappa (:func:`least_norm_kappa`), so that the zero
+    action never meets it and a table placed well does."""
+    share = scenarios_module.LADDER[params.rules.rung].share
+    return 1.0 + share * (least_norm_kappa(params, scenarios) - 1.0)
 
 
 def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, active: np.ndarray,
@@ -247,18 +294,19 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
         state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
         state.terms[0] = (0.0, 0.0, -params.limit_penalty)
         state.reward[0] = state.terms[0, 2]
-        state.success[0] = decide(state.k[0], state.last[0], True)
+        state.success[0] = decide(state.k[0], state.last[0], True, np.inf, np.inf)
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
 
 
 @njit(cache=True)
-def decide(k: int, last: int, failed: bool) -> bool:
-    """Whether a robot has succeeded: the path's end reached (``k >= last``) with no failure on the way. The one
+def decide(k: int, last: int, failed: bool, mean_kappa: float, bound: float) -> bool:
+    """Whether a robot has succeeded: the path's end reached (``k >= last``) with no failure on the way and a
+    mean kappa over its path points of at most ``bound`` (inf but on a rung of the ladder). The one
     place the task decides success: the transition calls it for every robot it evaluates, and
     :meth:`~paragym.tasks.orthoglide_task.OrthoglideTask.evaluate` reports what it decided."""
-    return k >= last and not failed
+    return k >= last and not failed and mean_kappa <= bound
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
@@ -277,7 +325,8 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     the tool point those joints give, and the tracking error in either mode.
     ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
-    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success = arrays
+    rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success, kappa_sum, \
+        mean_kappa, bound = arrays
     p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, version, track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
@@ -328,7 +377,9 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
             if reason[i] == 0:
                 reason[i] = _TRACKING
         terminated[i] = failed[i] or k[i] >= last[i]
-        success[i] = decide(k[i], last[i], failed[i])
+        kappa_sum[i] += kappa[i]
+        mean_kappa[i] = kappa_sum[i] / (k[i] + 1)
+        success[i] = decide(k[i], last[i], failed[i], mean_kappa[i], bound[i])
         if failed[i]:  # the reward and its terms (REWARD_TERMS): kappa, tracking, failure
             terms[i, 0], terms[i, 1], terms[i, 2] = 0.0, 0.0, -limit_penalty
             reward[i] = terms[i, 2]

@@ -14,6 +14,7 @@ from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
     FAILURES,
+    LADDER_RULES,
     OBS_SIZE,
     REWARD_TERMS,
     RULES,
@@ -25,7 +26,7 @@ from paragym.tasks.orthoglide_step import (
 )
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["RULES", "TASK", "OrthoglideTask"]
+__all__ = ["LADDER_RULES", "RULES", "TASK", "OrthoglideTask"]
 
 
 class OrthoglideTask(TaskBase):
@@ -47,6 +48,9 @@ class OrthoglideTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: OrthoglideParams) -> OrthoglideScenario:
+        if params.rules.rung is not None:
+            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
+                                                     params.geometry)[0]
         return scenarios_module.random_scenario(rng, params.geometry)
 
     def validate_scenario(self, scenario: OrthoglideScenario, params: OrthoglideParams) -> None:
@@ -54,7 +58,7 @@ class OrthoglideTask(TaskBase):
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: OrthoglideParams,
                        world: Any) -> list[OrthoglideScenario]:
-        drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry)
+        drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung)
         if world is not None and not world.exact_time:
             _warn_rounded_time(drawn, world)
         return drawn
@@ -87,6 +91,8 @@ class OrthoglideTask(TaskBase):
         s = state
         if s.evaluation is None:  # the same buffers every call
             numbers = {"kappa": s.kappa, "tracking_error": s.err, "step": s.k}
+            if params.rules.rung is not None:  # the mean kappa so far and the most a success may have
+                numbers.update(mean_kappa=s.mean_kappa, kappa_bound=s.bound)
             numbers.update(reward_terms(s.terms, REWARD_TERMS))
             s.evaluation = Evaluation(s.success, s.reason, numbers)
         return s.evaluation
