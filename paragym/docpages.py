@@ -22,8 +22,9 @@ from typing import Any
 
 from paragym import registry
 
-__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "speed_page", "readme_env_table",
-           "readme_leaderboard_table", "render_frame", "sections", "status", "write_pages"]
+__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "ladder_figure", "ladder_table", "ladders_page",
+           "readme_env_table", "readme_leaderboard_table", "render_frame", "sections", "speed_page", "status",
+           "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
@@ -173,7 +174,8 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
     """The README's headline leaderboard, from the committed run's ``leaderboard.csv``: per env id, the
     leader, the reference, the best learned agent and the floors, each success rate with its 95 % interval
     and the env's ranking metric after it; "(apart)" where the leader is ahead beyond doubt; and the
-    reference's episodes in dynamic fidelity (success with its interval, and the KF verdict on its own)."""
+    reference's episodes in dynamic fidelity (success with its interval, and the KF verdict on its own). The
+    rungs of the ladders are left to :func:`ladder_table`."""
     import csv
 
     from paragym.baselines.stats import wilson
@@ -204,6 +206,8 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
     lines = ["| env | 1st | reference | best learned | floors | reference, dynamic fidelity |",
              "|---|---|---|---|---|---|"]
     for env, rs in rows.items():
+        if registry.row(env).rung is not None:  # the ladders have their own table (ladder_table)
+            continue
         rs.sort(key=lambda r: int(r["rank"]))
         key = bench_of(env).primary[0]
         ref = next((r for r in rs if r["kind"] == "reference"), None)
@@ -213,6 +217,117 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
                      f"{cell(ref, key) if ref is not rs[0] else 'the 1st'} | {cell(learned, key)} | {floors} | "
                      f"{dynamic(ref)} |")
     return "\n".join(lines)
+
+
+def _ladder_rows(csv_path: str | Path) -> dict[str, dict[str, dict[str, dict[str, str]]]]:
+    """The committed run's rows of every rung: task -> method -> rung id -> its CSV row. A method is a row's
+    role: "reference", the naive floor (its name), "zero", "random", and "best learned" (the learned agent
+    ranked highest on that rung)."""
+    import csv
+
+    rungs = {r.id: r for r in registry.rows() if r.rung is not None}
+    out: dict[str, dict[str, dict[str, dict[str, str]]]] = {}
+    with open(csv_path, newline="") as f:
+        for row in sorted(csv.DictReader(f), key=lambda r: int(r["rank"])):
+            rung = rungs.get(row["env"])
+            if rung is None:
+                continue
+            kind, name = row["kind"], row["policy"]
+            method = ("reference" if kind == "reference" else name if kind == "floor" else
+                      "best learned" if kind == "learned" else None)
+            if method is not None:
+                out.setdefault(rung.task, {}).setdefault(method, {}).setdefault(rung.id, row)
+    return out
+
+
+def ladder_table(csv_path: str | Path) -> str:
+    """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task, each
+    method's success on every rung with its 95 % interval (Wilson; kinematic fidelity, the leaderboard's
+    episodes), and the reference's in dynamic fidelity (its successes of the episodes run there)."""
+    from paragym.baselines.stats import wilson
+
+    found = _ladder_rows(csv_path)
+    lines = ["| task | method | " + " | ".join(registry.RUNG_NAMES) + " |",
+             "|---|---|" + "---|" * len(registry.RUNG_NAMES)]
+    for task, methods in found.items():
+        ids = [r.id for r in registry.ladder_of(task)]
+        order = ["reference", *sorted(m for m in methods if m not in ("reference", "zero", "random",
+                                                                      "best learned")), "zero", "random",
+                 "best learned"]
+        for method in order:
+            cells = []
+            for env_id in ids:
+                r = methods.get(method, {}).get(env_id)
+                cells.append("-" if r is None else f"{float(r['success_rate']):.2f} [{float(r['success_ci_low']):.2f}, "
+                             f"{float(r['success_ci_high']):.2f}]")
+            if method in methods or method == "best learned":
+                lines.append(f"| {task} | {method} | " + " | ".join(cells) + " |")
+        cells = []
+        for env_id in ids:
+            r = methods.get("reference", {}).get(env_id)
+            if r is None or not r["dynamic_episodes"]:
+                cells.append("-")
+                continue
+            n = int(r["dynamic_episodes"])
+            k = round(float(r["dynamic_success_rate"]) * n)
+            lo, hi = wilson(k, n)
+            cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
+        lines.append(f"| {task} | reference, dynamic | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
+def ladder_figure(csv_path: str | Path, path: str | Path) -> Path:
+    """The headline figure: success against rung, one panel per task, a line per method with its 95 %
+    interval (the rows of :func:`ladder_table`), written to the PNG ``path``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    found = _ladder_rows(csv_path)
+    fig, axes = plt.subplots(1, len(found), figsize=(4.0 * len(found), 3.4), squeeze=False)
+    colours = {"reference": "tab:green", "zero": "tab:gray", "random": "tab:red", "best learned": "tab:blue"}
+    for ax, (task, methods) in zip(axes[0], found.items(), strict=True):
+        ids = [r.id for r in registry.ladder_of(task)]
+        for j, (method, rows) in enumerate(methods.items()):
+            xs = [k + (j - (len(methods) - 1) / 2) * 0.06 for k, env_id in enumerate(ids) if env_id in rows]
+            got = [rows[env_id] for env_id in ids if env_id in rows]
+            ys = [float(r["success_rate"]) for r in got]
+            err = [[y - float(r["success_ci_low"]) for y, r in zip(ys, got, strict=True)],
+                   [float(r["success_ci_high"]) - y for y, r in zip(ys, got, strict=True)]]
+            ax.errorbar(xs, ys, yerr=err, marker="o", ms=4, capsize=2, label=method,
+                        color=colours.get(method, "tab:orange"))
+        ax.set_xticks(range(len(ids)), registry.RUNG_NAMES[:len(ids)])
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_title(task, fontsize=10)
+        ax.axhline(0.9, color="tab:green", lw=0.6, ls=":")
+        ax.axhline(0.1, color="tab:gray", lw=0.6, ls=":")
+        ax.legend(fontsize=7, loc="center right")
+    axes[0][0].set_ylabel("success (95 % CI)")
+    fig.tight_layout()
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+    return path
+
+
+def ladders_page(csv_path: str | Path) -> str:
+    """The docs' ladders page (``docs/ladders.md``): what a ladder is, its figure and :func:`ladder_table`."""
+    rungs = ", ".join(f"[`{r.name}`](envs/{r.name}.md)" for r in registry.rows() if r.rung is not None)
+    return "\n".join([
+        "# Difficulty ladders", "",
+        "Each task has three rung ids, `-Easy`, `-Medium` and `-Hard` (v0 each), whose scenarios a seeded "
+        "generator draws from the rung's knobs (the table on each rung's page): the newest version's task on "
+        "scenarios where doing nothing, random actions and the task's naive controller fail and the paper's "
+        "method succeeds. Each rung is ranked as its own table of the leaderboard. The CaPaMan has no ladder "
+        "yet (issue 40).", "",
+        "Success per rung and method, over the leaderboard's 50 episodes (kinematic fidelity) with Wilson's "
+        "95 % interval; the last row of each task is the reference's dynamic episodes. Generated from the "
+        "committed `leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
+        "![success against rung](reports/ladders.png)", "",
+        ladder_table(csv_path), "",
+        f"Rungs: {rungs}.", ""])
 
 
 def render_frame(env_id: str, path: Path) -> Path:

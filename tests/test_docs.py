@@ -109,3 +109,41 @@ def test_no_source_of_the_site_is_ignored_by_git():
              and "__pycache__" not in p.parts]
     ignored = subprocess.run(["git", "check-ignore", *files], cwd=ROOT, capture_output=True, text=True).stdout
     assert ignored.split() == []
+
+
+def test_the_ladders_page_is_made_from_the_committed_leaderboard():
+    from paragym.docpages import ladders_page
+
+    board = ROOT / "leaderboard" / "leaderboard.csv"
+    assert (DOCS / "ladders.md").read_text() == ladders_page(board), \
+        "docs/ladders.md is stale: run python docs/build.py"
+    assert (DOCS / "reports" / "ladders.png").is_file()
+
+
+def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
+    """Each cell is that rung's row of the CSV: the success with its interval, the reference's dynamic episodes
+    counted; a method a rung lacks shows a dash."""
+    import csv
+
+    from paragym import registry
+    from paragym.docpages import ladder_table
+
+    easy, medium, hard = (r.id for r in registry.ladder_of("hybrid"))
+    fields = ["env", "rank", "policy", "kind", "success_rate", "success_ci_low", "success_ci_high",
+              "dynamic_episodes", "dynamic_success_rate"]
+    rows = [(easy, 1, "polynomial-detour", "reference", 0.98, 0.90, 1.0, 3, 2 / 3),
+            (easy, 2, "greedy-split", "floor", 0.02, 0.0, 0.1, "", ""),
+            (medium, 1, "polynomial-detour", "reference", 0.94, 0.84, 0.98, 3, 1.0),
+            (hard, 1, "polynomial-detour", "reference", 0.9, 0.79, 0.96, "", ""),
+            ("paragym/HybridSingularityFree-v2", 1, "zero", "floor", 1.0, 1.0, 1.0, "", "")]
+    path = tmp_path / "board.csv"
+    with path.open("w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(fields)
+        writer.writerows(rows)
+    table = ladder_table(path).splitlines()
+    assert table[2] == "| hybrid | reference | 0.98 [0.90, 1.00] | 0.94 [0.84, 0.98] | 0.90 [0.79, 0.96] |"
+    assert table[3] == "| hybrid | greedy-split | 0.02 [0.00, 0.10] | - | - |"
+    assert table[4] == "| hybrid | best learned | - | - | - |"  # none shipped: said, not left out
+    assert table[5] == "| hybrid | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
+    assert len(table) == 6  # the v2 row is no rung
