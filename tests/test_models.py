@@ -78,8 +78,12 @@ def test_every_shipped_model_loads_without_unpickling_and_acts_as_sb3_does():
     from stable_baselines3 import PPO, SAC
 
     files = sorted(shipped_models_dir().glob("*/*_seed*.zip"))
-    # v0: PPO and SAC x 3 seeds; CaPaMan v1: bc, PPO, SAC, DAgger x 3; tripod v1: bc, PPO, SAC x 3; hybrid v1: PPO, SAC
-    assert len(files) == 24 + 12 + 9 + 6
+    # v0: PPO and SAC x 3 seeds; CaPaMan v1: bc, PPO, SAC, DAgger x 3; tripod v1: bc, PPO, SAC x 3; hybrid v1: PPO, SAC;
+    # the nine rungs of the ladders: bc seed 0
+    assert len(files) == 24 + 12 + 9 + 6 + 9
+    from paragym import registry
+
+    assert all((shipped_models_dir() / r.name / "bc_seed0.zip").is_file() for r in registry.rows() if r.rung is not None)
     for path in files[::4]:
         ours = load_model(path)
         theirs = (SAC if path.stem.startswith("sac") else PPO).load(path, device="cpu")  # a clone is a PPO policy
