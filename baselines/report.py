@@ -41,13 +41,9 @@ __all__ = ["bootstrap_mean_ci", "latest_versions", "learning_curves", "normalize
 
 
 def latest_versions() -> list[str]:
-    """The newest registered version of every task (its id without ``-vN``)."""
-    newest: dict[str, str] = {}
-    for env_id in (r.id for r in registry.rows()):
-        task, version = env_id.rsplit("-v", 1)
-        if task not in newest or int(version) > int(newest[task].rsplit("-v", 1)[1]):
-            newest[task] = env_id
-    return list(newest.values())
+    """The newest registered version of every task (:func:`paragym.registry.newest`: a ladder's rungs are not
+    versions of their task)."""
+    return list(registry.newest())
 
 
 def _runs(models_dirs: list[Path]) -> dict[str, dict[str, list[dict[str, Any]]]]:

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import paragym
+from paragym import registry
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
@@ -447,10 +448,10 @@ def test_simulated_time_runs_at_the_control_rate(env_id, fidelity, dynamics):
     env.action_space.seed(0)
     env.reset(seed=0)
     u = env.unwrapped
-    period = {"CaPaManCollisionFree": lambda: u.control_period,
-              "HybridSingularityFree": lambda: u.world.control_period,
-              "Orthoglide2PRRKappa": lambda: float(u.state.dt[0, 0]),
-              "MobileTripodOdometry": lambda: u.state.drive.dt}[env_id.split("/")[1].rsplit("-v", 1)[0]]()
+    period = {"capaman": lambda: u.control_period,
+              "hybrid": lambda: u.world.control_period,
+              "orthoglide": lambda: float(u.state.dt[0, 0]),
+              "tripod": lambda: u.state.drive.dt}[registry.task_of(env_id)]()
     sim = _scene_of(env).sim
     start = sim.elapsed
     for _ in range(5):
