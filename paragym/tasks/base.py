@@ -23,8 +23,8 @@ import numpy as np
 from paragym.registry import RUNG_NAMES
 
 __all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
-           "check_choice", "check_control_period", "check_instance", "check_number", "refuse_unknown", "renamed",
-           "reward_terms", "resolve_scenario"]
+           "check_choice", "check_control_period", "check_instance", "check_number", "knob_table", "refuse_unknown",
+           "renamed", "reward_terms", "resolve_scenario"]
 
 S = TypeVar("S")
 
@@ -304,7 +304,6 @@ def reward_terms(terms: np.ndarray, names: tuple[str, ...]) -> dict[str, np.ndar
     """The info's ``reward_<name>`` of each term: a view of column j of ``terms`` (N, T) per name, as
     Gymnasium's MuJoCo v5 envs report their reward's parts. The reward is their sum."""
     return {f"reward_{name}": terms[:, j] for j, name in enumerate(names)}
-
 
 
 def knob_table(ladder: tuple[Any, ...], labels: dict[str, str], indent: str = "") -> str:
