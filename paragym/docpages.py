@@ -178,7 +178,6 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
     rungs of the ladders are left to :func:`ladder_table`."""
     import csv
 
-    from paragym.baselines.stats import wilson
     from paragym.baselines.tasks import bench_of
 
     rows: dict[str, list[dict[str, str]]] = {}
@@ -196,12 +195,8 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
                 f"{float(r['success_ci_high']):.2f}], {bench.label(key)} {value:{bench.fmt(key)}}{mark}")
 
     def dynamic(r: dict[str, str] | None) -> str:
-        if r is None or not r["dynamic_episodes"]:
-            return ""
-        n = int(r["dynamic_episodes"])
-        k = round(float(r["dynamic_success_rate"]) * n)
-        lo, hi = wilson(k, n)
-        return f"{k}/{n} [{lo:.2f}, {hi:.2f}], KF {r['dynamic_kf_own_episode']}"
+        counted = _dynamic_successes(r)
+        return "" if counted is None else f"{counted}, KF {r['dynamic_kf_own_episode']}"
 
     lines = ["| env | 1st | reference | best learned | floors | reference, dynamic fidelity |",
              "|---|---|---|---|---|---|"]
@@ -217,6 +212,18 @@ def readme_leaderboard_table(csv_path: str | Path) -> str:
                      f"{cell(ref, key) if ref is not rs[0] else 'the 1st'} | {cell(learned, key)} | {floors} | "
                      f"{dynamic(ref)} |")
     return "\n".join(lines)
+
+
+def _dynamic_successes(r: dict[str, str] | None) -> str | None:
+    """A CSV row's dynamic episodes as "k/n [low, high]" (Wilson's 95 %), or None where it ran none."""
+    from paragym.baselines.stats import wilson
+
+    if r is None or not r["dynamic_episodes"]:
+        return None
+    n = int(r["dynamic_episodes"])
+    k = round(float(r["dynamic_success_rate"]) * n)
+    lo, hi = wilson(k, n)
+    return f"{k}/{n} [{lo:.2f}, {hi:.2f}]"
 
 
 def _ladder_rows(csv_path: str | Path) -> dict[str, dict[str, dict[str, dict[str, str]]]]:
@@ -244,7 +251,6 @@ def ladder_table(csv_path: str | Path) -> str:
     """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task, each
     method's success on every rung with its 95 % interval (Wilson; kinematic fidelity, the leaderboard's
     episodes), and the reference's in dynamic fidelity (its successes of the episodes run there)."""
-    from paragym.baselines.stats import wilson
 
     found = _ladder_rows(csv_path)
     lines = ["| task | method | " + " | ".join(registry.RUNG_NAMES) + " |",
@@ -262,16 +268,7 @@ def ladder_table(csv_path: str | Path) -> str:
                              f"{float(r['success_ci_high']):.2f}]")
             if method in methods or method == "best learned":
                 lines.append(f"| {task} | {method} | " + " | ".join(cells) + " |")
-        cells = []
-        for env_id in ids:
-            r = methods.get("reference", {}).get(env_id)
-            if r is None or not r["dynamic_episodes"]:
-                cells.append("-")
-                continue
-            n = int(r["dynamic_episodes"])
-            k = round(float(r["dynamic_success_rate"]) * n)
-            lo, hi = wilson(k, n)
-            cells.append(f"{k}/{n} [{lo:.2f}, {hi:.2f}]")
+        cells = [_dynamic_successes(methods.get("reference", {}).get(env_id)) or "-" for env_id in ids]
         lines.append(f"| {task} | reference, dynamic | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 

@@ -9,6 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from paragym import registry
 from paragym.baselines.tasks import (
     Ablation,
     AblationRow,
@@ -21,12 +22,11 @@ from paragym.baselines.tasks import (
     tightest,
     zero_factory,
 )
-from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.hybrid_dynamic import HybridDynamics
 
 #: the rungs of the hybrid's difficulty ladder (:func:`paragym.registry.ladder_of`): v2's rules on their own pairs
-LADDER = tuple(f"paragym/HybridSingularityFree-{rung}-v0" for rung in RUNG_NAMES)
+LADDER = tuple(r.id for r in registry.ladder_of("hybrid"))
 V2 = ("paragym/HybridSingularityFree-v2", *LADDER)
 BEFORE_V2 = ("paragym/HybridSingularityFree-v0", "paragym/HybridSingularityFree-v1")
 #: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a

@@ -9,6 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from paragym import registry
 from paragym.baselines.tasks import (
     Bench,
     BuiltIn,
@@ -18,12 +19,11 @@ from paragym.baselines.tasks import (
     init_defaults,
     zero_factory,
 )
-from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
 #: the rungs of the Orthoglide's difficulty ladder (:func:`paragym.registry.ladder_of`)
-LADDER = tuple(f"paragym/Orthoglide2PRRKappa-{rung}-v0" for rung in RUNG_NAMES)
+LADDER = tuple(r.id for r in registry.ladder_of("orthoglide"))
 #: the best constant null-space action of each rung: :func:`paragym.baselines.simple.best_constant` over
 #: {-1, -0.5, -0.25, 0, 0.25, 0.5, 1} on reset seeds 0-29 (no constant succeeds on any rung: the first, -1, has the
 #: highest return; a test searches again). On v0 and v1 the best constant is zero, a floor already.

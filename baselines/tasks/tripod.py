@@ -14,6 +14,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from paragym import registry
 from paragym.baselines.tasks import (
     Ablation,
     AblationRow,
@@ -25,13 +26,12 @@ from paragym.baselines.tasks import (
     init_defaults,
     zero_factory,
 )
-from paragym.registry import RUNG_NAMES
 from paragym.rollout import Episode
 from paragym.sim.tripod_dynamic import TripodDynamics
 
 V0 = ("paragym/MobileTripodOdometry-v0",)
 #: the rungs of the tripod's difficulty ladder (:func:`paragym.registry.ladder_of`)
-LADDER = tuple(f"paragym/MobileTripodOdometry-{rung}-v0" for rung in RUNG_NAMES)
+LADDER = tuple(r.id for r in registry.ladder_of("tripod"))
 #: v1, v2 and the ladder act through trust in the paper's correction: the reference is its test of the faulty unit
 TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2", *LADDER)
 #: the best constant trust per unit of each id: :func:`paragym.baselines.simple.best_constant` over

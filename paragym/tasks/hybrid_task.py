@@ -45,10 +45,7 @@ class HybridTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: HybridParams) -> HybridScenario:
-        if params.rules.rung is not None:
-            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
-                                                     params.geometry)[0]
-        return scenarios_module.random_scenario(rng, params.geometry)
+        return self.draw_scenarios("random", [rng], params, None)[0]  # the rung's generator on a rung
 
     def validate_scenario(self, scenario: HybridScenario, params: HybridParams) -> None:
         scenarios_module.validate_scenario(scenario)

@@ -48,10 +48,7 @@ class OrthoglideTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: OrthoglideParams) -> OrthoglideScenario:
-        if params.rules.rung is not None:
-            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
-                                                     params.geometry)[0]
-        return scenarios_module.random_scenario(rng, params.geometry)
+        return self.draw_scenarios("random", [rng], params, None)[0]  # the rung's generator on a rung
 
     def validate_scenario(self, scenario: OrthoglideScenario, params: OrthoglideParams) -> None:
         scenarios_module.validate_scenario(scenario, params.geometry)

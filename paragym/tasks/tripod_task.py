@@ -45,9 +45,7 @@ class TripodTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: TripodParams) -> TripodScenario:
-        if params.rules.rung is not None:
-            return scenarios_module.ladder_scenario(rng, scenarios_module.LADDER[params.rules.rung])
-        return scenarios_module.random_scenario(rng)
+        return self.draw_scenarios("random", [rng], params, None)[0]  # the rung's generator on a rung
 
     def validate_scenario(self, scenario: TripodScenario, params: TripodParams) -> None:
         scenarios_module.validate_scenario(scenario)
