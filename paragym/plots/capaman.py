@@ -12,7 +12,7 @@ from matplotlib.patches import Circle, Rectangle
 
 from paragym.plots import _save
 from paragym.rollout import Episode
-from paragym.sim.obstacles import Box, Cylinder
+from paragym.sim.obstacles import Box, Capsule, Cylinder
 
 __all__ = ["plot_episode", "plot_motion"]
 
@@ -54,7 +54,7 @@ def plot_motion(scenario: Any, t: np.ndarray, alpha: np.ndarray, tips: np.ndarra
     ax = fig.add_subplot(2, 2, 2)
     for o in scenario.obstacles:
         cx, cy = o.center[0] * 1000, o.center[1] * 1000
-        if isinstance(o, Cylinder):
+        if isinstance(o, (Cylinder, Capsule)):
             ax.add_patch(Circle((cx, cy), o.radius * 1000, color="tab:red", alpha=0.5))
         elif isinstance(o, Box):
             hx, hy = o.half_extents[0] * 1000, o.half_extents[1] * 1000

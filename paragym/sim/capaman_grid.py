@@ -143,7 +143,9 @@ def _prisms(obstacles: Sequence[Obstacle], resolution: float, margin: float | No
     lies in the obstacle grown by half a cell (boxes; cylinders: a half
     diagonal sideways); both kinds are a shape in (x, y) times an interval
     in z, so the centres in the obstacle's mid plane and on its axis decide,
-    with the same arithmetic as at every centre."""
+    with the same arithmetic as at every centre. A capsule is rasterised as the
+    cylinder that holds it (its radius, its whole height): conservative, as
+    the grid's cells are."""
     # Bounding box of the obstacles plus the margin: the outer cell stays free (see lookup).
     pad = max(2 * resolution, margin or 0.0)
     lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) - pad

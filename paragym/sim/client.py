@@ -26,7 +26,7 @@ import numpy as np
 import pybullet as pb
 
 from paragym.mechanisms.geometry import PartShape
-from paragym.sim.obstacles import Cylinder, Obstacle
+from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
 
 __all__ = ["LinkSpec", "Motors", "PyBulletSim", "divides", "exact_time_step", "motors_of", "physics_steps"]
 
@@ -184,6 +184,12 @@ class PyBulletSim:
             if self.draws:
                 vis = pb.createVisualShape(pb.GEOM_SPHERE, radius=shape.radius, rgbaColor=rgba, physicsClientId=c,
                                            **vframe)
+        elif isinstance(shape, Capsule):
+            col = pb.createCollisionShape(pb.GEOM_CAPSULE, radius=shape.radius, height=shape.height,
+                                          physicsClientId=c, **frame)
+            if self.draws:
+                vis = pb.createVisualShape(pb.GEOM_CAPSULE, radius=shape.radius, length=shape.height,
+                                           rgbaColor=rgba, physicsClientId=c, **vframe)
         elif isinstance(shape, Cylinder) or (isinstance(shape, PartShape) and shape.kind == "cylinder"):
             radius = shape.radius
             length = shape.height if isinstance(shape, Cylinder) else shape.length
