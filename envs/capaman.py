@@ -10,11 +10,14 @@ from __future__ import annotations
 
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
+from paragym.tasks.capaman import knob_table
 from paragym.tasks.capaman_step import SWEEP_STEP
-from paragym.tasks.capaman_task import RULES, TASK
+from paragym.tasks.capaman_task import LADDER_RULES, RULES, TASK
 
-__all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeV1Env", "CaPaManCollisionFreeV1VectorEnv",
-           "CaPaManCollisionFreeVectorEnv"]
+__all__ = ["SWEEP_STEP", "CaPaManCollisionFreeEasyEnv", "CaPaManCollisionFreeEasyVectorEnv",
+           "CaPaManCollisionFreeEnv", "CaPaManCollisionFreeHardEnv", "CaPaManCollisionFreeHardVectorEnv",
+           "CaPaManCollisionFreeMediumEnv", "CaPaManCollisionFreeMediumVectorEnv", "CaPaManCollisionFreeV1Env",
+           "CaPaManCollisionFreeV1VectorEnv", "CaPaManCollisionFreeVectorEnv"]
 
 
 class CaPaManCollisionFreeEnv(ParagymEnv):
@@ -202,3 +205,103 @@ class CaPaManCollisionFreeV1VectorEnv(CaPaManCollisionFreeVectorEnv):
     """``num_envs`` copies of :class:`CaPaManCollisionFreeV1Env` stepped together on the grid."""
 
     rules = RULES[1]
+
+
+class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
+    """``paragym/CaPaManCollisionFree-Easy-v0``: rung 0 of the CaPaMan's difficulty ladder: v1's tour among
+    posts, one of which stands on a leg's straight line.
+
+    ## Why a ladder
+    On v1's random scenes at most three obstacles stand where they fall, and fewer than half of the tours need
+    a detour: steering the cranks straight at the target succeeds in 45-80 % of episodes, above every shipped
+    learner (issue 40). Each leg of a rung's tour that carries a post cannot be gone straight, and the
+    scenes are drawn by one compiled kernel in tens of microseconds, so that resets do not dominate a native
+    env's step.
+
+    ## Description
+    Each scene is drawn by :func:`paragym.tasks.capaman.ladder_scenarios` from the rung's knobs
+    (:data:`paragym.tasks.capaman.LADDER`): three T.P.s at least ``spread`` apart, 5 deg inside the joint
+    range; a post on the straight joint-space line of ``blocked_legs`` of the tour's legs (where the tool is
+    40-60 % along it) and ``clutter`` posts anywhere within 65 mm of the centre; every two posts at least
+    ``gap`` apart or overlapping, every T.P. 9 mm clear (in the capsule model; so that the planners on paper
+    000's grid, which may grow an obstacle by 8 mm, see it free). The posts are vertical capsules (:class:`~paragym.sim.obstacles.
+    Capsule`) standing on the fixed plate, 75-90 mm tall, the clearance cap below the plate's lowest reach:
+
+{knobs}
+
+    That a collision-free tour exists is checked over 1,000 seeds per rung on a 2 deg (else 1.5 deg) grid of
+    the joint range (:func:`paragym.tasks.capaman.solvable`, in the tests).
+
+    ## Collision
+    ``collision`` "posts" (the default in kinematic fidelity, and the native vector env's): every part but the
+    plate as the capsule that holds it (a link of 12 mm square section as a capsule of radius 8.5 mm, the tool
+    rod as its own), the distance to each post exact and in closed form
+    (:mod:`paragym.sim.capaman_posts`); conservative: where it says free, PyBullet's parts are free. The plate
+    stays farther than the clearance cap from every post in every pose, so it is left out. ``collision``
+    "pybullet": PyBullet's exact distance between the 17 parts and the same posts (the dynamic fidelity's).
+
+    ## Observation Space
+    v1's, with as many obstacle slots as the rung has posts (kind 0.5: a capsule): ``Box(-1, 1, (17 + 8 K,))``,
+    K = ``blocked_legs + clutter``.
+
+    ## Arguments
+    As v1; ``scenario`` "random" (the default) is the rung's scene, or a :class:`CaPaManScenario` of capsule
+    posts that :func:`paragym.tasks.capaman.validate_ladder_scenario` accepts.
+
+    ## Action Space, Rewards, Starting State, Episode End
+    As v1.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[0]
+
+
+CaPaManCollisionFreeEasyEnv.__doc__ = CaPaManCollisionFreeEasyEnv.__doc__.format(knobs=knob_table("    "))
+
+
+class CaPaManCollisionFreeMediumEnv(CaPaManCollisionFreeEasyEnv):
+    """``paragym/CaPaManCollisionFree-Medium-v0``: rung 1 of the CaPaMan's difficulty ladder: posts on two of
+    the tour's three legs, two more of clutter, wider and closer together.
+
+    ## Description, Collision, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of the easy rung (``paragym/CaPaManCollisionFree-Easy-v0``), with rung 1's knobs.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[1]
+
+
+class CaPaManCollisionFreeHardEnv(CaPaManCollisionFreeEasyEnv):
+    """``paragym/CaPaManCollisionFree-Hard-v0``: rung 2 of the CaPaMan's difficulty ladder: a post on every leg
+    of the tour, one more of clutter, the narrowest passages.
+
+    ## Description, Collision, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of the easy rung (``paragym/CaPaManCollisionFree-Easy-v0``), with rung 2's knobs.
+
+    ## Version History
+    * v0 (paragym 0.10): the rung above.
+    """
+
+    rules = LADDER_RULES[2]
+
+
+class CaPaManCollisionFreeEasyVectorEnv(CaPaManCollisionFreeVectorEnv):
+    """``num_envs`` copies of :class:`CaPaManCollisionFreeEasyEnv` stepped together with the capsule model."""
+
+    rules = LADDER_RULES[0]
+
+
+class CaPaManCollisionFreeMediumVectorEnv(CaPaManCollisionFreeVectorEnv):
+    """``num_envs`` copies of :class:`CaPaManCollisionFreeMediumEnv` stepped together with the capsule model."""
+
+    rules = LADDER_RULES[1]
+
+
+class CaPaManCollisionFreeHardVectorEnv(CaPaManCollisionFreeVectorEnv):
+    """``num_envs`` copies of :class:`CaPaManCollisionFreeHardEnv` stepped together with the capsule model."""
+
+    rules = LADDER_RULES[2]

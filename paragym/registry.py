@@ -130,6 +130,8 @@ ROWS: tuple[EnvRow, ...] = (
            "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
+    *_ladder("CaPaManCollisionFree", "paragym.envs.capaman", 400, "capaman",
+             "CaPaMan ladder: v1's tour among capsule posts standing on the straight lines between the T.P.s"),
     *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
              "2PRR ladder: v1's task on generated laps, asking a mean kappa the least-norm motion misses"),
     *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",

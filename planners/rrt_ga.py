@@ -45,7 +45,7 @@ from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
 from paragym.planners.rrt_ga_space import LEG_INTERVALS, Forest, JointSpaceModel, RrtGaSettings, fitness
 from paragym.sim.capaman_scene import CaPaManScene
-from paragym.tasks.capaman import CaPaManScenario, validate_scenario
+from paragym.tasks.capaman import LADDER_MAX_OBSTACLES, MAX_OBSTACLES, CaPaManScenario, validate_scenario
 from paragym.trajectories import JointPath, JointTrajectory
 from paragym.units import DEG
 
@@ -112,7 +112,7 @@ class RrtGaPlanner:
         """Validate the scenario (PyBullet: ``ValueError`` if a task
         configuration collides) and build its :class:`JointSpaceModel`
         (:class:`PlanningError` if a task point collides in the grid model)."""
-        validate_scenario(scenario, self.scene)
+        validate_scenario(scenario, self.scene, max(MAX_OBSTACLES, LADDER_MAX_OBSTACLES))  # a rung's too
         model = JointSpaceModel(scenario, self.settings, self.geometry)
         bad = np.flatnonzero(~model.configs(scenario.alpha))
         if len(bad):

@@ -9,6 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from paragym import registry
 from paragym.baselines.tasks import (
     Ablation,
     AblationRow,
@@ -25,7 +26,9 @@ from paragym.rollout import Episode
 from paragym.sim.capaman_dynamic import CaPaManDynamics
 from paragym.units import DEG
 
-V1 = ("paragym/CaPaManCollisionFree-v1",)
+#: the rungs of the CaPaMan's difficulty ladder (:func:`paragym.registry.ladder_of`): v1's rules on their own scenes
+LADDER = tuple(r.id for r in registry.ladder_of("capaman"))
+V1 = ("paragym/CaPaManCollisionFree-v1", *LADDER)
 
 
 def metrics(ep: Episode) -> dict[str, float]:

@@ -16,27 +16,37 @@ from the inverse kinematics). The tour is T.C.1 -> T.C.2 -> T.C.3 -> T.C.1.
   connected free component of the joint matrix Theta (paper 000's collision
   map on a joint grid, colliding cells grown by one), so a collision-free
   tour exists at that resolution (the tests follow one with a planner).
+* ``ladder_scenarios(rngs, rung)``: a rung of the difficulty ladder
+  (:data:`LADDER`): capsule posts standing on the fixed plate, some of them on
+  the straight joint-space lines between the T.P.s, so that a rung's tour
+  needs detours; drawn by one compiled kernel (:func:`_ladder_kernel`) and
+  judged by the exact capsule model of :mod:`paragym.sim.capaman_posts`.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
 import numpy as np
+from numba import njit
 from scipy import ndimage
 
 from paragym.mechanisms import capaman
 from paragym.sim import capaman_grid
+from paragym.sim.capaman_posts import forward_table, k_post_clearance, part_capsules, plate_floor, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
-from paragym.sim.obstacles import Box, Cylinder, Obstacle
+from paragym.sim.obstacles import Box, Capsule, Cylinder, Obstacle
 from paragym.tasks import base
 from paragym.units import DEG
 
-__all__ = ["CaPaManScenario", "draw_scenarios", "paper_scenario", "random_scenario", "resolve_scenario",
-           "validate_scenario", "MAX_OBSTACLES", "SCENARIOS", "TOUR"]
+__all__ = ["CaPaManRung", "CaPaManScenario", "draw_scenarios", "knob_table", "ladder_scenarios", "paper_scenario",
+           "posts_of", "random_scenario", "resolve_scenario", "solvable", "validate_ladder_scenario",
+           "validate_scenario", "LADDER", "LADDER_MAX_OBSTACLES", "WITNESSES",
+           "MAX_OBSTACLES", "SCENARIOS", "TOUR"]
 
 SCENARIOS = ("paper", "random")
 
@@ -81,7 +91,7 @@ class CaPaManScenario:
 
 
 def _tuples(a: np.ndarray) -> tuple[tuple[float, float, float], ...]:
-    return tuple(tuple(float(v) for v in row) for row in np.asarray(a))
+    return tuple(tuple(row) for row in np.asarray(a, float).tolist())
 
 
 @lru_cache(maxsize=8)
@@ -98,13 +108,13 @@ def paper_scenario(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY)
     return CaPaManScenario.from_tool_tips(tips, [obstacle], name="paper", geometry=geometry)
 
 
-def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene) -> None:
-    """Raise ``ValueError`` if the scenario is malformed, a task point is out
+def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstacles: int = MAX_OBSTACLES) -> None:
+    """Raise ``ValueError`` if the scenario is malformed (more than ``max_obstacles``), a task point is out
     of range, or the manipulator collides at a task configuration
     (PyBullet's exact check). Leaves the scene's obstacles set."""
     base.resolve_scenario(scenario, (), CaPaManScenario)
-    if not 1 <= len(scenario.obstacles) <= MAX_OBSTACLES:
-        raise ValueError(f"a scenario has 1 to {MAX_OBSTACLES} obstacles; got {len(scenario.obstacles)}")
+    if not 1 <= len(scenario.obstacles) <= max_obstacles:
+        raise ValueError(f"a scenario has 1 to {max_obstacles} obstacles; got {len(scenario.obstacles)}")
     alpha = capaman.check_joint_angles(scenario.alpha, scene.geometry, name="scenario.task_points")
     if alpha.shape != (3, 3):
         raise ValueError(f"scenario.task_points must be three configurations; got {alpha.shape}")
@@ -175,6 +185,276 @@ def random_scenario(rng: np.random.Generator, scene: CaPaManScene,
                 tips = capaman.tool_tip(capaman.forward(alpha, g, validate=False), g)
                 return CaPaManScenario("random", tuple(obstacles), _tuples(alpha), _tuples(tips))
     raise RuntimeError(f"no feasible random scenario in {max_tries} tries")
+
+
+# --- the difficulty ladder ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CaPaManRung:
+    """The knobs of one rung of the CaPaMan's difficulty ladder (:func:`ladder_scenarios`).
+
+    Attributes:
+        blocked_legs: of the tour's three legs, how many have a post standing on their straight joint-space line
+            (where the tool is midway along it), so that going straight collides there.
+        clutter: further posts anywhere within :data:`CLUTTER_RADIUS` of the plate's centre.
+        radius: the posts' radius range (m).
+        spread: the least joint distance (rad) between two T.P.s.
+        gap: the least distance (m) between two posts' surfaces that do not overlap: the narrowest passage (the
+            tool is 10 mm thick).
+    """
+
+    blocked_legs: int
+    clutter: int
+    radius: tuple[float, float]
+    spread: float
+    gap: float
+
+    @property
+    def max_obstacles(self) -> int:
+        """The posts of the rung's every scenario (its observation's obstacle slots)."""
+        return self.blocked_legs + self.clutter
+
+    @property
+    def spread_deg(self) -> float:
+        """``spread`` in degrees (the rung pages show it)."""
+        return round(math.degrees(self.spread), 6)
+
+
+#: the CaPaMan's difficulty ladder, easiest first: posts on one, two and all three legs' straight lines, with
+#: one, two and one posts of clutter, wider and closer together up the ladder (a second post of clutter on the
+#: hard rung made 7.5 % of its scenes unsolvable and cost 1.6 ms a draw)
+LADDER = (CaPaManRung(1, 1, (0.005, 0.008), 40 * DEG, 0.025), CaPaManRung(2, 2, (0.010, 0.014), 40 * DEG, 0.02),
+          CaPaManRung(3, 1, (0.010, 0.014), 50 * DEG, 0.016))
+#: the most obstacles any scenario of the ladder has
+LADDER_MAX_OBSTACLES = max(r.max_obstacles for r in LADDER)
+#: the clutter posts' centres lie within this distance (m) of the fixed plate's centre: the tool tip's reach
+CLUTTER_RADIUS = 0.065
+#: a post's top (m) is drawn from this range; its upper end keeps it the clearance cap below the plate
+#: (:func:`paragym.sim.capaman_posts.plate_floor`), so the plate never nears it
+POST_TOP = (0.075, 0.09)
+#: the least clearance (m) of each T.P. in the capsule model: more than the 8 mm by which paper 000's 5 mm grid
+#: may grow an obstacle, so that the planners on the grid see every T.P. free (at 5 mm, 1 of 50 tours failed so)
+LADDER_CLEARANCE = 0.009
+#: the T.P.s are drawn this far (rad) inside the joint range, so that a detour can pass a post on either side
+LADDER_EDGE = 5 * DEG
+#: how often :func:`_ladder_kernel` tries to place one post; the uniforms one attempt may read (the T.P.s, the
+#: legs' order, four per try of the most posts a rung has); attempts per block of them
+_TRIES = 8
+_ATTEMPT, _BLOCK = 12 + 4 * _TRIES * LADDER_MAX_OBSTACLES, 4
+
+
+def knob_table(indent: str = "") -> str:
+    """The knobs of every rung of :data:`LADDER` as a reStructuredText table (the rung pages show it)."""
+    return base.knob_table(LADDER, {"blocked_legs": "legs with a post on their straight line",
+                                    "clutter": "further posts", "radius": "post radius (m)",
+                                    "spread_deg": "T.P.s apart (deg)", "gap": "posts apart (m)"}, indent)
+
+
+@njit(cache=True, error_model="numpy")
+def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min, alpha_max,
+                   min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp, tips,
+                   posts):
+    """The first attempt (a row of ``u``, uniforms in [0, 1)) that makes a scenario of the rung; writes its T.P.s
+    ``tp`` (3, 3) rad, their tool tips ``tips`` (3, 3) m and its posts ``posts`` (K, 5) and returns its index,
+    or -1. An attempt draws three T.P.s inside the joint range less ``edge``, at least ``spread`` apart; orders
+    the legs at random and stands a post on the first ``blocked``: at the tool tip of a configuration 40-60 %
+    along the leg's straight line, moved by at most a third of its radius; then ``clutter`` posts anywhere
+    within :data:`CLUTTER_RADIUS`. A post is tried up to :data:`_TRIES` times until it is ``gap`` from the
+    posts before it or overlaps them (one obstacle then, with no slit), leaves every T.P.
+    ``min_clearance`` and, on a blocked leg, collides there; the attempt fails when one is not placed."""
+    legs = ((0, 1), (1, 2), (2, 0))
+    tip = np.empty(3)
+    every = np.ones(radius.shape[0], np.bool_)  # every part placed
+    n = blocked + clutter
+    for attempt in range(u.shape[0]):
+        v = u[attempt]
+        lo, span = alpha_min + edge, alpha_max - alpha_min - 2 * edge
+        for i in range(3):
+            for c in range(3):
+                tp[i, c] = lo + span * v[3 * i + c]
+        close = False
+        for i, j in legs:
+            d = 0.0
+            for c in range(3):
+                d += (tp[i, c] - tp[j, c]) ** 2
+            close = close or math.sqrt(d) < spread
+        if close:
+            continue
+        poses = (capaman.k_forward(tp[0, 0], tp[0, 1], tp[0, 2], consts),
+                 capaman.k_forward(tp[1, 0], tp[1, 1], tp[1, 2], consts),
+                 capaman.k_forward(tp[2, 0], tp[2, 1], tp[2, 2], consts))
+        order = np.argsort(v[9:12])  # the legs in a random order
+        mids = np.empty((3, 3))
+        ok = True
+        for b in range(n):  # each post tried up to _TRIES times where it keeps the gap and the T.P.s' clearance
+            placed = False
+            for k in range(_TRIES):
+                w = v[12 + 4 * (_TRIES * b + k):]
+                r = r_low + (r_high - r_low) * w[0]
+                top = top_low + (top_high - top_low) * w[1]
+                if b < blocked:
+                    i, j = legs[order[b]]
+                    t = 0.4 + 0.2 * w[2]
+                    for c in range(3):
+                        mids[b, c] = tp[i, c] + t * (tp[j, c] - tp[i, c])
+                    f = capaman.k_forward(mids[b, 0], mids[b, 1], mids[b, 2], consts)
+                    turn, shift = 2 * math.pi * w[3], r / 3 * w[2]
+                    x, y = f[8] + shift * math.cos(turn), f[9] + shift * math.sin(turn)
+                else:
+                    rho, turn = CLUTTER_RADIUS * math.sqrt(w[2]), 2 * math.pi * w[3]
+                    x, y = rho * math.cos(turn), rho * math.sin(turn)
+                posts[b, 0], posts[b, 1], posts[b, 2], posts[b, 3], posts[b, 4] = x, y, 0.0, top - r, r
+                placed = True
+                for e in range(b):  # apart by the gap at least, or overlapping (one obstacle, no slit)
+                    apart = math.hypot(x - posts[e, 0], y - posts[e, 1]) - r - posts[e, 4]
+                    placed = placed and (apart >= gap or apart <= 0.0)
+                for i in range(3):
+                    if placed:
+                        d, _ = k_post_clearance(tp[i, 0], tp[i, 1], tp[i, 2], poses[i], posts[b:b + 1], 1, every,
+                                                c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tip)
+                        placed = d >= min_clearance
+                if placed and b < blocked:
+                    d, _ = k_post_clearance(mids[b, 0], mids[b, 1], mids[b, 2], f, posts[b:b + 1], 1, every, c0,
+                                            c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tip)
+                    placed = d < 0.0
+                if placed:
+                    break
+            if not placed:
+                ok = False
+                break
+        if ok:  # the tool tips at the T.P.s
+            for i in range(3):
+                tips[i, 0], tips[i, 1], tips[i, 2] = poses[i][8], poses[i][9], poses[i][10]
+        if ok:
+            return attempt
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
+def _ladder_batch(u, pending, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
+                  alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp,
+                  tips, posts):
+    """:func:`_ladder_kernel` for each generator r still ``pending`` on its block ``u[r]``: one call for a
+    reset's robots. A scenario made clears ``pending[r]``."""
+    for r in range(u.shape[0]):
+        if pending[r]:
+            pending[r] = _ladder_kernel(u[r], blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge,
+                                        alpha_min, alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank,
+                                        tool_half, radius, half, cap, tp[r], tips[r], posts[r]) < 0
+
+
+@lru_cache(maxsize=16)
+def _ladder_args(rung: CaPaManRung, geometry: capaman.CaPaManGeometry) -> tuple[Any, ...]:
+    """The knobs and constants :func:`_ladder_batch` takes after ``pending``, made once per rung and geometry."""
+    g = geometry
+    top_high = min(POST_TOP[1], plate_floor(g) - 0.05)
+    return (rung.blocked_legs, rung.clutter, *rung.radius, rung.spread, rung.gap, POST_TOP[0], top_high, LADDER_EDGE,
+            g.alpha_min, g.alpha_max, LADDER_CLEARANCE, capaman.kernel_consts(g), *capaman.part_table(g),
+            *part_capsules(g)[:2], 0.05)
+
+
+def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
+                     geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                     max_blocks: int = 10_000) -> list[CaPaManScenario]:
+    """One scenario of a rung per generator (named "random" on the rung's env id): each generator gives blocks
+    of :data:`_BLOCK` attempts of uniforms until :func:`_ladder_kernel` makes one of them a scenario (the
+    stream is numpy's, so the same on every machine; one compiled call per round for every generator still
+    drawing). The posts are :class:`~paragym.sim.obstacles.Capsule` s standing on the fixed plate (their
+    segment from z = 0). That a collision-free tour exists is checked by :func:`solvable` over 1,000 seeds per
+    rung in the tests."""
+    n = len(rngs)
+    args = _ladder_args(rung, geometry)
+    tp, tips, posts = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, rung.max_obstacles, 5))
+    pending = np.ones(n, np.bool_)
+    u = np.empty((n, _BLOCK, _ATTEMPT))
+    for _ in range(max_blocks):
+        for r in np.flatnonzero(pending):
+            u[r] = rngs[r].random((_BLOCK, _ATTEMPT))
+        _ladder_batch(u, pending, *args, tp, tips, posts)
+        if not pending.any():
+            break
+    else:
+        raise RuntimeError(f"no scenario of the rung in {max_blocks * _BLOCK} attempts")
+    out = []
+    for r in range(n):
+        obstacles = tuple(Capsule((float(x), float(y), float(high) / 2), float(radius), float(high))
+                          for x, y, _, high, radius in posts[r].tolist())
+        out.append(CaPaManScenario("random", obstacles, _tuples(tp[r]), _tuples(tips[r])))
+    return out
+
+
+def validate_ladder_scenario(scenario: CaPaManScenario, scene: CaPaManScene, rung: int) -> None:
+    """Raise ``ValueError`` unless a custom scenario can run on rung ``rung`` of :data:`LADDER`: at most the
+    rung's posts, every obstacle a :class:`~paragym.sim.obstacles.Capsule` whose top is the clearance cap below
+    the plate's floor (:func:`~paragym.sim.capaman_posts.plate_floor`), and every T.C. free in PyBullet and in
+    the capsule model."""
+    base.resolve_scenario(scenario, (), CaPaManScenario)
+    posts = posts_of(scenario.obstacles)
+    validate_scenario(scenario, scene, LADDER[rung].max_obstacles)
+    highest = plate_floor(scene.geometry) - 0.05
+    for k, o in enumerate(scenario.obstacles):
+        if o.top > highest:
+            raise ValueError(f"obstacle {k}'s top is at {o.top * 1000:.1f} mm: a rung's posts end below "
+                             f"{highest * 1000:.1f} mm, the clearance cap under the plate's lowest reach")
+    clearance = post_clearance(scenario.alpha, posts[None], np.array([len(posts)]), np.zeros(3, np.int64),
+                               scene.geometry)[0]
+    for i, d in enumerate(clearance):
+        if d <= 0.0:
+            raise ValueError(f"scenario T.C.{i + 1} collides in the capsule model: {-d * 1000:.1f} mm inside a post")
+
+
+def posts_of(obstacles: Sequence[Obstacle]) -> np.ndarray:
+    """Capsule obstacles as the posts (K, 5) of :mod:`paragym.sim.capaman_posts` (``ValueError`` on another
+    kind)."""
+    out = np.empty((len(obstacles), 5))
+    for k, o in enumerate(obstacles):
+        if not isinstance(o, Capsule):
+            raise ValueError(f"the capsule model takes Capsule obstacles; obstacle {k} is a {type(o).__name__}")
+        out[k] = o.center[0], o.center[1], o.center[2] - o.height / 2, o.center[2] + o.height / 2, o.radius
+    return out
+
+
+@lru_cache(maxsize=2)
+def _joint_grid(geometry: capaman.CaPaManGeometry, points_per_axis: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The axis (rad), the nodes (M, 3) and their poses (:func:`~paragym.sim.capaman_posts.forward_table`) of a
+    ``points_per_axis``^3 grid of the joint range."""
+    axis = np.linspace(geometry.alpha_min, geometry.alpha_max, points_per_axis)
+    grid = np.ascontiguousarray(np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3))
+    return axis, grid, forward_table(grid, geometry)
+
+
+#: the witnesses :func:`solvable` tries in turn: (grid points per axis, margin in m); the coarse one settles
+#: almost every scene, the fine one the few whose passages are narrower than its margin and cells allow
+WITNESSES = ((46, 0.001), (61, 0.0))
+
+
+def solvable(scenario: CaPaManScenario, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+             witnesses: tuple[tuple[int, float], ...] = WITNESSES) -> bool:
+    """Whether a collision-free tour of a capsule scenario exists at the resolution of a grid of the joint range,
+    by the first of ``witnesses`` (points per axis, margin in m) that finds one: the nodes whose clearance in the
+    capsule model is under the margin, grown by one node, are blocked, and the free node nearest each T.P. must
+    lie in one connected (26-neighbour) component. A witness, not a proof: a path along free nodes passes at
+    least the margin and a cell (2 deg at 46 points, 1.5 deg at 61) from every blocked node."""
+    return any(_witness(scenario, geometry, n, margin) for n, margin in witnesses)
+
+
+def _witness(scenario: CaPaManScenario, geometry: capaman.CaPaManGeometry, points_per_axis: int,
+             margin: float) -> bool:
+    """One witness of :func:`solvable`."""
+    axis, grid, poses = _joint_grid(geometry, points_per_axis)
+    posts = posts_of(scenario.obstacles)[None]
+    clearance = post_clearance(grid, posts, np.array([len(scenario.obstacles)]), np.zeros(len(grid), np.int64),
+                               geometry, poses=poses)[0].reshape((points_per_axis,) * 3)
+    blocked = ndimage.binary_dilation(clearance < margin, structure=np.ones((3, 3, 3), bool))
+    labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3)))
+    free = np.argwhere(labels > 0)
+    if not len(free):
+        return False
+    found = set()
+    for a in scenario.alpha:
+        node = free[np.argmin(np.linalg.norm(axis[free] - a, axis=1))]
+        found.add(int(labels[tuple(node)]))
+    return len(found) == 1
 
 
 def resolve_scenario(choice: Any) -> str | CaPaManScenario:

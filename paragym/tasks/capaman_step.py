@@ -64,11 +64,11 @@ from paragym.tasks.base import (
     refuse_unknown,
     renamed,
 )
-from paragym.tasks.capaman import MAX_OBSTACLES, TOUR, CaPaManScenario
-from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, World
+from paragym.tasks.capaman import LADDER, MAX_OBSTACLES, TOUR, CaPaManScenario
+from paragym.tasks.capaman_worlds import DynamicWorld, NativeWorld, SceneWorld, World
 from paragym.units import DEG
 
-__all__ = ["FAILURES", "LOOKAHEAD", "REWARD_TERMS", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP",
+__all__ = ["FAILURES", "LADDER_RULES", "LOOKAHEAD", "REWARD_TERMS", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP",
            "CaPaManParams", "CaPaManRules", "CaPaManState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (0: it has not)
@@ -122,6 +122,9 @@ class CaPaManRules:
         goal_relative: v1's observation (goal-relative, with the clearance's look-ahead, :data:`OBS_SIZE_V1`)
             and ``time_penalty`` an argument; else v0's observation, and no time penalty.
         reach_tolerance, collision_penalty, time_penalty: the defaults of those arguments.
+        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.capaman.LADDER`): its scenarios
+            ("random"), its posts' slots in the observation and the capsule model's collision test
+            (``collision="posts"``); None for the released versions.
     """
 
     version: int
@@ -129,11 +132,21 @@ class CaPaManRules:
     reach_tolerance: float
     collision_penalty: float
     time_penalty: float
+    rung: int | None = None
+
+    @property
+    def max_obstacles(self) -> int:
+        """The obstacles' slots of the observation."""
+        return MAX_OBSTACLES if self.rung is None else LADDER[self.rung].max_obstacles
 
 
 #: the rules of CaPaManCollisionFree-v0 and -v1
 RULES = {0: CaPaManRules(0, goal_relative=False, reach_tolerance=1 * DEG, collision_penalty=5.0, time_penalty=0.0),
          1: CaPaManRules(1, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0, time_penalty=0.01)}
+#: the rules of the ladder's rungs, CaPaManCollisionFree-Easy, -Medium and -Hard (v0 each): v1's observation,
+#: reward and reach tolerance, on the rung's scenarios, with the capsule model's collision test
+LADDER_RULES = {k: CaPaManRules(0, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0,
+                                time_penalty=0.01, rung=k) for k in range(len(LADDER))}
 
 
 @dataclass(frozen=True)
@@ -165,7 +178,7 @@ class CaPaManParams:
                     beta: float = 0.1, w_length: float = 1.0, w_progress: float = 2.0, reach_bonus: float = 1.0,
                     collision_penalty: float | None = None, clearance_cap: float = 0.05,
                     control_period: float = 0.02, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                    collision: str = "pybullet", time_penalty: float | None = None, dynamics: Any = None,
+                    collision: str | None = None, time_penalty: float | None = None, dynamics: Any = None,
                     **unknown: Any) -> CaPaManParams:
         """The env's keyword arguments, checked: the one place they are. Whether a custom scenario can run
         needs PyBullet: it is checked at reset."""
@@ -180,9 +193,14 @@ class CaPaManParams:
             raise ValueError("time_penalty is a v1 argument: use paragym/CaPaManCollisionFree-v1")
         time_penalty = check_number("time_penalty", time_penalty, strict=False)
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
-        check_choice("collision", collision, ("pybullet", "grid"))
-        if collision == "grid" and fidelity != "kinematic":
-            raise ValueError("collision='grid' needs fidelity='kinematic' (the dynamic scene is PyBullet's)")
+        if rules.rung is None:
+            collision = "pybullet" if collision is None else collision
+            check_choice("collision", collision, ("pybullet", "grid"))
+        else:  # a rung: the capsule model, or PyBullet's exact distance to the same posts
+            collision = ("posts" if fidelity == "kinematic" else "pybullet") if collision is None else collision
+            check_choice("collision", collision, ("posts", "pybullet"))
+        if collision in ("grid", "posts") and fidelity != "kinematic":
+            raise ValueError(f"collision={collision!r} needs fidelity='kinematic' (the dynamic scene is PyBullet's)")
         control_period = check_number("control_period", control_period, unit=" of seconds")
         scenarios_module.resolve_scenario(scenario)
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
@@ -196,8 +214,14 @@ class CaPaManParams:
                    dynamics, rules)
 
     @property
+    def max_obstacles(self) -> int:
+        """The obstacles' slots of the observation (:attr:`CaPaManRules.max_obstacles`)."""
+        return self.rules.max_obstacles
+
+    @property
     def obs_size(self) -> int:
-        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
+        """v0: :data:`OBS_SIZE`; v1: :data:`OBS_SIZE_V1`; a rung: v1's with its own number of post slots."""
+        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1 + (self.max_obstacles - MAX_OBSTACLES) * ENCODING_SIZE
 
     @property
     def substeps(self) -> int:
@@ -258,7 +282,7 @@ class CaPaManState(KernelArrays):
     def empty(cls, n: int, params: CaPaManParams) -> CaPaManState:
         """N robots, before their first reset."""
         z, obs_size = np.zeros, params.obs_size
-        return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, MAX_OBSTACLES * ENCODING_SIZE)), alpha=z((n, 3)),
+        return cls(tp=z((n, 3, 3)), tc=z((n, 3, 3)), code=z((n, params.max_obstacles * ENCODING_SIZE)), alpha=z((n, 3)),
                    command=z((n, 3)), tip=z((n, 3)), reached=z(n, np.int64), path_length=z(n), step_length=z(n),
                    progress=z(n), just_reached=z(n, bool), clearance=z(n), lookahead=z((n, 3)),
                    terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n),
@@ -282,10 +306,13 @@ def reset(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenario
         world.set_obstacles(i, scenario)
         if probe is not None and probe is not world:
             probe.set_obstacles(i, scenario)
-        state.tp[i] = scenario.alpha
-        state.tc[i] = np.array(scenario.task_configs) if scenario.task_configs else \
-            capaman.forward(scenario.alpha, g).tip
-        state.code[i] = 0.0
+    # the task points, configurations and obstacles' codes of every row in one array each (as many rows reset
+    # at once as a native env's episodes end together)
+    state.tp[rows] = np.array([s.task_points for s in scenarios], float).reshape(-1, 3, 3)
+    state.tc[rows] = [np.array(s.task_configs) if s.task_configs else capaman.forward(s.alpha, g).tip
+                      for s in scenarios]
+    state.code[rows] = 0.0
+    for i, scenario in zip(rows, scenarios, strict=True):
         for k, o in enumerate(scenario.obstacles):
             state.code[i, k * ENCODING_SIZE:(k + 1) * ENCODING_SIZE] = o.encode()
     state.alpha[rows] = state.tp[rows, 0]
@@ -355,7 +382,7 @@ def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: 
     probes = np.repeat(state.alpha[near][:, None], 3, axis=1)  # (M, 3, 3): crank k moved in probes[:, k]
     for k in range(3):
         probes[:, k, k] = np.minimum(probes[:, k, k] + LOOKAHEAD, g.alpha_max)
-    if isinstance(world, GridWorld):  # the grid answers every probe in one call, a robot's one after another
+    if isinstance(world, NativeWorld):  # N robots' worlds answer every probe in one call, a robot's one after another
         ahead = world.clearance(np.repeat(near, 3), probes.reshape(-1, 3)).reshape(-1, 3)
     else:
         ahead = np.stack([world.place(near, probes[:, k])[0] for k in range(3)], axis=1)

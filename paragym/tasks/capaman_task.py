@@ -16,6 +16,7 @@ from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.capaman import CaPaManScenario
 from paragym.tasks.capaman_step import (
     FAILURES,
+    LADDER_RULES,
     REWARD_TERMS,
     RULES,
     CaPaManParams,
@@ -24,9 +25,9 @@ from paragym.tasks.capaman_step import (
     reset,
     step,
 )
-from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, SceneWorld, _clusters
+from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, NativeWorld, PostWorld, SceneWorld, _clusters
 
-__all__ = ["RULES", "TASK", "CaPaManTask"]
+__all__ = ["LADDER_RULES", "RULES", "TASK", "CaPaManTask"]
 
 
 class CaPaManTask(TaskBase):
@@ -46,22 +47,38 @@ class CaPaManTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
+        if params.rules.rung is not None:
+            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
+                                                     params.geometry)[0]
         with _checker(params, world) as scene:
             return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
 
     def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
         with _checker(params, world) as scene:
-            scenarios_module.validate_scenario(scenario, scene)
+            if params.rules.rung is None:
+                scenarios_module.validate_scenario(scenario, scene)
+            else:
+                scenarios_module.validate_ladder_scenario(scenario, scene, params.rules.rung)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
                        world: Any) -> list[CaPaManScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
+        if params.rules.rung is None:
+            return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
+        if scenarios_module.resolve_scenario(choice) == "random":
+            return scenarios_module.ladder_scenarios(rngs, scenarios_module.LADDER[params.rules.rung],
+                                                     params.geometry)
+        if choice == "paper":
+            raise ValueError("a rung's scenarios are its own: scenario 'random' or a CaPaManScenario of capsule "
+                             "posts (the paper's case stands a cylinder, which the capsule model does not take)")
+        self.validate_scenario(choice, params, world)
+        return [choice for _ in rngs]
 
     def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
-        if kwargs.get("collision", "grid") != "grid" or kwargs.get("fidelity", "kinematic") != "kinematic":
-            raise ValueError("the native CaPaMan vector env checks collisions on the grid in kinematic fidelity: "
-                             "use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
-        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": "grid"})
+        native = "grid" if rules.rung is None else "posts"
+        if kwargs.get("collision", native) != native or kwargs.get("fidelity", "kinematic") != "kinematic":
+            raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r} in kinematic "
+                             "fidelity: use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
+        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": native})
 
     def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
@@ -72,6 +89,8 @@ class CaPaManTask(TaskBase):
         gui, g = render_mode == "human", params.geometry
         if params.collision == "grid":
             return GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
+        if params.collision == "posts":
+            return PostWorld(n, g, params.clearance_cap, params.max_obstacles, draws=render_mode is not None, gui=gui)
         if params.fidelity == "kinematic":
             return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
                                            draws=render_mode is not None))
@@ -81,7 +100,7 @@ class CaPaManTask(TaskBase):
     @staticmethod
     def _probe(params: CaPaManParams, world: Any) -> Any:
         """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
-        if params.version == 0 or isinstance(world, GridWorld):
+        if params.version == 0 or isinstance(world, NativeWorld):
             return None if params.version == 0 else world
         return world.probe()
 
@@ -110,13 +129,13 @@ class CaPaManTask(TaskBase):
 
     def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
-        if isinstance(world, GridWorld):  # the grid does not pose the scene: render does
+        if isinstance(world, NativeWorld):  # a native world does not pose the scene: render does
             scene = world.checker()
             scene.set_obstacles(state.scenarios[i].obstacles)
             scene.set_configuration(state.alpha[i])
         elif gui:  # PyBullet keeps the GUI's scene posed
             return None
-        return world.checker().render() if isinstance(world, GridWorld) else world.scene.render()
+        return world.checker().render() if isinstance(world, NativeWorld) else world.scene.render()
 
 
 @contextmanager

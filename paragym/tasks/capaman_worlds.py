@@ -2,6 +2,9 @@
 
 * :class:`GridWorld` (N robots): the closed-form kinematics and paper 000's
   occupancy grid Psi at the cluster points of eq 2 (numpy, all robots at once);
+* :class:`PostWorld` (N robots, the difficulty ladder): the parts as capsules
+  against capsule posts, the exact distance in closed form
+  (:mod:`paragym.sim.capaman_posts`);
 * :class:`SceneWorld` (one robot): PyBullet's exact signed distance in the
   kinematic scene;
 * :class:`DynamicWorld` (one robot): the closed chain under PyBullet's
@@ -24,14 +27,15 @@ from paragym.mechanisms.geometry import pose6
 from paragym.sim import capaman_grid
 from paragym.sim.capaman_clearance import DistanceGrids, grid_clearance
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+from paragym.sim.capaman_posts import parts_in_reach, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
 from paragym.tasks.base import BROKEN_GAP
-from paragym.tasks.capaman import CaPaManScenario
+from paragym.tasks.capaman import CaPaManScenario, posts_of
 
 #: the state and parameters the worlds read are the transition's (paragym.tasks.capaman_step), typed Any
 #: here: the transition imports the worlds, not the other way
-__all__ = ["DynamicWorld", "GridWorld", "SceneWorld", "World"]
+__all__ = ["DynamicWorld", "GridWorld", "NativeWorld", "PostWorld", "SceneWorld", "World"]
 
 
 class World(Protocol):
@@ -49,19 +53,17 @@ def _clusters(geometry: capaman.CaPaManGeometry) -> capaman_grid.ClusterPoints:
     return capaman_grid.cluster_points(geometry, spacing=0.01)
 
 
-class GridWorld:
-    """Paper 000's own test for N robots: the occupancy grid Psi of each
-    robot's obstacles as signed distances, read at the cluster points of eq 2
-    (10 mm apart) placed by the closed-form kinematics."""
+class NativeWorld:
+    """A world of N robots that answers many configurations in one call (:meth:`clearance`), with no
+    simulation of its own: its kinematic PyBullet scene, which generates and checks scenarios and draws, is
+    built when first asked for."""
 
     #: it holds no simulation: a copy builds its own checker scene when it needs one
     live = False
 
-    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
-                 gui: bool = False) -> None:
-        self.geometry, self.grids, self.clusters = geometry, DistanceGrids(n, cap=cap), _clusters(geometry)
-        self.part_names = [p.name for p in capaman.part_shapes(geometry)]
-        self.cap, self.draws, self.gui = cap, draws, gui
+    def __init__(self, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False, gui: bool = False
+                 ) -> None:
+        self.geometry, self.cap, self.draws, self.gui = geometry, cap, draws, gui
         #: the kinematic PyBullet scene that generates and checks scenarios and draws, built on first use
         self.scene: CaPaManScene | None = None
 
@@ -79,6 +81,22 @@ class GridWorld:
             self.scene.close()
             self.scene = None
 
+    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
+        raise NotImplementedError
+
+
+class GridWorld(NativeWorld):
+    """Paper 000's own test for N robots: the occupancy grid Psi of each
+    robot's obstacles as signed distances, read at the cluster points of eq 2
+    (10 mm apart) placed by the closed-form kinematics."""
+
+    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
+                 gui: bool = False) -> None:
+        super().__init__(geometry, cap, draws, gui)
+        self.grids, self.clusters = DistanceGrids(n, cap=cap), _clusters(geometry)
+        self.part_names = [p.name for p in capaman.part_shapes(geometry)]
+
     def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
         self.grids.set(int(i), scenario.obstacles)
 
@@ -88,8 +106,43 @@ class GridWorld:
         return clearance, pose.tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
 
     def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
-        """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
         return grid_clearance(alpha, self.grids, self.clusters, self.geometry, rows)[0]
+
+
+class PostWorld(NativeWorld):
+    """The difficulty ladder's test for N robots: every part but the plate as the capsule that holds it, the
+    obstacles as capsule posts, the distance between them exact and in closed form
+    (:func:`paragym.sim.capaman_posts.post_clearance`); up to ``max_obstacles`` posts per robot."""
+
+    def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, max_obstacles: int,
+                 draws: bool = False, gui: bool = False) -> None:
+        super().__init__(geometry, cap, draws, gui)
+        self.posts, self.counts = np.zeros((n, max_obstacles, 5)), np.zeros(n, np.int64)
+        self.reach = parts_in_reach(self.posts, self.counts, geometry, cap)
+        self._stale: list[int] = []  # robots whose posts changed since reach was computed
+        self.part_names = [p.name for p in capaman.part_shapes(geometry) if p.name != "plate"]
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        posts = posts_of(scenario.obstacles)
+        self.posts[i, :len(posts)], self.counts[i] = posts, len(posts)
+        self._stale.append(int(i))
+
+    def _fresh(self) -> None:
+        """The parts in reach of the robots whose posts changed since the last answer, in one call."""
+        if self._stale:
+            rows = np.array(self._stale)
+            self.reach[rows] = parts_in_reach(self.posts[rows], self.counts[rows], self.geometry, self.cap)
+            self._stale = []
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        self._fresh()
+        clearance, part, tip = post_clearance(alpha, self.posts, self.counts, rows, self.geometry, self.cap,
+                                              self.reach)
+        return clearance, tip, [self.part_names[p] if p >= 0 else None for p in part.tolist()]
+
+    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        self._fresh()
+        return post_clearance(alpha, self.posts, self.counts, rows, self.geometry, self.cap, self.reach)[0]
 
 
 class SceneWorld:
