@@ -224,8 +224,9 @@ class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
     range; a post on the straight joint-space line of ``blocked_legs`` of the tour's legs (where the tool is
     40-60 % along it) and ``clutter`` posts anywhere within 65 mm of the centre; every two posts at least
     ``gap`` apart or overlapping, every T.P. 9 mm clear (in the capsule model; so that the planners on paper
-    000's grid, which may grow an obstacle by 8 mm, see it free). The posts are vertical capsules (:class:`~paragym.sim.obstacles.
-    Capsule`) standing on the fixed plate, 75-90 mm tall, the clearance cap below the plate's lowest reach:
+    000's grid, which may grow an obstacle by 8 mm, see it free). The posts are vertical capsules
+    (:class:`~paragym.sim.obstacles.Capsule`) standing on the fixed plate, 75-90 mm tall, the clearance cap
+    below the plate's lowest reach:
 
 {knobs}
 
@@ -241,12 +242,24 @@ class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
     "pybullet": PyBullet's exact distance between the 17 parts and the same posts (the dynamic fidelity's).
 
     ## Observation Space
-    v1's, with as many obstacle slots as the rung has posts (kind 0.5: a capsule): ``Box(-1, 1, (17 + 8 K,))``,
-    K = ``blocked_legs + clutter``.
+    v1's, with a slot for each of the rung's K = ``blocked_legs + clutter`` posts: ``Box(-1, 1, (17 + 8 K,),
+    float32)``, (33,) on the easy rung and (49,) on the medium and hard ones:
+
+    ===============  ==========================================================
+    0-2              crank angles, normalised to [-1, 1] over 45-135 deg
+    3-5              current target T.P. minus the cranks (/ 45 deg)
+    6-8              the next target T.P. minus the cranks (/ 45 deg)
+    9-11             current target T.C. minus the tool tip (x 5 /m)
+    12 to 11 + 8 K   K posts x [present, kind (0.5: a capsule), centre minus tool tip (3), half sizes (3)]
+                     (x 5 /m)
+    12 + 8 K         clearance / ``clearance_cap`` (signed)
+    13-15 + 8 K      look-ahead: the clearance's change if crank k alone moved 3 deg further, / cap
+    16 + 8 K         progress: T.C.s reached / 3
+    ===============  ==========================================================
 
     ## Arguments
     As v1; ``scenario`` "random" (the default) is the rung's scene, or a :class:`CaPaManScenario` of capsule
-    posts that :func:`paragym.tasks.capaman.validate_ladder_scenario` accepts.
+    posts that :func:`paragym.tasks.capaman.validate_scenario` accepts on the rung.
 
     ## Action Space, Rewards, Starting State, Episode End
     As v1.

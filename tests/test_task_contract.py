@@ -146,14 +146,14 @@ def test_success_is_decided_by_one_function_of_the_transition():
 
 def _short_scenario(task: str):
     """A scenario that ends within a few zero actions."""
-    from paragym.sim.obstacles import Cylinder
+    from paragym.sim.obstacles import Capsule
     from paragym.tasks.capaman import CaPaManScenario
     from paragym.tasks.orthoglide import circle_task
     from paragym.tasks.tripod import TripodScenario
 
-    if task == "capaman":  # the three T.P.s the same: each step reaches the next one
+    if task == "capaman":  # the three T.P.s the same: each step reaches the next one (a post every id takes)
         point = (1.4, 1.4, 1.4)
-        return CaPaManScenario("same", (Cylinder((0.1, 0.1, 0.04), 0.005, 0.08),), (point, point, point))
+        return CaPaManScenario("same", (Capsule((0.1, 0.1, 0.04), 0.005, 0.07),), (point, point, point))
     if task == "orthoglide":
         return circle_task((0.1, 0.55), 0.4, 0.2, steps=4)
     if task == "tripod":

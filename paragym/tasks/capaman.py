@@ -44,9 +44,8 @@ from paragym.tasks import base
 from paragym.units import DEG
 
 __all__ = ["CaPaManRung", "CaPaManScenario", "draw_scenarios", "knob_table", "ladder_scenarios", "paper_scenario",
-           "posts_of", "random_scenario", "resolve_scenario", "solvable", "validate_ladder_scenario",
-           "validate_scenario", "LADDER", "LADDER_MAX_OBSTACLES", "WITNESSES",
-           "MAX_OBSTACLES", "SCENARIOS", "TOUR"]
+           "posts_of", "random_scenario", "resolve_scenario", "solvable", "validate_scenario", "LADDER",
+           "LADDER_MAX_OBSTACLES", "MAX_OBSTACLES", "SCENARIOS", "TOUR", "WITNESSES"]
 
 SCENARIOS = ("paper", "random")
 
@@ -108,11 +107,18 @@ def paper_scenario(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY)
     return CaPaManScenario.from_tool_tips(tips, [obstacle], name="paper", geometry=geometry)
 
 
-def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstacles: int = MAX_OBSTACLES) -> None:
+def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstacles: int = MAX_OBSTACLES,
+                      rung: int | None = None) -> None:
     """Raise ``ValueError`` if the scenario is malformed (more than ``max_obstacles``), a task point is out
     of range, or the manipulator collides at a task configuration
-    (PyBullet's exact check). Leaves the scene's obstacles set."""
+    (PyBullet's exact check). On rung ``rung`` of :data:`LADDER` (its own number of posts then), also unless
+    every obstacle is a :class:`~paragym.sim.obstacles.Capsule` whose top is the clearance cap below the
+    plate's floor (:func:`~paragym.sim.capaman_posts.plate_floor`) and every T.C. is free in the capsule model.
+    Leaves the scene's obstacles set."""
     base.resolve_scenario(scenario, (), CaPaManScenario)
+    if rung is not None:
+        posts = posts_of(scenario.obstacles)
+        max_obstacles = LADDER[rung].max_obstacles
     if not 1 <= len(scenario.obstacles) <= max_obstacles:
         raise ValueError(f"a scenario has 1 to {max_obstacles} obstacles; got {len(scenario.obstacles)}")
     alpha = capaman.check_joint_angles(scenario.alpha, scene.geometry, name="scenario.task_points")
@@ -124,6 +130,17 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstac
         d, part = scene.clearance()
         if d <= 0.0:
             raise ValueError(f"scenario T.C.{i + 1} collides: the {part} is {-d * 1000:.1f} mm inside an obstacle")
+    if rung is None:
+        return
+    highest = plate_floor(scene.geometry) - 0.05
+    for k, o in enumerate(scenario.obstacles):
+        if o.top > highest:
+            raise ValueError(f"obstacle {k}'s top is at {o.top * 1000:.1f} mm: a rung's posts end below "
+                             f"{highest * 1000:.1f} mm, the clearance cap under the plate's lowest reach")
+    clearance = post_clearance(alpha, posts[None], np.array([len(posts)]), np.zeros(3, np.int64), scene.geometry)[0]
+    for i, d in enumerate(clearance):
+        if d <= 0.0:
+            raise ValueError(f"scenario T.C.{i + 1} collides in the capsule model: {-d * 1000:.1f} mm inside a post")
 
 
 def _random_obstacles(rng: np.random.Generator) -> list[Obstacle]:
@@ -381,26 +398,6 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
                           for x, y, _, high, radius in posts[r].tolist())
         out.append(CaPaManScenario("random", obstacles, _tuples(tp[r]), _tuples(tips[r])))
     return out
-
-
-def validate_ladder_scenario(scenario: CaPaManScenario, scene: CaPaManScene, rung: int) -> None:
-    """Raise ``ValueError`` unless a custom scenario can run on rung ``rung`` of :data:`LADDER`: at most the
-    rung's posts, every obstacle a :class:`~paragym.sim.obstacles.Capsule` whose top is the clearance cap below
-    the plate's floor (:func:`~paragym.sim.capaman_posts.plate_floor`), and every T.C. free in PyBullet and in
-    the capsule model."""
-    base.resolve_scenario(scenario, (), CaPaManScenario)
-    posts = posts_of(scenario.obstacles)
-    validate_scenario(scenario, scene, LADDER[rung].max_obstacles)
-    highest = plate_floor(scene.geometry) - 0.05
-    for k, o in enumerate(scenario.obstacles):
-        if o.top > highest:
-            raise ValueError(f"obstacle {k}'s top is at {o.top * 1000:.1f} mm: a rung's posts end below "
-                             f"{highest * 1000:.1f} mm, the clearance cap under the plate's lowest reach")
-    clearance = post_clearance(scenario.alpha, posts[None], np.array([len(posts)]), np.zeros(3, np.int64),
-                               scene.geometry)[0]
-    for i, d in enumerate(clearance):
-        if d <= 0.0:
-            raise ValueError(f"scenario T.C.{i + 1} collides in the capsule model: {-d * 1000:.1f} mm inside a post")
 
 
 def posts_of(obstacles: Sequence[Obstacle]) -> np.ndarray:

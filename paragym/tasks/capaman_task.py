@@ -55,10 +55,7 @@ class CaPaManTask(TaskBase):
 
     def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
         with _checker(params, world) as scene:
-            if params.rules.rung is None:
-                scenarios_module.validate_scenario(scenario, scene)
-            else:
-                scenarios_module.validate_ladder_scenario(scenario, scene, params.rules.rung)
+            scenarios_module.validate_scenario(scenario, scene, rung=params.rules.rung)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
                        world: Any) -> list[CaPaManScenario]:
