@@ -29,8 +29,8 @@ from numba import njit, prange
 
 from paragym.mechanisms import capaman
 
-__all__ = ["PARALLEL_FROM", "POST_FIELDS", "forward_table", "k_post_clearance", "part_capsules", "parts_in_reach",
-           "plate_floor", "post_clearance", "segment_distance"]
+__all__ = ["PARALLEL_FROM", "POST_FIELDS", "forward_table", "k_post_clearance", "kernel_constants", "part_capsules",
+           "parts_in_reach", "plate_floor", "post_ceiling", "post_clearance", "segment_distance"]
 
 #: a post as the kernels take it: x, y, the segment's lower and upper z, the radius (m)
 POST_FIELDS = ("x", "y", "z_low", "z_high", "radius")
@@ -75,6 +75,12 @@ def plate_floor(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, po
     nz = pose.rotation[:, 2, 2]
     rim = pose.position[:, 2] - g.plate_thickness / 2 * nz - g.r_p * np.sqrt(np.maximum(1.0 - nz * nz, 0.0))
     return float(rim.min()) - 0.001
+
+
+def post_ceiling(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, cap: float = 0.05) -> float:
+    """The highest a post's top may reach (m) for the plate to be left out exactly: ``cap`` below
+    :func:`plate_floor`."""
+    return plate_floor(geometry) - cap
 
 
 def parts_in_reach(posts: np.ndarray, counts: np.ndarray,
@@ -244,9 +250,10 @@ _NO_POSES = np.empty((0, 12))
 
 
 @lru_cache(maxsize=8)
-def _constants(geometry: capaman.CaPaManGeometry) -> tuple[np.ndarray, ...]:
-    """What :func:`post_clearance`'s kernels take of the geometry, gathered once: :func:`capaman.kernel_consts`,
-    :func:`capaman.part_table` and :func:`part_capsules`' radii and half lengths."""
+def kernel_constants(geometry: capaman.CaPaManGeometry) -> tuple[np.ndarray, ...]:
+    """What :func:`k_post_clearance`'s callers pass of the geometry, in its order, gathered once:
+    :func:`capaman.kernel_consts`, :func:`capaman.part_table` and :func:`part_capsules`' radii and half
+    lengths."""
     return (capaman.kernel_consts(geometry), *capaman.part_table(geometry), *part_capsules(geometry)[:2])
 
 
@@ -268,6 +275,6 @@ def post_clearance(alpha: np.ndarray, posts: np.ndarray, counts: np.ndarray, row
     if reach is None:
         reach = parts_in_reach(posts, counts, geometry, cap)
     poses = _NO_POSES if poses is None else poses
-    kernel(al, poses, rows, posts, counts, reach, *_constants(geometry), float(cap), out, part, tip)
+    kernel(al, poses, rows, posts, counts, reach, *kernel_constants(geometry), float(cap), out, part, tip)
     return out, part, tip
 

@@ -37,15 +37,15 @@ from scipy import ndimage
 
 from paragym.mechanisms import capaman
 from paragym.sim import capaman_grid
-from paragym.sim.capaman_posts import forward_table, k_post_clearance, part_capsules, plate_floor, post_clearance
+from paragym.sim.capaman_posts import forward_table, k_post_clearance, kernel_constants, post_ceiling, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Box, Capsule, Cylinder, Obstacle
 from paragym.tasks import base
 from paragym.units import DEG
 
 __all__ = ["CaPaManRung", "CaPaManScenario", "draw_scenarios", "knob_table", "ladder_scenarios", "paper_scenario",
-           "posts_of", "random_scenario", "resolve_scenario", "solvable", "validate_scenario", "LADDER",
-           "LADDER_MAX_OBSTACLES", "MAX_OBSTACLES", "SCENARIOS", "TOUR", "WITNESSES"]
+           "posts_of", "random_scenario", "resolve_scenario", "scene_clearance", "solvable", "validate_scenario",
+           "LADDER", "LADDER_MAX_OBSTACLES", "MAX_OBSTACLES", "SCENARIOS", "TOUR", "WITNESSES"]
 
 SCENARIOS = ("paper", "random")
 
@@ -113,7 +113,7 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstac
     of range, or the manipulator collides at a task configuration
     (PyBullet's exact check). On rung ``rung`` of :data:`LADDER` (its own number of posts then), also unless
     every obstacle is a :class:`~paragym.sim.obstacles.Capsule` whose top is the clearance cap below the
-    plate's floor (:func:`~paragym.sim.capaman_posts.plate_floor`) and every T.C. is free in the capsule model.
+    plate's floor (:func:`~paragym.sim.capaman_posts.post_ceiling`) and every T.C. is free in the capsule model.
     Leaves the scene's obstacles set."""
     base.resolve_scenario(scenario, (), CaPaManScenario)
     if rung is not None:
@@ -132,12 +132,12 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstac
             raise ValueError(f"scenario T.C.{i + 1} collides: the {part} is {-d * 1000:.1f} mm inside an obstacle")
     if rung is None:
         return
-    highest = plate_floor(scene.geometry) - 0.05
+    highest = post_ceiling(scene.geometry)
     for k, o in enumerate(scenario.obstacles):
         if o.top > highest:
             raise ValueError(f"obstacle {k}'s top is at {o.top * 1000:.1f} mm: a rung's posts end below "
                              f"{highest * 1000:.1f} mm, the clearance cap under the plate's lowest reach")
-    clearance = post_clearance(alpha, posts[None], np.array([len(posts)]), np.zeros(3, np.int64), scene.geometry)[0]
+    clearance = scene_clearance(alpha, posts, scene.geometry)
     for i, d in enumerate(clearance):
         if d <= 0.0:
             raise ValueError(f"scenario T.C.{i + 1} collides in the capsule model: {-d * 1000:.1f} mm inside a post")
@@ -282,6 +282,7 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
     legs = ((0, 1), (1, 2), (2, 0))
     tip = np.empty(3)
     every = np.ones(radius.shape[0], np.bool_)  # every part placed
+    mids = np.empty((3, 3))  # the blocked legs' configurations where their posts stand
     n = blocked + clutter
     for attempt in range(u.shape[0]):
         v = u[attempt]
@@ -301,7 +302,6 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
                  capaman.k_forward(tp[1, 0], tp[1, 1], tp[1, 2], consts),
                  capaman.k_forward(tp[2, 0], tp[2, 1], tp[2, 2], consts))
         order = np.argsort(v[9:12])  # the legs in a random order
-        mids = np.empty((3, 3))
         ok = True
         for b in range(n):  # each post tried up to _TRIES times where it keeps the gap and the T.P.s' clearance
             placed = False
@@ -364,10 +364,9 @@ def _ladder_batch(u, pending, blocked, clutter, r_low, r_high, spread, gap, top_
 def _ladder_args(rung: CaPaManRung, geometry: capaman.CaPaManGeometry) -> tuple[Any, ...]:
     """The knobs and constants :func:`_ladder_batch` takes after ``pending``, made once per rung and geometry."""
     g = geometry
-    top_high = min(POST_TOP[1], plate_floor(g) - 0.05)
+    top_high = min(POST_TOP[1], post_ceiling(g))
     return (rung.blocked_legs, rung.clutter, *rung.radius, rung.spread, rung.gap, POST_TOP[0], top_high, LADDER_EDGE,
-            g.alpha_min, g.alpha_max, LADDER_CLEARANCE, capaman.kernel_consts(g), *capaman.part_table(g),
-            *part_capsules(g)[:2], 0.05)
+            g.alpha_min, g.alpha_max, LADDER_CLEARANCE, *kernel_constants(g), 0.05)
 
 
 def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
@@ -398,6 +397,15 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
                           for x, y, _, high, radius in posts[r].tolist())
         out.append(CaPaManScenario("random", obstacles, _tuples(tp[r]), _tuples(tips[r])))
     return out
+
+
+def scene_clearance(alpha: np.ndarray, posts: np.ndarray, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
+                    poses: np.ndarray | None = None) -> np.ndarray:
+    """The capsule model's clearance (m, capped at 5 cm) of configurations ``alpha`` (M, 3) among one scene's
+    ``posts`` (K, 5, :func:`posts_of`); ``poses`` as :func:`~paragym.sim.capaman_posts.post_clearance` takes
+    them."""
+    rows = np.zeros(len(np.atleast_2d(alpha)), np.int64)
+    return post_clearance(alpha, posts[None], np.array([len(posts)]), rows, geometry, poses=poses)[0]
 
 
 def posts_of(obstacles: Sequence[Obstacle]) -> np.ndarray:
@@ -439,9 +447,8 @@ def _witness(scenario: CaPaManScenario, geometry: capaman.CaPaManGeometry, point
              margin: float) -> bool:
     """One witness of :func:`solvable`."""
     axis, grid, poses = _joint_grid(geometry, points_per_axis)
-    posts = posts_of(scenario.obstacles)[None]
-    clearance = post_clearance(grid, posts, np.array([len(scenario.obstacles)]), np.zeros(len(grid), np.int64),
-                               geometry, poses=poses)[0].reshape((points_per_axis,) * 3)
+    clearance = scene_clearance(grid, posts_of(scenario.obstacles), geometry,
+                                poses).reshape((points_per_axis,) * 3)
     blocked = ndimage.binary_dilation(clearance < margin, structure=np.ones((3, 3, 3), bool))
     labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3)))
     free = np.argwhere(labels > 0)

@@ -47,9 +47,8 @@ class CaPaManTask(TaskBase):
         return scenarios_module.paper_scenario()
 
     def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
-        if params.rules.rung is not None:
-            return scenarios_module.ladder_scenarios([rng], scenarios_module.LADDER[params.rules.rung],
-                                                     params.geometry)[0]
+        if params.rules.rung is not None:  # the rung's generator, which needs no scene
+            return self.draw_scenarios("random", [rng], params, world)[0]
         with _checker(params, world) as scene:
             return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
 
