@@ -219,11 +219,42 @@ class Orthoglide2PRRKappaMediumEnv(Orthoglide2PRRKappaEasyEnv):
 
 
 class Orthoglide2PRRKappaHardEnv(Orthoglide2PRRKappaEasyEnv):
-    """``paragym/Orthoglide2PRRKappa-Hard-v0``: rung 2 of the Orthoglide's difficulty ladder: the easy rung's
-    paths under the tightest bound on the mean kappa.
+    """``paragym/Orthoglide2PRRKappa-Hard-v0``: rung 2 of the Orthoglide's difficulty ladder: faster laps under
+    the tightest bound on the mean kappa, with the policy driving the three joints itself.
 
-    ## Description, Episode End, Arguments, Action Space, Observation Space, Rewards, Starting State
-    As v0 of the easy rung (``paragym/Orthoglide2PRRKappa-Easy-v0``), with rung 2's knobs.
+    ## Why the joints
+    On the null-space rungs the env keeps the tool on the path and the policy chooses one number, the table's
+    rate along n: PPO from scratch matched the paper's gradient there within a minute on every rung (issue
+    40). Here the policy commands the joint rates, as paper 003's eq 5 does in full
+    (``rho_dot = J^+ t_dot + z n``): it must track the path within the tolerance and lower kappa at once. The
+    paper's gradient plays it through :class:`paragym.planners.nullspace_gradient.JointRates` (eq 5 over the
+    path step, the sliders by inverse kinematics at the next point, from the measured joints).
+
+    ## Description, Starting State
+    As v0 of the easy rung (``paragym/Orthoglide2PRRKappa-Easy-v0``), with rung 2's knobs (its page's table).
+
+    ## Action Space
+    ``Box(-1, 1, (3,))``: joint rates (table, slider 2, slider 3) times ``max_joint_rate`` (0.5 m/s), clipped
+    to the Box. The rung fixes ``action_mode="joint_velocity"``; another raises ``ValueError``.
+
+    ## Observation Space
+    ``Box(-10, 10, (13,), float32)``, each component clipped to +-10: v1's eleven, then
+
+    ==========  ==========================================================
+    11-12       the tool's offset from this step's path point (x, y, table frame, cm)
+    ==========  ==========================================================
+
+    ## Rewards
+    v1's in joint-velocity mode: ``-log(kappa) - w_track * tracking error / 0.01 m`` per step; a failure costs
+    ``limit_penalty`` plus 1 per path point left (the rung's ``left_penalty``), so that leaving the path early
+    never pays better than tracking it (a step that tracks costs log kappa, about 0.1, plus at most 0.5).
+
+    ## Episode End
+    As the easy rung: the path's end, or a failure, a tracking error beyond ``track_tolerance`` (5 mm) among
+    them; ``is_success`` asks for the mean kappa under ``info["kappa_bound"]``.
+
+    ## Arguments
+    As the easy rung, without ``action_mode`` (fixed).
 
     ## Version History
     * v0 (paragym 0.10): the rung above.

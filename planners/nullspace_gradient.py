@@ -29,8 +29,8 @@ from paragym.planners.base import PlanningError
 from paragym.tasks.base import renamed
 from paragym.tasks.orthoglide import OrthoglideScenario, paper_scenario
 
-__all__ = ["CaseResult", "GradientPolicy", "OrthoglideScenario", "case_fixed_table", "case_gradient", "case_least_norm",
-           "paper_scenario", "pointwise_optimum"]
+__all__ = ["CaseResult", "GradientPolicy", "JointRates", "OrthoglideScenario", "case_fixed_table", "case_gradient",
+           "case_least_norm", "paper_scenario", "pointwise_optimum"]
 
 
 @dataclass(frozen=True)
@@ -144,6 +144,39 @@ class GradientPolicy:
         rho = np.asarray(info["rho"])[None]
         slope = float(np.sum(og.null_direction(rho, self.geometry) * og.kappa_gradient(rho, self.geometry)))
         return np.array([np.clip(-self.gain * slope, -1.0, 1.0)], np.float32)
+
+class JointRates:
+    """A null-space policy (one action in [-1, 1], as :class:`GradientPolicy`) played in the env's
+    joint-velocity action mode: each step, the joints that the null-space step would reach (eq 5 over the path
+    step, then the sliders by inverse kinematics at the next path point: :func:`og.k_null_space_step`, the
+    transition's own), taken from where the joints are, with J and n at the tool point they give, as joint rates
+    in units of ``max_joint_rate``, clipped. The inverse kinematics closes the loop: an error left by a clipped
+    step is corrected the next. Paper 003's eq 5 in full, as the robot's joint controller runs it."""
+
+    def __init__(self, policy: Any, geometry: og.OrthoglideGeometry, max_null_rate: float, max_joint_rate: float
+                 ) -> None:
+        self.policy, self.geometry = policy, geometry
+        self.max_null_rate, self.max_joint_rate = max_null_rate, max_joint_rate
+        self.p = og.params(geometry)
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.task = info["scenario"]
+        self.policy.reset(obs, info)
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        null = float(np.asarray(self.policy.act(obs, info)).reshape(-1)[0])
+        task, k = self.task, int(info["step"])
+        if k >= len(task.t) - 1:
+            return np.zeros(3, np.float32)
+        rho = np.asarray(info["rho"], float)
+        tool = og.forward(rho[None], self.geometry)[0]
+        j, _, n = og.jacobian_at(rho[:1], tool[:1], tool[1:], self.geometry)
+        h = float(task.t[k + 1] - task.t[k])
+        target = og.k_null_space_step(rho[0], *j.reshape(6), n[0, 0], *task.velocities[k],
+                                      null * self.max_null_rate, h, *task.points[k + 1], self.p)
+        rates = (np.array(target) - rho) / (h * self.max_joint_rate)
+        return np.clip(np.nan_to_num(rates), -1.0, 1.0).astype(np.float32)
+
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning
 __getattr__ = renamed(__name__, {"Task": "OrthoglideScenario", "paper_task": "paper_scenario"})

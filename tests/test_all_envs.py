@@ -29,8 +29,9 @@ def test_same_seed_same_episode(env_id):
     np.testing.assert_array_equal(_episode(env_id, 5), _episode(env_id, 5))
     env = gym.make(env_id)
     env.reset(seed=1)
-    for _ in range(10):
-        env.step(env.action_space.sample())
+    for _ in range(10):  # random actions may end an episode early (a rung that tracks through the joints)
+        if any(env.step(env.action_space.sample())[2:4]):
+            break
     obs_after, _ = env.reset(seed=9)
     obs_fresh, _ = gym.make(env_id).reset(seed=9)
     np.testing.assert_array_equal(obs_after, obs_fresh)

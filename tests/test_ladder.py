@@ -192,21 +192,23 @@ def test_an_orthoglide_rung_bounds_the_mean_kappa_by_the_least_norm_motions(env_
     never meets it, the paper's gradient does."""
     from paragym.tasks.orthoglide import LADDER as ORTHOGLIDE_LADDER
 
-    share = ORTHOGLIDE_LADDER[registry.row(env_id).rung].share
+    rung = ORTHOGLIDE_LADDER[registry.row(env_id).rung]
     env = gym.make(env_id)
-    wins = {"zero": 0, "gradient-c": 0}
+    naive = "zero" if rung.actions == "null_space" else "least-norm"  # the least-norm motion in the rung's actions
+    wins = {naive: 0, "gradient-c": 0}
     for k in range(20):
         for name in wins:
             ep = run_episode(env, get_policy(env_id, name).factory(env, k), seed=4000 + k)
             last = ep.infos[-1]
             kappa = np.array([i["kappa"] for i in ep.infos])
             assert last["mean_kappa"] == pytest.approx(kappa.mean(), rel=1e-12)
-            if name == "zero":  # the bound is made from this very motion
-                assert last["kappa_bound"] == pytest.approx(1 + share * (kappa.mean() - 1), rel=1e-12)
+            if name == naive:  # the bound is made from this very motion (in joint rates, where it tracks)
+                exact = 1e-12 if rung.actions == "null_space" else 1e-9
+                assert last["kappa_bound"] == pytest.approx(1 + rung.share * (kappa.mean() - 1), rel=exact)
             assert bool(ep.success) == (last["step"] == len(ep.infos) - 1 and last["mean_kappa"] <= last["kappa_bound"]
                                         and last["failure"] is None)
             wins[name] += bool(ep.success)
-    assert wins["zero"] == 0 and wins["gradient-c"] >= 18, wins
+    assert wins[naive] == 0 and wins["gradient-c"] >= 18, wins
     env.close()
 
 
@@ -215,3 +217,67 @@ def test_the_released_orthoglide_ids_ask_for_no_kappa():
     _, info = env.reset(seed=0)
     assert "kappa_bound" not in info and np.isinf(env.unwrapped.state.bound).all()
     env.close()
+
+
+def test_the_orthoglide_hard_rung_has_the_policy_drive_the_joints():
+    """The hard rung fixes the joint-velocity actions (eq 5 in full) and shows the tool's offset from the path
+    point (cm) after v1's eleven entries; the other rungs keep the null-space action, and refuse the other."""
+    from paragym.mechanisms import orthoglide as og
+
+    hard, easy = ORTHOGLIDE_RUNGS[2], ORTHOGLIDE_RUNGS[0]
+    env = gym.make(hard)
+    assert env.action_space.shape == (3,) and env.observation_space.shape == (13,)
+    obs, info = env.reset(seed=11)
+    path = info["scenario"].points
+    policy = get_policy(hard, "least-norm").factory(env, 0)
+    policy.reset(obs, info)
+    for _ in range(5):  # the least-norm motion, nudged off the path by a little under 1 mm a step
+        obs, _, terminated, _, info = env.step(policy.act(obs, info) + np.array([0.15, -0.1, 0.05], np.float32))
+        assert not terminated and info["tracking_error"] > 1e-4
+        tool = og.forward(np.asarray(info["rho"])[None], env.unwrapped.geometry)[0]
+        np.testing.assert_allclose(obs[11:13], 100 * (tool - path[info["step"]]), rtol=1e-5, atol=1e-5)
+        assert np.hypot(*obs[11:13]) / 100 == pytest.approx(info["tracking_error"], rel=1e-5)
+    env.close()
+    with pytest.raises(ValueError, match="action_mode"):
+        gym.make(hard, action_mode="null_space")
+    with pytest.raises(ValueError, match="action_mode"):
+        gym.make(easy, action_mode="joint_velocity")
+    assert gym.make(easy).observation_space.shape == (11,)
+
+
+def test_joint_rates_play_a_null_space_policy_as_the_null_space_action_does():
+    """:class:`JointRates` runs the transition's own null-space step from the measured joints: on v1 in joint
+    rates, the paper's gradient's null-space actions drive the joints where v1's null-space mode puts them (to
+    rounding, 1e-8 m over 1,000 steps; replayed, since the gradient's own rule flips sign near kappa = 1 and
+    amplifies any rounding)."""
+    from paragym.baselines.tasks.orthoglide import in_env_actions
+    from paragym.planners.nullspace_gradient import GradientPolicy
+
+    class Replay:
+        def __init__(self, actions):
+            self.actions = iter(actions)
+
+        def reset(self, obs, info):
+            pass
+
+        def act(self, obs, info):
+            return next(self.actions)
+
+    env = gym.make("paragym/Orthoglide2PRRKappa-v1")
+    ep = run_episode(env, GradientPolicy(geometry=env.unwrapped.geometry), seed=21)
+    assert ep.success and len(np.unique(np.sign(ep.actions))) > 1
+    joints = gym.make("paragym/Orthoglide2PRRKappa-v1", action_mode="joint_velocity")
+    replayed = run_episode(joints, in_env_actions(joints, Replay(ep.actions)), seed=21)
+    assert replayed.success and np.abs(replayed.actions).max() < 1
+    np.testing.assert_allclose([i["rho"] for i in replayed.infos], [i["rho"] for i in ep.infos], atol=1e-8)
+    env.close()
+    joints.close()
+
+
+def test_the_orthoglide_hard_rungs_best_constant_is_what_its_search_finds():
+    from paragym.baselines.tasks.orthoglide import JOINT_BEST_CONSTANT
+
+    hard = ORTHOGLIDE_RUNGS[2]
+    action, wins, _ = best_constant(hard, levels=(-1.0, -0.5, 0.0, 0.5, 1.0))
+    assert action == JOINT_BEST_CONSTANT[hard] and wins == 0
+    assert set(policies_for(hard)) >= {"gradient-c", "least-norm", "zero", "random", "best-constant"}

@@ -21,13 +21,23 @@ from paragym.baselines.tasks import (
 )
 from paragym.rollout import Episode
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
+from paragym.tasks import orthoglide as scenarios_module
 
 #: the rungs of the Orthoglide's difficulty ladder (:func:`paragym.registry.ladder_of`)
 LADDER = tuple(r.id for r in registry.ladder_of("orthoglide"))
+#: the ids whose policy drives the joints (a rung's ``actions``), and the ids whose policy moves the table along
+#: n (every other id of the task, in its default action mode)
+JOINT_IDS = tuple(env_id for env_id, rung in zip(LADDER, scenarios_module.LADDER, strict=True)
+                  if rung.actions == "joint_velocity")
+NULL_SPACE_IDS = tuple(env_id for env_id in (*(r.id for r in registry.rows_of("orthoglide")), *LADDER)
+                       if env_id not in JOINT_IDS)
 #: the best constant null-space action of each rung: :func:`paragym.baselines.simple.best_constant` over
 #: {-1, -0.5, -0.25, 0, 0.25, 0.5, 1} on reset seeds 0-29 (no constant succeeds on any rung: the first, -1, has the
 #: highest return; a test searches again). On v0 and v1 the best constant is zero, a floor already.
-BEST_CONSTANT = {env_id: (-1.0,) for env_id in LADDER}
+BEST_CONSTANT = {env_id: (-1.0,) for env_id in LADDER if env_id not in JOINT_IDS}
+#: the best constant joint rates of each rung that drives the joints: the same search over {-1, -0.5, 0, 0.5, 1}
+#: for each joint (every constant leaves the path within a few steps; a test searches again)
+JOINT_BEST_CONSTANT = {env_id: (1.0, 1.0, 0.0) for env_id in JOINT_IDS}
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -41,11 +51,29 @@ def metrics(ep: Episode) -> dict[str, float]:
             "path_completed": float(ep.infos[-1]["step"] / last)}
 
 
+def in_env_actions(env: gym.Env, policy: Any) -> Any:
+    """A null-space policy as it plays ``env``: itself in the null-space action mode, in joint rates through
+    :class:`~paragym.planners.nullspace_gradient.JointRates` in the joint-velocity mode."""
+    from paragym.planners.nullspace_gradient import JointRates
+
+    u = env.unwrapped
+    if u.action_mode == "null_space":
+        return policy
+    return JointRates(policy, u.geometry, u.max_null_rate, u.max_joint_rate)
+
+
 def gradient(env: gym.Env, seed: int) -> Any:
     """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
     from paragym.planners.nullspace_gradient import GradientPolicy
 
-    return GradientPolicy(geometry=env.unwrapped.geometry)
+    return in_env_actions(env, GradientPolicy(geometry=env.unwrapped.geometry))
+
+
+def least_norm(env: gym.Env, seed: int) -> Any:
+    """Paper 003's case (b), the least-norm motion (the zero null-space rate), in the env's actions."""
+    from paragym.baselines.simple import ZeroPolicy
+
+    return in_env_actions(env, ZeroPolicy(gym.spaces.Box(-1.0, 1.0, (1,), np.float32)))
 
 
 def gradient_params() -> dict[str, Any]:
@@ -85,9 +113,7 @@ class FixedTablePolicy:
 
 def fixed_table(env: gym.Env, seed: int) -> FixedTablePolicy:
     """A fresh policy for one episode, seeded (a :class:`BuiltIn` factory)."""
-    if env.unwrapped.action_mode != "null_space":
-        raise ValueError("the fixed-table policy acts in the env's null_space action mode")
-    return FixedTablePolicy(env)
+    return in_env_actions(env, FixedTablePolicy(env))
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
@@ -145,9 +171,15 @@ BENCH = Bench(
         BuiltIn("fixed-table-a", fixed_table, "paper case",
                 "case (a): the table held still (at the env's start; see FixedTablePolicy)"),
         BuiltIn("zero", zero_factory, "floor",
-                "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)"),
+                "= least norm, case (b): rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0)", ids=NULL_SPACE_IDS),
+        BuiltIn("zero", zero_factory, "floor", "the joints stand still", ids=JOINT_IDS),
+        BuiltIn("least-norm", least_norm, "floor",
+                "case (b) in joint rates: rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0), the path tracked and "
+                "kappa left alone", ids=JOINT_IDS),
         *best_constant_floors(BEST_CONSTANT, "the table driven along n at {action} of max_null_rate, the best of "
                               "{{-1, -0.5, -0.25, 0, 0.25, 0.5, 1}} on reset seeds 0-29"),
+        *best_constant_floors(JOINT_BEST_CONSTANT, "joint rates {action} of max_joint_rate, the best of "
+                              "{{-1, -0.5, 0, 0.5, 1}} per joint on reset seeds 0-29"),
     ),
     dynamics=OrthoglideDynamics,  # the env's default
     demo="null-space gradient of kappa (paper 003, case c)",

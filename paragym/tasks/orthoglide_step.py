@@ -19,7 +19,8 @@ p_k, task rate t_k, J and n at k):
 * then at p_{k+1}: the working mode and the joint limits (else failure),
   J, kappa (eq 8) and n; kappa above :data:`KAPPA_LIMIT` is a failure too.
   Reward: -log kappa - w_track * tracking error / 0.01 m, or
-  -limit_penalty on failure; terminated on failure or at the path's end.
+  -limit_penalty on failure (on a rung with ``left_penalty``, also that much per path point left, so that
+  no failure pays better than finishing); terminated on failure or at the path's end.
 """
 
 from __future__ import annotations
@@ -45,11 +46,14 @@ from paragym.tasks.base import (
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "LADDER_RULES", "OBS_SIZE", "REWARD_TERMS", "RULES",
-           "OrthoglideParams", "OrthoglideRules", "OrthoglideState", "decide", "kappa_bounds", "least_norm_kappa",
-           "reset", "step"]
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "LADDER_RULES", "OBS_SIZE", "OBS_SIZE_JOINTS", "REWARD_TERMS",
+           "RULES", "OrthoglideParams", "OrthoglideRules", "OrthoglideState", "decide", "kappa_bounds",
+           "least_norm_kappa", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
+#: a rung whose policy drives the joints: :data:`OBS_SIZE`, then the tool's offset from the path point (x, y, in
+#: centimetres)
+OBS_SIZE_JOINTS = OBS_SIZE + 2
 KAPPA_LIMIT = 100.0  # kappa above this counts as a singularity
 #: why a robot failed (``OrthoglideState.reason``; 0: it did not): the names ``info["failure"]`` reports
 FAILURES = (None, "joint limit", "working mode", "singular", "tracking", "broken")
@@ -109,7 +113,7 @@ class OrthoglideParams:
     rules: OrthoglideRules = RULES[0]
 
     @classmethod
-    def from_kwargs(cls, rules: OrthoglideRules, scenario: Any = "random", action_mode: str = "null_space",
+    def from_kwargs(cls, rules: OrthoglideRules, scenario: Any = "random", action_mode: str | None = None,
                     max_null_rate: float = 0.5, max_joint_rate: float = 0.5, w_track: float = 1.0,
                     limit_penalty: float = 10.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                     fidelity: str = "kinematic", dynamics: Any = None, track_tolerance: float | None = None,
@@ -124,7 +128,12 @@ class OrthoglideParams:
                                        unit=" of metres")
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
         check_instance("dynamics", dynamics, OrthoglideDynamics)
+        fixed = None if rules.rung is None else scenarios_module.LADDER[rules.rung].actions
+        if action_mode is None:
+            action_mode = fixed or "null_space"
         check_choice("action_mode", action_mode, ("null_space", "joint_velocity"))
+        if fixed is not None and action_mode != fixed:
+            raise ValueError(f"action_mode: this rung of the ladder fixes it to {fixed!r}; got {action_mode!r}")
         scenario = scenarios_module.resolve_scenario(scenario, geometry)
         return cls(action_mode == "joint_velocity", float(max_null_rate), float(max_joint_rate), float(w_track),
                    float(limit_penalty), geometry, 1 if rules.tracking else 0, track_tolerance, scenario,
@@ -137,6 +146,12 @@ class OrthoglideParams:
         return replace(self, joint_mode=False, action_mode="null_space", fidelity="kinematic", dynamics=None,
                        version=1, rules=RULES[1])
 
+    @property
+    def obs_size(self) -> int:
+        """The observation's length: :data:`OBS_SIZE`, and the tool's offset from the path point (2) where a
+        rung of the ladder has the policy drive the joints (:data:`OBS_SIZE_JOINTS`)."""
+        return OBS_SIZE_JOINTS if self.joint_mode and self.rules.rung is not None else OBS_SIZE
+
     @cached_property
     def kernel_args(self) -> tuple[Any, ...]:
         """The numbers the kernel takes, as a plain tuple in :class:`KernelParams`' order (made once: a step
@@ -144,7 +159,13 @@ class OrthoglideParams:
         g = self.geometry
         return tuple(KernelParams(og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode,
                                   self.max_null_rate, self.max_joint_rate, self.w_track, self.limit_penalty,
-                                  self.version, self.track_tolerance))
+                                  self.left_penalty, self.version, self.track_tolerance))
+
+    @property
+    def left_penalty(self) -> float:
+        """What a failure costs per path point left, beyond ``limit_penalty``: the rung's
+        (:attr:`paragym.tasks.orthoglide.OrthoglideRung.left_penalty`), 0 off the ladder."""
+        return 0.0 if self.rules.rung is None else scenarios_module.LADDER[self.rules.rung].left_penalty
 
 
 class KernelParams(NamedTuple):
@@ -160,6 +181,7 @@ class KernelParams(NamedTuple):
     max_joint_rate: float
     w_track: float
     limit_penalty: float
+    left_penalty: float
     version: int
     track_tolerance: float
 
@@ -211,7 +233,8 @@ class OrthoglideState(KernelArrays):
                    path=np.zeros((n, points, 4)), dt=np.zeros((n, points - 1)), j=np.zeros((n, 6)),
                    n=np.zeros((n, 3)), kappa=np.zeros(n), err=np.zeros(n), failed=np.zeros(n, bool),
                    reason=np.zeros(n, np.int64), terminated=np.zeros(n, bool),
-                   obs=np.zeros((n, OBS_SIZE), np.float32), reward=np.zeros(n),
+                   obs=np.zeros((n, OBS_SIZE if params is None else params.obs_size), np.float32),
+                   reward=np.zeros(n),
                    terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
                    success=np.zeros(n, bool), kappa_sum=np.zeros(n), mean_kappa=np.zeros(n),
                    bound=np.full(n, np.inf))
@@ -292,7 +315,7 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
     _advance(state, params, actions, active, True, _EVALUATE)
     if params.version >= 1 and world.scene.closure_error() > BROKEN_GAP and not state.failed[0]:
         state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
-        state.terms[0] = (0.0, 0.0, -params.limit_penalty)
+        state.terms[0] = (0.0, 0.0, -(params.limit_penalty + params.left_penalty * (state.last[0] - state.k[0])))
         state.reward[0] = state.terms[0, 2]
         state.success[0] = decide(state.k[0], state.last[0], True, np.inf, np.inf)
 
@@ -327,7 +350,8 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     and a tracking error beyond ``track_tolerance`` fails the robot."""
     rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success, kappa_sum, \
         mean_kappa, bound = arrays
-    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, version, track_tolerance = params
+    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, left_penalty, version, \
+        track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
             continue
@@ -337,18 +361,18 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
                 for c in range(3):
                     rho[i, c] = rho[i, c] + h * max_joint_rate * actions[i, c]
                 k[i] += 1
-            else:
-                t0, t1, t2 = og.k_least_norm(j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5],
-                                             path[i, k[i], 2], path[i, k[i], 3])
-                r1 = rho[i, 0] + h * (t0 + actions[i, 0] * max_null_rate * n[i, 0])
+            else:  # eq 5, then exact tracking
+                kk = k[i]
                 k[i] += 1
-                r2, r3, _ = og.k_inverse(r1, path[i, k[i], 0], path[i, k[i], 1], p)  # exact tracking
-                rho[i, 0], rho[i, 1], rho[i, 2] = r1, r2, r3
+                rho[i, 0], rho[i, 1], rho[i, 2] = og.k_null_space_step(
+                    rho[i, 0], j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5], n[i, 0], path[i, kk, 2],
+                    path[i, kk, 3], actions[i, 0] * max_null_rate, h, path[i, k[i], 0], path[i, k[i], 1], p)
         if stage == 1:
             continue
         px, py = path[i, k[i], 0], path[i, k[i], 1]
         err[i] = 0.0
         track = joint_mode or stage == 2
+        tx, ty = px, py
         if track:
             tx, ty = og.k_forward(rho[i, 0], rho[i, 1], rho[i, 2], p)
             err[i] = math.hypot(tx - px, ty - py)
@@ -381,7 +405,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
         mean_kappa[i] = kappa_sum[i] / (k[i] + 1)
         success[i] = decide(k[i], last[i], failed[i], mean_kappa[i], bound[i])
         if failed[i]:  # the reward and its terms (REWARD_TERMS): kappa, tracking, failure
-            terms[i, 0], terms[i, 1], terms[i, 2] = 0.0, 0.0, -limit_penalty
+            terms[i, 0], terms[i, 1], terms[i, 2] = 0.0, 0.0, -(limit_penalty + left_penalty * (last[i] - k[i]))
             reward[i] = terms[i, 2]
         else:
             terms[i, 0], terms[i, 2] = -math.log(kappa[i]), 0.0
@@ -396,5 +420,8 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
         for c in range(11):
             v = row[c]
             obs[i, c] = 10.0 if v != v else min(10.0, max(-10.0, v))
+        if obs.shape[1] > 11:  # a rung that drives the joints: the tool's offset from the path point (cm)
+            for c, v in ((11, 100.0 * (tx - px)), (12, 100.0 * (ty - py))):
+                obs[i, c] = 10.0 if v != v else min(10.0, max(-10.0, v))
 
 

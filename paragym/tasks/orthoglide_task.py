@@ -15,7 +15,6 @@ from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
     FAILURES,
     LADDER_RULES,
-    OBS_SIZE,
     REWARD_TERMS,
     RULES,
     OrthoglideParams,
@@ -61,7 +60,7 @@ class OrthoglideTask(TaskBase):
         return drawn
 
     def spaces(self, params: OrthoglideParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-10.0, 10.0, (OBS_SIZE,)),
+        return (BoxSpec(-10.0, 10.0, (params.obs_size,)),
                 BoxSpec(-1.0, 1.0, (3 if params.joint_mode else 1,)))
 
     def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> DynamicWorld | None:
