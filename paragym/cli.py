@@ -45,6 +45,9 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
     rep = val.report
     print(f"episode: {val.steps} steps, return {val.episode_return:.2f}, success {val.success}; the body "
           f"executed at most {val.position_error * 1000:.2f} mm from its command")
+    if rep is None:
+        print("FAIL: the episode ended before the sensors took enough samples to validate it")
+        return 1
     print(rep.table())
     out = Path(args.out) / (env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}_{name}")
     return write_report(rep, out, f"{env_id.split('/')[1]}, {args.scenario}, {name}: "

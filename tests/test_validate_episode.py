@@ -78,3 +78,14 @@ def test_cli_validates_a_learned_policy_episode(tmp_path, capsys):
     report = json.loads((tmp_path / "Orthoglide2PRRKappa-v0_paper_seed0_ppo-seed0" / "report.json").read_text())
     assert report["passed"] and report["policy"] == "ppo-seed0" and "sha256" in json.dumps(report["producer"])
     assert "PASS" in capsys.readouterr().out
+
+
+def test_an_episode_too_short_to_judge_is_a_fail_not_an_error():
+    """Constant joint rates leave the Orthoglide's hard rung's path at the first step: the sensors share too
+    few samples with the plan to judge it, and the validation says FAIL instead of raising (the leaderboard's
+    dynamic column runs every floor)."""
+    env_id = "paragym/Orthoglide2PRRKappa-Hard-v0"
+    env = gym.make(env_id, fidelity="dynamic", scenario="paper")
+    val = validate_episode(env, get_policy(env_id, "best-constant").factory(env, 0), seed=0)
+    env.close()
+    assert val.steps <= 2 and val.report is None and not val.passed

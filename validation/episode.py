@@ -48,7 +48,7 @@ from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.rollout import Episode
 from paragym.trajectories import RigidMotion
 from paragym.validation.motion import pose_path_motion
-from paragym.validation.report import Tolerances, ValidationReport, validate
+from paragym.validation.report import MotionTooShort, Tolerances, ValidationReport, validate
 from paragym.validation.sensors import AccelerometerArray
 
 __all__ = ["EpisodeValidation", "MotionRecorder", "validate_episode"]
@@ -86,7 +86,9 @@ class EpisodeValidation:
     (m) between the executed and the commanded body, the episode itself
     (observations, actions, rewards, infos), and both motions."""
 
-    report: ValidationReport
+    #: None where the episode ended before the sensors took enough samples to judge it
+    #: (:class:`~paragym.validation.report.MotionTooShort`): not validated, which counts as a FAIL
+    report: ValidationReport | None
     position_error: float
     episode: Episode
     commanded: RigidMotion
@@ -94,7 +96,7 @@ class EpisodeValidation:
 
     @property
     def passed(self) -> bool:
-        return self.report.passed
+        return self.report is not None and self.report.passed
 
     @property
     def success(self) -> bool:
@@ -148,5 +150,9 @@ def validate_episode(env: Any, policy: Any, seed: int = 0, tolerances: Tolerance
     end = min(commanded.t[-1], executed.t[-1])
     on_grid = commanded.at(executed.t[executed.t <= end])
     error = float(np.linalg.norm(executed.position[:len(on_grid.t)] - on_grid.position, axis=1).max())
-    report = validate(commanded, executed, sensors, tolerances=tolerances, seed=sensor_seed)
+    try:
+        report: ValidationReport | None = validate(commanded, executed, sensors, tolerances=tolerances,
+                                                   seed=sensor_seed)
+    except MotionTooShort:  # an episode that ended within a few steps: nothing to judge, not a PASS
+        report = None
     return EpisodeValidation(report, error, episode, commanded, executed)

@@ -22,7 +22,15 @@ from paragym.trajectories import RigidMotion
 from paragym.validation.kalman import KalmanSettings, filter_vectorised, smooth_vectorised
 from paragym.validation.sensors import GRAVITY, AccelerometerArray, angular_velocity_from_z
 
-__all__ = ["ComponentReport", "Tolerances", "ValidationReport", "plot_report", "validate", "write_report"]
+__all__ = ["ComponentReport", "MotionTooShort", "Tolerances", "ValidationReport", "plot_report", "validate",
+           "write_report"]
+
+#: the fewest sensor samples the planned and the executed motion must share to be validated
+MIN_SAMPLES = 10
+
+
+class MotionTooShort(ValueError):
+    """The planned and executed motions share fewer than :data:`MIN_SAMPLES` sensor samples: nothing to judge."""
 
 COMPONENTS = ("a_Hx", "a_Hy", "a_Hz", "omega_x", "omega_y", "omega_z")
 UNITS = {"a": "m/s^2", "o": "rad/s"}
@@ -135,8 +143,8 @@ def validate(planned: RigidMotion, executed: RigidMotion, sensors: Accelerometer
     tolerances = tolerances or Tolerances()
     end = min(planned.t[-1], executed.t[-1])
     t = np.arange(max(planned.t[0], executed.t[0]), end + 1e-12, 1.0 / sensors.rate)
-    if len(t) < 10:
-        raise ValueError("planned and executed motions share fewer than 10 sensor samples")
+    if len(t) < MIN_SAMPLES:
+        raise MotionTooShort(f"planned and executed motions share fewer than {MIN_SAMPLES} sensor samples")
     plan, done = planned.at(t), executed.at(t)
     dt = 1.0 / sensors.rate
     y_raw = _without_gravity(sensors.read(done, np.random.default_rng(seed)), sensors, plan.rotation)

@@ -93,7 +93,9 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
         env.close()
     metrics = bench_of(spec.env_id).metrics(val.episode)
     metrics["policy_failed"] = failed
-    kf = {"worst": tightest(val.report), "position_error_mm": round(val.position_error * 1000, 3)}
+    worst = ("not validated: the episode ended before the sensors took enough samples" if val.report is None
+             else tightest(val.report))
+    kf = {"worst": worst, "position_error_mm": round(val.position_error * 1000, 3)}
     return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
                       kf, time.perf_counter() - t0, producer=dynamic_producer(spec) if producer is None else producer)
 
