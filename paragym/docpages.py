@@ -317,8 +317,9 @@ def ladders_page(csv_path: str | Path) -> str:
         "Each task has three rung ids, `-Easy`, `-Medium` and `-Hard` (v0 each), whose scenarios a seeded "
         "generator draws from the rung's knobs (the table on each rung's page): the newest version's task on "
         "scenarios where doing nothing, random actions and the task's naive controller fail and the paper's "
-        "method succeeds. Each rung is ranked as its own table of the leaderboard. The CaPaMan has no ladder "
-        "yet (issue 40).", "",
+        "method succeeds. Each rung is ranked as its own table of the leaderboard. How long PPO from scratch "
+        "takes to solve a rung on 2 cores is measured by `python benchmarks/time_to_solve.py --env <rung>` "
+        "(the CHANGELOG has the figures).", "",
         "Success per rung and method, over the leaderboard's 50 episodes (kinematic fidelity) with Wilson's "
         "95 % interval; the last row of each task is the reference's dynamic episodes. Generated from the "
         "committed `leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
