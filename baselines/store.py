@@ -182,12 +182,20 @@ class ResultStore:
 
     def add(self, row: EpisodeRow) -> None:
         """Store one episode now (a key already stored is kept as it was)."""
+        self.add_all([row], [])
+
+    def add_all(self, rows: list[EpisodeRow], dynamic: list[DynamicRow]) -> None:
+        """Store many rows in one transaction (keys already stored are kept as they were)."""
         with self.db:
-            self.db.execute("INSERT OR IGNORE INTO episodes VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
-                            (row.env, row.policy, row.seed, row.episode, row.version, row.kind,
-                             float(row.episode_return), int(row.length), int(row.success),
-                             json.dumps(row.metrics, sort_keys=True), float(row.wall_seconds), time.time(),
-                             row.producer))
+            self.db.executemany("INSERT OR IGNORE INTO episodes VALUES (?,?,?,?,?,?,?,?,?,?,?,?,?)",
+                                [(r.env, r.policy, r.seed, r.episode, r.version, r.kind, float(r.episode_return),
+                                  int(r.length), int(r.success), json.dumps(r.metrics, sort_keys=True),
+                                  float(r.wall_seconds), time.time(), r.producer) for r in rows])
+            self.db.executemany("INSERT OR IGNORE INTO dynamic VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
+                                [(r.env, r.policy, r.scenario, r.seed, r.version, r.producer,
+                                  float(r.episode_return), int(r.success), json.dumps(r.metrics, sort_keys=True),
+                                  int(r.kf_passed), json.dumps(r.kf, sort_keys=True), float(r.wall_seconds))
+                                 for r in dynamic])
 
     def rows(self, env: str | None = None) -> list[EpisodeRow]:
         """This version's episodes (of ``env``), in key order."""
@@ -204,11 +212,7 @@ class ResultStore:
 
     def add_dynamic(self, row: DynamicRow) -> None:
         """Store one dynamic-fidelity episode now (a key already stored is kept as it was)."""
-        with self.db:
-            self.db.execute("INSERT OR IGNORE INTO dynamic VALUES (?,?,?,?,?,?,?,?,?,?,?,?)",
-                            (row.env, row.policy, row.scenario, row.seed, row.version, row.producer,
-                             float(row.episode_return), int(row.success), json.dumps(row.metrics, sort_keys=True),
-                             int(row.kf_passed), json.dumps(row.kf, sort_keys=True), float(row.wall_seconds)))
+        self.add_all([], [row])
 
     def dynamic_rows(self) -> list[DynamicRow]:
         """This version's dynamic-fidelity episodes, in key order."""

@@ -255,7 +255,8 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
                               executor="workers" if args.workers > 1 and args.executor == "local" else args.executor,
                               workers=args.workers, ray_address=args.ray_address, out=args.out,
                               markdown_path=args.markdown, validate=not args.no_validation,
-                              progress=not args.no_progress, on_row=still_asked, command=_command(args.argv))
+                              progress=not args.no_progress, on_row=still_asked, command=_command(args.argv),
+                              resume_from=args.resume_from)
     finally:  # the caller's handlers again (a test or a notebook that called main)
         signal.signal(signal.SIGTERM, before[0])
         signal.signal(signal.SIGINT, before[1])
@@ -416,6 +417,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="episodes per evaluation seed (full suite: 10 x 5 seeds; quick: 3 x 1): more give a finer "
                         "noise floor, the smallest difference from #1 a table can tell apart")
     p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
+    p.add_argument("--resume-from", default=None, metavar="RESULTS.json.gz",
+                   help="first put a results file's episodes into --db (the committed leaderboard/results.json.gz: "
+                        "a fresh checkout runs only what it lacks); its digest is checked, and a row is reused only "
+                        "where its policy's producer is unchanged")
     p.add_argument("--out", default="results", help="folder for the reports (default %(default)s)")
     p.add_argument("--markdown", default=None, help="where LEADERBOARD.md goes (default: in --out)")
     p.add_argument("--env", action="append", help="only this env (repeatable)")

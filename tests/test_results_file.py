@@ -22,6 +22,7 @@ from paragym.baselines.leaderboard.results import (
     tolerance_of,
     verify,
 )
+from paragym.baselines.store import ResultStore
 
 ORTHO = "paragym/Orthoglide2PRRKappa-v1"
 
@@ -163,3 +164,22 @@ def test_the_committed_results_file_reproduces_on_another_cpu(cpu: str) -> None:
 def test_the_verdict_names_both_machines(written: Path) -> None:
     text = describe(verify(written, sample=1, echo=lambda s: None))
     assert "written on" in text and "re-run on" in text and "the rule:" in text
+
+
+def test_a_fresh_database_resumes_from_the_results_file(written: Path, tmp_path: Path) -> None:
+    """A fresh checkout has the committed results file but no database: ``--resume-from`` takes the file's rows,
+    so the same run runs nothing again and writes the same episodes; an edited file is refused before a row is
+    taken."""
+    seen: list[str] = []
+    kw = dict(suite=EvalSuite("test", (0,), 2, (("paper", 0),)), env_ids=[ORTHO],
+              policies=["gradient-c", "zero", "random"], out=tmp_path / "out", progress=False)
+    run = run_leaderboard(tmp_path / "fresh.sqlite", resume_from=written, echo=seen.append, **kw)
+    assert (run.new_episodes, run.skipped_episodes, run.new_dynamic, run.skipped_dynamic) == (0, 6, 0, 3)
+    assert any("took 6 episodes and 3 dynamic episodes" in line for line in seen)
+    again = read_results(next((tmp_path / "out").rglob("results.json.gz")))
+    assert again["episodes"] == read_results(written)["episodes"]
+    assert again["dynamic"] == read_results(written)["dynamic"]
+    with pytest.raises(ValueError, match="digest does not match"):
+        run_leaderboard(tmp_path / "other.sqlite", resume_from=_tamper(written, tmp_path / "e.json.gz", False),
+                        echo=seen.append, **kw)
+    assert not (tmp_path / "other.sqlite").exists() or not ResultStore(tmp_path / "other.sqlite").rows()

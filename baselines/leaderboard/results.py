@@ -65,7 +65,7 @@ from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, producer_id
 
 __all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "describe", "read_results",
-           "tolerance_of", "verify", "write_episodes_csv", "write_results"]
+           "rows_of_results", "tolerance_of", "verify", "write_episodes_csv", "write_results"]
 
 FORMAT = "paragym-results/1"
 #: the packages whose versions decide an episode's numbers
@@ -177,6 +177,27 @@ def read_results(path: str | Path) -> dict[str, Any]:
     if not isinstance(data, dict) or data.get("format") != FORMAT:
         raise ValueError(f"{path} is not a paragym results file: JSON without \"format\": {FORMAT!r}")
     return data
+
+
+def rows_of_results(path: str | Path) -> tuple[list[EpisodeRow], list[DynamicRow]]:
+    """The episode and dynamic-fidelity rows of the results file at ``path``, as the run that wrote it stored
+    them (policy, seeds, producer, paragym version): what ``paragym leaderboard --resume-from`` puts into a
+    fresh results database so that only what the file lacks runs again. A ValueError for a file whose digest
+    does not match its contents (edited or damaged rows are never taken in). A dynamic row's wall time is not
+    in the file (0)."""
+    data = read_results(path)
+    if _digest({k: v for k, v in data.items() if k != "sha256"}) != data.get("sha256"):
+        raise ValueError(f"{path}: the file's digest does not match its contents (edited or damaged after paragym "
+                         f"wrote it); its rows are not taken")
+    version, who = data["written_by"]["paragym"], data["policies"]
+    episodes = [EpisodeRow(who[e["policy"]]["env"], who[e["policy"]]["policy"], e["seed"], e["episode"],
+                           who[e["policy"]]["kind"], e["return"], e["length"], e["success"], e["metrics"],
+                           e["wall_seconds"], version, who[e["policy"]]["producer"]) for e in data["episodes"]]
+    dynamic = [DynamicRow(who[d["policy"]]["env"], who[d["policy"]]["policy"], d["scenario"], d["seed"], d["return"],
+                          d["success"], d["metrics"], d["kf_passed"], d["kf"], 0.0, version,
+                          json.dumps({**json.loads(who[d["policy"]]["producer"]), "dynamics": d["physics"]},
+                                     sort_keys=True)) for d in data["dynamic"]]
+    return episodes, dynamic
 
 
 def write_episodes_csv(path: str | Path, rows: list[EpisodeRow]) -> Path:

@@ -73,7 +73,7 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
                     ray_address: str | None = None, out: str | Path | None = "results",
                     markdown_path: str | Path | None = None, validate: bool = True, progress: bool = True,
                     on_row: Callable[[EpisodeRow], None] | None = None, echo: Callable[[str], None] = print,
-                    command: str = "") -> LeaderboardRun:
+                    command: str = "", resume_from: str | Path | None = None) -> LeaderboardRun:
     """Evaluate what is missing from ``db`` for ``suite``, then write the
     reports (to ``out``: ``LEADERBOARD.md`` unless ``markdown_path``,
     ``leaderboard.csv``, ``<env>.png``, every episode in ``episodes.csv`` and
@@ -83,7 +83,10 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     always take part; ``models_dir`` adds your own (``user-...``). An
     episode is taken from ``db`` only when its stored row has the policy's
     current producer (model hash, planner parameters); the others are run
-    again, and ``echo`` says so.
+    again, and ``echo`` says so. ``resume_from``: a results file (``results.json.gz``) whose rows are put into
+    ``db`` first (:func:`~paragym.baselines.leaderboard.results.rows_of_results`), so that a fresh checkout
+    extends the committed leaderboard instead of running it all again; its rows are taken on the same terms
+    (this paragym version, each policy's current producer).
 
     The steps: choose the policies (:func:`_select`), plan the missing
     episodes (:func:`_plan`), the missing dynamic episodes
@@ -101,7 +104,19 @@ def run_leaderboard(db: str | Path = "results/paragym.sqlite", suite: EvalSuite 
     out = _report_folder(out, markdown_path, env_ids, policies)
     producers = {(env, name): spec.producer() for env, specs in chosen.items() for name, spec in specs.items()}
     t0 = time.perf_counter()
+    imported = None
+    if resume_from is not None:
+        from paragym.baselines.leaderboard.results import read_results, rows_of_results
+
+        written = read_results(resume_from)["written_by"]["paragym"]
+        if written != paragym.__version__:
+            raise ValueError(f"resume_from: {resume_from} was written by paragym {written}, this is "
+                             f"{paragym.__version__}; its rows would not be taken")
+        imported = rows_of_results(resume_from)
     with ResultStore(db) as store:
+        if imported is not None:
+            store.add_all(*imported)
+            echo(f"took {len(imported[0])} episodes and {len(imported[1])} dynamic episodes from {resume_from}")
         jobs, total = _plan(store, chosen, suite, producers, echo)
         echo(f"paragym {paragym.__version__} leaderboard ({suite.name}: seeds {list(suite.seeds)} x "
              f"{suite.episodes} episodes): {len(chosen)} envs, {total} episodes, {total - len(jobs)} already in "
