@@ -135,6 +135,9 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
             (easy, 2, "greedy-split", "floor", 0.02, 0.0, 0.1, "", ""),
             (medium, 1, "polynomial-detour", "reference", 0.94, 0.84, 0.98, 3, 1.0),
             (hard, 1, "polynomial-detour", "reference", 0.9, 0.79, 0.96, "", ""),
+            (easy, 3, "ppo-seed1", "learned", 0.9, 0.79, 0.96, "", ""),
+            (easy, 4, "ppo-seed0", "learned", 0.8, 0.67, 0.89, "", ""),
+            (hard, 2, "bc-seed0", "learned", 0.1, 0.04, 0.21, "", ""),
             ("paragym/HybridSingularityFree-v2", 1, "zero", "floor", 1.0, 1.0, 1.0, "", "")]
     path = tmp_path / "board.csv"
     with path.open("w", newline="") as f:
@@ -144,6 +147,7 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     table = ladder_table(path).splitlines()
     assert table[2] == "| hybrid | reference | 0.98 [0.90, 1.00] | 0.94 [0.84, 0.98] | 0.90 [0.79, 0.96] |"
     assert table[3] == "| hybrid | greedy-split | 0.02 [0.00, 0.10] | - | - |"
-    assert table[4] == "| hybrid | best learned | - | - | - |"  # none shipped: said, not left out
-    assert table[5] == "| hybrid | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
-    assert len(table) == 6  # the v2 row is no rung
+    assert table[4] == "| hybrid | PPO | 0.90 [0.79, 0.96] | - | - |"  # each algorithm's best seed per rung
+    assert table[5] == "| hybrid | BC | - | - | 0.10 [0.04, 0.21] |"
+    assert table[6] == "| hybrid | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
+    assert len(table) == 7  # the v2 row is no rung
