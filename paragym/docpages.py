@@ -330,7 +330,8 @@ def ladders_page(csv_path: str | Path) -> str:
         "95 % interval; the last row of each task is the reference's dynamic episodes. PPO is trained from "
         "scratch (seed 0, at most 30 minutes on 2 cores on the rungs); BC and DAgger learn from 200 of the "
         "reference's episodes, so they show how well the paper's method can be imitated, not learned anew; a "
-        "dash is a rung without that learner shipped. Generated from the committed `leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
+        "dash is a rung without that learner shipped. Generated from the committed "
+        "`leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
         "![success against rung](reports/ladders.png)", "",
         ladder_table(csv_path), "",
         f"Rungs: {rungs}.", ""])
