@@ -32,6 +32,7 @@ from paragym import registry
 from paragym.baselines.policies import policies_for
 from paragym.baselines.stats import BOOTSTRAP_REPS, bootstrap_mean_ci
 from paragym.baselines.store import ResultStore
+from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import env_name
 from paragym.models import shipped_models_dir, shipped_models_folder
 
@@ -125,7 +126,7 @@ def task_scores(db: str | Path, env_ids: list[str] | None = None) -> dict[str, d
                 if producers.get(row.policy) != row.producer:
                     continue
                 returns[row.policy].append(row.episode_return)
-                kinds[row.policy] = row.kind
+                kinds[row.policy] = bench_of(env_id).kind_of(env_id, row.policy, row.kind)
             mean = {name: float(np.mean(r)) for name, r in returns.items()}
             refs = [n for n, k in kinds.items() if k == "reference"]
             floors = [mean[n] for n in ("zero", "random") if n in mean]

@@ -63,6 +63,7 @@ from paragym import machine
 from paragym.baselines.leaderboard.suite import EvalSuite, episode_seed
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, producer_id
+from paragym.baselines.tasks import bench_of
 
 __all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "describe", "read_results",
            "rows_of_results", "tolerance_of", "verify", "write_episodes_csv", "write_results"]
@@ -210,7 +211,8 @@ def write_episodes_csv(path: str | Path, rows: list[EpisodeRow]) -> Path:
     writer.writerow(["env", "policy", "kind", "seed", "episode", "reset_seed", "return", "length", "success",
                      *metrics, "wall_seconds", "paragym", "producer_sha256"])
     for r in rows:
-        writer.writerow([r.env, r.policy, r.kind, r.seed, r.episode, episode_seed(r.seed, r.episode),
+        kind = bench_of(r.env).kind_of(r.env, r.policy, r.kind)
+        writer.writerow([r.env, r.policy, kind, r.seed, r.episode, episode_seed(r.seed, r.episode),
                          repr(r.episode_return), r.length, int(r.success),
                          *(repr(r.metrics[k]) if k in r.metrics else "" for k in metrics), f"{r.wall_seconds:.4f}",
                          r.version, producer_id(r.producer)])

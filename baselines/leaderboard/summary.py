@@ -68,7 +68,7 @@ def summarise(rows: Iterable[EpisodeRow], store: ResultStore | None = None) -> d
         key = bench_of(env).primary[0]
         wins = sum(bool(r.success) for r in rs)
         out.setdefault(env, []).append(Summary(
-            env, policy, rs[0].kind, "", len(rs),
+            env, policy, bench_of(env).kind_of(env, policy, rs[0].kind), "", len(rs),
             wins / len(rs), float(returns.mean()), float(returns.std()), metrics,
             float(np.mean([r.wall_seconds for r in rs])),
             store.validation(env, policy, rs[0].producer) if store is not None else None, producer=rs[0].producer,

@@ -241,6 +241,14 @@ class Bench:
     def fmt(self, key: str) -> str:
         return next((c.fmt for c in self.columns if c.key == key), ".2f")
 
+    def kind_of(self, env_id: str, name: str, stored: str) -> str:
+        """The kind of built-in policy ``name`` on ``env_id`` today ("floor" for the random floor every
+        task has); ``stored`` (the kind its rows were stored with) for a policy the bench does not know.
+        A row's kind is a label, not part of what produced it: a re-labelled policy is labelled anew."""
+        if name == "random":
+            return "floor"
+        return next((p.kind for p in self.policies if p.name == name and p.plays(env_id)), stored)
+
 
 def bench_of(env_id: str) -> Bench:
     """The bench of ``env_id``'s task (its row's bench module's ``BENCH``)."""
