@@ -138,6 +138,19 @@ def test_summaries_rank_by_success_then_the_primary_metric():
     assert ranked == ["b", "a", "c"]
 
 
+def test_a_policy_s_kind_is_today_s_not_the_one_stored_with_its_rows():
+    """A built-in policy re-labelled (Orthoglide's plain gradient-c became a "paper case" when the
+    rate-limited gradient became the reference) must not stay a second "reference" through rows
+    stored before the change: the label is the bench's, the rows only say what was measured."""
+    stored = [EpisodeRow(ORTHO, name, 0, k, "reference", -1.0, 10, True, {"mean_kappa": 1.05})
+              for name in ("gradient-c", "gradient-c-limited") for k in range(2)]
+    kinds = {s.policy: s.kind for s in summarise(stored)[ORTHO]}
+    assert kinds == {name: spec.kind for name, spec in policies_for(ORTHO).items() if name in kinds}
+    assert list(kinds.values()).count("reference") == 1
+    user = summarise([EpisodeRow(ORTHO, "user-x", 0, 0, "user", 0.0, 10, True, {"mean_kappa": 1.1})])[ORTHO]
+    assert user[0].kind == "user"  # a policy the bench does not know keeps what its rows say
+
+
 # --- the references and the shipped models on fixed seeds ----------------------------------------------------------
 
 import paragym  # noqa: E402
@@ -332,7 +345,7 @@ def test_a_quick_table_of_an_older_id_says_where_its_dynamic_episodes_are():
                        {"mean_kappa": 3.0, "max_kappa": 4.0, "tracking_error_mm": 0.0, "max_tracking_error_mm": 0.0,
                         "path_completed": 1.0}, 0.1) for k in range(3)]
     quick = markdown(summarise(rows), QUICK, {}, "# header")
-    assert "runs the dynamic episodes on each task's newest id (`paragym/Orthoglide2PRRKappa-v1`)" in quick
+    assert "runs the dynamic episodes on each task's newest id (`paragym/Orthoglide2PRRKappa-v2`)" in quick
     assert "newest id" not in markdown(summarise(rows), FULL, {}, "# header")
 
 
