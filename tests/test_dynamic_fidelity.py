@@ -205,6 +205,27 @@ def test_orthoglide_default_settings_stay_within_their_stated_lag():
 # --- the CaPaMan --------------------------------------------------------------------------------------------
 
 
+@pytest.mark.parametrize("below", [False, True])
+def test_orthoglide_v2_table_runs_beneath_the_guides(below):
+    """Up to v1 the table runs at the sliders' guides' height and meets the x guide's end (a contact that
+    stopped the reference's table at step 732 of reset seed 200009); from v2 it runs beneath them, clear by
+    1 cm at every table position, while v1 and the rungs keep its height (a released id never changes)."""
+    from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
+    from paragym.tasks.orthoglide_step import LADDER_RULES, RULES
+
+    assert [RULES[v].table_below_guides for v in (0, 1, 2)] == [False, False, True]
+    assert not any(r.table_below_guides for r in LADDER_RULES.values())  # released before v2
+    scene = OrthoglideDynamicScene(table_below_guides=below)
+    try:
+        gaps = []
+        for r1 in np.linspace(-1.0, 1.0, 41):
+            scene.reset(np.array([r1, 0.5889, 0.3245]))
+            gaps.append(scene.sim.clearance(scene.ROBOT, ["guide_x", "guide_y"], 0.05, links=[scene.motors[0]])[0])
+    finally:
+        scene.close()
+    assert (min(gaps) >= 0.0099) if below else (min(gaps) <= 0.0)
+
+
 def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_ones():
     import dataclasses
 

@@ -25,12 +25,12 @@ def test_bootstrap_interval_holds_the_mean_and_narrows_with_agreement():
     np.testing.assert_allclose(high, [4.0, 5.0])
 
 
-def test_latest_versions_pick_v1_where_it_exists():
+def test_latest_versions_pick_the_newest_version_of_each_task():
     latest = latest_versions()
     assert "paragym/CaPaManCollisionFree-v1" in latest and "paragym/CaPaManCollisionFree-v0" not in latest
     assert "paragym/HybridSingularityFree-v2" in latest and "paragym/HybridSingularityFree-v1" not in latest
     assert "paragym/MobileTripodOdometry-v2" in latest
-    assert "paragym/Orthoglide2PRRKappa-v1" in latest and "paragym/Orthoglide2PRRKappa-v0" not in latest
+    assert "paragym/Orthoglide2PRRKappa-v2" in latest and "paragym/Orthoglide2PRRKappa-v1" not in latest
     assert len(latest) == 4
 
 

@@ -19,6 +19,12 @@ distance it travels in one step: on the paper's circle (0.25 m/s) 1.26 mm at
 5 ms, against 0.25 mm at 1 ms and 150 iterations, with kappa within 0.001 of
 the kinematic one either way (``tests/test_dynamic_fidelity.py`` checks
 both).
+
+The table is a 1.1 m plate. Up to v1 it runs at the height of the sliders'
+guides, and a path that carries it to the x guide's end stops it there
+against the guide (a contact of about 424 N, the motor's force and more):
+the tool then leaves the path. From v2 (``table_below_guides``) it runs 2 cm
+lower, beneath them, as a machine's table passes under the gantry.
 """
 
 from __future__ import annotations
@@ -70,8 +76,13 @@ class OrthoglideDynamicScene:
 
     ROBOT = "orthoglide"
 
+    #: the table's height (m): at the guides' height (0.04 below the sliders; v0 and v1), where it can strike
+    #: the x guide's end, or beneath them (v2)
+    TABLE_Z = {False: -0.04, True: -0.06}
+
     def __init__(self, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
-                 dynamics: OrthoglideDynamics | None = None, gui: bool = False) -> None:
+                 dynamics: OrthoglideDynamics | None = None, gui: bool = False,
+                 table_below_guides: bool = False) -> None:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or OrthoglideDynamics()
         self.sim = PyBulletSim(gui=gui)
@@ -79,7 +90,8 @@ class OrthoglideDynamicScene:
         half = g.link / 2
         bar = PartShape("link", "box", (half, 0.012, 0.008))
         links = [
-            LinkSpec("table", None, "prismatic", (*g.table_origin, -0.04), axis=(dx, dy, 0.0),
+            LinkSpec("table", None, "prismatic", (*g.table_origin, self.TABLE_Z[table_below_guides]),
+                     axis=(dx, dy, 0.0),
                      shape=PartShape("table", "box", (0.55, 0.55, 0.01)), shape_offset=(0.1, 0.55, 0.0),
                      rgba=(0.75, 0.75, 0.6, 1.0), mass=d.table_mass),
             LinkSpec("slider_a", None, "prismatic", (g.slider2_origin, 0.0, 0.0), axis=(1.0, 0.0, 0.0),

@@ -77,18 +77,23 @@ class OrthoglideRules:
             are the "random" scenario, and success asks for a mean kappa at most the rung's share of the way
             from 1 to the least-norm motion's (:func:`kappa_bounds`); None: a version of the task, whose success
             asks for no kappa.
+        table_below_guides: in dynamic fidelity the table runs beneath the sliders' guides
+            (:class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`'s ``table_below_guides``); before v2
+            it ran at their height and struck the x guide's end on paths that carry it there.
     """
 
     version: int
     tracking: bool
     exact_time: bool
     rung: int | None = None
+    table_below_guides: bool = False
 
 
-#: the rules of Orthoglide2PRRKappa-v0 and -v1
-RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True)}
+#: the rules of Orthoglide2PRRKappa-v0, -v1 and -v2
+RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True),
+         2: OrthoglideRules(2, tracking=True, exact_time=True, table_below_guides=True)}
 #: the rules of the ladder's rungs, Orthoglide2PRRKappa-Easy, -Medium and -Hard (v0 each): v1's, on the rung's
-#: paths and with its bound on the mean kappa
+#: paths and with its bound on the mean kappa (released before v2: their table runs at the guides' height)
 LADDER_RULES = {k: OrthoglideRules(0, tracking=True, exact_time=True, rung=k) for k in range(3)}
 
 
@@ -123,7 +128,7 @@ class OrthoglideParams:
 
         refuse_unknown(unknown, (), "Orthoglide2PRRKappa")
         if not rules.tracking and track_tolerance is not None:
-            raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1")
+            raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1 and later, not of v0")
         track_tolerance = check_number("track_tolerance", 0.005 if track_tolerance is None else track_tolerance,
                                        unit=" of metres")
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))

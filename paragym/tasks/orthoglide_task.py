@@ -68,7 +68,8 @@ class OrthoglideTask(TaskBase):
             return None
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
 
-        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human",
+                                       table_below_guides=params.rules.table_below_guides)
         return DynamicWorld(scene, exact_time=params.rules.exact_time)
 
     def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
@@ -114,7 +115,7 @@ def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> 
             simulated = sum(physics_steps(float(d), h) * h for d in dt)
             warnings.warn(f"the path's {path.t[-1]:g} s are simulated over {simulated:g} s: the dynamic fidelity "
                           f"of paragym/Orthoglide2PRRKappa-v0 rounds each path step to whole physics steps of "
-                          f"{h:g} s; paragym/Orthoglide2PRRKappa-v1 simulates it exactly", UserWarning, stacklevel=4)
+                          f"{h:g} s; v1 and later ids simulate it exactly", UserWarning, stacklevel=4)
 
 
 #: the Orthoglide task (paper 003)
