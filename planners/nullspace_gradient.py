@@ -132,18 +132,35 @@ def case_gradient(task: OrthoglideScenario, geometry: og.OrthoglideGeometry = og
 
 class GradientPolicy:
     """Case (c) in ``Orthoglide2PRRKappa-v0`` (default action mode): the
-    null-space rate along -grad kappa, ``gain`` per unit of gradient, clipped."""
+    null-space rate along -grad kappa, ``gain`` per unit of gradient, clipped.
 
-    def __init__(self, gain: float = 5.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY) -> None:
+    ``max_accel`` (m/s^2 along n; None: unlimited, the paper's rule as written) limits how fast that rate may
+    change: each path step the action moves at most ``max_accel * h / max_null_rate`` from the last one (h: the
+    path's time step, s), from rest at the start. Near its optimum kappa has a kink (two singular values of J
+    cross), so the plain rule's sign flips between -1 and +1 from one step to the next; a kinematic model
+    follows, motors do not (issue 41: under PyBullet's dynamics the plain rule fails on tracking in most
+    episodes, and the KF check with it). The limit is the actuators' acceleration, which paper 003 leaves out.
+    """
+
+    def __init__(self, gain: float = 5.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
+                 max_accel: float | None = None, max_null_rate: float = 0.5) -> None:
         self.gain, self.geometry = gain, geometry
+        self.max_accel, self.max_null_rate = max_accel, max_null_rate
+        self.last = 0.0
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
-        pass
+        self.last, self.task = 0.0, info.get("scenario")
 
     def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
         rho = np.asarray(info["rho"])[None]
         slope = float(np.sum(og.null_direction(rho, self.geometry) * og.kappa_gradient(rho, self.geometry)))
-        return np.array([np.clip(-self.gain * slope, -1.0, 1.0)], np.float32)
+        rate = float(np.clip(-self.gain * slope, -1.0, 1.0))
+        if self.max_accel is not None:
+            t, k = self.task.t, min(int(info["step"]), len(self.task.t) - 2)
+            most = self.max_accel * float(t[k + 1] - t[k]) / self.max_null_rate
+            rate = float(np.clip(rate, self.last - most, self.last + most))
+        self.last = rate
+        return np.array([rate], np.float32)
 
 class JointRates:
     """A null-space policy (one action in [-1, 1], as :class:`GradientPolicy`) played in the env's
