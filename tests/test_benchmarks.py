@@ -222,3 +222,13 @@ def test_headroom_checks_floors_and_reference_against_the_bounds(tmp_path):
     assert "rows miss their bound" in out
     assert (tmp_path / "headroom.png").stat().st_size > 0  # the figure beside a result file written elsewhere
     assert all(r[3] != "learned" or r[-1] == "-" for r in rows)  # learned agents are measured, not bounded
+
+
+def test_reference_dynamic_counts_the_reference_s_dynamic_episodes(tmp_path):
+    """The Orthoglide v2 reference on its paper case and one random lap under physics: both succeed and pass the
+    KF check (issue 41's fix; the plain rule failed here), and the row says so with its interval."""
+    out = _run("benchmarks/reference_dynamic.py", "--env", "paragym/Orthoglide2PRRKappa-v2", "--episodes", "2",
+               "--record", str(tmp_path))
+    row = _recorded(tmp_path, "reference_dynamic")["rows"][0]
+    assert row[:2] == ["paragym/Orthoglide2PRRKappa-v2", "gradient-c-limited"]
+    assert row[2].startswith("2/2 = 1.00 [") and row[4].startswith("2/2 = 1.00 [") and row[5] == "meets", out
