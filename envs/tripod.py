@@ -194,6 +194,20 @@ class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
     ## Action Space, Observation Space, Rewards, Starting State
     As v1.
 
+    ## Dynamic Fidelity
+    The paper's correction (``encoder-correction``) assumes one faulty unit at a time and relocates it from
+    the other two. Under PyBullet's dynamics a unit's heading error or push also drags the other two through
+    the legs: over the random drives of reset seeds 300001-300029, at the episode's end the two units least
+    off their odometry are off by 3.9 and 5.6 cm (medians; 14.1 cm at most) against 0.2 and 0.5 cm in
+    kinematic fidelity, where the success error is 5 cm. The correction then moves the faulty unit to the
+    wrong place, or blames a healthy one: the reference succeeds on 8 of those 29 drives in dynamic fidelity
+    against 20 of 29 in kinematic fidelity (``python benchmarks/reference_dynamic.py --env
+    paragym/MobileTripodOdometry-v2``: 9 of 30 with the paper's push). The failures are the method's
+    single-fault premise meeting coupled units, not its implementation. The KF check of the dynamic episodes
+    fails for every policy, the zero action included: the policy only estimates, and what the check takes
+    as commanded is the plate fitted to its estimated units, which carries none of the accelerations that
+    bumps, pushes and the wheels' stick and slip give the real plate (4 of 30 PASS for the reference).
+
     ## Version History
     * v2 (paragym 0.8.0): the folded end above; drives that do not fold are
       v1's, bit for bit, and so are v1's shipped models.

@@ -27,8 +27,10 @@ __all__ = ["SECTIONS", "env_class", "env_page", "index_page", "ladder_figure", "
            "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
+#: and "Dynamic Fidelity": what is known of the env under PyBullet's dynamics, where it departs from the
+#: kinematic model (measured)
 SECTIONS = ("Description", "Action Space", "Observation Space", "Rewards", "Starting State", "Episode End",
-            "Arguments", "Version History")
+            "Arguments", "Dynamic Fidelity", "Version History")
 
 
 def env_class(env_id: str) -> type:
