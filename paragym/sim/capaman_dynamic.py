@@ -194,6 +194,10 @@ class CaPaManDynamicScene:
             sim.ball_joint(leg, crank_b, [0, 0, g.a / 2], coupler, [0, 0, g.c / 2])
             sim.ball_joint(leg, slider, [0, 0, 0], self.plate[1], list(g.plate_points[k]), other=self.plate[0])
 
+    def motor_limits(self) -> list[tuple[str, int, float]]:
+        """The driven joints, (body, joint index, force limit): the three crank motors (N m)."""
+        return [(body, joint, self.dynamics.motor_torque) for body, joint in self.motors]
+
     def reset(self, alpha: np.ndarray) -> None:
         """Put every joint where the analytic model has it at ``alpha`` (rad), at rest."""
         g, sim = self.geometry, self.sim

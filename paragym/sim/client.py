@@ -134,6 +134,9 @@ class PyBulletSim:
         self._removed = 0
         self._links: dict[str, dict[str, int]] = {}
         self._link_names: dict[str, dict[int, str]] = {}
+        #: the loop closures (:meth:`ball_joint`), by (body, link, other body, other link) names (None: a base):
+        #: the two points, each in its link's frame (m); what :mod:`paragym.sim.export` writes
+        self.loops: dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]] = {}
         #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
         self.after_step: list[Any] = []
         #: the physics step (s) and the simulated time (s) so far
@@ -324,6 +327,10 @@ class PyBulletSim:
             self._draw(True)
         pb.resetJointStatesMultiDof(self._bodies[name], joints, values, physicsClientId=self._client)
 
+    def link_name(self, name: str, index: int) -> str | None:
+        """The name of link ``index`` of body ``name`` (None: the base, -1)."""
+        return self._link_names[name].get(index)
+
     def body(self, name: str) -> int:
         """PyBullet id of body ``name`` now (it changes when the world is rebuilt)."""
         return self._bodies[name]
@@ -397,6 +404,17 @@ class PyBulletSim:
         centre-of-mass frame (m)."""
         pb.createConstraint(self._bodies[name], link_a, self._bodies[other or name], link_b, pb.JOINT_POINT2POINT,
                             [0, 0, 0], list(pivot_a), list(pivot_b), physicsClientId=self._client)
+        other = other or name
+        key = (name, self._link_names[name].get(link_a), other, self._link_names[other].get(link_b))
+        self.loops[key] = (self._in_link_frame(name, link_a, pivot_a), self._in_link_frame(other, link_b, pivot_b))
+
+    def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
+        """A point given in a link's centre-of-mass frame, in its link frame (the two differ by the link's
+        ``shape_offset``, their axes aligned): a base's two frames are one."""
+        _, args = self._recipe[name]
+        offset = next((spec.shape_offset for spec in args[1] if spec.name == self._link_names[name].get(link)),
+                      (0.0, 0.0, 0.0))
+        return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
 
     def no_collision(self, name: str) -> None:
         """No part of body ``name`` collides with anything (a mechanism alone in its scene, whose parts
@@ -532,6 +550,7 @@ class PyBulletSim:
         del self._recipe[name]
         self._links.pop(name, None)
         self._link_names.pop(name, None)
+        self.loops = {key: points for key, points in self.loops.items() if name not in (key[0], key[2])}
         self._removed += 1
         if self._removed >= self.REBUILD_AFTER:
             self._rebuild()
@@ -550,6 +569,7 @@ class PyBulletSim:
         self._recipe.clear()
         self._links.clear()
         self._link_names.clear()
+        self.loops.clear()
         self._removed = 0
         for build, args in recipe:
             build(*args)
@@ -559,6 +579,20 @@ class PyBulletSim:
     def _check_new(self, name: str) -> None:
         if name in self._bodies:
             raise ValueError(f"a body named {name!r} exists already")
+
+    @property
+    def recipes(self) -> dict[str, tuple[str, tuple]]:
+        """How each body now in the scene was built, in order: name -> (the ``add_*`` method's name, its
+        arguments after ``self``)."""
+        return {name: (build.__name__, args) for name, (build, args) in self._recipe.items()}
+
+    def joint_values(self, name: str) -> list[tuple[float, ...]]:
+        """Every joint of body ``name`` now, in PyBullet's order (:meth:`add_tree_body`'s depth-first one):
+        ``(q,)`` for a revolute or prismatic joint (rad or m), an xyzw quaternion for a spherical one, ``()``
+        for a fixed one."""
+        body, c = self._bodies[name], self._client
+        return [tuple(pb.getJointStateMultiDof(body, j, physicsClientId=c)[0])
+                for j in range(pb.getNumJoints(body, physicsClientId=c))]
 
     @property
     def body_names(self) -> tuple[str, ...]:

@@ -202,6 +202,11 @@ class HybridDynamicScene:
             sim.ball_joint(body, link, [0, 0, 0.025], platform[1], list(joint), other=platform[0])
         self.reset(np.zeros(6), 0.5)
 
+    def motor_limits(self) -> list[tuple[str, int, float]]:
+        """The driven joints, (body, joint index, force limit): the nine prismatic actuators, in the order of
+        the strokes (N)."""
+        return [(body, joint, self.dynamics.motor_force) for body, joint in self.actuators]
+
     def _set(self, joint: tuple[str, int], value: float | np.ndarray) -> None:
         self.sim.reset_joint(joint[0], joint[1], value if isinstance(value, np.ndarray) else float(value))
 

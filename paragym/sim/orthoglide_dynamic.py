@@ -123,6 +123,10 @@ class OrthoglideDynamicScene:
         self._target = np.zeros(3)
         self._path_bodies: list[str] = []
 
+    def motor_limits(self) -> list[tuple[str, int, float]]:
+        """The driven joints, (body, joint index, force limit): the table's and the two sliders' motors (N)."""
+        return [(self.ROBOT, joint, self.dynamics.motor_force) for joint in self.motors]
+
     def reset(self, rho: np.ndarray) -> None:
         """Every joint where the analytic model has it at rho (3,) (m), at rest."""
         g = self.geometry

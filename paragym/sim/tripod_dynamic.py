@@ -163,6 +163,10 @@ class TripodDynamicScene:
         sim.friction(self.ROBOT, [w for pair in self.wheels for w in pair], d.friction)
         sim.friction(self.ROBOT, [c for pair in self.casters for c in pair], 0.0)
 
+    def motor_limits(self) -> list[tuple[str, int, float]]:
+        """The driven joints, (body, joint index, force limit): the six wheels' servos (N m)."""
+        return [(self.ROBOT, wheel, self.dynamics.wheel_torque) for pair in self.wheels for wheel in pair]
+
     # --- state ----------------------------------------------------------------------------------------------
     def reset(self, units: np.ndarray, eta: np.ndarray, heading: float, heading_error: np.ndarray) -> None:
         """Put the robot at rest with its units' ground points at ``units``
