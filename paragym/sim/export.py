@@ -1,0 +1,478 @@
+"""A dynamic scene's mechanism as a model file: MJCF (MuJoCo) or URDF with a loop-closure sidecar.
+
+The files are written from what the scene itself built (:class:`~paragym.sim.client.PyBulletSim`'s
+``recipes``, its ``loops`` and the scene's ``motor_limits()``), so the exported geometry is the simulated one:
+every link's joint frame, axis, part and mass, every loop closure and every motor's force limit.
+
+* **MJCF**: the links nested as bodies with hinge, slide and ball joints; each loop closure an equality
+  ``connect`` between two sites, one on each link, so that both points are stated (not read off the model's
+  reference pose); the motors as ``position`` actuators whose ``forcerange`` is the scene's force limit and whose
+  ``kp`` saturates it at 1 mm (slide) or 0.01 rad (hinge) of error; the fixed parts (guides, obstacles) as world
+  geoms. The robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed
+  parts (1, 2), as in the scene. The loops' ``solref``/``solimp`` (:data:`LOOP_SOLREF`, :data:`LOOP_SOLIMP`) are
+  stiffer than MuJoCo's defaults: a closed chain under gravity sags at its pins with the defaults (mujoco #2698).
+  The physics step, gravity and solver iterations are the scene's.
+* **URDF**: the open tree (every link, its joint to its parent with the motors' force limits as ``effort``),
+  the fixed parts as links fixed to the base; URDF has no ball joint, so a spherical joint is three revolute
+  joints (about z, y, x, in that order from the parent) through two links of 1e-6 kg. The loop closures and
+  actuators go to a JSON sidecar (``<file>.loops.json``): each closure names the two links and the point on each,
+  in that link's frame (m), to be closed by a ball joint, as the Extended-URDF proposal and urdfdom's
+  ``<constraint>`` discussion suggest.
+
+Lengths in m, angles in rad, masses in kg, force limits in N (slides) or N m (hinges).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from paragym.mechanisms.geometry import PartShape
+from paragym.sim.client import LinkSpec
+from paragym.sim.obstacles import Box, Capsule, Cylinder
+
+__all__ = ["FORMATS", "LOOP_SOLIMP", "LOOP_SOLREF", "dynamic_env", "mjcf", "scene_of", "urdf", "write"]
+
+#: the formats :func:`write` writes, and each one's file suffix
+FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
+#: the loop closures' constraint settings in MJCF: MuJoCo's (0.02, 1) defaults let a loop sag under load; a time
+#: constant of two 1 ms steps and a hard impedance hold it (measured in ``benchmarks/conformance.py``)
+LOOP_SOLREF = (0.002, 1.0)
+LOOP_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+#: the error (m for a slide, rad for a hinge) at which an exported position servo reaches its force limit
+SERVO_SATURATION = {"prismatic": 1e-3, "revolute": 1e-2}
+#: the mass (kg) of the two links that carry a spherical joint's first two axes in URDF
+AXIS_LINK_MASS = 1e-6
+
+
+def _num(values: Any) -> str:
+    """Numbers as MJCF and URDF take them: space-separated, each exact (``repr`` of a float)."""
+    return " ".join(repr(float(v)) for v in np.atleast_1d(values))
+
+
+def _wxyz(xyzw: Any) -> tuple[float, ...]:
+    x, y, z, w = (float(v) for v in xyzw)
+    return (w, x, y, z)
+
+
+def dynamic_env(env_id: str) -> Any:
+    """``env_id`` in dynamic fidelity with its default dynamics, after ``reset(seed=0)``; its scene is
+    :func:`scene_of` it. The caller closes it."""
+    import gymnasium as gym
+
+    import paragym  # noqa: F401 (registers the ids)
+
+    env = gym.make(env_id, fidelity="dynamic")
+    env.reset(seed=0)
+    return env
+
+
+def scene_of(env: Any) -> Any:
+    """The PyBullet scene of an env in dynamic fidelity (``env.unwrapped.world.scene``)."""
+    world = getattr(env.unwrapped, "world", None)
+    if world is None or not hasattr(world, "scene"):
+        raise ValueError(f"{env.unwrapped.spec.id if env.unwrapped.spec else env} has no dynamic scene: make it "
+                         'with fidelity="dynamic"')
+    return world.scene
+
+
+def _bodies(scene: Any) -> tuple[list[tuple[str, list[LinkSpec], float, PartShape | None]], list[tuple[str, Any]]]:
+    """The scene's tree bodies (name, links, base mass, base shape) and fixed parts (name, shape), in the order
+    they were built; ground (a plane or a heightfield: the scenario's terrain) and drawn-only bodies are left out."""
+    trees, fixed = [], []
+    for name, (build, args) in scene.sim.recipes.items():
+        if build == "add_tree_body":
+            trees.append((name, list(args[1]), float(args[2]), args[3]))
+        elif build == "add_static":
+            fixed.append((name, args[1]))
+        elif build == "add_static_group":
+            fixed += [(f"{name}_{k}", shape) for k, shape in enumerate(args[1])]
+    return trees, fixed
+
+
+def _motors(scene: Any) -> dict[tuple[str, str], float]:
+    """(body, link name) -> the motor's force limit."""
+    return {(body, scene.sim.link_name(body, joint)): float(limit) for body, joint, limit in scene.motor_limits()}
+
+
+# --- MJCF ---------------------------------------------------------------------------------------------------------
+
+
+def _mjcf_geom(parent: ET.Element, shape: PartShape | Any, pos: Any, robot: bool, mass: float | None = None,
+               rgba: Any = None, name: str | None = None) -> None:
+    attrs: dict[str, str] = {"pos": _num(pos)}
+    if name:
+        attrs["name"] = name
+    if isinstance(shape, Capsule):
+        attrs.update(type="capsule", size=_num([shape.radius, shape.height / 2]))
+    elif isinstance(shape, Cylinder):
+        attrs.update(type="cylinder", size=_num([shape.radius, shape.height / 2]))
+    elif isinstance(shape, Box):
+        attrs.update(type="box", size=_num(shape.half_extents))
+    elif shape.kind == "sphere":
+        attrs.update(type="sphere", size=_num(shape.radius))
+    elif shape.kind == "cylinder":
+        attrs.update(type="cylinder", size=_num([shape.radius, shape.length / 2]))
+    else:
+        attrs.update(type="box", size=_num(shape.half_extents))
+    attrs.update(contype="2" if robot else "1", conaffinity="1" if robot else "2")
+    if mass is not None:
+        attrs["mass"] = _num(mass)
+    if rgba is not None:
+        attrs["rgba"] = _num(rgba)
+    ET.SubElement(parent, "geom", attrs)
+
+
+def mjcf(scene: Any, model: str = "paragym") -> str:
+    """The scene's mechanism as an MJCF document (module docstring)."""
+    trees, fixed = _bodies(scene)
+    motors = _motors(scene)
+    d = scene.dynamics
+    root = ET.Element("mujoco", model=model)
+    ET.SubElement(root, "compiler", angle="radian", autolimits="true")
+    ET.SubElement(root, "option", timestep=_num(d.time_step), gravity=_num([0.0, 0.0, -d.gravity]),
+                  iterations=str(int(d.solver_iterations)))
+    world = ET.SubElement(root, "worldbody")
+    for name, shape in fixed:
+        _mjcf_geom(world, shape, shape.center, robot=False, name=name)
+    joints: list[tuple[str, str, str]] = []  # (joint name, kind, body)
+    for body, links, base_mass, base_shape in trees:
+        base = ET.SubElement(world, "body", name=body)
+        if base_mass > 0:  # a free body
+            ET.SubElement(base, "freejoint", name=f"{body}_free")
+            _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass)
+        elements = {None: base}
+        for link in _tree_order(links):
+            el = ET.SubElement(elements[link.parent], "body", name=_link_name(body, link.name, len(trees)),
+                               pos=_num(link.position), quat=_num(_wxyz(link.orientation)))
+            elements[link.name] = el
+            kind = {"revolute": "hinge", "prismatic": "slide", "spherical": "ball"}.get(link.joint)
+            if kind is not None:
+                attrs = {"name": f"{el.get('name')}_joint", "type": kind}
+                if kind != "ball":
+                    attrs["axis"] = _num(link.axis)
+                ET.SubElement(el, "joint", attrs)
+                joints.append((attrs["name"], link.joint, body))
+            if link.shape is None:
+                ET.SubElement(el, "inertial", pos=_num(link.shape_offset), mass=_num(link.mass),
+                              diaginertia=_num([1e-9] * 3))
+            else:
+                _mjcf_geom(el, link.shape, link.shape_offset, robot=True, mass=link.mass, rgba=link.rgba)
+    sites = []
+    for k, ((body_a, link_a, body_b, link_b), (point_a, point_b)) in enumerate(scene.sim.loops.items()):
+        for side, body, link, point in (("a", body_a, link_a, point_a), ("b", body_b, link_b, point_b)):
+            owner = root.find(f".//body[@name='{_link_name(body, link, len(trees)) if link else body}']")
+            ET.SubElement(owner, "site", name=f"loop{k}_{side}", pos=_num(point), size="0.005")
+        sites.append((f"loop{k}_a", f"loop{k}_b"))
+    if sites:
+        equality = ET.SubElement(root, "equality")
+        for a, b in sites:
+            ET.SubElement(equality, "connect", site1=a, site2=b, solref=_num(LOOP_SOLREF), solimp=_num(LOOP_SOLIMP))
+    if motors:
+        actuator = ET.SubElement(root, "actuator")
+        kinds = {name: kind for name, kind, _ in joints}
+        for (body, link), limit in motors.items():
+            joint = f"{_link_name(body, link, len(trees))}_joint"
+            ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint,
+                          kp=_num(limit / SERVO_SATURATION[kinds[joint]]), forcerange=_num([-limit, limit]))
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _link_name(body: str, link: str, n_trees: int) -> str:
+    """A link's name in the model: its own, prefixed by its body's where the scene has several tree bodies."""
+    return link if n_trees == 1 else f"{body}/{link}"
+
+
+def _tree_order(links: list[LinkSpec]) -> list[LinkSpec]:
+    from paragym.sim.client import _depth_first
+
+    return _depth_first(links)
+
+
+# --- URDF ---------------------------------------------------------------------------------------------------------
+
+
+def _rpy(xyzw: Any) -> tuple[float, float, float]:
+    """URDF's fixed-axis roll, pitch, yaw of an xyzw quaternion: R = Rz(yaw) Ry(pitch) Rx(roll) (at a pitch of
+    +-90 deg, where roll and yaw are one rotation, scipy puts it all in yaw: the same R)."""
+    import warnings
+
+    from scipy.spatial.transform import Rotation
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="Gimbal lock")
+        return tuple(float(v) for v in Rotation.from_quat(np.asarray(xyzw, float)).as_euler("xyz"))
+
+
+def _inertia(shape: PartShape | None, mass: float) -> tuple[float, float, float]:
+    """The principal moments (kg m^2) of a solid part about its centre (tiny for a link without a part)."""
+    if shape is None:
+        return (1e-9, 1e-9, 1e-9)
+    if shape.kind == "sphere":
+        i = 0.4 * mass * shape.radius**2
+        return (i, i, i)
+    if shape.kind == "cylinder":
+        r, h = shape.radius, shape.length
+        side = mass * (3 * r * r + h * h) / 12
+        return (side, side, 0.5 * mass * r * r)
+    x, y, z = (2 * v for v in shape.half_extents)
+    return (mass * (y * y + z * z) / 12, mass * (x * x + z * z) / 12, mass * (x * x + y * y) / 12)
+
+
+def _urdf_shape(parent: ET.Element, shape: Any) -> None:
+    geometry = ET.SubElement(parent, "geometry")
+    if isinstance(shape, Capsule):  # URDF has no capsule: the cylinder between its caps' centres
+        ET.SubElement(geometry, "cylinder", radius=_num(shape.radius), length=_num(shape.height))
+    elif isinstance(shape, Cylinder):
+        ET.SubElement(geometry, "cylinder", radius=_num(shape.radius), length=_num(shape.height))
+    elif isinstance(shape, Box):
+        ET.SubElement(geometry, "box", size=_num([2 * v for v in shape.half_extents]))
+    elif shape.kind == "sphere":
+        ET.SubElement(geometry, "sphere", radius=_num(shape.radius))
+    elif shape.kind == "cylinder":
+        ET.SubElement(geometry, "cylinder", radius=_num(shape.radius), length=_num(shape.length))
+    else:
+        ET.SubElement(geometry, "box", size=_num([2 * v for v in shape.half_extents]))
+
+
+def _urdf_link(root: ET.Element, name: str, shape: Any, offset: Any, mass: float) -> None:
+    link = ET.SubElement(root, "link", name=name)
+    inertial = ET.SubElement(link, "inertial")
+    ET.SubElement(inertial, "origin", xyz=_num(offset), rpy="0 0 0")
+    ET.SubElement(inertial, "mass", value=_num(mass))
+    ixx, iyy, izz = _inertia(shape if isinstance(shape, PartShape) else None, mass)
+    ET.SubElement(inertial, "inertia", ixx=_num(ixx), iyy=_num(iyy), izz=_num(izz), ixy="0", ixz="0", iyz="0")
+    if shape is not None:
+        for tag in ("visual", "collision"):
+            part = ET.SubElement(link, tag)
+            ET.SubElement(part, "origin", xyz=_num(offset), rpy="0 0 0")
+            _urdf_shape(part, shape)
+
+
+def _urdf_joint(root: ET.Element, name: str, kind: str, parent: str, child: str, xyz: Any, rpy: Any,
+                axis: Any = None, effort: float = 0.0) -> None:
+    joint = ET.SubElement(root, "joint", name=name, type=kind)
+    ET.SubElement(joint, "parent", link=parent)
+    ET.SubElement(joint, "child", link=child)
+    ET.SubElement(joint, "origin", xyz=_num(xyz), rpy=_num(rpy))
+    if kind != "fixed":
+        ET.SubElement(joint, "axis", xyz=_num(axis))
+        limit = {"effort": _num(effort), "velocity": "100.0"}
+        if kind == "prismatic":
+            limit.update(lower="-10.0", upper="10.0")
+        ET.SubElement(joint, "limit", limit)
+
+
+def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
+    """The scene's mechanism as a URDF document of its open tree, and the loop-closure sidecar (a JSON-able
+    dict; module docstring). A scene of one tree body only: a split layout has no single tree to write."""
+    trees, fixed = _bodies(scene)
+    if len(trees) != 1 or trees[0][2] > 0:
+        raise ValueError("URDF export needs the mechanism as one fixed-base tree body (the dynamics' "
+                         f'layout "tree"); this scene has {[t[0] for t in trees]}')
+    body, links, _, _ = trees[0]
+    motors = {link: limit for (_, link), limit in _motors(scene).items()}
+    root = ET.Element("robot", name=model)
+    base = "base"
+    ET.SubElement(root, "link", name=base)
+    for name, shape in fixed:
+        _urdf_link(root, name, shape, (0.0, 0.0, 0.0), 0.0)
+        _urdf_joint(root, f"{name}_fixed", "fixed", base, name, shape.center, (0.0, 0.0, 0.0))
+    joints = []
+    for link in _tree_order(links):
+        parent = link.parent or base
+        if link.joint == "spherical":  # three revolute joints about z, y, x
+            first, second = f"{link.name}_rz", f"{link.name}_ry"
+            for child in (first, second):
+                _urdf_link(root, child, None, (0.0, 0.0, 0.0), AXIS_LINK_MASS)
+            _urdf_joint(root, f"{first}_joint", "continuous", parent, first, link.position, _rpy(link.orientation),
+                        (0.0, 0.0, 1.0))
+            _urdf_joint(root, f"{second}_joint", "continuous", first, second, (0, 0, 0), (0, 0, 0), (0.0, 1.0, 0.0))
+            _urdf_link(root, link.name, link.shape, link.shape_offset, link.mass)
+            _urdf_joint(root, f"{link.name}_joint", "continuous", second, link.name, (0, 0, 0), (0, 0, 0),
+                        (1.0, 0.0, 0.0))
+            joints.append({"link": link.name, "type": "spherical",
+                           "joints": [f"{first}_joint", f"{second}_joint", f"{link.name}_joint"]})
+            continue
+        _urdf_link(root, link.name, link.shape, link.shape_offset, link.mass)
+        kind = {"revolute": "continuous", "prismatic": "prismatic", "fixed": "fixed"}[link.joint]
+        _urdf_joint(root, f"{link.name}_joint", kind, parent, link.name, link.position, _rpy(link.orientation),
+                    link.axis, motors.get(link.name, 0.0))
+        joints.append({"link": link.name, "type": link.joint, "joints": [f"{link.name}_joint"]})
+    sidecar = {
+        "format": "paragym loop closures 1",
+        "robot": model,
+        "units": "m, rad, kg; force limits in N (prismatic) or N m (revolute)",
+        "loops": [{"type": "ball", "link_a": link_a or base, "point_a": list(point_a),
+                   "link_b": link_b or base, "point_b": list(point_b)}
+                  for (_, link_a, _, link_b), (point_a, point_b) in scene.sim.loops.items()],
+        "actuators": [{"joint": f"{link}_joint", "force_limit": limit} for link, limit in motors.items()],
+        "joints": joints,
+        "note": "URDF has no ball joint: a spherical joint is three continuous joints about z, y and x through two "
+                f"links of {AXIS_LINK_MASS:g} kg; each loop closes by a ball joint between point_a on link_a "
+                "and point_b on link_b, each in its link's frame",
+    }
+    ET.indent(root)
+    return ET.tostring(root, encoding="unicode") + "\n", sidecar
+
+
+def write(env_id: str, fmt: str, out: str | Path,
+          overwrite: bool = False) -> tuple[list[Path], dict[str, float] | None]:
+    """Write ``env_id``'s mechanism as ``fmt`` ("mjcf" or "urdf") to ``out`` (a file; its suffix is the
+    format's, added when missing), with the URDF's sidecar beside it. An existing file is refused unless
+    ``overwrite``. Returns the paths written and, where ``mujoco`` is installed, the files checked against the
+    scene after ``reset(seed=0)`` (:func:`check_mjcf`, :func:`check_urdf`; None without ``mujoco``)."""
+    import importlib.util
+
+    if fmt not in FORMATS:
+        raise ValueError(f"format must be one of {', '.join(FORMATS)}; got {fmt!r}")
+    path = Path(out)
+    if path.suffix != FORMATS[fmt]:
+        path = path.with_name(path.name + FORMATS[fmt])
+    paths = [path] + ([path.with_name(path.name + ".loops.json")] if fmt == "urdf" else [])
+    existing = [str(p) for p in paths if p.exists()]
+    if existing and not overwrite:
+        raise FileExistsError(f"{', '.join(existing)} exists already: choose another --out, or pass --overwrite")
+    env = dynamic_env(env_id)
+    try:
+        scene, model = scene_of(env), env_id.split("/")[-1]
+        checks = importlib.util.find_spec("mujoco") is not None
+        if fmt == "mjcf":
+            text = mjcf(scene, model)
+            texts, gaps = [text], check_mjcf(scene, text) if checks else None
+        else:
+            text, sidecar = urdf(scene, model)
+            texts, gaps = [text, json.dumps(sidecar, indent=1) + "\n"], check_urdf(scene, text, sidecar) if checks \
+                else None
+    finally:
+        env.close()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    for p, text in zip(paths, texts, strict=True):
+        p.write_text(text)
+    return paths, gaps
+
+
+# --- checks -------------------------------------------------------------------------------------------------------
+
+
+def _matrix(xyzw: Any) -> np.ndarray:
+    from scipy.spatial.transform import Rotation
+
+    return Rotation.from_quat(np.asarray(xyzw, float)).as_matrix()
+
+
+def tree_frames(links: list[LinkSpec], values: list[tuple[float, ...]]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every link's frame (world position, m; rotation matrix) for joint values ``values`` (in ``links``'
+    depth-first order, as :meth:`~paragym.sim.client.PyBulletSim.joint_values` gives them), in double precision:
+    the tree the scene simulates, from its base at the origin (PyBullet reports link frames in single precision)."""
+    frames: dict[str | None, tuple[np.ndarray, np.ndarray]] = {None: (np.zeros(3), np.eye(3))}
+    for link, value in zip(links, values, strict=True):
+        pos, rot = frames[link.parent]
+        pos, rot = pos + rot @ np.asarray(link.position, float), rot @ _matrix(link.orientation)
+        axis = np.asarray(link.axis, float) / np.linalg.norm(link.axis)
+        if link.joint == "revolute":
+            from scipy.spatial.transform import Rotation
+
+            rot = rot @ Rotation.from_rotvec(axis * value[0]).as_matrix()
+        elif link.joint == "prismatic":
+            pos = pos + rot @ (axis * value[0])
+        elif link.joint == "spherical":
+            rot = rot @ _matrix(value)
+        frames[link.name] = (pos, rot)
+    del frames[None]
+    return frames
+
+
+def _gaps(frames: dict[str, tuple[np.ndarray, np.ndarray]], got: Any) -> dict[str, float]:
+    """The largest position (m) and orientation (rad) gap between ``frames`` and ``got(name)`` -> (pos, R)."""
+    frame_m = frame_rad = 0.0
+    for name, (pos, rot) in frames.items():
+        p, r = got(name)
+        frame_m = max(frame_m, float(np.linalg.norm(p - pos)))
+        cos = (np.trace(rot.T @ r) - 1.0) / 2.0
+        frame_rad = max(frame_rad, float(np.linalg.norm(rot.T @ r - np.eye(3))) if cos > 0.999 else math.acos(cos))
+    return {"frame_m": frame_m, "frame_rad": frame_rad}
+
+
+def _tree(scene: Any) -> tuple[str, list[LinkSpec]]:
+    trees, _ = _bodies(scene)
+    if len(trees) != 1 or trees[0][2] > 0:
+        raise ValueError("the check needs the mechanism as one fixed-base tree body (the dynamics' layout \"tree\")")
+    return trees[0][0], _tree_order(trees[0][1])
+
+
+def _mujoco_pose(model: Any, links: list[LinkSpec], values: list[tuple[float, ...]], urdf: bool) -> Any:
+    """MuJoCo's data with ``values`` set on ``model``'s joints (a URDF's spherical joints through their three
+    revolute ones), forward kinematics done."""
+    import mujoco
+
+    data = mujoco.MjData(model)
+    for link, value in zip(links, values, strict=True):
+        if link.joint == "spherical" and urdf:
+            from scipy.spatial.transform import Rotation
+
+            z, y, x = Rotation.from_quat(np.asarray(value, float)).as_euler("ZYX")
+            for name, angle in ((f"{link.name}_rz_joint", z), (f"{link.name}_ry_joint", y), (f"{link.name}_joint", x)):
+                data.qpos[model.joint(name).qposadr[0]] = angle
+        elif link.joint == "spherical":
+            adr = model.joint(f"{link.name}_joint").qposadr[0]
+            data.qpos[adr:adr + 4] = _wxyz(value)
+        elif link.joint != "fixed":
+            data.qpos[model.joint(f"{link.name}_joint").qposadr[0]] = value[0]
+    mujoco.mj_kinematics(model, data)
+    return data
+
+
+def check_mjcf(scene: Any, text: str) -> dict[str, float]:
+    """The exported MJCF, loaded in MuJoCo at the scene's joint values now, against the scene's tree
+    (:func:`tree_frames`): the largest gap of a link's frame (``frame_m``, m; ``frame_rad``, rad), and the largest
+    gap at a loop closure (``loop_m``, m: zero where those joint values close the loops, as the kinematics'
+    do)."""
+    import mujoco
+
+    body, links = _tree(scene)
+    values = scene.sim.joint_values(body)
+    model = mujoco.MjModel.from_xml_string(text)
+    data = _mujoco_pose(model, links, values, urdf=False)
+
+    def got(name: str) -> tuple[np.ndarray, np.ndarray]:
+        b = model.body(name).id
+        return data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy()
+
+    out = _gaps(tree_frames(links, values), got)
+    out["loop_m"] = max((float(np.linalg.norm(data.site(f"loop{k}_a").xpos - data.site(f"loop{k}_b").xpos))
+                         for k in range(len(scene.sim.loops))), default=0.0)
+    return out
+
+
+def check_urdf(scene: Any, text: str, sidecar: dict[str, Any]) -> dict[str, float]:
+    """The exported URDF, loaded in MuJoCo (its URDF importer, static bodies kept), and its sidecar's loop
+    closures, at the scene's joint values now: as :func:`check_mjcf`."""
+    import mujoco
+
+    body, links = _tree(scene)
+    values = scene.sim.joint_values(body)
+    keep = '<mujoco><compiler fusestatic="false" discardvisual="true" balanceinertia="true"/></mujoco>'
+    model = mujoco.MjModel.from_xml_string(text.replace(">", ">" + keep, 1) if "<mujoco>" not in text else text)
+    data = _mujoco_pose(model, links, values, urdf=True)
+
+    def got(name: str) -> tuple[np.ndarray, np.ndarray]:
+        if name == "base":
+            return np.zeros(3), np.eye(3)
+        b = model.body(name).id
+        return data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy()
+
+    out = _gaps(tree_frames(links, values), got)
+    loop_m = 0.0
+    for loop in sidecar["loops"]:
+        (pa, ra), (pb_, rb) = got(loop["link_a"]), got(loop["link_b"])
+        gap = pa + ra @ np.asarray(loop["point_a"]) - (pb_ + rb @ np.asarray(loop["point_b"]))
+        loop_m = max(loop_m, float(np.linalg.norm(gap)))
+    out["loop_m"] = loop_m
+    return out

@@ -1,0 +1,119 @@
+"""``paragym export``: every mechanism as MJCF and URDF, loaded in MuJoCo and PyBullet, its geometry the
+kinematics' (issue 41)."""
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import paragym  # noqa: F401
+from paragym import registry
+from paragym.sim import export
+
+mujoco = pytest.importorskip("mujoco")
+
+NEWEST = list(registry.newest())
+
+
+@pytest.fixture(scope="module", params=NEWEST)
+def env(request):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = export.dynamic_env(request.param)
+    yield env
+    env.close()
+
+
+def _both(scene):
+    """Both formats' checks at the scene's joint values now."""
+    text, sidecar = export.urdf(scene)
+    return {"mjcf": export.check_mjcf(scene, export.mjcf(scene)), "urdf": export.check_urdf(scene, text, sidecar)}
+
+
+def test_the_files_close_the_loops_where_the_kinematics_does(env):
+    """At the start of three random scenarios (each reset puts every joint where the task's kinematics has it)
+    the exported models' link frames are the simulated tree's and every loop closes, to 1e-9 m, in MuJoCo."""
+    for seed in (1, 2, 3):
+        env.reset(seed=seed)
+        scene = export.scene_of(env)
+        for fmt, gaps in _both(scene).items():
+            assert gaps["frame_m"] < 1e-9 and gaps["frame_rad"] < 1e-9, (fmt, seed, gaps)
+            assert gaps["loop_m"] < 1e-9, (fmt, seed, gaps)
+        assert len(json.loads(json.dumps(export.urdf(scene)[1]))["loops"]) == len(scene.sim.loops)
+
+
+def test_the_open_tree_matches_at_random_joint_values(env):
+    """Any joint values, the loops left open: the frames still agree (the tree's geometry alone), while the loop
+    gap shows the loops open where the mechanism has any."""
+    env.reset(seed=0)
+    scene = export.scene_of(env)
+    body, links = export._tree(scene)
+    rng = np.random.default_rng(7)
+    for index, link in enumerate(links):
+        if link.joint in ("revolute", "prismatic"):
+            scene.sim.reset_joint(body, index, float(rng.uniform(-0.3, 0.3)))
+        elif link.joint == "spherical":
+            q = rng.normal(size=4)
+            scene.sim.reset_joint(body, index, list(q / np.linalg.norm(q)))
+    for fmt, gaps in _both(scene).items():
+        assert gaps["frame_m"] < 1e-9 and gaps["frame_rad"] < 1e-9, (fmt, gaps)
+        assert (gaps["loop_m"] > 1e-3) == bool(scene.sim.loops), (fmt, gaps)
+
+
+def test_a_misplaced_pivot_is_seen(env):
+    """The check is not blind: one loop's pivot moved by 1 mm in the MJCF shows as a 1 mm gap."""
+    env.reset(seed=0)
+    scene = export.scene_of(env)
+    if not scene.sim.loops:
+        pytest.skip("no loop closure in this mechanism (the tripod's loops close through the ground)")
+    text = export.mjcf(scene)
+    head, tail = text.split('<site name="loop0_a" pos="', 1)
+    x, rest = tail.split(" ", 1)
+    moved = f'{head}<site name="loop0_a" pos="{float(x) + 1e-3!r} {rest}'
+    assert export.check_mjcf(scene, moved)["loop_m"] == pytest.approx(1e-3, rel=1e-6)
+
+
+def test_the_urdf_loads_in_pybullet_with_every_joint(env, tmp_path):
+    import pybullet as pb
+
+    env.reset(seed=0)
+    scene = export.scene_of(env)
+    text, sidecar = export.urdf(scene)
+    path = tmp_path / "m.urdf"
+    path.write_text(text)
+    client = pb.connect(pb.DIRECT)
+    try:
+        robot = pb.loadURDF(str(path), useFixedBase=True, physicsClientId=client)
+        names = {pb.getJointInfo(robot, j, physicsClientId=client)[1].decode()
+                 for j in range(pb.getNumJoints(robot, physicsClientId=client))}
+    finally:
+        pb.disconnect(client)
+    assert {j for joint in sidecar["joints"] for j in joint["joints"]} <= names
+    assert {a["joint"] for a in sidecar["actuators"]} <= names and sidecar["actuators"]
+
+
+def test_the_mjcf_motors_carry_the_scene_s_force_limits(env):
+    env.reset(seed=0)
+    scene = export.scene_of(env)
+    model = mujoco.MjModel.from_xml_string(export.mjcf(scene))
+    limits = sorted(limit for _, _, limit in scene.motor_limits())
+    assert model.nu == len(limits)
+    assert sorted(model.actuator_forcerange[:, 1]) == limits
+    assert np.all(model.actuator_forcerange[:, 0] == -model.actuator_forcerange[:, 1])
+
+
+def test_export_cli_writes_checks_and_refuses_to_overwrite(tmp_path, capsys):
+    from paragym.cli import main
+
+    out = tmp_path / "orthoglide"
+    assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert (tmp_path / "orthoglide.urdf").exists() and (tmp_path / "orthoglide.urdf.loops.json").exists()
+    assert "loops closed within" in said
+    before = (tmp_path / "orthoglide.urdf").read_text()
+    (tmp_path / "orthoglide.urdf").write_text("mine")
+    assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out)]) != 0
+    assert (tmp_path / "orthoglide.urdf").read_text() == "mine"  # a user's file is not overwritten unasked
+    assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out), "--overwrite"]) == 0
+    assert (tmp_path / "orthoglide.urdf").read_text() == before
