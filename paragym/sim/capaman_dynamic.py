@@ -194,6 +194,11 @@ class CaPaManDynamicScene:
             sim.ball_joint(leg, crank_b, [0, 0, g.a / 2], coupler, [0, 0, g.c / 2])
             sim.ball_joint(leg, slider, [0, 0, 0], self.plate[1], list(g.plate_points[k]), other=self.plate[0])
 
+    def hold(self, duration: float) -> None:
+        """Keep the cranks' targets (rad) where they are for ``duration`` s of simulated time, the motors holding the mechanism
+        against gravity under their force limits."""
+        self.drive(self._target, duration)
+
     def motor_limits(self) -> list[tuple[str, int, float]]:
         """The driven joints, (body, joint index, force limit): the three crank motors (N m)."""
         return [(body, joint, self.dynamics.motor_torque) for body, joint in self.motors]

@@ -6,12 +6,15 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
 
 * **MJCF**: the links nested as bodies with hinge, slide and ball joints; each loop closure an equality
   ``connect`` between two sites, one on each link, so that both points are stated (not read off the model's
-  reference pose); the motors as ``position`` actuators whose ``forcerange`` is the scene's force limit and whose
-  ``kp`` saturates it at 1 mm (slide) or 0.01 rad (hinge) of error; the fixed parts (guides, obstacles) as world
-  geoms. The robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed
-  parts (1, 2), as in the scene. The loops' ``solref``/``solimp`` (:data:`LOOP_SOLREF`, :data:`LOOP_SOLIMP`) are
-  stiffer than MuJoCo's defaults: a closed chain under gravity sags at its pins with the defaults (mujoco #2698).
-  The physics step, gravity and solver iterations are the scene's.
+  reference pose); the motors as ``position`` servos whose ``forcerange`` is the scene's force limit, critically
+  damped at the stiffest bandwidth the physics step h integrates stably, 0.5 / h rad/s, for the inertia each
+  one moves (:func:`servo_gains`); the fixed parts (guides, obstacles) as world geoms. The robot's parts do not
+  collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts (1, 2), as in the scene.
+  The loops' ``solref``/``solimp`` (:func:`loop_solref`, :data:`LOOP_SOLIMP`) are stiffer than MuJoCo's
+  defaults, with which a closed chain under gravity sags at its pins (mujoco #2698;
+  ``benchmarks/conformance.py`` measures both). Gravity and the solver iterations are the scene's; the physics
+  step is at most 1 ms (:func:`mujoco_time_step`), with MuJoCo's default integrator (semi-implicit Euler: on the
+  CaPaMan ``implicitfast`` let the loops open 40 times as far).
 * **URDF**: the open tree (every link, its joint to its parent with the motors' force limits as ``effort``),
   the fixed parts as links fixed to the base; URDF has no ball joint, so a spherical joint is three revolute
   joints (about z, y, x, in that order from the parent) through two links of 1e-6 kg. The loop closures and
@@ -36,16 +39,63 @@ from paragym.mechanisms.geometry import PartShape
 from paragym.sim.client import LinkSpec
 from paragym.sim.obstacles import Box, Capsule, Cylinder
 
-__all__ = ["FORMATS", "LOOP_SOLIMP", "LOOP_SOLREF", "dynamic_env", "mjcf", "scene_of", "urdf", "write"]
+__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "dynamic_env", "loop_solref", "mjcf", "mujoco_time_step",
+           "scene_of", "servo_gains", "urdf", "write"]
 
 #: the formats :func:`write` writes, and each one's file suffix
 FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
-#: the loop closures' constraint settings in MJCF: MuJoCo's (0.02, 1) defaults let a loop sag under load; a time
-#: constant of two 1 ms steps and a hard impedance hold it (measured in ``benchmarks/conformance.py``)
-LOOP_SOLREF = (0.002, 1.0)
+#: the loop closures' impedance in MJCF: harder than MuJoCo's default (0.9, 0.95, 0.001, 0.5, 2)
 LOOP_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
-#: the error (m for a slide, rad for a hinge) at which an exported position servo reaches its force limit
-SERVO_SATURATION = {"prismatic": 1e-3, "revolute": 1e-2}
+
+
+#: the longest physics step (s) of an exported MJCF: a scene's, or shorter
+MUJOCO_MAX_STEP = 1e-3
+
+
+def mujoco_time_step(time_step: float) -> float:
+    """The exported MJCF's physics step (s): the scene's, at most :data:`MUJOCO_MAX_STEP`. MuJoCo's position
+    servos are springs integrated step by step, where PyBullet's motors are velocity constraints solved in the
+    step: holding a 4 kg platform on 0.2 kg legs, the hybrid's servos at its 5 ms step are either too soft to
+    hold it or unstable; at 1 ms they hold it (``benchmarks/conformance.py``)."""
+    return min(time_step, MUJOCO_MAX_STEP)
+
+
+def loop_solref(time_step: float) -> tuple[float, float]:
+    """The loop closures' ``solref`` in MJCF: a time constant of two physics steps (the shortest MuJoCo takes;
+    its default, 0.02 s, lets a loop sag under load), critically damped."""
+    return (2.0 * time_step, 1.0)
+
+
+def servo_gains(links: list[LinkSpec], values: list[tuple[float, ...]], link: str,
+                time_step: float) -> tuple[float, float]:
+    """A position servo's ``kp`` and ``kv`` for the joint of ``link``: critically damped at 0.5 / h rad/s (h:
+    the physics step; semi-implicit Euler goes unstable as that product nears 2) for what it moves, the mass of
+    the link's subtree for a slide, its moment of inertia about the axis (point masses at the parts' centres, at
+    the joint values ``values``) for a hinge. The loop closures add what they carry on top; the servo is then
+    softer than the one paragym simulates, by at most that ratio."""
+    frames = tree_frames(links, values)
+    children: dict[str | None, list[LinkSpec]] = {}
+    for spec in links:
+        children.setdefault(spec.parent, []).append(spec)
+    spec = next(s for s in links if s.name == link)
+    subtree, stack = [], [spec]
+    while stack:
+        item = stack.pop()
+        subtree.append(item)
+        stack.extend(children.get(item.name, []))
+    pos, rot = frames[link]
+    axis = rot @ (np.asarray(spec.axis, float) / np.linalg.norm(spec.axis))
+    if spec.joint == "prismatic":
+        inertia = sum(item.mass for item in subtree)
+    else:
+        inertia = 0.0
+        for item in subtree:
+            p, r = frames[item.name]
+            arm = p + r @ np.asarray(item.shape_offset, float) - pos
+            inertia += item.mass * float(np.sum((arm - np.dot(arm, axis) * axis) ** 2))
+        inertia = max(inertia, 1e-6)
+    omega = 0.5 / time_step
+    return inertia * omega**2, 2.0 * inertia * omega
 #: the mass (kg) of the two links that carry a spherical joint's first two axes in URDF
 AXIS_LINK_MASS = 1e-6
 
@@ -135,7 +185,8 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
     d = scene.dynamics
     root = ET.Element("mujoco", model=model)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
-    ET.SubElement(root, "option", timestep=_num(d.time_step), gravity=_num([0.0, 0.0, -d.gravity]),
+    h = mujoco_time_step(d.time_step)
+    ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
                   iterations=str(int(d.solver_iterations)))
     world = ET.SubElement(root, "worldbody")
     for name, shape in fixed:
@@ -172,14 +223,17 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
     if sites:
         equality = ET.SubElement(root, "equality")
         for a, b in sites:
-            ET.SubElement(equality, "connect", site1=a, site2=b, solref=_num(LOOP_SOLREF), solimp=_num(LOOP_SOLIMP))
+            ET.SubElement(equality, "connect", site1=a, site2=b, solref=_num(loop_solref(h)),
+                          solimp=_num(LOOP_SOLIMP))
     if motors:
         actuator = ET.SubElement(root, "actuator")
-        kinds = {name: kind for name, kind, _ in joints}
+        specs = {body: (links, scene.sim.joint_values(body)) for body, links, _, _ in trees}
         for (body, link), limit in motors.items():
             joint = f"{_link_name(body, link, len(trees))}_joint"
-            ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint,
-                          kp=_num(limit / SERVO_SATURATION[kinds[joint]]), forcerange=_num([-limit, limit]))
+            links, values = specs[body]
+            kp, kv = servo_gains(_tree_order(links), values, link, h)
+            ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
+                          forcerange=_num([-limit, limit]))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
 

@@ -202,6 +202,11 @@ class HybridDynamicScene:
             sim.ball_joint(body, link, [0, 0, 0.025], platform[1], list(joint), other=platform[0])
         self.reset(np.zeros(6), 0.5)
 
+    def hold(self, duration: float) -> None:
+        """Keep the nine strokes' targets (m) where they are for ``duration`` s of simulated time, the motors holding the mechanism
+        against gravity under their force limits."""
+        self.drive(self._target, duration)
+
     def motor_limits(self) -> list[tuple[str, int, float]]:
         """The driven joints, (body, joint index, force limit): the nine prismatic actuators, in the order of
         the strokes (N)."""

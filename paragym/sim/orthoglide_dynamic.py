@@ -123,6 +123,11 @@ class OrthoglideDynamicScene:
         self._target = np.zeros(3)
         self._path_bodies: list[str] = []
 
+    def hold(self, duration: float) -> None:
+        """Keep the three motors' targets (m) where they are for ``duration`` s of simulated time, the motors holding the mechanism
+        against gravity under their force limits."""
+        self.drive(self._target, duration)
+
     def motor_limits(self) -> list[tuple[str, int, float]]:
         """The driven joints, (body, joint index, force limit): the table's and the two sliders' motors (N)."""
         return [(self.ROBOT, joint, self.dynamics.motor_force) for joint in self.motors]
