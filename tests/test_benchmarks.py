@@ -232,3 +232,16 @@ def test_reference_dynamic_counts_the_reference_s_dynamic_episodes(tmp_path):
     row = _recorded(tmp_path, "reference_dynamic")["rows"][0]
     assert row[:2] == ["paragym/Orthoglide2PRRKappa-v2", "gradient-c-limited"]
     assert row[2].startswith("2/2 = 1.00 [") and row[4].startswith("2/2 = 1.00 [") and row[5] == "meets", out
+
+
+def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp_path):
+    """The CaPaMan held under gravity for 0.2 s: with the exported loop settings MuJoCo keeps its loops within
+    0.01 mm, with MuJoCo's defaults they open by more than 0.5 mm (mujoco #2698), and PyBullet's within 0.01 mm."""
+    pytest = __import__("pytest")
+    pytest.importorskip("mujoco")
+    _run("benchmarks/conformance.py", "--env", "paragym/CaPaManCollisionFree-v1", "--seconds", "0.2", "--record",
+         str(tmp_path))
+    rows = {r[1]: r for r in _recorded(tmp_path, "conformance")["rows"]}
+    assert set(rows) == {"MuJoCo, exported loops", "MuJoCo, default loops", "PyBullet (the env's)"}
+    assert float(rows["MuJoCo, exported loops"][3]) < 0.01 < 0.5 < float(rows["MuJoCo, default loops"][3])
+    assert float(rows["PyBullet (the env's)"][3]) < 0.01
