@@ -215,10 +215,10 @@ def test_headroom_checks_floors_and_reference_against_the_bounds(tmp_path):
                str(tmp_path))
     rows = _recorded(tmp_path, "headroom")["rows"]
     judged = {(r[1], r[2]) for r in rows if r[3] != "learned"}
-    assert judged == {(s, p) for s in ("paper", "random") for p in ("gradient-c", "zero", "random")}, rows
+    assert judged == {(s, p) for s in ("paper", "random") for p in ("gradient-c-limited", "zero", "random")}, rows
     assert {r[2] for r in rows if r[3] == "learned"} and all(r[2].endswith("-seed0") for r in rows if r[3] == "learned")
     by = {(r[1], r[2]): r for r in rows}
-    assert by[("random", "zero")][-1] == "MISSED" and by[("random", "gradient-c")][-1] == "ok"  # 2 of 2 each
+    assert by[("random", "zero")][-1] == "MISSED" and by[("random", "gradient-c-limited")][-1] == "ok"  # 2 of 2 each
     assert "rows miss their bound" in out
     assert (tmp_path / "headroom.png").stat().st_size > 0  # the figure beside a result file written elsewhere
     assert all(r[3] != "learned" or r[-1] == "-" for r in rows)  # learned agents are measured, not bounded
