@@ -36,14 +36,7 @@ def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float]:
     residuals = []
 
     def record_gap() -> None:
-        gaps = [0.0]
-        for (body_a, link_a, body_b, link_b), (point_a, point_b) in scene.sim.loops.items():
-            ends = []
-            for b, link, point in ((body_a, link_a, point_a), (body_b, link_b, point_b)):
-                pos, xyzw = scene.sim.link_frame(b, link if link is not None else -1)
-                ends.append(pos + export._matrix(xyzw) @ np.asarray(point))
-            gaps.append(float(np.linalg.norm(ends[0] - ends[1])))
-        residuals.append(max(gaps))
+        residuals.append(scene.sim.loop_residual())
 
     scene.sim.after_step.append(record_gap)
     t0 = time.perf_counter()

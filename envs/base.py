@@ -318,6 +318,9 @@ class ParagymEnv(TaskShell, gym.Env):
             info[name] = read(0)
         info["is_success"] = success(0)
         info["failure"] = names[failure(0)]
+        sim = getattr(getattr(self.world, "scene", None), "sim", None)
+        if sim is not None and sim.loops:  # dynamic fidelity of a closed-chain mechanism
+            info["loop_residual_m"] = sim.loop_residual()
         return info
 
     _read_for: Any = None

@@ -195,8 +195,8 @@ class CaPaManDynamicScene:
             sim.ball_joint(leg, slider, [0, 0, 0], self.plate[1], list(g.plate_points[k]), other=self.plate[0])
 
     def hold(self, duration: float) -> None:
-        """Keep the cranks' targets (rad) where they are for ``duration`` s of simulated time, the motors holding the mechanism
-        against gravity under their force limits."""
+        """Keep the cranks' targets (rad) where they are for ``duration`` s of simulated time, the motors
+        holding the mechanism against gravity under their force limits."""
         self.drive(self._target, duration)
 
     def motor_limits(self) -> list[tuple[str, int, float]]:

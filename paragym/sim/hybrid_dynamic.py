@@ -203,8 +203,8 @@ class HybridDynamicScene:
         self.reset(np.zeros(6), 0.5)
 
     def hold(self, duration: float) -> None:
-        """Keep the nine strokes' targets (m) where they are for ``duration`` s of simulated time, the motors holding the mechanism
-        against gravity under their force limits."""
+        """Keep the nine strokes' targets (m) where they are for ``duration`` s of simulated time, the motors
+        holding the mechanism against gravity under their force limits."""
         self.drive(self._target, duration)
 
     def motor_limits(self) -> list[tuple[str, int, float]]:

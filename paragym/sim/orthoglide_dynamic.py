@@ -124,8 +124,8 @@ class OrthoglideDynamicScene:
         self._path_bodies: list[str] = []
 
     def hold(self, duration: float) -> None:
-        """Keep the three motors' targets (m) where they are for ``duration`` s of simulated time, the motors holding the mechanism
-        against gravity under their force limits."""
+        """Keep the three motors' targets (m) where they are for ``duration`` s of simulated time, the motors
+        holding the mechanism against gravity under their force limits."""
         self.drive(self._target, duration)
 
     def motor_limits(self) -> list[tuple[str, int, float]]:
