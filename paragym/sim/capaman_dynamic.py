@@ -141,6 +141,10 @@ class CaPaManDynamicScene:
     """
 
     ROBOT = "capaman"
+    #: the exported MJCF's servo bandwidth times its step (:func:`paragym.sim.export.servo_gains`): at the
+    #: default 0.5 the crank servos, held against the loops that carry the plate, chattered by +-7 N m about
+    #: their mean holding torque in MuJoCo; at 0.25 they hold it still, sagging as little (0.1 mm)
+    EXPORT_SERVO_BANDWIDTH = 0.25
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
                  dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05) -> None:

@@ -514,6 +514,13 @@ class PyBulletSim:
         return np.array([s[0] for name, joints in motors
                          for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
 
+    def motor_forces(self, motors: Motors) -> np.ndarray:
+        """The force (N) or torque (N m) each joint of ``motors`` applied in the last physics step, in their
+        order."""
+        c = self._client
+        return np.array([s[3] for name, joints in motors
+                         for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
+
     def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
                    quaternion: Sequence[float]) -> None:
         """Put a free rigid part at ``position`` (m), turned by the xyzw ``quaternion``, at rest: ``part`` is

@@ -7,9 +7,10 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
 * **MJCF**: the links nested as bodies with hinge, slide and ball joints; each loop closure an equality
   ``connect`` between two sites, one on each link, so that both points are stated (not read off the model's
   reference pose); the motors as ``position`` servos whose ``forcerange`` is the scene's force limit, critically
-  damped at the stiffest bandwidth the physics step h integrates stably, 0.5 / h rad/s, for the inertia each
-  one moves (:func:`servo_gains`); the fixed parts (guides, obstacles) as world geoms. The robot's parts do not
-  collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts (1, 2), as in the scene.
+  damped at a bandwidth the physics step h integrates stably, 0.5 / h rad/s (or a scene's own), for the
+  inertia each one moves (:func:`servo_gains`); the fixed parts (guides, obstacles) as world geoms. The
+  robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts
+  (1, 2), as in the scene.
   The loops' ``solref``/``solimp`` (:func:`loop_solref`, :data:`LOOP_SOLIMP`) are stiffer than MuJoCo's
   defaults, with which a closed chain under gravity sags at its pins (mujoco #2698;
   ``benchmarks/conformance.py`` measures both). Gravity and the solver iterations are the scene's; the physics
@@ -46,6 +47,9 @@ __all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "dynamic_env", "loop_sol
 FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
 #: the loop closures' impedance in MJCF: harder than MuJoCo's default (0.9, 0.95, 0.001, 0.5, 2)
 LOOP_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+#: the exported servos' bandwidth times the physics step (rad): how stiff they are against what the step
+#: integrates stably (semi-implicit Euler goes unstable as it nears 2)
+SERVO_BANDWIDTH = 0.5
 
 
 #: the longest physics step (s) of an exported MJCF: a scene's, or shorter
@@ -67,12 +71,12 @@ def loop_solref(time_step: float) -> tuple[float, float]:
 
 
 def servo_gains(links: list[LinkSpec], values: list[tuple[float, ...]], link: str,
-                time_step: float) -> tuple[float, float]:
-    """A position servo's ``kp`` and ``kv`` for the joint of ``link``: critically damped at 0.5 / h rad/s (h:
-    the physics step; semi-implicit Euler goes unstable as that product nears 2) for what it moves, the mass of
-    the link's subtree for a slide, its moment of inertia about the axis (point masses at the parts' centres, at
-    the joint values ``values``) for a hinge. The loop closures add what they carry on top; the servo is then
-    softer than the one paragym simulates, by at most that ratio."""
+                time_step: float, bandwidth: float = SERVO_BANDWIDTH) -> tuple[float, float]:
+    """A position servo's ``kp`` and ``kv`` for the joint of ``link``: critically damped at ``bandwidth`` / h
+    rad/s (h: the physics step; :data:`SERVO_BANDWIDTH`, or a scene's ``EXPORT_SERVO_BANDWIDTH``) for what it
+    moves: the mass of the link's subtree for a slide, its moment of inertia about the axis for a hinge (point
+    masses at the parts' centres, at the joint values ``values``). The loop closures add what they carry on
+    top; the servo is then softer than the one paragym simulates, by at most that ratio."""
     frames = tree_frames(links, values)
     children: dict[str | None, list[LinkSpec]] = {}
     for spec in links:
@@ -94,7 +98,7 @@ def servo_gains(links: list[LinkSpec], values: list[tuple[float, ...]], link: st
             arm = p + r @ np.asarray(item.shape_offset, float) - pos
             inertia += item.mass * float(np.sum((arm - np.dot(arm, axis) * axis) ** 2))
         inertia = max(inertia, 1e-6)
-    omega = 0.5 / time_step
+    omega = bandwidth / time_step
     return inertia * omega**2, 2.0 * inertia * omega
 #: the mass (kg) of the two links that carry a spherical joint's first two axes in URDF
 AXIS_LINK_MASS = 1e-6
@@ -231,7 +235,8 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
         for (body, link), limit in motors.items():
             joint = f"{_link_name(body, link, len(trees))}_joint"
             links, values = specs[body]
-            kp, kv = servo_gains(_tree_order(links), values, link, h)
+            kp, kv = servo_gains(_tree_order(links), values, link, h,
+                                 getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH))
             ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
                           forcerange=_num([-limit, limit]))
     ET.indent(root)
