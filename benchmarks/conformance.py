@@ -7,7 +7,9 @@ MuJoCo (the file ``paragym export`` writes, with the same step and iterations; p
 limits), the latter both with the exported loop settings and with MuJoCo's default ``solref``/``solimp`` (the
 sag that mujoco #2698 reports). The table gives, per engine, the loop-closure residual over the run (mean and
 largest, mm), how far any link ended from its kinematic pose (mm: the sag under gravity, the gap to the
-kinematic model) and the physics steps per second of this machine (each engine's step with the residual's
+kinematic model), the motors' holding forces at the end (the largest, and the largest difference from
+PyBullet's, motor by motor: the statics of one mechanism, which two engines must agree on) and the physics
+steps per second of this machine (each engine's step with the residual's
 measurement after it, in Python: a measure of the run here, not of either engine's speed alone).
 
     python benchmarks/conformance.py [--env ID ...] [--seconds 1.0] [--seed 0] [--record]
@@ -25,10 +27,12 @@ from results_file import add_record_option, paragraph, record
 
 from paragym import registry
 from paragym.sim import export
+from paragym.sim.client import motors_of
 
 
-def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float]:
-    """Loop residuals (m) at every physics step, the largest link drift (m) at the end, steps per second."""
+def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float, np.ndarray]:
+    """Loop residuals (m) at every physics step, the largest link drift (m) at the end, steps per second, and
+    each motor's force (N or N m) in the last step, in the order of ``scene.motor_limits()``."""
     body, links = export._tree(scene)
     start = export.tree_frames(links, scene.sim.joint_values(body))
     h = scene.sim.time_step
@@ -45,11 +49,13 @@ def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float]:
     scene.sim.after_step.remove(record_gap)
     drift = max(float(np.linalg.norm(scene.sim.link_frame(body, i)[0] - start[link.name][0]))
                 for i, link in enumerate(links))
-    return np.array(residuals), drift, rate
+    forces = scene.sim.motor_forces(motors_of([(b, j) for b, j, _ in scene.motor_limits()]))
+    return np.array(residuals), drift, rate, forces
 
 
-def mujoco_hold(scene, text: str, seconds: float) -> tuple[np.ndarray, float, float]:
-    """:func:`pybullet_hold` for the exported MJCF ``text`` in MuJoCo, from the scene's joint values."""
+def mujoco_hold(scene, text: str, seconds: float) -> tuple[np.ndarray, float, float, np.ndarray]:
+    """:func:`pybullet_hold` for the exported MJCF ``text`` in MuJoCo, from the scene's joint values; the forces
+    the mean over the last fifth of the hold (a servo's spring may ring about its holding force)."""
     import mujoco
 
     body, links = export._tree(scene)
@@ -61,14 +67,15 @@ def mujoco_hold(scene, text: str, seconds: float) -> tuple[np.ndarray, float, fl
         data.ctrl[k] = data.qpos[model.jnt_qposadr[model.actuator_trnid[k, 0]]]
     steps = max(1, int(round(seconds / model.opt.timestep)))
     pairs = [(model.site(f"loop{k}_a").id, model.site(f"loop{k}_b").id) for k in range(len(scene.sim.loops))]
-    residuals = np.zeros(steps)
+    residuals, forces = np.zeros(steps), np.zeros((steps, model.nu))
     t0 = time.perf_counter()
     for i in range(steps):
         mujoco.mj_step(model, data)
         residuals[i] = max((np.linalg.norm(data.site_xpos[a] - data.site_xpos[b]) for a, b in pairs), default=0.0)
+        forces[i] = data.actuator_force
     rate = steps / (time.perf_counter() - t0)
     drift = max(float(np.linalg.norm(data.xpos[model.body(link.name).id] - start[link.name][0])) for link in links)
-    return residuals, drift, rate
+    return residuals, drift, rate, forces[-max(1, steps // 5):].mean(axis=0)
 
 
 def with_default_loops(text: str) -> str:
@@ -102,12 +109,14 @@ def main() -> None:
                     ("PyBullet (the env's)", *pybullet_hold(scene, args.seconds))]
         finally:
             env.close()
-        for engine, residuals, drift, rate in runs:
+        held = runs[-1][-1]  # PyBullet's holding forces: the reference the MuJoCo rows are compared with
+        for engine, residuals, drift, rate, forces in runs:
+            gap = "-" if forces is held else f"{np.max(np.abs(forces - held)):.3g}"
             rows.append([env_id, engine, f"{residuals.mean() * 1e3:.3g}", f"{residuals.max() * 1e3:.3g}",
-                         f"{drift * 1e3:.3g}", f"{rate:,.0f}"])
+                         f"{drift * 1e3:.3g}", f"{np.max(np.abs(forces)):.3g}", gap, f"{rate:,.0f}"])
             print(" | ".join(rows[-1]), flush=True)
     columns = ["env", "engine", "loop residual, mean [mm]", "loop residual, max [mm]", "largest link drift [mm]",
-               "physics steps/s"]
+               "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]", "physics steps/s"]
     if args.record:
         record("conformance", "Two engines on one mechanism: holding a pose under gravity", paragraph(__doc__),
                columns, rows, order=62, folder=args.record)

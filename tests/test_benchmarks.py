@@ -236,7 +236,8 @@ def test_reference_dynamic_counts_the_reference_s_dynamic_episodes(tmp_path):
 
 def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp_path):
     """The CaPaMan held under gravity for 0.2 s: with the exported loop settings MuJoCo keeps its loops within
-    0.01 mm, with MuJoCo's defaults they open by more than 0.5 mm (mujoco #2698), and PyBullet's within 0.01 mm."""
+    0.01 mm, with MuJoCo's defaults they open by more than 0.5 mm (mujoco #2698), and PyBullet's within 0.01 mm;
+    the motors' holding torques agree between the engines."""
     pytest = __import__("pytest")
     pytest.importorskip("mujoco")
     _run("benchmarks/conformance.py", "--env", "paragym/CaPaManCollisionFree-v1", "--seconds", "0.2", "--record",
@@ -245,3 +246,5 @@ def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp
     assert set(rows) == {"MuJoCo, exported loops", "MuJoCo, default loops", "PyBullet (the env's)"}
     assert float(rows["MuJoCo, exported loops"][3]) < 0.01 < 0.5 < float(rows["MuJoCo, default loops"][3])
     assert float(rows["PyBullet (the env's)"][3]) < 0.01
+    # the statics of one mechanism: the cranks hold the plate with the same torques in both engines (0.78 N m)
+    assert 0.5 < float(rows["PyBullet (the env's)"][5]) and float(rows["MuJoCo, exported loops"][6]) < 0.05
