@@ -400,12 +400,12 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
 
 
 def scene_clearance(alpha: np.ndarray, posts: np.ndarray, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                    poses: np.ndarray | None = None) -> np.ndarray:
-    """The capsule model's clearance (m, capped at 5 cm) of configurations ``alpha`` (M, 3) among one scene's
+                    poses: np.ndarray | None = None, cap: float = 0.05) -> np.ndarray:
+    """The capsule model's clearance (m, capped at ``cap``) of configurations ``alpha`` (M, 3) among one scene's
     ``posts`` (K, 5, :func:`posts_of`); ``poses`` as :func:`~paragym.sim.capaman_posts.post_clearance` takes
     them."""
     rows = np.zeros(len(np.atleast_2d(alpha)), np.int64)
-    return post_clearance(alpha, posts[None], np.array([len(posts)]), rows, geometry, poses=poses)[0]
+    return post_clearance(alpha, posts[None], np.array([len(posts)]), rows, geometry, cap=cap, poses=poses)[0]
 
 
 def posts_of(obstacles: Sequence[Obstacle]) -> np.ndarray:
@@ -447,8 +447,9 @@ def _witness(scenario: CaPaManScenario, geometry: capaman.CaPaManGeometry, point
              margin: float) -> bool:
     """One witness of :func:`solvable`."""
     axis, grid, poses = _joint_grid(geometry, points_per_axis)
-    clearance = scene_clearance(grid, posts_of(scenario.obstacles), geometry,
-                                poses).reshape((points_per_axis,) * 3)
+    # only "under the margin" matters: a cap just above it leaves every answer and skips the parts out of its reach
+    clearance = scene_clearance(grid, posts_of(scenario.obstacles), geometry, poses,
+                                cap=margin + 0.004).reshape((points_per_axis,) * 3)
     blocked = ndimage.binary_dilation(clearance < margin, structure=np.ones((3, 3, 3), bool))
     labels, _ = ndimage.label(~blocked, structure=np.ones((3, 3, 3)))
     free = np.argwhere(labels > 0)
