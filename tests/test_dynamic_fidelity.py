@@ -396,8 +396,9 @@ def test_capaman_dynamic_agrees_with_the_kinematics_when_slow_and_lags_when_fast
                                     "paragym/Orthoglide2PRRKappa-v2"])
 def test_a_dynamic_step_says_how_far_its_loops_are_open(env_id):
     """``info["loop_residual_m"]``: the largest gap at a loop closure after each dynamic step (issue 41), under
-    a millimetre while the motors follow the zero action's commands; a joint forced off the closed configuration shows as a
-    gap of its size; a kinematic step has no such key (its loops are closed by construction)."""
+    a millimetre while the motors follow the zero action's commands; a joint forced off the closed
+    configuration shows as a gap of its size; a kinematic step has no such key (its loops are closed by
+    construction)."""
     import gymnasium as gym
 
     from paragym.sim.export import scene_of
