@@ -117,3 +117,44 @@ def test_export_cli_writes_checks_and_refuses_to_overwrite(tmp_path, capsys):
     assert (tmp_path / "orthoglide.urdf").read_text() == "mine"  # a user's file is not overwritten unasked
     assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out), "--overwrite"]) == 0
     assert (tmp_path / "orthoglide.urdf").read_text() == before
+
+
+@pytest.mark.parametrize("push", ["down", "sideways"])
+def test_the_exported_capaman_stops_at_a_box_where_pybullet_does(push):
+    """Contact in both engines: the CaPaMan's motors ramp into a box over 1 s and push on for 1 s at their torque
+    limit (``tests/test_rules.py``'s pushes); in MuJoCo, from the exported MJCF with the box as a fixed geom, the
+    tool stops within 2.5 mm of where PyBullet stops it (without the box it goes on by more than 5 mm), and the
+    loops stay closed within 0.2 mm."""
+    from test_rules import HOME, PUSHES
+
+    from paragym.mechanisms import capaman
+    from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+
+    box, goal = PUSHES[push]
+    ends = {}
+    for obstacles in ((box,), ()):
+        scene = CaPaManDynamicScene(capaman.DEFAULT_GEOMETRY)
+        try:
+            scene.set_obstacles(obstacles)
+            scene.set_configuration(HOME)
+            body, links = export._tree(scene)
+            values = scene.sim.joint_values(body)
+            model = mujoco.MjModel.from_xml_string(export.mjcf(scene))
+            if obstacles:
+                for i in range(100):  # as tests/test_rules.py's _push
+                    scene.drive(HOME + (goal - HOME) * min(1.0, (i + 1) / 50), 0.02)
+                pybullet_tool = scene.sim.link_frame(body, "tool")[0]
+        finally:
+            scene.close()
+        data = export._mujoco_pose(model, links, values, urdf=False)
+        start = np.array([data.qpos[model.jnt_qposadr[model.actuator_trnid[k, 0]]] for k in range(model.nu)])
+        ramp, gap = int(round(1.0 / model.opt.timestep)), 0.0
+        for i in range(2 * ramp):
+            data.ctrl[:] = start + (-goal - start) * min(1.0, (i + 1) / ramp)  # the crank joints turn by -alpha
+            mujoco.mj_step(model, data)
+            gap = max(gap, *(float(np.linalg.norm(data.site(f"loop{k}_a").xpos - data.site(f"loop{k}_b").xpos))
+                             for k in range(6)))
+        ends[bool(obstacles)] = data.body("tool").xpos.copy(), gap
+    (blocked, gap), (free, _) = ends[True], ends[False]
+    assert np.linalg.norm(blocked - pybullet_tool) < 2.5e-3, (blocked, pybullet_tool)
+    assert np.linalg.norm(free - blocked) > 5e-3 and gap < 2e-4, (free, blocked, gap)
