@@ -33,7 +33,7 @@ from paragym.sim.client import motors_of
 def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float, np.ndarray]:
     """Loop residuals (m) at every physics step, the largest link drift (m) at the end, steps per second, and
     each motor's force (N or N m) in the last step, in the order of ``scene.motor_limits()``."""
-    body, links = export._tree(scene)
+    body, links = export.tree_of(scene)
     start = export.tree_frames(links, scene.sim.joint_values(body))
     h = scene.sim.time_step
     steps = max(1, int(round(seconds / h)))
@@ -58,20 +58,18 @@ def mujoco_hold(scene, text: str, seconds: float) -> tuple[np.ndarray, float, fl
     the mean over the last fifth of the hold (a servo's spring may ring about its holding force)."""
     import mujoco
 
-    body, links = export._tree(scene)
+    body, links = export.tree_of(scene)
     values = scene.sim.joint_values(body)
     start = export.tree_frames(links, values)
     model = mujoco.MjModel.from_xml_string(text)
-    data = export._mujoco_pose(model, links, values, urdf=False)
-    for k in range(model.nu):
-        data.ctrl[k] = data.qpos[model.jnt_qposadr[model.actuator_trnid[k, 0]]]
+    data = export.mujoco_pose(model, links, values, urdf=False)
+    data.ctrl[:] = export.mujoco_motor_positions(model, data)
     steps = max(1, int(round(seconds / model.opt.timestep)))
-    pairs = [(model.site(f"loop{k}_a").id, model.site(f"loop{k}_b").id) for k in range(len(scene.sim.loops))]
     residuals, forces = np.zeros(steps), np.zeros((steps, model.nu))
     t0 = time.perf_counter()
     for i in range(steps):
         mujoco.mj_step(model, data)
-        residuals[i] = max((np.linalg.norm(data.site_xpos[a] - data.site_xpos[b]) for a, b in pairs), default=0.0)
+        residuals[i] = export.mujoco_loop_gap(model, data)
         forces[i] = data.actuator_force
     rate = steps / (time.perf_counter() - t0)
     drift = max(float(np.linalg.norm(data.xpos[model.body(link.name).id] - start[link.name][0])) for link in links)

@@ -48,7 +48,7 @@ def test_the_open_tree_matches_at_random_joint_values(env):
     gap shows the loops open where the mechanism has any."""
     env.reset(seed=0)
     scene = export.scene_of(env)
-    body, links = export._tree(scene)
+    body, links = export.tree_of(scene)
     rng = np.random.default_rng(7)
     for index, link in enumerate(links):
         if link.joint in ("revolute", "prismatic"):
@@ -137,7 +137,7 @@ def test_the_exported_capaman_stops_at_a_box_where_pybullet_does(push):
         try:
             scene.set_obstacles(obstacles)
             scene.set_configuration(HOME)
-            body, links = export._tree(scene)
+            body, links = export.tree_of(scene)
             values = scene.sim.joint_values(body)
             model = mujoco.MjModel.from_xml_string(export.mjcf(scene))
             if obstacles:
@@ -146,14 +146,13 @@ def test_the_exported_capaman_stops_at_a_box_where_pybullet_does(push):
                 pybullet_tool = scene.sim.link_frame(body, "tool")[0]
         finally:
             scene.close()
-        data = export._mujoco_pose(model, links, values, urdf=False)
-        start = np.array([data.qpos[model.jnt_qposadr[model.actuator_trnid[k, 0]]] for k in range(model.nu)])
+        data = export.mujoco_pose(model, links, values, urdf=False)
+        start = export.mujoco_motor_positions(model, data)
         ramp, gap = int(round(1.0 / model.opt.timestep)), 0.0
         for i in range(2 * ramp):
             data.ctrl[:] = start + (-goal - start) * min(1.0, (i + 1) / ramp)  # the crank joints turn by -alpha
             mujoco.mj_step(model, data)
-            gap = max(gap, *(float(np.linalg.norm(data.site(f"loop{k}_a").xpos - data.site(f"loop{k}_b").xpos))
-                             for k in range(6)))
+            gap = max(gap, export.mujoco_loop_gap(model, data))
         ends[bool(obstacles)] = data.body("tool").xpos.copy(), gap
     (blocked, gap), (free, _) = ends[True], ends[False]
     assert np.linalg.norm(blocked - pybullet_tool) < 2.5e-3, (blocked, pybullet_tool)

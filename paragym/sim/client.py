@@ -28,7 +28,8 @@ import pybullet as pb
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "Motors", "PyBulletSim", "divides", "exact_time_step", "motors_of", "physics_steps"]
+__all__ = ["LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
+           "physics_steps"]
 
 #: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
 Motors = Sequence[tuple[str, Sequence[int]]]
@@ -90,7 +91,7 @@ class LinkSpec:
     mass: float = 1e-3  # kg; the centre of mass sits at the shape's centre
 
 
-def _depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
+def depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
     """Links in depth-first pre-order (children in the order given)."""
     children: dict[str | None, list[LinkSpec]] = {}
     for link in links:
@@ -293,7 +294,7 @@ class PyBulletSim:
         self._check_new(name)
         self._recipe[name] = (self.add_tree_body, (name, links, base_mass, base_shape, base_rgba))
         base_col, base_vis = (-1, -1) if base_shape is None else self._shape(base_shape, base_rgba)
-        links = _depth_first(links)  # PyBullet stores links in this order whatever order it is given
+        links = depth_first(links)  # PyBullet stores links in this order whatever order it is given
         index = {link.name: i for i, link in enumerate(links)}
         cols, vis = [], []
         for link in links:

@@ -35,13 +35,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
-from paragym.mechanisms.geometry import PartShape
-from paragym.sim.client import LinkSpec
+from paragym.mechanisms.geometry import PartShape, quat_to_matrix
+from paragym.sim.client import LinkSpec, depth_first
 from paragym.sim.obstacles import Box, Capsule, Cylinder
 
-__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "dynamic_env", "loop_solref", "mjcf", "mujoco_time_step",
-           "scene_of", "servo_gains", "urdf", "write"]
+__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "check_mjcf", "check_urdf", "dynamic_env", "loop_solref",
+           "mjcf", "mujoco_loop_gap", "mujoco_motor_positions", "mujoco_pose", "mujoco_time_step", "scene_of",
+           "servo_gains", "tree_frames", "tree_of", "urdf", "write"]
 
 #: the formats :func:`write` writes, and each one's file suffix
 FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
@@ -70,14 +72,13 @@ def loop_solref(time_step: float) -> tuple[float, float]:
     return (2.0 * time_step, 1.0)
 
 
-def servo_gains(links: list[LinkSpec], values: list[tuple[float, ...]], link: str,
+def servo_gains(links: list[LinkSpec], frames: dict[str, tuple[np.ndarray, np.ndarray]], link: str,
                 time_step: float, bandwidth: float = SERVO_BANDWIDTH) -> tuple[float, float]:
     """A position servo's ``kp`` and ``kv`` for the joint of ``link``: critically damped at ``bandwidth`` / h
     rad/s (h: the physics step; :data:`SERVO_BANDWIDTH`, or a scene's ``EXPORT_SERVO_BANDWIDTH``) for what it
     moves: the mass of the link's subtree for a slide, its moment of inertia about the axis for a hinge (point
-    masses at the parts' centres, at the joint values ``values``). The loop closures add what they carry on
-    top; the servo is then softer than the one paragym simulates, by at most that ratio."""
-    frames = tree_frames(links, values)
+    masses at the parts' centres, the links placed at ``frames``, :func:`tree_frames`). The loop closures add
+    what they carry on top; the servo is then softer than the one paragym simulates, by at most that ratio."""
     children: dict[str | None, list[LinkSpec]] = {}
     for spec in links:
         children.setdefault(spec.parent, []).append(spec)
@@ -202,7 +203,7 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
             ET.SubElement(base, "freejoint", name=f"{body}_free")
             _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass)
         elements = {None: base}
-        for link in _tree_order(links):
+        for link in depth_first(links):
             el = ET.SubElement(elements[link.parent], "body", name=_link_name(body, link.name, len(trees)),
                                pos=_num(link.position), quat=_num(_wxyz(link.orientation)))
             elements[link.name] = el
@@ -231,12 +232,14 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
                           solimp=_num(LOOP_SOLIMP))
     if motors:
         actuator = ET.SubElement(root, "actuator")
-        specs = {body: (links, scene.sim.joint_values(body)) for body, links, _, _ in trees}
+        bandwidth = getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
+        posed = {}  # body -> its links in PyBullet's order and their frames now: once per body, not per motor
+        for body, links, _, _ in trees:
+            ordered = depth_first(links)
+            posed[body] = ordered, tree_frames(ordered, scene.sim.joint_values(body))
         for (body, link), limit in motors.items():
             joint = f"{_link_name(body, link, len(trees))}_joint"
-            links, values = specs[body]
-            kp, kv = servo_gains(_tree_order(links), values, link, h,
-                                 getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH))
+            kp, kv = servo_gains(*posed[body], link, h, bandwidth)
             ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
                           forcerange=_num([-limit, limit]))
     ET.indent(root)
@@ -248,11 +251,6 @@ def _link_name(body: str, link: str, n_trees: int) -> str:
     return link if n_trees == 1 else f"{body}/{link}"
 
 
-def _tree_order(links: list[LinkSpec]) -> list[LinkSpec]:
-    from paragym.sim.client import _depth_first
-
-    return _depth_first(links)
-
 
 # --- URDF ---------------------------------------------------------------------------------------------------------
 
@@ -261,8 +259,6 @@ def _rpy(xyzw: Any) -> tuple[float, float, float]:
     """URDF's fixed-axis roll, pitch, yaw of an xyzw quaternion: R = Rz(yaw) Ry(pitch) Rx(roll) (at a pitch of
     +-90 deg, where roll and yaw are one rotation, scipy puts it all in yaw: the same R)."""
     import warnings
-
-    from scipy.spatial.transform import Rotation
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Gimbal lock")
@@ -331,11 +327,8 @@ def _urdf_joint(root: ET.Element, name: str, kind: str, parent: str, child: str,
 def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
     """The scene's mechanism as a URDF document of its open tree, and the loop-closure sidecar (a JSON-able
     dict; module docstring). A scene of one tree body only: a split layout has no single tree to write."""
-    trees, fixed = _bodies(scene)
-    if len(trees) != 1 or trees[0][2] > 0:
-        raise ValueError("URDF export needs the mechanism as one fixed-base tree body (the dynamics' "
-                         f'layout "tree"); this scene has {[t[0] for t in trees]}')
-    body, links, _, _ = trees[0]
+    _, fixed = _bodies(scene)
+    body, links = tree_of(scene)
     motors = {link: limit for (_, link), limit in _motors(scene).items()}
     root = ET.Element("robot", name=model)
     base = "base"
@@ -344,7 +337,7 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
         _urdf_link(root, name, shape, (0.0, 0.0, 0.0), 0.0)
         _urdf_joint(root, f"{name}_fixed", "fixed", base, name, shape.center, (0.0, 0.0, 0.0))
     joints = []
-    for link in _tree_order(links):
+    for link in links:
         parent = link.parent or base
         if link.joint == "spherical":  # three revolute joints about z, y, x
             first, second = f"{link.name}_rz", f"{link.name}_ry"
@@ -420,11 +413,6 @@ def write(env_id: str, fmt: str, out: str | Path,
 # --- checks -------------------------------------------------------------------------------------------------------
 
 
-def _matrix(xyzw: Any) -> np.ndarray:
-    from scipy.spatial.transform import Rotation
-
-    return Rotation.from_quat(np.asarray(xyzw, float)).as_matrix()
-
 
 def tree_frames(links: list[LinkSpec], values: list[tuple[float, ...]]) -> dict[str, tuple[np.ndarray, np.ndarray]]:
     """Every link's frame (world position, m; rotation matrix) for joint values ``values`` (in ``links``'
@@ -433,16 +421,15 @@ def tree_frames(links: list[LinkSpec], values: list[tuple[float, ...]]) -> dict[
     frames: dict[str | None, tuple[np.ndarray, np.ndarray]] = {None: (np.zeros(3), np.eye(3))}
     for link, value in zip(links, values, strict=True):
         pos, rot = frames[link.parent]
-        pos, rot = pos + rot @ np.asarray(link.position, float), rot @ _matrix(link.orientation)
+        pos = pos + rot @ np.asarray(link.position, float)
+        rot = rot @ quat_to_matrix(np.asarray(link.orientation, float))
         axis = np.asarray(link.axis, float) / np.linalg.norm(link.axis)
         if link.joint == "revolute":
-            from scipy.spatial.transform import Rotation
-
             rot = rot @ Rotation.from_rotvec(axis * value[0]).as_matrix()
         elif link.joint == "prismatic":
             pos = pos + rot @ (axis * value[0])
         elif link.joint == "spherical":
-            rot = rot @ _matrix(value)
+            rot = rot @ quat_to_matrix(np.asarray(value, float))
         frames[link.name] = (pos, rot)
     del frames[None]
     return frames
@@ -459,14 +446,31 @@ def _gaps(frames: dict[str, tuple[np.ndarray, np.ndarray]], got: Any) -> dict[st
     return {"frame_m": frame_m, "frame_rad": frame_rad}
 
 
-def _tree(scene: Any) -> tuple[str, list[LinkSpec]]:
+def tree_of(scene: Any) -> tuple[str, list[LinkSpec]]:
+    """The scene's mechanism as one fixed-base tree body: its name and its links in PyBullet's (depth-first)
+    order. A split layout (several bodies, free bases) is refused: URDF and the checks need one tree."""
     trees, _ = _bodies(scene)
     if len(trees) != 1 or trees[0][2] > 0:
-        raise ValueError("the check needs the mechanism as one fixed-base tree body (the dynamics' layout \"tree\")")
-    return trees[0][0], _tree_order(trees[0][1])
+        raise ValueError("the mechanism must be one fixed-base tree body (the dynamics' layout \"tree\"); this "
+                         f"scene has {[t[0] for t in trees]}")
+    return trees[0][0], depth_first(trees[0][1])
 
 
-def _mujoco_pose(model: Any, links: list[LinkSpec], values: list[tuple[float, ...]], urdf: bool) -> Any:
+def mujoco_loop_gap(model: Any, data: Any) -> float:
+    """The largest gap (m) between the two sites of a loop closure of an exported MJCF (its equality
+    constraints, each a ``connect`` of two sites) in MuJoCo's ``data`` now; 0 without loops."""
+    if not model.neq:
+        return 0.0
+    gaps = data.site_xpos[model.eq_obj1id] - data.site_xpos[model.eq_obj2id]
+    return float(np.sqrt((gaps**2).sum(axis=1)).max())
+
+
+def mujoco_motor_positions(model: Any, data: Any) -> np.ndarray:
+    """The position (rad or m) of each actuator's joint in MuJoCo's ``data`` now, in the actuators' order."""
+    return data.qpos[model.jnt_qposadr[model.actuator_trnid[:, 0]]].copy()
+
+
+def mujoco_pose(model: Any, links: list[LinkSpec], values: list[tuple[float, ...]], urdf: bool) -> Any:
     """MuJoCo's data with ``values`` set on ``model``'s joints (a URDF's spherical joints through their three
     revolute ones), forward kinematics done."""
     import mujoco
@@ -474,8 +478,6 @@ def _mujoco_pose(model: Any, links: list[LinkSpec], values: list[tuple[float, ..
     data = mujoco.MjData(model)
     for link, value in zip(links, values, strict=True):
         if link.joint == "spherical" and urdf:
-            from scipy.spatial.transform import Rotation
-
             z, y, x = Rotation.from_quat(np.asarray(value, float)).as_euler("ZYX")
             for name, angle in ((f"{link.name}_rz_joint", z), (f"{link.name}_ry_joint", y), (f"{link.name}_joint", x)):
                 data.qpos[model.joint(name).qposadr[0]] = angle
@@ -495,18 +497,17 @@ def check_mjcf(scene: Any, text: str) -> dict[str, float]:
     do)."""
     import mujoco
 
-    body, links = _tree(scene)
+    body, links = tree_of(scene)
     values = scene.sim.joint_values(body)
     model = mujoco.MjModel.from_xml_string(text)
-    data = _mujoco_pose(model, links, values, urdf=False)
+    data = mujoco_pose(model, links, values, urdf=False)
 
     def got(name: str) -> tuple[np.ndarray, np.ndarray]:
         b = model.body(name).id
         return data.xpos[b].copy(), data.xmat[b].reshape(3, 3).copy()
 
     out = _gaps(tree_frames(links, values), got)
-    out["loop_m"] = max((float(np.linalg.norm(data.site(f"loop{k}_a").xpos - data.site(f"loop{k}_b").xpos))
-                         for k in range(len(scene.sim.loops))), default=0.0)
+    out["loop_m"] = mujoco_loop_gap(model, data)
     return out
 
 
@@ -515,11 +516,11 @@ def check_urdf(scene: Any, text: str, sidecar: dict[str, Any]) -> dict[str, floa
     closures, at the scene's joint values now: as :func:`check_mjcf`."""
     import mujoco
 
-    body, links = _tree(scene)
+    body, links = tree_of(scene)
     values = scene.sim.joint_values(body)
     keep = '<mujoco><compiler fusestatic="false" discardvisual="true" balanceinertia="true"/></mujoco>'
     model = mujoco.MjModel.from_xml_string(text.replace(">", ">" + keep, 1) if "<mujoco>" not in text else text)
-    data = _mujoco_pose(model, links, values, urdf=True)
+    data = mujoco_pose(model, links, values, urdf=True)
 
     def got(name: str) -> tuple[np.ndarray, np.ndarray]:
         if name == "base":
