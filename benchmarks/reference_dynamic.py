@@ -8,7 +8,8 @@ and the KF check of what the motors executed against what the policy commanded. 
 PASS and both, each with Wilson's 95 % interval, against issue 41's target of 0.90 for both; the failing
 episodes are printed with their figures of merit.
 
-    python benchmarks/reference_dynamic.py [--env ID ...] [--episodes 30] [--policy NAME] [--record]
+    python benchmarks/reference_dynamic.py [--env ID ...] [--episodes 30] [--policy NAME] [--engine mujoco]
+                                           [--record]
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ def main() -> None:
     parser.add_argument("--env", action="append", default=None, help="an env id (repeatable; default: newest ids)")
     parser.add_argument("--episodes", type=int, default=30, help="dynamic episodes per env, the paper's first")
     parser.add_argument("--policy", default=None, help="a policy name (default: each bench's reference)")
+    parser.add_argument("--engine", default="pybullet", choices=("pybullet", "mujoco"),
+                        help="the dynamic fidelity's engine (MuJoCo: the CaPaMan's and the hybrid's ids)")
     add_record_option(parser)
     args = parser.parse_args()
     if args.episodes < 1:
@@ -52,7 +55,7 @@ def main() -> None:
         won = passed = both = 0
         for i in range(args.episodes):
             scenario, seed = ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
-            row = evaluate_dynamic(spec, scenario, seed)
+            row = evaluate_dynamic(spec, scenario, seed, engine=args.engine)
             won, passed, both = won + row.success, passed + row.kf_passed, both + (row.success and row.kf_passed)
             if not (row.success and row.kf_passed):
                 merit = ", ".join(f"{k} {v:.3g}" for k, v in row.metrics.items())
@@ -60,13 +63,15 @@ def main() -> None:
                 print(f"  {env_id} {scenario} seed {seed}: success {row.success}, KF {verdict} ({row.kf['worst']}); "
                       f"{merit}", flush=True)
         n = args.episodes
-        rows.append([env_id, name, rate(won, n), rate(passed, n), rate(both, n),
+        rows.append([env_id, args.engine, name, rate(won, n), rate(passed, n), rate(both, n),
                      "meets" if both / n >= TARGET else "misses",
                      f"{time.perf_counter() - t0:.0f}"])
         print(" | ".join(rows[-1]), flush=True)
-    columns = ["env", "policy", "success", "KF PASS", "both", f"target {TARGET:.2f}", "seconds"]
+    columns = ["env", "engine", "policy", "success", "KF PASS", "both", f"target {TARGET:.2f}", "seconds"]
     if args.record:
-        record("reference_dynamic", "The paper's method under physics", paragraph(__doc__), columns, rows,
+        suffix, title = ("", "") if args.engine == "pybullet" else (f"_{args.engine}", ", in MuJoCo")
+        record(f"reference_dynamic{suffix}", f"The paper's method under physics{title}", paragraph(__doc__),
+               columns, rows,
                order=60, folder=args.record)
 
 

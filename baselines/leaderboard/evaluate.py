@@ -61,9 +61,10 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int, producer: str | 
                       ep.success, metrics, wall, producer=spec.producer() if producer is None else producer)
 
 
-def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str | None = None) -> DynamicRow:
+def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str | None = None,
+                     engine: str = "pybullet") -> DynamicRow:
     """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
-    from reset seed ``seed`` in the dynamic fidelity (:func:`dynamic_kwargs`),
+    from reset seed ``seed`` in the dynamic fidelity of ``engine`` (:func:`dynamic_kwargs`),
     measure it as a kinematic episode is measured, and validate what it
     executed against what it commanded (the accelerometers and the Kalman
     filter: :func:`paragym.validation.episode.validate_episode`). A planner
@@ -78,7 +79,7 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*is out of date.*")
-        env = gym.make(spec.env_id, scenario=arg, **dynamic_kwargs(spec.env_id))
+        env = gym.make(spec.env_id, scenario=arg, **dynamic_kwargs(spec.env_id, engine))
     failed = 0.0
     try:
         try:
@@ -97,7 +98,8 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
              else tightest(val.report))
     kf = {"worst": worst, "position_error_mm": round(val.position_error * 1000, 3)}
     return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
-                      kf, time.perf_counter() - t0, producer=dynamic_producer(spec) if producer is None else producer)
+                      kf, time.perf_counter() - t0,
+                      producer=dynamic_producer(spec, engine) if producer is None else producer)
 
 
 

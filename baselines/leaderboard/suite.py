@@ -65,23 +65,34 @@ class EvalSuite:
 FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))
 QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
 
-def dynamic_kwargs(env_id: str) -> dict[str, Any]:
-    """The env's arguments for the leaderboard's dynamic episodes, the
-    physics settings explicit (they are part of each row's producer,
-    :func:`dynamic_producer`): the task bench's (:attr:`paragym.baselines.tasks.Bench.dynamics`).
-    A ValueError for a task without a dynamic fidelity."""
+def dynamic_kwargs(env_id: str, engine: str = "pybullet") -> dict[str, Any]:
+    """The env's arguments for the leaderboard's dynamic episodes in ``engine`` ("pybullet" or "mujoco"), the
+    physics settings explicit (they are part of each row's producer, :func:`dynamic_producer`): the task
+    bench's (:attr:`paragym.baselines.tasks.Bench.dynamics`), and MuJoCo's default settings
+    (:class:`paragym.sim.mujoco_sim.MuJoCoSettings`) in MuJoCo. A ValueError for a task without a dynamic
+    fidelity."""
     settings = bench_of(env_id).dynamics
     if settings is None:
         raise ValueError(f"{env_id} has no dynamic fidelity (its task's bench names no dynamics)")
-    return {"fidelity": "dynamic", "dynamics": settings()}
+    kwargs = {"fidelity": "dynamic", "dynamics": settings()}
+    if engine != "pybullet":
+        from paragym.sim.mujoco_sim import ENGINES, MuJoCoSettings
+        from paragym.tasks.base import check_choice
+
+        check_choice("engine", engine, ENGINES)
+        kwargs["engine"] = MuJoCoSettings()
+    return kwargs
 
 
-def dynamic_producer(spec: PolicySpec) -> str:
+def dynamic_producer(spec: PolicySpec, engine: str = "pybullet") -> str:
     """What makes a dynamic row: the policy's producer and the physics settings it ran under (None: the task
-    has no dynamic fidelity, and no dynamic row)."""
+    has no dynamic fidelity, and no dynamic row); in MuJoCo also the engine and its settings (a PyBullet row's
+    producer names no engine, as before MuJoCo came)."""
     settings = bench_of(spec.env_id).dynamics
-    return json.dumps({**json.loads(spec.producer()), "dynamics": None if settings is None else repr(settings())},
-                      sort_keys=True)
+    made = {**json.loads(spec.producer()), "dynamics": None if settings is None else repr(settings())}
+    if engine != "pybullet":
+        made["engine"] = repr(dynamic_kwargs(spec.env_id, engine)["engine"])
+    return json.dumps(made, sort_keys=True)
 
 
 def episode_seed(seed: int, episode: int) -> int:

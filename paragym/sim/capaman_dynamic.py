@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -58,6 +59,7 @@ from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.capaman_scene import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
+from paragym.sim.mujoco_sim import simulate_in
 from paragym.trajectories import JointTrajectory, RigidMotion
 
 __all__ = ["CaPaManDynamics", "CaPaManDynamicScene", "ExecutedMotion"]
@@ -138,6 +140,8 @@ class CaPaManDynamicScene:
     Args:
         geometry: the mechanism's dimensions.
         dynamics: masses, motors and integration settings.
+        engine: None: PyBullet's physics; a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`: MuJoCo's, over
+            the PyBullet world as built (:mod:`paragym.sim.mujoco_sim`).
     """
 
     ROBOT = "capaman"
@@ -147,7 +151,8 @@ class CaPaManDynamicScene:
     EXPORT_SERVO_BANDWIDTH = 0.25
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
-                 dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05) -> None:
+                 dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05,
+                 engine: Any = None) -> None:
         self.geometry = g = geometry
         self.clearance_cap = clearance_cap
         self.obstacles: tuple = ()
@@ -180,6 +185,7 @@ class CaPaManDynamicScene:
         self._motors = motors_of(self.motors)
         self.sim.on_rebuild(self._set_up_physics)
         self.set_configuration(g.alpha_home)
+        simulate_in(self, engine)
 
     def _set_up_physics(self) -> None:
         """Gravity, the engine's parameters, the passive joints, no self-collision and the six loop

@@ -138,6 +138,8 @@ class PyBulletSim:
         #: the loop closures (:meth:`ball_joint`), by (body, link, other body, other link) names (None: a base):
         #: the two points, each in its link's frame (m); what :mod:`paragym.sim.export` writes
         self.loops: dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]] = {}
+        #: the joints' hard stops (:meth:`joint_stops`), by (body, link name): (lower, upper) (rad or m)
+        self.stops: dict[tuple[str, str | None], tuple[float, float]] = {}
         #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
         self.after_step: list[Any] = []
         #: the physics step (s) and the simulated time (s) so far
@@ -442,6 +444,7 @@ class PyBulletSim:
         for joint in joints:
             pb.changeDynamics(self._bodies[name], joint, jointLowerLimit=lower, jointUpperLimit=upper,
                               physicsClientId=self._client)
+            self.stops[name, self._link_names[name].get(joint)] = (float(lower), float(upper))
 
     def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
         """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base)."""
@@ -571,6 +574,7 @@ class PyBulletSim:
         self._links.pop(name, None)
         self._link_names.pop(name, None)
         self.loops = {key: points for key, points in self.loops.items() if name not in (key[0], key[2])}
+        self.stops = {key: stop for key, stop in self.stops.items() if key[0] != name}
         self._removed += 1
         if self._removed >= self.REBUILD_AFTER:
             self._rebuild()
@@ -590,6 +594,7 @@ class PyBulletSim:
         self._links.clear()
         self._link_names.clear()
         self.loops.clear()
+        self.stops.clear()
         self._removed = 0
         for build, args in recipe:
             build(*args)

@@ -41,9 +41,10 @@ from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.client import LinkSpec, depth_first
 from paragym.sim.obstacles import Box, Capsule, Cylinder
 
-__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "check_mjcf", "check_urdf", "dynamic_env", "loop_solref",
-           "mjcf", "mujoco_loop_gap", "mujoco_motor_positions", "mujoco_pose", "mujoco_time_step", "scene_of",
-           "servo_gains", "tree_frames", "tree_of", "urdf", "write"]
+__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "bodies_of", "check_mjcf", "check_urdf", "dynamic_env",
+           "fixed_parts", "loop_solref", "mjcf", "model_name", "mujoco_loop_gap", "mujoco_motor_positions",
+           "mujoco_pose", "mujoco_time_step", "scene_of", "servo_gains", "tree_frames", "tree_of", "urdf",
+           "with_fixed_parts", "write"]
 
 #: the formats :func:`write` writes, and each one's file suffix
 FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
@@ -136,11 +137,12 @@ def scene_of(env: Any) -> Any:
     return world.scene
 
 
-def _bodies(scene: Any) -> tuple[list[tuple[str, list[LinkSpec], float, PartShape | None]], list[tuple[str, Any]]]:
-    """The scene's tree bodies (name, links, base mass, base shape) and fixed parts (name, shape), in the order
-    they were built; ground (a plane or a heightfield: the scenario's terrain) and drawn-only bodies are left out."""
+def bodies_of(sim: Any) -> tuple[list[tuple[str, list[LinkSpec], float, PartShape | None]], list[tuple[str, Any]]]:
+    """The tree bodies (name, links, base mass, base shape) and fixed parts (name, shape) of the PyBullet ``sim``,
+    in the order they were built; ground (a plane or a heightfield: the scenario's terrain) and drawn-only bodies
+    are left out."""
     trees, fixed = [], []
-    for name, (build, args) in scene.sim.recipes.items():
+    for name, (build, args) in sim.recipes.items():
         if build == "add_tree_body":
             trees.append((name, list(args[1]), float(args[2]), args[3]))
         elif build == "add_static":
@@ -183,19 +185,23 @@ def _mjcf_geom(parent: ET.Element, shape: PartShape | Any, pos: Any, robot: bool
     ET.SubElement(parent, "geom", attrs)
 
 
-def mjcf(scene: Any, model: str = "paragym") -> str:
-    """The scene's mechanism as an MJCF document (module docstring)."""
-    trees, fixed = _bodies(scene)
+def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, bandwidth: float | None = None,
+         iterations: int | None = None) -> str:
+    """The scene's mechanism as an MJCF document (module docstring). ``time_step`` (s), the servos'
+    ``bandwidth`` (:func:`servo_gains`) and the solver's ``iterations`` replace the exported defaults
+    (:func:`mujoco_time_step`, the scene's ``EXPORT_SERVO_BANDWIDTH`` or :data:`SERVO_BANDWIDTH`, the scene's
+    iterations) where given: a MuJoCo dynamic fidelity's settings (:mod:`paragym.sim.mujoco_sim`)."""
+    trees, fixed = bodies_of(scene.sim)
     motors = _motors(scene)
     d = scene.dynamics
     root = ET.Element("mujoco", model=model)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
-    h = mujoco_time_step(d.time_step)
+    h = mujoco_time_step(d.time_step) if time_step is None else float(time_step)
     ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
-                  iterations=str(int(d.solver_iterations)))
+                  iterations=str(int(d.solver_iterations if iterations is None else iterations)))
     world = ET.SubElement(root, "worldbody")
-    for name, shape in fixed:
-        _mjcf_geom(world, shape, shape.center, robot=False, name=name)
+    _fixed_geoms(world, fixed)
+    stops = getattr(scene.sim, "stops", {})
     joints: list[tuple[str, str, str]] = []  # (joint name, kind, body)
     for body, links, base_mass, base_shape in trees:
         base = ET.SubElement(world, "body", name=body)
@@ -204,7 +210,7 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
             _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass)
         elements = {None: base}
         for link in depth_first(links):
-            el = ET.SubElement(elements[link.parent], "body", name=_link_name(body, link.name, len(trees)),
+            el = ET.SubElement(elements[link.parent], "body", name=model_name(body, link.name, len(trees)),
                                pos=_num(link.position), quat=_num(_wxyz(link.orientation)))
             elements[link.name] = el
             kind = {"revolute": "hinge", "prismatic": "slide", "spherical": "ball"}.get(link.joint)
@@ -212,6 +218,8 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
                 attrs = {"name": f"{el.get('name')}_joint", "type": kind}
                 if kind != "ball":
                     attrs["axis"] = _num(link.axis)
+                if (body, link.name) in stops:  # a hard stop: MuJoCo's joint limit
+                    attrs["range"] = _num(stops[body, link.name])
                 ET.SubElement(el, "joint", attrs)
                 joints.append((attrs["name"], link.joint, body))
             if link.shape is None:
@@ -222,7 +230,7 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
     sites = []
     for k, ((body_a, link_a, body_b, link_b), (point_a, point_b)) in enumerate(scene.sim.loops.items()):
         for side, body, link, point in (("a", body_a, link_a, point_a), ("b", body_b, link_b, point_b)):
-            owner = root.find(f".//body[@name='{_link_name(body, link, len(trees)) if link else body}']")
+            owner = root.find(f".//body[@name='{model_name(body, link, len(trees)) if link else body}']")
             ET.SubElement(owner, "site", name=f"loop{k}_{side}", pos=_num(point), size="0.005")
         sites.append((f"loop{k}_a", f"loop{k}_b"))
     if sites:
@@ -232,13 +240,14 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
                           solimp=_num(LOOP_SOLIMP))
     if motors:
         actuator = ET.SubElement(root, "actuator")
-        bandwidth = getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
+        if bandwidth is None:
+            bandwidth = getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
         posed = {}  # body -> its links in PyBullet's order and their frames now: once per body, not per motor
         for body, links, _, _ in trees:
             ordered = depth_first(links)
             posed[body] = ordered, tree_frames(ordered, scene.sim.joint_values(body))
         for (body, link), limit in motors.items():
-            joint = f"{_link_name(body, link, len(trees))}_joint"
+            joint = f"{model_name(body, link, len(trees))}_joint"
             kp, kv = servo_gains(*posed[body], link, h, bandwidth)
             ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
                           forcerange=_num([-limit, limit]))
@@ -246,7 +255,30 @@ def mjcf(scene: Any, model: str = "paragym") -> str:
     return ET.tostring(root, encoding="unicode") + "\n"
 
 
-def _link_name(body: str, link: str, n_trees: int) -> str:
+def _fixed_geoms(world: ET.Element, fixed: list[tuple[str, Any]]) -> None:
+    """The fixed parts (name, shape) as world geoms of ``world``."""
+    for name, shape in fixed:
+        _mjcf_geom(world, shape, shape.center, robot=False, name=name)
+
+
+def fixed_parts(sim: Any) -> list[tuple[str, Any]]:
+    """The fixed parts (guides, obstacles) of a PyBullet scene now: (name, shape), as :func:`mjcf` writes them."""
+    return bodies_of(sim)[1]
+
+
+def with_fixed_parts(text: str, fixed: list[tuple[str, Any]]) -> str:
+    """The MJCF ``text`` with its fixed parts (the world geoms that the robot collides with) replaced by
+    ``fixed`` (:func:`fixed_parts`): a scene's new obstacles in a model whose robot stays as it was written."""
+    root = ET.fromstring(text)
+    world = root.find("worldbody")
+    for geom in world.findall("geom"):
+        if geom.get("contype") == "1":
+            world.remove(geom)
+    _fixed_geoms(world, fixed)
+    return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def model_name(body: str, link: str, n_trees: int) -> str:
     """A link's name in the model: its own, prefixed by its body's where the scene has several tree bodies."""
     return link if n_trees == 1 else f"{body}/{link}"
 
@@ -327,7 +359,7 @@ def _urdf_joint(root: ET.Element, name: str, kind: str, parent: str, child: str,
 def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
     """The scene's mechanism as a URDF document of its open tree, and the loop-closure sidecar (a JSON-able
     dict; module docstring). A scene of one tree body only: a split layout has no single tree to write."""
-    _, fixed = _bodies(scene)
+    _, fixed = bodies_of(scene.sim)
     body, links = tree_of(scene)
     motors = {link: limit for (_, link), limit in _motors(scene).items()}
     root = ET.Element("robot", name=model)
@@ -449,7 +481,7 @@ def _gaps(frames: dict[str, tuple[np.ndarray, np.ndarray]], got: Any) -> dict[st
 def tree_of(scene: Any) -> tuple[str, list[LinkSpec]]:
     """The scene's mechanism as one fixed-base tree body: its name and its links in PyBullet's (depth-first)
     order. A split layout (several bodies, free bases) is refused: URDF and the checks need one tree."""
-    trees, _ = _bodies(scene)
+    trees, _ = bodies_of(scene.sim)
     if len(trees) != 1 or trees[0][2] > 0:
         raise ValueError("the mechanism must be one fixed-base tree body (the dynamics' layout \"tree\"); this "
                          f"scene has {[t[0] for t in trees]}")

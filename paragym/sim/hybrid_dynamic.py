@@ -44,6 +44,7 @@ measured by ``benchmarks/env_speed.py``; the figures are in CHANGELOG.md.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
@@ -51,6 +52,7 @@ from scipy.interpolate import PchipInterpolator
 from paragym.mechanisms import hybrid
 from paragym.mechanisms.geometry import PartShape, matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
+from paragym.sim.mujoco_sim import simulate_in
 
 __all__ = ["HybridDynamics", "HybridDynamicScene", "HybridRun"]
 
@@ -118,12 +120,19 @@ def _quat_z_to(d: np.ndarray) -> tuple[float, ...]:
 class HybridDynamicScene:
     """The dynamic hybrid robot (module docstring), built at the home pose in
     the dynamics' ``layout``: every joint is addressed as (body name, link
-    index), so that both layouts share the code below."""
+    index), so that both layouts share the code below. ``engine``: None for
+    PyBullet's physics, a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings` for
+    MuJoCo's over the PyBullet world as built (:mod:`paragym.sim.mujoco_sim`)."""
 
     ROBOT = "hybrid"
+    #: the exported MJCF's servo bandwidth times its step (:func:`paragym.sim.export.servo_gains`), which the
+    #: MuJoCo fidelity runs too: a servo's gains are set for its leg, and the loops hang the platforms on it, so
+    #: at the default 0.5 the legs rang under the reference's motion (KF FAIL in 5 of 10 reference episodes in
+    #: MuJoCo); at 1.0 none rang (10 of 10 KF PASS); at 1.5 all did (0 of 10)
+    EXPORT_SERVO_BANDWIDTH = 1.0
 
     def __init__(self, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
-                 dynamics: HybridDynamics | None = None, gui: bool = False) -> None:
+                 dynamics: HybridDynamics | None = None, gui: bool = False, engine: Any = None) -> None:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or HybridDynamics()
         if d.layout not in ("tree", "split"):
@@ -201,6 +210,7 @@ class HybridDynamicScene:
                                (self.e_platform, g.tripod_top[leg - 6]))
             sim.ball_joint(body, link, [0, 0, 0.025], platform[1], list(joint), other=platform[0])
         self.reset(np.zeros(6), 0.5)
+        simulate_in(self, engine)
 
     def hold(self, duration: float) -> None:
         """Keep the nine strokes' targets (m) where they are for ``duration`` s of simulated time, the motors

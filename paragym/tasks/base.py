@@ -144,6 +144,8 @@ class Task(Protocol):
         Rules: the rules of one version, as data; the env id's class holds one value of it.
         State: the state of N robots (:class:`TaskState`), ``State.empty(n, params)``.
         vector_fidelities: the fidelities its native vector env runs.
+        engines: the physics engines of its dynamic fidelity (the env's ``engine`` argument,
+            :mod:`paragym.sim.mujoco_sim`), PyBullet's first, the default.
         sensor_layout: the accelerometer array of KF validation on the validated body
             (:meth:`paragym.validation.sensors.AccelerometerArray.paper_layout`'s arguments).
     """
@@ -156,6 +158,7 @@ class Task(Protocol):
     Rules: ClassVar[type]
     State: ClassVar[type]
     vector_fidelities: tuple[str, ...]
+    engines: tuple[str, ...]
     sensor_layout: dict[str, float]
 
     def paper_scenario(self) -> Any:
@@ -216,6 +219,7 @@ class TaskBase:
     name: str = ""
     Params: ClassVar[type]
     vector_fidelities: tuple[str, ...] = ("kinematic",)
+    engines: tuple[str, ...] = ("pybullet",)
     sensor_layout: dict[str, float] = {}
 
     def vector_params(self, rules: Any, kwargs: dict[str, Any]) -> Any:

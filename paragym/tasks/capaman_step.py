@@ -140,6 +140,8 @@ class CaPaManRules:
         return MAX_OBSTACLES if self.rung is None else LADDER[self.rung].max_obstacles
 
 
+#: the engines of the dynamic fidelity (the env's ``engine`` argument, :mod:`paragym.sim.mujoco_sim`)
+ENGINES = ("pybullet", "mujoco")
 #: the rules of CaPaManCollisionFree-v0 and -v1
 RULES = {0: CaPaManRules(0, goal_relative=False, reach_tolerance=1 * DEG, collision_penalty=5.0, time_penalty=0.0),
          1: CaPaManRules(1, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0, time_penalty=0.01)}
@@ -171,6 +173,8 @@ class CaPaManParams:
     control_period: float = 0.02
     dynamics: Any = None
     rules: CaPaManRules = RULES[0]
+    #: the dynamic fidelity's engine: None (PyBullet) or MuJoCo's settings (:mod:`paragym.sim.mujoco_sim`)
+    engine: Any = None
 
     @classmethod
     def from_kwargs(cls, rules: CaPaManRules, scenario: Any = "random", fidelity: str = "kinematic",
@@ -179,10 +183,11 @@ class CaPaManParams:
                     collision_penalty: float | None = None, clearance_cap: float = 0.05,
                     control_period: float = 0.02, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
                     collision: str | None = None, time_penalty: float | None = None, dynamics: Any = None,
-                    **unknown: Any) -> CaPaManParams:
+                    engine: Any = "pybullet", **unknown: Any) -> CaPaManParams:
         """The env's keyword arguments, checked: the one place they are. Whether a custom scenario can run
         needs PyBullet: it is checked at reset."""
         from paragym.sim.capaman_dynamic import CaPaManDynamics
+        from paragym.sim.mujoco_sim import check_engine
 
         refuse_unknown(unknown, (), "CaPaManCollisionFree")
         check_instance("dynamics", dynamics, CaPaManDynamics)
@@ -206,12 +211,15 @@ class CaPaManParams:
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
                             ("clearance_cap", clearance_cap)):
             check_number(name, value)
+        engine = check_engine(engine, ENGINES, fidelity)
         if fidelity == "dynamic":
             check_control_period(control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
+            if engine is not None:  # a new fidelity: nothing released to keep
+                check_control_period(control_period, engine.time_step, refuse=True)
         return cls(float(max_joint_step), float(reach_tolerance), float(delta), float(beta), float(w_length),
                    float(w_progress), float(reach_bonus), float(collision_penalty), float(clearance_cap), geometry,
                    1 if rules.goal_relative else 0, time_penalty, scenario, fidelity, collision, control_period,
-                   dynamics, rules)
+                   dynamics, rules, engine)
 
     @property
     def max_obstacles(self) -> int:

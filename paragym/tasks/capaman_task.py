@@ -15,6 +15,7 @@ from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.capaman import CaPaManScenario
 from paragym.tasks.capaman_step import (
+    ENGINES,
     FAILURES,
     LADDER_RULES,
     REWARD_TERMS,
@@ -41,6 +42,7 @@ class CaPaManTask(TaskBase):
     Rules = CaPaManRules
     State = CaPaManState
     #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
+    engines = ENGINES
     sensor_layout: dict[str, float] = {}
 
     def paper_scenario(self) -> CaPaManScenario:
@@ -90,7 +92,8 @@ class CaPaManTask(TaskBase):
         if params.fidelity == "kinematic":
             return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
                                            draws=render_mode is not None))
-        return DynamicWorld(CaPaManDynamicScene(g, params.dynamics, gui=gui, clearance_cap=params.clearance_cap),
+        return DynamicWorld(CaPaManDynamicScene(g, params.dynamics, gui=gui, clearance_cap=params.clearance_cap,
+                                                engine=params.engine),
                             params.control_period)
 
     @staticmethod

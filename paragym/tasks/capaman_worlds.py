@@ -206,7 +206,7 @@ class DynamicWorld(SceneWorld):
     # --- what KF validation reads (paragym.validation.episode) ---
     def body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """Paper 000's accelerometer array on the movable plate, judged about H."""
-        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.dynamics.time_step)
+        return (self.scene.sim, *self.scene.plate, np.zeros(3), self.scene.sim.time_step)
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """The plate's pose by the closed-form direct kinematics of the motors' targets."""
@@ -214,7 +214,7 @@ class DynamicWorld(SceneWorld):
         return pose6(pose.position[0], pose.rotation[0])
 
     def step_duration(self, state: Any, params: Any) -> float:
-        h = self.scene.dynamics.time_step
+        h = self.scene.sim.time_step  # the engine's physics step
         return h * physics_steps(self.control_period, h)
 
     def move(self, command: np.ndarray) -> np.ndarray:

@@ -121,6 +121,8 @@ class HybridRules:
     rung: int | None = None
 
 
+#: the engines of the dynamic fidelity (the env's ``engine`` argument, :mod:`paragym.sim.mujoco_sim`)
+ENGINES = ("pybullet", "mujoco")
 #: the rules of HybridSingularityFree-v0, -v1 and -v2
 RULES = {0: HybridRules(0, sees_the_end=False, strict_dynamics=False),
          1: HybridRules(1, sees_the_end=True, strict_dynamics=False),
@@ -151,6 +153,8 @@ class HybridParams:
     track_tolerance: float = 0.005
     track_angle_tolerance: float = math.radians(1.0)
     rules: HybridRules = RULES[0]
+    #: the dynamic fidelity's engine: None (PyBullet) or MuJoCo's settings (:mod:`paragym.sim.mujoco_sim`)
+    engine: Any = None
 
     @classmethod
     def from_kwargs(cls, rules: HybridRules, scenario: Any = "random", max_delta_step: float = 0.05,
@@ -158,9 +162,11 @@ class HybridParams:
                     w_limit: float = 1.0, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
                     tau: float = 0.01, w_end: float | None = None, fidelity: str = "kinematic",
                     dynamics: Any = None, control_period: float = 0.05, track_tolerance: float = 0.005,
-                    track_angle_tolerance: float | None = None, **unknown: Any) -> HybridParams:
+                    track_angle_tolerance: float | None = None, engine: Any = "pybullet",
+                    **unknown: Any) -> HybridParams:
         """The env's keyword arguments, checked: the one place they are."""
         from paragym.sim.hybrid_dynamic import HybridDynamics
+        from paragym.sim.mujoco_sim import check_engine
 
         refuse_unknown(unknown, (), "HybridSingularityFree")
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
@@ -182,9 +188,12 @@ class HybridParams:
             dynamics = dynamics or HybridDynamics.fast()
             check_control_period(control_period, dynamics.time_step, refuse=rules.strict_dynamics,
                                  later="paragym/HybridSingularityFree-v2")
+        engine = check_engine(engine, ENGINES, fidelity)
+        if engine is not None:  # a new fidelity: nothing released to keep
+            check_control_period(control_period, engine.time_step, refuse=True)
         return cls(float(max_delta_step), float(j_bar), float(w_offset), float(w_delta), float(w_singular),
                    float(w_limit), geometry, float(tau), 1 if rules.sees_the_end else 0, w_end, scenario, fidelity,
-                   dynamics, control_period, track_tolerance, angle, rules)
+                   dynamics, control_period, track_tolerance, angle, rules, engine)
 
     @property
     def obs_size(self) -> int:

@@ -12,6 +12,7 @@ from paragym.tasks import hybrid as scenarios_module
 from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.hybrid_step import (
+    ENGINES,
     FAILURES,
     LADDER_RULES,
     REWARD_TERMS,
@@ -39,6 +40,7 @@ class HybridTask(TaskBase):
     Rules = HybridRules
     State = HybridState
     #: KF validation (dynamic fidelity): the paper's array scaled to platform E
+    engines = ENGINES
     sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
 
     def paper_scenario(self) -> HybridScenario:
@@ -62,7 +64,7 @@ class HybridTask(TaskBase):
             return None
         from paragym.sim.hybrid_dynamic import HybridDynamicScene
 
-        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human")
+        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human", engine=params.engine)
         strict = params.rules.strict_dynamics
         return DynamicWorld(scene, params.control_period, params.track_tolerance,
                             params.track_angle_tolerance if strict else None, BROKEN_GAP if strict else None)

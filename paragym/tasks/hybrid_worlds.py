@@ -86,7 +86,7 @@ class DynamicWorld:
     def body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """Platform E, judged at its centre."""
         scene = self.scene
-        return (scene.sim, *scene.e_platform, np.zeros(3), scene.dynamics.time_step)
+        return (scene.sim, *scene.e_platform, np.zeros(3), scene.sim.time_step)
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """E's pose of the step: the nominal path plus the action's offset."""
@@ -94,7 +94,7 @@ class DynamicWorld:
         return pose6(t_e[:3, 3], t_e[:3, :3])
 
     def step_duration(self, state: Any, params: Any) -> float:
-        h = self.scene.dynamics.time_step
+        h = self.scene.sim.time_step  # the engine's physics step
         return h * physics_steps(self.control_period, h)
 
 

@@ -89,6 +89,8 @@ class OrthoglideRules:
     table_below_guides: bool = False
 
 
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): PyBullet's only
+ENGINES = ("pybullet",)
 #: the rules of Orthoglide2PRRKappa-v0, -v1 and -v2
 RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True),
          2: OrthoglideRules(2, tracking=True, exact_time=True, table_below_guides=True)}
@@ -122,11 +124,13 @@ class OrthoglideParams:
                     max_null_rate: float = 0.5, max_joint_rate: float = 0.5, w_track: float = 1.0,
                     limit_penalty: float = 10.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                     fidelity: str = "kinematic", dynamics: Any = None, track_tolerance: float | None = None,
-                    **unknown: Any) -> OrthoglideParams:
+                    engine: Any = "pybullet", **unknown: Any) -> OrthoglideParams:
         """The env's keyword arguments, checked: the one place they are."""
+        from paragym.sim.mujoco_sim import check_engine
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
         refuse_unknown(unknown, (), "Orthoglide2PRRKappa")
+        check_engine(engine, ENGINES, fidelity)  # PyBullet's only: the argument is every task's
         if not rules.tracking and track_tolerance is not None:
             raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1 and later, not of v0")
         track_tolerance = check_number("track_tolerance", 0.005 if track_tolerance is None else track_tolerance,

@@ -13,6 +13,7 @@ from paragym.tasks import orthoglide as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
+    ENGINES,
     FAILURES,
     LADDER_RULES,
     REWARD_TERMS,
@@ -41,6 +42,7 @@ class OrthoglideTask(TaskBase):
     State = OrthoglideState
     #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
     #: below
+    engines = ENGINES
     sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
 
     def paper_scenario(self) -> OrthoglideScenario:

@@ -98,6 +98,8 @@ class TripodRules:
     rung: int | None = None
 
 
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): PyBullet's only
+ENGINES = ("pybullet",)
 #: the rules of MobileTripodOdometry-v0, -v1 and -v2
 RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(1, trust_action=True, fold_ends=False),
          2: TripodRules(2, trust_action=True, fold_ends=True)}
@@ -129,11 +131,13 @@ class TripodParams:
                     max_correction: float = 0.05, success_error: float = 0.05,
                     geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY, trust_rate: float | None = None,
                     relative_reward: bool | None = None, fidelity: str = "kinematic", dynamics: Any = None,
-                    **unknown: Any) -> TripodParams:
+                    engine: Any = "pybullet", **unknown: Any) -> TripodParams:
         """The env's keyword arguments, checked: the one place they are. A custom drive is checked at reset."""
+        from paragym.sim.mujoco_sim import check_engine
         from paragym.sim.tripod_dynamic import TripodDynamics
 
         refuse_unknown(unknown, (), "MobileTripodOdometry")
+        check_engine(engine, ENGINES, fidelity)  # PyBullet's only: the argument is every task's
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
         check_instance("dynamics", dynamics, TripodDynamics)
         if not rules.trust_action and (trust_rate is not None or relative_reward is not None):

@@ -12,6 +12,7 @@ from paragym.tasks import tripod as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_step import (
+    ENGINES,
     FAILURES,
     LADDER_RULES,
     REWARD_TERMS,
@@ -39,6 +40,7 @@ class TripodTask(TaskBase):
     Rules = TripodRules
     State = TripodState
     #: KF validation (dynamic fidelity): the upper plate, sampled at 100 Hz (a slow vehicle)
+    engines = ENGINES
     sensor_layout: dict[str, float] = {"r": 0.3, "depth": 0.1, "rate": 100.0}
 
     def paper_scenario(self) -> TripodScenario:

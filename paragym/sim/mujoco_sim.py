@@ -1,0 +1,387 @@
+"""A dynamic scene's physics in MuJoCo: the MuJoCo dynamic fidelity (``engine="mujoco"``).
+
+:class:`MuJoCoSim` stands where a dynamic scene's :class:`~paragym.sim.client.PyBulletSim` stands and answers
+the same calls, so that the scene (:mod:`paragym.sim.capaman_dynamic`, :mod:`paragym.sim.hybrid_dynamic`), its
+world, the task's transition and KF validation run unchanged on either engine. The scene is built in PyBullet
+as always; its mechanism is then written as MJCF by :func:`paragym.sim.export.mjcf` (the same links, masses,
+loop closures as ``connect`` constraints, motors as force-limited position servos) and simulated by MuJoCo:
+
+* **physics** (every step, every motor, every loop closure and contact with the fixed parts) is MuJoCo's;
+* **geometry** stays PyBullet's: the scene's PyBullet world is kept as a mirror, posed at MuJoCo's joint values
+  whenever it is read, and answers the clearance queries (the task's collision rule, one code for both
+  engines), renders, and keeps the bodies' bookkeeping (names, link indices, obstacles);
+* a reset poses the mirror (the scene's own reset code), which answers the reads until MuJoCo next runs; MuJoCo
+  then starts from there, at rest, with nothing of a former episode (warm starts, time); new fixed parts (a
+  scenario's obstacles) recompile the model with the robot as it was first written, so that the servos' gains
+  do not depend on the pose at a reset.
+
+The motors: MuJoCo's position servo pushes kp (u - q) - kv q_dot within its force range; :meth:`MuJoCoSim.drive`
+sets u = target + (kv / kp) * rate, which makes that kp (target - q) + kv (rate - q_dot), the PD law of
+PyBullet's motors with its target rate. The gains are the export's (critically damped at
+``servo_bandwidth`` / h for what each servo moves, :func:`paragym.sim.export.servo_gains`), not PyBullet's
+normalised ones; the force limit is the scene's, per call as in PyBullet.
+
+The settings (:class:`MuJoCoSettings`) are the engine's own: its physics step (1 ms by default: MuJoCo's
+servos are springs integrated step by step, and at the PyBullet scenes' 5 ms they cannot hold the hybrid's
+platforms, :func:`paragym.sim.export.mujoco_time_step`), the servos' bandwidth and the solver's iterations.
+A scene's ``time_step`` passed to :meth:`MuJoCoSim.ramp` is ignored: a ramp lasts its duration in MuJoCo's
+steps. Lengths in m, angles in rad, forces in N or N m.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from paragym.sim import export
+from paragym.sim.client import depth_first, physics_steps
+
+__all__ = ["ENGINES", "MuJoCoSettings", "MuJoCoSim", "check_engine", "engine_name", "simulate_in"]
+
+#: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
+ENGINES = ("pybullet", "mujoco")
+
+
+@dataclass(frozen=True)
+class MuJoCoSettings:
+    """The MuJoCo dynamic fidelity's own settings (SI).
+
+    Attributes:
+        time_step: MuJoCo's physics step (s).
+        servo_bandwidth: the servos' bandwidth times the step (:func:`paragym.sim.export.servo_gains`); None:
+            the scene's ``EXPORT_SERVO_BANDWIDTH`` or :data:`paragym.sim.export.SERVO_BANDWIDTH`.
+        iterations: the constraint solver's iterations; None: the scene's dynamics' ``solver_iterations``.
+    """
+
+    time_step: float = 1e-3
+    servo_bandwidth: float | None = None
+    iterations: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.time_step, int | float) and 0 < self.time_step <= export.MUJOCO_MAX_STEP):
+            raise ValueError(f"MuJoCoSettings.time_step must be in (0, {export.MUJOCO_MAX_STEP:g}] s; got "
+                             f"{self.time_step!r}")
+        if self.servo_bandwidth is not None and not 0 < self.servo_bandwidth < 2:
+            raise ValueError(f"MuJoCoSettings.servo_bandwidth must be in (0, 2) (semi-implicit Euler is unstable "
+                             f"from 2 on); got {self.servo_bandwidth!r}")
+        if self.iterations is not None and not (isinstance(self.iterations, int) and self.iterations > 0):
+            raise ValueError(f"MuJoCoSettings.iterations must be a positive int; got {self.iterations!r}")
+
+
+def check_engine(engine: Any, engines: tuple[str, ...], fidelity: str) -> MuJoCoSettings | None:
+    """The ``engine`` argument of an env whose task runs the dynamic fidelity in ``engines``: "pybullet"
+    (None), "mujoco" or a :class:`MuJoCoSettings` (the MuJoCo settings). A ValueError naming it for an engine the
+    task does not run, or for MuJoCo outside the dynamic fidelity; an ImportError saying how to install MuJoCo
+    where it is missing."""
+    if isinstance(engine, MuJoCoSettings):
+        settings: MuJoCoSettings | None = engine
+    elif isinstance(engine, str) and engine in ENGINES:
+        settings = MuJoCoSettings() if engine == "mujoco" else None
+    else:
+        raise ValueError(f"engine must be 'pybullet', 'mujoco' or a MuJoCoSettings; got {engine!r:.80}")
+    if settings is None:
+        return None
+    if "mujoco" not in engines:
+        raise ValueError(f"engine='mujoco': this task's dynamic fidelity runs in {' and '.join(engines)} only")
+    if fidelity != "dynamic":
+        raise ValueError(f"engine='mujoco' is a dynamic fidelity: make the env with fidelity='dynamic' (got "
+                         f"fidelity={fidelity!r})")
+    _import_mujoco()
+    return settings
+
+
+def engine_name(settings: MuJoCoSettings | None) -> str:
+    """The engine's name of a checked ``engine`` argument (:func:`check_engine`)."""
+    return "pybullet" if settings is None else "mujoco"
+
+
+def simulate_in(scene: Any, settings: MuJoCoSettings | None) -> None:
+    """Give the built dynamic ``scene`` its engine: PyBullet's as built (``settings`` None), else MuJoCo's with
+    ``settings`` (``scene.sim`` becomes a :class:`MuJoCoSim` over the PyBullet world)."""
+    if settings is not None:
+        scene.sim = MuJoCoSim(scene, settings)
+
+
+def _import_mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError as error:
+        raise ImportError('engine="mujoco" needs MuJoCo: pip install "paragym[mujoco]"') from error
+    return mujoco
+
+
+class MuJoCoSim:
+    """The physics of ``scene`` (a dynamic scene built in PyBullet) in MuJoCo, with its PyBullet world as the
+    geometry's mirror (module docstring). Joints, links and motors are addressed as in PyBullet: (body name,
+    joint or link index), -1 a base."""
+
+    def __init__(self, scene: Any, settings: MuJoCoSettings | None = None) -> None:
+        self._mj = _import_mujoco()
+        self.settings = s = settings or MuJoCoSettings()
+        #: the scene's PyBullet world: its geometry, posed at MuJoCo's state when read
+        self.mirror = mirror = scene.sim
+        #: MuJoCo's physics step (s) and the simulated time (s) so far
+        self.time_step = float(s.time_step)
+        self.elapsed = 0.0
+        #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
+        self.after_step: list[Any] = []
+        #: the robot as MJCF, written once from the scene as built (its fixed parts are replaced at a recompile)
+        self.robot_mjcf = export.mjcf(scene, getattr(scene, "ROBOT", "paragym"), time_step=s.time_step,
+                                      bandwidth=s.servo_bandwidth, iterations=s.iterations)
+        self._trees = [(name, depth_first(links), base_mass) for name, links, base_mass, _ in
+                       export.bodies_of(mirror)[0]]
+        self._fixed: Any = None
+        self.model: Any = None
+        self.data: Any = None
+        self._actuators: dict[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+        self._need_load = True  # the mirror holds the state (a reset): load it before MuJoCo runs
+        self._mirror_stale = False  # MuJoCo has moved since the mirror was posed
+        self._ready()
+
+    # --- the model and the two states --------------------------------------------------------------
+    def _compile(self, fixed: list[tuple[str, Any]]) -> None:
+        mj = self._mj
+        self.model = model = mj.MjModel.from_xml_string(export.with_fixed_parts(self.robot_mjcf, fixed))
+        self.data = mj.MjData(model)
+        self._fixed = fixed
+        self._actuators.clear()
+        n = len(self._trees)
+        #: (body, joint or link index) -> (MuJoCo body id, joint type, qpos address); -1: the base
+        self._joints: dict[tuple[str, int], tuple[int, int, int]] = {}
+        for name, links, base_mass in self._trees:
+            base = model.body(name).id
+            self._joints[name, -1] = (base, -1, int(model.jnt_qposadr[model.body_jntadr[base]]) if base_mass > 0
+                                      else -1)
+            for i, link in enumerate(links):
+                b = model.body(export.model_name(name, link.name, n)).id
+                if model.body_jntnum[b]:
+                    j = int(model.body_jntadr[b])
+                    self._joints[name, i] = (b, int(model.jnt_type[j]), int(model.jnt_qposadr[j]))
+                else:
+                    self._joints[name, i] = (b, -1, -1)
+
+    def _ready(self) -> None:
+        """Load the mirror's state into MuJoCo if a reset put it there (recompiling for new fixed parts): before
+        MuJoCo runs."""
+        if not self._need_load:
+            return
+        mj, mirror = self._mj, self.mirror
+        fixed = export.fixed_parts(mirror)
+        if self.model is None or not _same_parts(fixed, self._fixed):
+            self._compile(fixed)
+        model, data = self.model, self.data
+        mj.mj_resetData(model, data)  # nothing of a former episode (warm starts, time) carries over
+        ball = mj.mjtJoint.mjJNT_BALL
+        for name, links, base_mass in self._trees:
+            values = mirror.joint_values(name)
+            for index in range(len(links)):
+                _, kind, adr = self._joints[name, index]
+                if adr < 0:
+                    continue
+                value = values[index]
+                if kind == ball:
+                    data.qpos[adr:adr + 4] = (value[3], value[0], value[1], value[2])
+                else:
+                    data.qpos[adr] = value[0]
+            if base_mass > 0:
+                pos, xyzw = mirror.link_frame(name, -1)
+                adr = self._joints[name, -1][2]
+                data.qpos[adr:adr + 3] = pos
+                data.qpos[adr + 3:adr + 7] = (xyzw[3], xyzw[0], xyzw[1], xyzw[2])
+        adr = model.jnt_qposadr[model.actuator_trnid[:, 0]]
+        data.ctrl[:] = data.qpos[adr]  # the servos hold where the reset put them until driven
+        mj.mj_step1(model, data)  # the state's kinematics and velocities: what a read sees
+        self._need_load, self._mirror_stale = False, False
+
+    def _pose_mirror(self) -> None:
+        """Pose the PyBullet mirror at MuJoCo's joint values (it then answers geometric queries)."""
+        if not self._mirror_stale or self._need_load:
+            return
+        qpos, ball = self.data.qpos, self._mj.mjtJoint.mjJNT_BALL
+        for name, links, base_mass in self._trees:
+            indices, values = [], []
+            for i in range(len(links)):
+                _, kind, adr = self._joints[name, i]
+                if adr < 0:
+                    continue
+                indices.append(i)
+                values.append([qpos[adr + 1], qpos[adr + 2], qpos[adr + 3], qpos[adr]] if kind == ball
+                              else [qpos[adr]])
+            self.mirror.set_joints(name, indices, values)
+            if base_mass > 0:
+                adr = self._joints[name, -1][2]
+                w, x, y, z = qpos[adr + 3:adr + 7]
+                self.mirror.reset_base(name, qpos[adr:adr + 3], (x, y, z, w))
+        self._mirror_stale = False
+
+    # --- dynamics --------------------------------------------------------------------------------------
+    def _motors(self, motors: Sequence[tuple[str, Sequence[int]]]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The actuators of ``motors``, their joints' qpos addresses and their kv / kp (cached per motor list)."""
+        key = tuple((name, tuple(joints)) for name, joints in motors)
+        if key not in self._actuators:
+            model, n = self.model, len(self._trees)
+            ids = []
+            for name, joints in key:
+                links = next(links for tree, links, _ in self._trees if tree == name)
+                ids += [model.actuator(f"{export.model_name(name, links[j].name, n)}_joint_motor").id
+                        for j in joints]
+            ids_arr = np.array(ids, int)
+            adr = model.jnt_qposadr[model.actuator_trnid[ids_arr, 0]]
+            ratio = -model.actuator_biasprm[ids_arr, 2] / model.actuator_gainprm[ids_arr, 0]
+            self._actuators[key] = (ids_arr, adr, ratio)
+        return self._actuators[key]
+
+    def drive(self, motors: Sequence[tuple[str, Sequence[int]]], targets: Sequence[float], rates: Sequence[float],
+              force: float, position_gain: float = 0.0, velocity_gain: float = 0.0) -> None:
+        """The servos of ``motors`` chase ``targets`` at ``rates`` (each at most ``force``, N or N m) from the
+        next step on; PyBullet's normalised gains are not MuJoCo's and are ignored (module docstring)."""
+        self._ready()
+        ids, _, ratio = self._motors(motors)
+        self.data.ctrl[ids] = np.asarray(targets, float) + ratio * np.asarray(rates, float)
+        self.model.actuator_forcerange[ids] = (-force, force)
+
+    def ramp(self, motors: Sequence[tuple[str, Sequence[int]]], start: np.ndarray, goal: np.ndarray,
+             duration: float, time_step: float, force: float, position_gain: float = 0.0,
+             velocity_gain: float = 0.0) -> None:
+        """Move the servos' targets linearly from ``start`` to ``goal`` over ``duration`` s of MuJoCo's steps
+        (at least one; ``time_step``, PyBullet's, is ignored), stepping as they go."""
+        h = self.time_step
+        steps = physics_steps(duration, h)
+        rate = (goal - start) / (steps * h)
+        for i in range(1, steps + 1):
+            self.drive(motors, start + (goal - start) * (i / steps), rate, force)
+            self.step()
+
+    def step(self) -> None:
+        """One MuJoCo step (then the :attr:`after_step` callbacks)."""
+        self._ready()
+        mj = self._mj
+        mj.mj_step2(self.model, self.data)
+        mj.mj_step1(self.model, self.data)  # the new state's kinematics and velocities, for the reads
+        self.elapsed += self.time_step
+        self._mirror_stale = True
+        for callback in self.after_step:
+            callback()
+
+    # --- reads ------------------------------------------------------------------------------------------
+    def _index(self, name: str, link: str | int) -> int:
+        return self.mirror.link_index(name, link) if isinstance(link, str) else link
+
+    def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
+        """World position (m) and xyzw quaternion of a link's frame (the link by name or index; -1 the base)."""
+        return self.link_motion(name, link)[:2]
+
+    def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
+        """A link's frame: world position (m), xyzw quaternion and, with ``velocity``, the linear (m/s) and
+        angular (rad/s) velocity of the frame's origin, world frame."""
+        if self._need_load:  # a reset: the mirror holds the state, at rest
+            return self.mirror.link_motion(name, link, velocity)
+        b = self._joints[name, self._index(name, link)][0]
+        w, x, y, z = self.data.xquat[b]
+        out = (self.data.xpos[b].copy(), np.array([x, y, z, w]))
+        if not velocity:
+            return out
+        v = np.empty(6)
+        self._mj.mj_objectVelocity(self.model, self.data, self._mj.mjtObj.mjOBJ_BODY, b, v, 0)
+        return (*out, v[3:].copy(), v[:3].copy())
+
+    def motor_positions(self, motors: Sequence[tuple[str, Sequence[int]]]) -> np.ndarray:
+        """The positions of the joints of ``motors`` now, in their order (rad or m)."""
+        if self._need_load:
+            return self.mirror.motor_positions(motors)
+        return self.data.qpos[self._motors(motors)[1]].copy()
+
+    def motor_forces(self, motors: Sequence[tuple[str, Sequence[int]]]) -> np.ndarray:
+        """The force (N) or torque (N m) each servo of ``motors`` applied in the last step, in their order."""
+        self._ready()
+        return self.data.actuator_force[self._motors(motors)[0]].copy()
+
+    def loop_residual(self) -> float:
+        """The largest gap (m) between the two points of a loop closure now, in MuJoCo (its ``connect``
+        constraints' sites); 0 without loops (after a reset, before a step: the mirror's)."""
+        if self._need_load:
+            return self.mirror.loop_residual()
+        return export.mujoco_loop_gap(self.model, self.data)
+
+    def joint_values(self, name: str) -> list[tuple[float, ...]]:
+        """Every joint of body ``name`` now, as :meth:`PyBulletSim.joint_values` gives them."""
+        self._pose_mirror()
+        return self.mirror.joint_values(name)
+
+    def clearance(self, name: str, others: Sequence[str], max_distance: float,
+                  links: Sequence[int] | None = None) -> tuple[float, str | None]:
+        """:meth:`PyBulletSim.clearance` at MuJoCo's state (the mirror's geometry)."""
+        self._pose_mirror()
+        return self.mirror.clearance(name, others, max_distance, links)
+
+    def render(self, width: int, height: int, target: Sequence[float], distance: float, yaw: float, pitch: float,
+               fov: float = 45.0) -> np.ndarray:
+        """:meth:`PyBulletSim.render` of the mirror at MuJoCo's state."""
+        self._pose_mirror()
+        return self.mirror.render(width, height, target, distance, yaw, pitch, fov)
+
+    # --- resets: the mirror is posed, MuJoCo loads it before it runs --------------------------------
+    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+        """Put a joint at ``value`` (a number, or an xyzw quaternion), the mechanism at rest."""
+        self._pose_mirror()
+        self.mirror.reset_joint(name, joint, value)
+        self._need_load = True
+
+    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
+                   quaternion: Sequence[float]) -> None:
+        """:meth:`PyBulletSim.place_free`, the mechanism at rest."""
+        self._pose_mirror()
+        self.mirror.place_free(part, floats, position, quaternion)
+        self._need_load = True
+
+    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        """:meth:`PyBulletSim.reset_base`, the mechanism at rest."""
+        self._pose_mirror()
+        self.mirror.reset_base(name, position, quaternion)
+        self._need_load = True
+
+    # --- the world's bodies: the mirror's (fixed parts reach MuJoCo at the next load) ---------------------
+    def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+        self._pose_mirror()
+        self.mirror.add_static(name, shape, rgba)
+        self._need_load = True
+
+    def add_static_group(self, name: str, shapes: Sequence[Any],
+                         rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+        self._pose_mirror()
+        self.mirror.add_static_group(name, shapes, rgba)
+        self._need_load = True
+
+    def remove(self, name: str) -> None:
+        self._pose_mirror()
+        self.mirror.remove(name)  # a rebuild of the mirror re-runs the scene's set-up, through this object
+        self._need_load = True
+
+    def __getattr__(self, name: str) -> Any:
+        """What the mirror keeps and sets up (names, links, loops, collision filters, the GUI): the mirror's."""
+        if name in _MIRRORED:
+            return getattr(self.mirror, name)
+        raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
+
+    def close(self) -> None:
+        """Close the mirror's PyBullet connection and drop the MuJoCo model."""
+        self.mirror.close()
+        self.model = self.data = None
+
+
+#: the mirror's names :class:`MuJoCoSim` answers with: bookkeeping, and the scene's set-up (run again by the
+#: mirror's rebuild; what the MJCF holds of it was written when the model was)
+_MIRRORED = frozenset({
+    "loops", "stops", "recipes", "body_names", "link_name", "link_index", "locate", "body", "connected", "gui",
+    "draws", "set_physics", "no_self_collision", "passive", "ball_joint", "no_collision", "joint_stops",
+    "friction", "on_rebuild"})
+
+
+def _same_parts(a: Any, b: Any) -> bool:
+    """Whether two lists of fixed parts (name, shape) are the same (shapes compared by their numbers)."""
+    if a is None or b is None or len(a) != len(b):
+        return False
+    return all(na == nb and repr(sa) == repr(sb) for (na, sa), (nb, sb) in zip(a, b, strict=True))

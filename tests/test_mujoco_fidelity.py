@@ -1,0 +1,162 @@
+"""The MuJoCo dynamic fidelity (``engine="mujoco"``, paragym.sim.mujoco_sim): the same envs, scenes and checks
+as PyBullet's, with MuJoCo's physics."""
+
+from __future__ import annotations
+
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import paragym  # noqa: F401
+from paragym import registry
+
+mujoco = pytest.importorskip("mujoco")
+
+from paragym.sim.client import PyBulletSim  # noqa: E402
+from paragym.sim.mujoco_sim import MuJoCoSettings, MuJoCoSim  # noqa: E402
+
+#: the ids whose task runs MuJoCo, and how far (m) the engines may part on the reference's paper episode
+IDS = {"paragym/CaPaManCollisionFree-v1": 5e-4, "paragym/HybridSingularityFree-v2": 2e-3}
+#: how far (m) a loop may open in MuJoCo under random actions (PyBullet on the same actions: 0.0007 and 0.64 mm)
+LOOPS = {"paragym/CaPaManCollisionFree-v1": 5e-5, "paragym/HybridSingularityFree-v2": 5e-4}
+
+
+def make(env_id: str, engine: object = "mujoco", **kwargs: object) -> gym.Env:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return gym.make(env_id, fidelity="dynamic", engine=engine, **kwargs)
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_mujoco_runs_the_env_with_its_spaces_and_loops_closed(env_id):
+    """The env's spaces are the same in both engines; in MuJoCo random in-Box actions keep every loop closed
+    (CaPaMan within 0.05 mm, hybrid 0.5 mm), as ``info["loop_residual_m"]`` reports it every step."""
+    env, reference = make(env_id), make(env_id, "pybullet")
+    try:
+        assert env.observation_space == reference.observation_space
+        assert env.action_space == reference.action_space
+        assert isinstance(env.unwrapped.world.scene.sim, MuJoCoSim)
+        assert isinstance(reference.unwrapped.world.scene.sim, PyBulletSim)
+        obs, _ = env.reset(seed=1)
+        assert env.observation_space.contains(obs)
+        env.action_space.seed(1)
+        for _ in range(20):
+            obs, _, terminated, truncated, info = env.step(env.action_space.sample())
+            assert env.observation_space.contains(obs)
+            assert 0 < info["loop_residual_m"] < LOOPS[env_id], info["loop_residual_m"]
+            if terminated or truncated:
+                break
+    finally:
+        env.close()
+        reference.close()
+
+
+@pytest.mark.parametrize("env_id", IDS)
+def test_the_engines_execute_the_reference_alike(env_id):
+    """The paper's method on the paper's case in both engines: it succeeds and passes the KF check in each, and
+    the validated body's executed paths stay within the id's tolerance of each other (CaPaMan 0.5 mm, hybrid
+    2 mm); MuJoCo's recorder samples at MuJoCo's 1 ms step."""
+    from paragym.baselines.policies import get_policy
+    from paragym.baselines.tasks import bench_of
+    from paragym.validation.episode import validate_episode
+
+    spec = get_policy(env_id, bench_of(env_id).reference)
+    runs = {}
+    for engine in ("pybullet", "mujoco"):
+        env = make(env_id, engine, scenario=registry.row(env_id).paper_scenario)
+        try:
+            runs[engine] = val = validate_episode(env, spec.factory(env, 0), seed=0, sensor_seed=0)
+        finally:
+            env.close()
+        assert val.success and val.passed, (engine, val.report)
+    ours, theirs = runs["mujoco"].executed, runs["pybullet"].executed
+    assert np.allclose(np.diff(ours.t), MuJoCoSettings().time_step)
+    on_grid = ours.at(theirs.t[theirs.t <= ours.t[-1]])
+    gap = np.linalg.norm(on_grid.position - theirs.position[:len(on_grid.t)], axis=1).max()
+    assert gap < IDS[env_id], gap
+
+
+def test_a_reset_starts_mujoco_afresh():
+    """An episode from a seed is the same, bit for bit, whatever ran before it (no warm start, no time carried
+    over), and a new scenario's obstacles reach MuJoCo's model."""
+    env = make("paragym/CaPaManCollisionFree-v1")
+    try:
+        def episode(seed: int) -> list[np.ndarray]:
+            out = [env.reset(seed=seed)[0]]
+            out += [env.step(np.full(3, 0.5, np.float32))[0] for _ in range(5)]
+            return out
+
+        first = episode(5)
+        sim = env.unwrapped.world.scene.sim
+        geoms = sim.model.ngeom
+        episode(9)
+        assert sim.model.ngeom != geoms or sim.mirror.recipes["obstacles"] != ()
+        for _ in range(2):  # after another scenario (a new model), then after itself (the same model)
+            again = episode(5)
+            assert all(np.array_equal(a, b) for a, b in zip(first, again, strict=True))
+        obstacles = [g for g in range(sim.model.ngeom) if sim.model.geom_contype[g] == 1]
+        assert len(obstacles) == len(env.unwrapped.world.scene.obstacles) > 0
+    finally:
+        env.close()
+
+
+@pytest.mark.parametrize("push", ["down", "sideways"])
+def test_the_capaman_stops_at_a_box_in_both_engines(push):
+    """The same scene code in both engines: the motors ramp into a box over 1 s and push on for 1 s at their
+    torque limit (``tests/test_rules.py``'s pushes); the tool stops within 2.5 mm of where PyBullet stops it,
+    the loops closed within 0.2 mm, and without the box it goes on by more than 5 mm."""
+    from test_rules import HOME, PUSHES
+
+    from paragym.mechanisms import capaman
+    from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+
+    box, goal = PUSHES[push]
+    ends = {}
+    for engine, obstacles in ((None, (box,)), (MuJoCoSettings(), (box,)), (MuJoCoSettings(), ())):
+        scene = CaPaManDynamicScene(capaman.DEFAULT_GEOMETRY, engine=engine)
+        try:
+            scene.set_obstacles(obstacles)
+            scene.set_configuration(HOME)
+            gap = 0.0
+            for i in range(100):  # as tests/test_rules.py's _push
+                scene.drive(HOME + (goal - HOME) * min(1.0, (i + 1) / 50), 0.02)
+                gap = max(gap, scene.sim.loop_residual())
+            ends[engine is not None, bool(obstacles)] = scene.tip, gap
+        finally:
+            scene.close()
+    (pybullet, _), (blocked, gap), (free, _) = ends[False, True], ends[True, True], ends[True, False]
+    assert np.linalg.norm(blocked - pybullet) < 2.5e-3, (blocked, pybullet)
+    assert np.linalg.norm(free - blocked) > 5e-3 and gap < 2e-4, (free, blocked, gap)
+
+
+def test_the_engine_argument_is_checked():
+    """Each refusal names the argument: an unknown engine, MuJoCo outside the dynamic fidelity or on a task that
+    does not run it, settings out of range, a control period that is not a whole number of MuJoCo's steps."""
+    with pytest.raises(ValueError, match="engine must be"):
+        make("paragym/CaPaManCollisionFree-v1", "bullet")
+    with pytest.raises(ValueError, match="fidelity='dynamic'"):
+        gym.make("paragym/HybridSingularityFree-v2", engine="mujoco")
+    for env_id in ("paragym/Orthoglide2PRRKappa-v2", "paragym/MobileTripodOdometry-v2"):
+        with pytest.raises(ValueError, match="runs in pybullet only"):
+            make(env_id)
+        make(env_id, "pybullet").close()  # the argument is every task's
+    with pytest.raises(ValueError, match="time_step"):
+        MuJoCoSettings(time_step=0.002)
+    with pytest.raises(ValueError, match="servo_bandwidth"):
+        MuJoCoSettings(servo_bandwidth=2.0)
+    with pytest.raises(ValueError, match="control_period"):
+        make("paragym/HybridSingularityFree-v2", MuJoCoSettings(time_step=4e-4), control_period=0.0502)
+
+
+def test_the_default_engine_is_pybullet():
+    """The released ids keep PyBullet: no ``engine`` argument is PyBullet's physics."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make("paragym/HybridSingularityFree-v2", fidelity="dynamic")
+    try:
+        assert env.unwrapped.params.engine is None
+        assert isinstance(env.unwrapped.world.scene.sim, PyBulletSim)
+    finally:
+        env.close()
