@@ -1,18 +1,29 @@
-"""Two engines on one mechanism: PyBullet's scene and its MJCF export in MuJoCo, holding a pose under gravity.
+"""Two engines on one mechanism: PyBullet's and MuJoCo's physics, held, pushed and driven by the paper's method.
 
-For each mechanism with loop closures (the newest ids' dynamic scenes, or ``--env``), after ``reset(seed)`` every
-joint sits where the task's kinematics has it; the motors then hold their targets for ``--seconds`` of simulated
-time under gravity, in PyBullet (the scene's own settings: its step, solver iterations and motor gains) and in
-MuJoCo (the file ``paragym export`` writes, with the same step and iterations; position servos at the same force
-limits), the latter both with the exported loop settings and with MuJoCo's default ``solref``/``solimp`` (the
-sag that mujoco #2698 reports). The table gives, per engine, the loop-closure residual over the run (mean and
-largest, mm), how far any link ended from its kinematic pose (mm: the sag under gravity, the gap to the
-kinematic model), the motors' holding forces at the end (the largest, and the largest difference from
-PyBullet's, motor by motor: the statics of one mechanism, which two engines must agree on) and the physics
-steps per second of this machine (each engine's step with the residual's
-measurement after it, in Python: a measure of the run here, not of either engine's speed alone).
+Three tables from one run, each engine on the same mechanism, commands and seeds.
+*Holding*: for each mechanism with loop closures (the newest ids' dynamic scenes, or ``--env``), after
+``reset(seed)`` every joint sits where the task's kinematics has it; the motors then hold their targets for
+``--seconds`` of simulated time under gravity, in PyBullet (the scene's own settings: its step, solver iterations
+and motor gains) and in MuJoCo (the file ``paragym export`` writes; position servos at the same force limits),
+the latter both with the exported loop settings and with MuJoCo's default ``solref``/``solimp`` (the sag that
+mujoco #2698 reports). The table gives, per engine, the loop-closure residual over the run (mean and largest,
+mm), how far any link ended from its kinematic pose (mm: the sag under gravity, the gap to the kinematic model),
+the motors' holding forces at the end (the largest, and the largest difference from PyBullet's, motor by motor:
+the statics of one mechanism, which two engines must agree on) and the physics steps per second of this machine
+(each engine's step with the residual's measurement after it, in Python: a measure of the run here, not of
+either engine's speed alone).
 
-    python benchmarks/conformance.py [--env ID ...] [--seconds 1.0] [--seed 0] [--record]
+*Contact*: the CaPaMan's scene, the same code in both engines (``engine=``), drives its cranks into each box of
+the contact contract (:data:`paragym.sim.capaman_dynamic.CONTACT_PUSHES`) at the motors' torque limit: where the
+tool stops, how far from PyBullet's stop, and the loops' largest gap under the push.
+
+*The reference*: the bench's reference of each id whose task runs MuJoCo plays ``--episodes`` dynamic episodes
+(the paper's case, then random scenarios from reset seed 300001, the leaderboard's physics settings) in each
+engine, judged as the leaderboard judges them (success, and the KF check of the executed against the commanded
+motion), with the loop residual over every step, the largest distance of the validated body from its command
+(mm) and the env steps per second.
+
+    python benchmarks/conformance.py [--env ID ...] [--seconds 1.0] [--seed 0] [--episodes 10] [--record]
 """
 
 from __future__ import annotations
@@ -26,8 +37,12 @@ import numpy as np
 from results_file import add_record_option, paragraph, record
 
 from paragym import registry
+from paragym.baselines.stats import wilson
 from paragym.sim import export
 from paragym.sim.client import motors_of
+
+#: the first random scenario's reset seed of the reference's episodes (as benchmarks/reference_dynamic.py)
+FIRST_SEED = 300_001
 
 
 def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float, np.ndarray]:
@@ -81,30 +96,23 @@ def with_default_loops(text: str) -> str:
     return re.sub(r' solref="[^"]*" solimp="[^"]*"', "", text)
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", action="append", default=None, help="an env id (repeatable; default: newest)")
-    parser.add_argument("--seconds", type=float, default=1.0, help="simulated seconds of holding")
-    parser.add_argument("--seed", type=int, default=0, help="the reset seed: the pose held")
-    add_record_option(parser)
-    args = parser.parse_args()
-    if args.seconds <= 0:
-        parser.error(f"--seconds must be positive, got {args.seconds}")
+def holding(env_ids: list[str], seconds: float, seed: int) -> list[list[str]]:
+    """The holding table's rows (module docstring)."""
     rows = []
-    for env_id in args.env or list(registry.newest()):
+    for env_id in env_ids:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             env = export.dynamic_env(env_id)
         try:
-            env.reset(seed=args.seed)
+            env.reset(seed=seed)
             scene = export.scene_of(env)
             if not scene.sim.loops or not hasattr(scene, "hold"):
                 print(f"{env_id}: no loop closure to hold (its loops close through the ground)")
                 continue
             text = export.mjcf(scene, env_id.split("/")[1])
-            runs = [("MuJoCo, exported loops", *mujoco_hold(scene, text, args.seconds)),
-                    ("MuJoCo, default loops", *mujoco_hold(scene, with_default_loops(text), args.seconds)),
-                    ("PyBullet (the env's)", *pybullet_hold(scene, args.seconds))]
+            runs = [("MuJoCo, exported loops", *mujoco_hold(scene, text, seconds)),
+                    ("MuJoCo, default loops", *mujoco_hold(scene, with_default_loops(text), seconds)),
+                    ("PyBullet (the env's)", *pybullet_hold(scene, seconds))]
         finally:
             env.close()
         held = runs[-1][-1]  # PyBullet's holding forces: the reference the MuJoCo rows are compared with
@@ -113,11 +121,107 @@ def main() -> None:
             rows.append([env_id, engine, f"{residuals.mean() * 1e3:.3g}", f"{residuals.max() * 1e3:.3g}",
                          f"{drift * 1e3:.3g}", f"{np.max(np.abs(forces)):.3g}", gap, f"{rate:,.0f}"])
             print(" | ".join(rows[-1]), flush=True)
-    columns = ["env", "engine", "loop residual, mean [mm]", "loop residual, max [mm]", "largest link drift [mm]",
-               "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]", "physics steps/s"]
-    if args.record:
-        record("conformance", "Two engines on one mechanism: holding a pose under gravity", paragraph(__doc__),
-               columns, rows, order=62, folder=args.record)
+    return rows
+
+
+def contact() -> list[list[str]]:
+    """The contact table's rows: the CaPaMan pushed into each box in each engine (module docstring)."""
+    from paragym.mechanisms import capaman
+    from paragym.sim.capaman_dynamic import CONTACT_PUSHES, CaPaManDynamicScene, push_into
+    from paragym.sim.mujoco_sim import MuJoCoSettings
+
+    rows = []
+    for push in CONTACT_PUSHES:
+        stops = {}
+        for engine, settings in (("PyBullet", None), ("MuJoCo", MuJoCoSettings())):
+            scene = CaPaManDynamicScene(capaman.DEFAULT_GEOMETRY, engine=settings)
+            try:
+                t0 = time.perf_counter()
+                tips, gap = push_into(scene, push)
+                wall = time.perf_counter() - t0
+            finally:
+                scene.close()
+            stops[engine] = tips[-1]
+            apart = "-" if engine == "PyBullet" else f"{np.linalg.norm(tips[-1] - stops['PyBullet']) * 1e3:.2f}"
+            rows.append([f"CaPaMan, pushed {push}", engine, " ".join(f"{v * 1e3:.1f}" for v in tips[-1]), apart,
+                         f"{gap * 1e3:.3g}", f"{2.0 / wall:.1f}"])
+            print(" | ".join(rows[-1]), flush=True)
+    return rows
+
+
+def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
+    """The reference's table's rows: each id's reference in each engine (module docstring)."""
+    import gymnasium as gym
+
+    from paragym.baselines.leaderboard.suite import dynamic_kwargs
+    from paragym.baselines.policies import get_policy
+    from paragym.baselines.tasks import bench_of
+    from paragym.validation.episode import validate_episode
+
+    def rate(k: int, n: int) -> str:
+        low, high = wilson(k, n)
+        return f"{k}/{n} [{low:.2f}, {high:.2f}]"
+
+    rows = []
+    for env_id in env_ids:
+        engines = registry.row(env_id).engines
+        if len(engines) < 2:
+            continue
+        spec = get_policy(env_id, bench_of(env_id).reference)
+        for engine in engines:
+            won = passed = steps = 0
+            residuals, errors, wall = [], [], 0.0
+            for i in range(episodes):
+                scenario, seed = ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
+                arg = registry.row(env_id).paper_scenario if scenario == "paper" else scenario
+                with warnings.catch_warnings():
+                    warnings.simplefilter("ignore")
+                    env = gym.make(env_id, scenario=arg, **dynamic_kwargs(env_id, engine))
+                try:
+                    t0 = time.perf_counter()
+                    val = validate_episode(env, spec.factory(env, seed), seed=seed, sensor_seed=seed)
+                    wall += time.perf_counter() - t0
+                finally:
+                    env.close()
+                won, passed, steps = won + val.success, passed + val.passed, steps + val.steps
+                residuals += [info["loop_residual_m"] for info in val.episode.infos]
+                errors.append(val.position_error)
+            rows.append([env_id, engine, spec.name, rate(won, episodes), rate(passed, episodes),
+                         f"{np.mean(residuals) * 1e3:.3g}", f"{np.max(residuals) * 1e3:.3g}",
+                         f"{np.max(errors) * 1e3:.3g}", f"{steps / wall:.0f}"])
+            print(" | ".join(rows[-1]), flush=True)
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--env", action="append", default=None, help="an env id (repeatable; default: newest)")
+    parser.add_argument("--seconds", type=float, default=1.0, help="simulated seconds of holding")
+    parser.add_argument("--seed", type=int, default=0, help="the reset seed: the pose held")
+    parser.add_argument("--episodes", type=int, default=10, help="the reference's dynamic episodes per engine")
+    add_record_option(parser)
+    args = parser.parse_args()
+    if args.seconds <= 0:
+        parser.error(f"--seconds must be positive, got {args.seconds}")
+    if args.episodes < 1:
+        parser.error(f"--episodes must be at least 1, got {args.episodes}")
+    env_ids = args.env or list(registry.newest())
+    held, pushed, played = holding(env_ids, args.seconds, args.seed), contact(), reference(env_ids, args.episodes)
+    if not args.record:
+        return
+    intro = paragraph(__doc__)
+    record("conformance", "Two engines on one mechanism: holding a pose under gravity",
+           f"{intro} {paragraph(__doc__, 1)}",
+           ["env", "engine", "loop residual, mean [mm]", "loop residual, max [mm]", "largest link drift [mm]",
+            "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]", "physics steps/s"],
+           held, order=62, folder=args.record)
+    record("conformance_contact", "Two engines on one mechanism: contact stops", paragraph(__doc__, 2),
+           ["push", "engine", "tool stopped at x y z [mm]", "from PyBullet's stop [mm]", "loop gap, max [mm]",
+            "simulated seconds per second"], pushed, order=63, folder=args.record)
+    record("conformance_reference", "Two engines on one mechanism: the paper's method", paragraph(__doc__, 3),
+           ["env", "engine", "policy", "success [95% CI]", "KF PASS [95% CI]", "loop residual, mean [mm]",
+            "loop residual, max [mm]", "largest distance from the command [mm]", "env steps/s"], played,
+           order=64, folder=args.record)
 
 
 if __name__ == "__main__":

@@ -70,6 +70,15 @@ class EnvRow:
         return tuple(getattr(importlib.import_module(module), cls).task.scenario_names)
 
     @property
+    def engines(self) -> tuple[str, ...]:
+        """The physics engines of the id's dynamic fidelity (its task's ``engines``: the ``engine`` argument),
+        the default first."""
+        import importlib
+
+        module, cls = self.entry_point.split(":")
+        return tuple(getattr(importlib.import_module(module), cls).task.engines)
+
+    @property
     def name(self) -> str:
         """The id without ``paragym/`` (file and folder names use it)."""
         return self.id.split("/", 1)[1]

@@ -17,7 +17,7 @@ import paragym
 from paragym import registry
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
-from paragym.sim.capaman_dynamic import CaPaManDynamics, CaPaManDynamicScene
+from paragym.sim.capaman_dynamic import CONTACT_PUSHES, CaPaManDynamics, CaPaManDynamicScene, push_into
 from paragym.sim.obstacles import Box
 from paragym.tasks.capaman import CaPaManScenario, paper_scenario
 from paragym.units import DEG
@@ -77,25 +77,17 @@ def test_an_obstacle_at_the_plate_ends_the_episode_in_every_fidelity_and_preset(
 
 # --- the loops stay closed, and the tool stops, under contact ----------------------------------------------
 
-#: boxes the motors drive the mechanism into (at their torque limit once blocked): the tool from above, and the
-#: tool's rod from the side
-PUSHES = {"down": (Box((0.0, 0.0, 0.03), (0.03, 0.03, 0.02)), np.radians([45.0, 45, 45])),
-          "sideways": (Box((-0.025, -0.043, 0.08), (0.008, 0.008, 0.015)), np.radians([135.0, 45, 90]))}
+PUSHES = CONTACT_PUSHES
 
 
 def _push(dynamics: CaPaManDynamics, push: str) -> tuple[np.ndarray, float]:
     """The tool tip at every control period (0.02 s) of a 1 s ramp of the commands into the box and 1 s of
-    pushing on, and the largest loop-closure gap (m)."""
-    box, goal = PUSHES[push]
+    pushing on, and the largest loop-closure gap (m) (:func:`paragym.sim.capaman_dynamic.push_into`)."""
     scene = CaPaManDynamicScene(G, dynamics)
-    scene.set_obstacles((box,))
-    scene.set_configuration(HOME)
-    tips, gap = [], 0.0
-    for i in range(100):
-        tips.append(scene.drive(HOME + (goal - HOME) * min(1.0, (i + 1) / 50), 0.02))
-        gap = max(gap, scene.closure_error())
-    scene.close()
-    return np.array(tips), gap
+    try:
+        return push_into(scene, push)
+    finally:
+        scene.close()
 
 
 @pytest.fixture(scope="module")

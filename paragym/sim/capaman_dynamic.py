@@ -60,9 +60,10 @@ from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.capaman_scene import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
 from paragym.sim.mujoco_sim import simulate_in
+from paragym.sim.obstacles import Box
 from paragym.trajectories import JointTrajectory, RigidMotion
 
-__all__ = ["CaPaManDynamics", "CaPaManDynamicScene", "ExecutedMotion"]
+__all__ = ["CONTACT_PUSHES", "CaPaManDynamicScene", "CaPaManDynamics", "ExecutedMotion", "push_into"]
 
 
 @dataclass(frozen=True)
@@ -323,3 +324,26 @@ class CaPaManDynamicScene:
     def close(self) -> None:
         """Disconnect PyBullet."""
         self.sim.close()
+
+
+#: the contact contract's pushes (``tests/test_rules.py``, ``benchmarks/conformance.py``): boxes the motors drive
+#: the mechanism into from home, and the crank angles (rad) they are driven toward: the tool from above, and the
+#: tool's rod from the side
+CONTACT_PUSHES = {"down": (Box((0.0, 0.0, 0.03), (0.03, 0.03, 0.02)), np.radians([45.0, 45, 45])),
+                  "sideways": (Box((-0.025, -0.043, 0.08), (0.008, 0.008, 0.015)), np.radians([135.0, 45, 90]))}
+
+
+def push_into(scene: CaPaManDynamicScene, push: str, box: bool = True) -> tuple[np.ndarray, float]:
+    """Drive ``scene`` from home toward the angles of ``CONTACT_PUSHES[push]``, its box in place (or not, without
+    ``box``): a 1 s ramp of the commands, then 1 s on at the goal (the motors at their torque limit once the box
+    blocks them). Returns the tool tip at every control period of 0.02 s (100, 3) (m) and the largest loop gap
+    over them (m). The scene is left where the push ended."""
+    obstacle, goal = CONTACT_PUSHES[push]
+    home = np.asarray(scene.geometry.alpha_home, float).ravel()
+    scene.set_obstacles((obstacle,) if box else ())
+    scene.set_configuration(home)
+    tips, gap = [], 0.0
+    for i in range(100):
+        tips.append(scene.drive(home + (goal - home) * min(1.0, (i + 1) / 50), 0.02))
+        gap = max(gap, scene.closure_error())
+    return np.array(tips), gap

@@ -10,7 +10,9 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
   damped at a bandwidth the physics step h integrates stably, 0.5 / h rad/s (or a scene's own), for the
   inertia each one moves (:func:`servo_gains`); the fixed parts (guides, obstacles) as world geoms. The
   robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts
-  (1, 2), as in the scene.
+  (1, 2), as in the scene; the fixed parts' contacts take the loops' ``solref``/``solimp``: with MuJoCo's
+  defaults the CaPaMan pushed into a box at its torque limit sank 1.8 mm deeper than in PyBullet, with these
+  0.5 mm (``benchmarks/conformance.py``).
   The loops' ``solref``/``solimp`` (:func:`loop_solref`, :data:`LOOP_SOLIMP`) are stiffer than MuJoCo's
   defaults, with which a closed chain under gravity sags at its pins (mujoco #2698;
   ``benchmarks/conformance.py`` measures both). Gravity and the solver iterations are the scene's; the physics
@@ -200,7 +202,7 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
                   iterations=str(int(d.solver_iterations if iterations is None else iterations)))
     world = ET.SubElement(root, "worldbody")
-    _fixed_geoms(world, fixed)
+    _fixed_geoms(world, fixed, h)
     stops = getattr(scene.sim, "stops", {})
     joints: list[tuple[str, str, str]] = []  # (joint name, kind, body)
     for body, links, base_mass, base_shape in trees:
@@ -255,10 +257,13 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     return ET.tostring(root, encoding="unicode") + "\n"
 
 
-def _fixed_geoms(world: ET.Element, fixed: list[tuple[str, Any]]) -> None:
-    """The fixed parts (name, shape) as world geoms of ``world``."""
+def _fixed_geoms(world: ET.Element, fixed: list[tuple[str, Any]], time_step: float) -> None:
+    """The fixed parts (name, shape) as world geoms of ``world``, their contacts as stiff as the loops (module
+    docstring) at the physics step ``time_step`` (s)."""
     for name, shape in fixed:
         _mjcf_geom(world, shape, shape.center, robot=False, name=name)
+        world[-1].set("solref", _num(loop_solref(time_step)))
+        world[-1].set("solimp", _num(LOOP_SOLIMP))
 
 
 def fixed_parts(sim: Any) -> list[tuple[str, Any]]:
@@ -274,7 +279,7 @@ def with_fixed_parts(text: str, fixed: list[tuple[str, Any]]) -> str:
     for geom in world.findall("geom"):
         if geom.get("contype") == "1":
             world.remove(geom)
-    _fixed_geoms(world, fixed)
+    _fixed_geoms(world, fixed, float(root.find("option").get("timestep")))
     return ET.tostring(root, encoding="unicode") + "\n"
 
 
