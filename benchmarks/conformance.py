@@ -34,7 +34,7 @@ import time
 import warnings
 
 import numpy as np
-from results_file import add_record_option, paragraph, record
+from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
 from paragym.baselines.stats import wilson
@@ -214,14 +214,14 @@ def main() -> None:
            f"{intro} {paragraph(__doc__, 1)}",
            ["env", "engine", "loop residual, mean [mm]", "loop residual, max [mm]", "largest link drift [mm]",
             "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]", "physics steps/s"],
-           held, order=62, folder=args.record)
+           held, order=62, folder=args.record, source=engine_versions())
     record("conformance_contact", "Two engines on one mechanism: contact stops", paragraph(__doc__, 2),
            ["push", "engine", "tool stopped at x y z [mm]", "from PyBullet's stop [mm]", "loop gap, max [mm]",
-            "simulated seconds per second"], pushed, order=63, folder=args.record)
+            "simulated seconds per second"], pushed, order=63, folder=args.record, source=engine_versions())
     record("conformance_reference", "Two engines on one mechanism: the paper's method", paragraph(__doc__, 3),
            ["env", "engine", "policy", "success [95% CI]", "KF PASS [95% CI]", "loop residual, mean [mm]",
             "loop residual, max [mm]", "largest distance from the command [mm]", "env steps/s"], played,
-           order=64, folder=args.record)
+           order=64, folder=args.record, source=engine_versions())
 
 
 if __name__ == "__main__":

@@ -17,7 +17,7 @@ from __future__ import annotations
 import argparse
 import time
 
-from results_file import add_record_option, paragraph, record
+from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
 from paragym.baselines.leaderboard.evaluate import evaluate_dynamic
@@ -71,8 +71,7 @@ def main() -> None:
     if args.record:
         suffix, title = ("", "") if args.engine == "pybullet" else (f"_{args.engine}", ", in MuJoCo")
         record(f"reference_dynamic{suffix}", f"The paper's method under physics{title}", paragraph(__doc__),
-               columns, rows,
-               order=60, folder=args.record)
+               columns, rows, order=60, folder=args.record, source=engine_versions())
 
 
 if __name__ == "__main__":

@@ -59,9 +59,9 @@ def paragraph(doc: str, index: int = 0) -> str:
 
 def record(name: str, title: str, paragraph: str, columns: list[str], rows: list[list[Any]],
            command: str | None = None, order: int = 50, folder: str | Path = RESULTS,
-           figure: str | None = None) -> Path:
+           figure: str | None = None, source: str | None = None) -> Path:
     """Write ``<folder>/<name>.json`` (``order``: where the table goes on the page, lowest first; ``figure``: a
-    picture under docs/ shown below it)."""
+    picture under docs/ shown below it; ``source``: what else produced it, e.g. the engines' versions)."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     out = folder / f"{name}.json"
@@ -70,6 +70,19 @@ def record(name: str, title: str, paragraph: str, columns: list[str], rows: list
         "command": command or "python " + " ".join([f"benchmarks/{Path(sys.argv[0]).name}", *sys.argv[1:]]),
         "date": datetime.now(UTC).strftime("%Y-%m-%d"), "machine": machine(), "commit": _commit(),
         "columns": columns, "rows": [[str(c) for c in r] for r in rows],
-        **({"figure": figure} if figure else {})}, indent=1) + "\n")
+        **({"figure": figure} if figure else {}), **({"source": source} if source else {})}, indent=1) + "\n")
     print(f"wrote {out}")
     return out
+
+
+def engine_versions() -> str:
+    """The physics engines' versions installed here (MuJoCo's where it is), for a result file's ``source``."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    out = []
+    for name, package in (("PyBullet", "pybullet"), ("MuJoCo", "mujoco")):
+        try:
+            out.append(f"{name} {version(package)}")
+        except PackageNotFoundError:
+            pass
+    return ", ".join(out)

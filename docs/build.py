@@ -1,7 +1,7 @@
 """Build paragym's documentation site: ``python docs/build.py`` (needs the ``docs`` extra).
 
-Writes the generated pages (one per env id, the speed page from the benchmarks' result files, and the
-ladders' page and figure from the committed leaderboard, :mod:`paragym.docpages`), then runs Sphinx in
+Writes the generated pages (one per env id, the speed and conformance pages from the benchmarks' result files,
+and the ladders' page and figure from the committed leaderboard, :mod:`paragym.docpages`), then runs Sphinx in
 strict mode (a warning is an error) into ``docs/_build/html``. ``--no-images`` keeps the
 rendered frames as they are; ``--check`` only builds.
 """
@@ -23,10 +23,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=str(DOCS / "_build" / "html"), help="where the HTML goes")
     args = parser.parse_args(argv)
     if not args.check:
-        from paragym.docpages import ladder_figure, ladders_page, speed_page, write_pages
+        from paragym.docpages import conformance_page, ladder_figure, ladders_page, speed_page, write_pages
 
         write_pages(DOCS / "envs", images=not args.no_images)
         (DOCS / "speed.md").write_text(speed_page(DOCS.parent / "benchmarks" / "results"))
+        (DOCS / "conformance.md").write_text(conformance_page(DOCS.parent / "benchmarks" / "results"))
         board = DOCS.parent / "leaderboard" / "leaderboard.csv"
         (DOCS / "ladders.md").write_text(ladders_page(board))
         if not args.no_images:

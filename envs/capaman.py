@@ -107,6 +107,10 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     cheaper layout) have joint stops and keep the loops closed within 1 mm
     under contact, several times faster than the released settings
     (:mod:`paragym.sim.capaman_dynamic`).
+    ``engine``: the dynamic fidelity's physics, "pybullet" (default) or
+    "mujoco" (or a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`): the same
+    model, obstacles, rules and checks in MuJoCo (the ``mujoco`` extra; the
+    conformance page compares the engines).
 
     ## Version History
     * v0: initial release (kinematic and dynamic fidelity). Since paragym 0.2.0
@@ -128,6 +132,8 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+    * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
+      MuJoCo (issue 41); PyBullet's, the default, runs as before.
     """
 
     task, rules = TASK, RULES[0]

@@ -87,7 +87,11 @@ class HybridSingularityFreeEnv(ParagymEnv):
     the episode fails). ``dynamics``: a
     :class:`~paragym.sim.hybrid_dynamic.HybridDynamics` (default
     ``HybridDynamics.fast()``). ``info["tracking_error"]`` (m) is E's distance
-    from its command (0 in kinematic fidelity).
+    from its command (0 in kinematic fidelity). ``engine``: the dynamic
+    fidelity's physics, "pybullet" (default) or "mujoco" (or a
+    :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`): the same model, rules
+    and checks in MuJoCo (the ``mujoco`` extra; the conformance page
+    compares the engines).
 
     ## Version History
     * v0: initial release (kinematic fidelity).
@@ -108,6 +112,8 @@ class HybridSingularityFreeEnv(ParagymEnv):
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+    * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
+      MuJoCo (issue 41); PyBullet's, the default, runs as before.
     """
 
     task, rules = TASK, RULES[0]

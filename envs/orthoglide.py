@@ -82,7 +82,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     where they put the tool, and the tracking error, charged by
     ``w_track`` in both action modes, is how far the tool is from the
     path). ``dynamics``: an
-    :class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamics`.
+    :class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamics`. ``engine``:
+    "pybullet" only (MuJoCo's world of the 2PRR is not built).
 
     ## Version History
     * v0: initial release (kinematic fidelity).

@@ -75,6 +75,8 @@ class MobileTripodOdometryEnv(ParagymEnv):
     forces, odometry from the wheel encoders, eta from the leg encoders;
     the estimate, the observation and the reward are the same functions of
     them). ``dynamics``: a :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
+    ``engine``: "pybullet" only (the terrain's contacts and slip are not
+    exported to MuJoCo).
     On rough terrain the fidelities differ most: the kinematic units roll
     over the bumps without slip, the dynamic ones bounce and slip, and
     their odometry drifts several times further (CHANGELOG.md, 0.8.0).

@@ -36,9 +36,10 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
 
     name = args.policy or bench_of(env_id).reference
     spec = get_policy(env_id, name, args.models)
-    env = gym.make(env_id, scenario=_scenario(env_id, args), fidelity="dynamic")
+    env = gym.make(env_id, scenario=_scenario(env_id, args), fidelity="dynamic", engine=args.engine)
     try:
-        print(f"{env_id}: {args.scenario} scenario, seed {args.seed}, policy {name} ({spec.kind}), dynamic fidelity")
+        print(f"{env_id}: {args.scenario} scenario, seed {args.seed}, policy {name} ({spec.kind}), dynamic fidelity "
+              f"in {args.engine}")
         val = validate_episode(env, spec.factory(env, args.seed), seed=args.seed, sensor_seed=args.seed)
     finally:
         env.close()
@@ -53,7 +54,8 @@ def _validate_episode(env_id: str, args: argparse.Namespace) -> int:
     return write_report(rep, out, f"{env_id.split('/')[1]}, {args.scenario}, {name}: "
                                   f"{'PASS' if rep.passed else 'FAIL'}",
                         {"env_id": env_id, "scenario": args.scenario, "seed": args.seed, "policy": name,
-                         "producer": json.loads(spec.producer()), "position_error_m": val.position_error,
+                         "producer": json.loads(spec.producer()), "engine": args.engine,
+                         "position_error_m": val.position_error,
                          "success": val.success, "return": val.episode_return, "steps": val.steps})
 
 
@@ -101,7 +103,10 @@ def _cmd_validate(args: argparse.Namespace) -> int:
         raise ValueError(f"{env_id} has no dynamic fidelity to execute and validate in (its task's bench names "
                          f"no dynamics)")
     validate_plan = bench_of(env_id).validate_plan
-    if args.policy is not None or validate_plan is None:  # a policy's executed episode
+    if args.engine not in paragym.registry.row(env_id).engines:
+        raise ValueError(f"--engine {args.engine}: {env_id}'s dynamic fidelity runs in "
+                         f"{', '.join(paragym.registry.row(env_id).engines)}")
+    if args.policy is not None or validate_plan is None or args.engine != "pybullet":  # a policy's episode
         return _validate_episode(env_id, args)
     env = gym.make(env_id, scenario=_scenario(env_id, args))
     out = Path(args.out)
@@ -375,6 +380,10 @@ def build_parser() -> argparse.ArgumentParser:
                         "model, user-<algo>-seed<N> with --models); without it, the reference plan where the task "
                         "has one (the CaPaMan, the hybrid), else the reference policy's episode")
     p.add_argument("--models", default=None, help="folder of your own models (for --policy user-...)")
+    p.add_argument("--engine", default="pybullet", choices=("pybullet", "mujoco"),
+                   help="the dynamic fidelity's physics engine (MuJoCo: the CaPaMan's and the hybrid's ids, with "
+                        "the mujoco extra); in MuJoCo the policy's episode is validated (the reference's without "
+                        "--policy)")
     p.add_argument("--out", default="runs/validate", help="folder for the pictures and the JSON report")
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("export", help="write an env's mechanism as a model file: MJCF (MuJoCo) with its loop "

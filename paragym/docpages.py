@@ -22,9 +22,9 @@ from typing import Any
 
 from paragym import registry
 
-__all__ = ["SECTIONS", "env_class", "env_page", "index_page", "ladder_figure", "ladder_table", "ladders_page",
-           "readme_env_table", "readme_leaderboard_table", "render_frame", "sections", "speed_page", "status",
-           "write_pages"]
+__all__ = ["CONFORMANCE", "SECTIONS", "conformance_page", "env_class", "env_page", "index_page", "ladder_figure",
+           "ladder_table", "ladders_page", "readme_env_table", "readme_leaderboard_table", "render_frame",
+           "sections", "speed_page", "status", "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
 #: and "Dynamic Fidelity": what is known of the env under PyBullet's dynamics, where it departs from the
@@ -376,21 +376,16 @@ def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | No
     return written
 
 
-def speed_page(results: str | Path) -> str:
-    """``docs/speed.md``, made from the benchmarks' result files in ``results`` (``benchmarks/results/*.json``,
-    written by ``benchmarks/results_file.record``): one section per file, in its ``order``, each a title, one
-    paragraph, what produced it (command, date, machine, commit) and its table. No figure is typed in."""
-    import json
+#: the result files of the conformance page (:func:`conformance_page`), by their names' beginnings; the speed
+#: page has the others
+CONFORMANCE = ("conformance", "reference_dynamic")
 
-    files = [json.loads(p.read_text()) for p in sorted(Path(results).glob("*.json"))]
-    files.sort(key=lambda f: (f.get("order", 50), f["name"]))
-    out = ["# Speed", "",
-           "Every table below is a benchmark's result file (`benchmarks/results/`), written by the script that "
-           "measured it, with the command, the date, the machine and the commit that produced it; "
-           "`python docs/build.py` makes this page from them. Figures move with a machine's load: compare rows "
-           "of one table, or re-run its command. How these figures were investigated in the past is in "
-           "[the speed notes](notes/speed-history.md).", ""]
-    for f in files:
+
+def _result_sections(files: list[dict[str, Any]]) -> list[str]:
+    """One section per result file: its title, its paragraph, what produced it (command, date, machine,
+    commit, versions) and its table (and figure)."""
+    out: list[str] = []
+    for f in sorted(files, key=lambda f: (f.get("order", 50), f["name"])):
         out += [f"## {f['title']}", "", f["paragraph"], "",
                 f"`{f['command']}`: {f['date']}, {f['machine']}, commit `{f['commit']}`"
                 + (f"; {f['source']}" if f.get("source") else "") + ".", "",
@@ -399,4 +394,49 @@ def speed_page(results: str | Path) -> str:
         out.append("")
         if f.get("figure"):
             out += [f"![{f['title']}]({f['figure']})", ""]
-    return "\n".join(out)
+    return out
+
+
+def _result_files(results: str | Path, conformance: bool) -> list[dict[str, Any]]:
+    import json
+
+    files = [json.loads(p.read_text()) for p in sorted(Path(results).glob("*.json"))]
+    return [f for f in files if f["name"].startswith(CONFORMANCE) == conformance]
+
+
+def speed_page(results: str | Path) -> str:
+    """``docs/speed.md``, made from the benchmarks' result files in ``results`` (``benchmarks/results/*.json``,
+    written by ``benchmarks/results_file.record``) but the conformance page's: one section per file, in its
+    ``order``, each a title, one paragraph, what produced it (command, date, machine, commit) and its table. No
+    figure is typed in."""
+    out = ["# Speed", "",
+           "Every table below is a benchmark's result file (`benchmarks/results/`), written by the script that "
+           "measured it, with the command, the date, the machine and the commit that produced it; "
+           "`python docs/build.py` makes this page from them. Figures move with a machine's load: compare rows "
+           "of one table, or re-run its command. How these figures were investigated in the past is in "
+           "[the speed notes](notes/speed-history.md). Two engines on one mechanism are on "
+           "[the conformance page](conformance.md).", ""]
+    return "\n".join(out + _result_sections(_result_files(results, conformance=False)))
+
+
+def conformance_page(results: str | Path) -> str:
+    """``docs/conformance.md``: PyBullet and MuJoCo on the same mechanisms (``benchmarks/conformance.py`` and
+    ``benchmarks/reference_dynamic.py``'s result files, :data:`CONFORMANCE`), as :func:`speed_page` makes its
+    sections, under a guide to reading them. No figure is typed in."""
+    out = ["# Conformance: two engines, one mechanism", "",
+           "paragym's dynamic fidelity runs in PyBullet and, for the CaPaMan and the hybrid, in MuJoCo "
+           "(`gym.make(id, fidelity=\"dynamic\", engine=\"mujoco\")`, [the dynamics guide](guides/dynamics.md)). "
+           "Both engines simulate the same model: MuJoCo's is the MJCF that `paragym export` writes from the "
+           "PyBullet scene, its loop closures as `connect` constraints. The tables below come from one run of "
+           "`benchmarks/conformance.py` (and `benchmarks/reference_dynamic.py` for 30 episodes per engine), "
+           "with the date, the machine, the commit and the engines' versions of that run.", "",
+           "How to read them. *Holding*: where a loop mechanism's motors hold it under gravity, both engines must "
+           "find the same holding forces (statics) and keep the loops closed; the MuJoCo rows with its default "
+           "`solref`/`solimp` show the sag that closed chains meet there, the exported rows the settings that "
+           "fix it (a loop time constant of two steps, a harder impedance). *Contact*: the CaPaMan pushed into "
+           "a box at its torque limit stops at nearly the same place in both; MuJoCo's default contacts are soft "
+           "and let the tool sink deeper, so the export gives the fixed parts the loops' stiffness. *The "
+           "reference*: the paper's method, judged by success and the KF check in each engine on the same "
+           "seeds; where the engines part, the episode's own measures (loop residual, distance from the "
+           "command) say which engine drifted.", ""]
+    return "\n".join(out + _result_sections(_result_files(results, conformance=True)))

@@ -47,10 +47,14 @@ def test_the_speed_page_is_made_from_the_benchmarks_result_files():
     """docs/speed.md is generated (no figure typed in): each table is a result file saying what produced it."""
     import json
 
-    from paragym.docpages import speed_page
+    from paragym.docpages import conformance_page, speed_page
 
     results = ROOT / "benchmarks" / "results"
     assert (DOCS / "speed.md").read_text() == speed_page(results), "docs/speed.md is stale: run python docs/build.py"
+    conformance = (DOCS / "conformance.md").read_text()
+    assert conformance == conformance_page(results), "docs/conformance.md is stale: run python docs/build.py"
+    for name in ("conformance", "conformance_contact", "conformance_reference", "reference_dynamic_mujoco"):
+        assert (results / f"{name}.json").is_file() and "MuJoCo" in conformance, name
     files = [json.loads(p.read_text()) for p in results.glob("*.json")]
     assert files
     for f in files:

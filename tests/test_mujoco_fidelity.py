@@ -106,7 +106,8 @@ def test_a_reset_starts_mujoco_afresh():
 def test_the_capaman_stops_at_a_box_in_both_engines(push):
     """The same scene code in both engines: the motors ramp into a box over 1 s and push on for 1 s at their
     torque limit (:func:`paragym.sim.capaman_dynamic.push_into`); the tool stops within 1 mm of where
-    PyBullet stops it (1.8 mm with MuJoCo's default contact softness), the loops closed within 0.2 mm, and without the box it goes on by more than 5 mm."""
+    PyBullet stops it (1.8 mm with MuJoCo's default contact softness), the loops closed within 0.2 mm, and
+    without the box it goes on by more than 5 mm."""
     from paragym.mechanisms import capaman
     from paragym.sim.capaman_dynamic import CaPaManDynamicScene, push_into
 
@@ -152,3 +153,18 @@ def test_the_default_engine_is_pybullet():
         assert isinstance(env.unwrapped.world.scene.sim, PyBulletSim)
     finally:
         env.close()
+
+
+def test_paragym_validate_runs_in_mujoco(tmp_path, capsys):
+    """``paragym validate ENV --engine mujoco`` validates the reference's episode in MuJoCo and says so in its
+    report; an id whose task runs PyBullet only is refused, naming the option."""
+    import json
+
+    from paragym.cli import main
+
+    assert main(["validate", "HybridSingularityFree-v2", "--engine", "mujoco", "--out", str(tmp_path)]) == 0
+    assert "dynamic fidelity in mujoco" in capsys.readouterr().out
+    (report,) = tmp_path.glob("*/report.json")
+    assert json.loads(report.read_text())["engine"] == "mujoco"
+    assert main(["validate", "MobileTripodOdometry-v2", "--engine", "mujoco", "--out", str(tmp_path)]) != 0
+    assert "--engine mujoco" in capsys.readouterr().err
