@@ -96,6 +96,12 @@ class DynamicRow:
     def key(self) -> tuple[str, str, str, int, str, str]:
         return (self.env, self.policy, self.scenario, self.seed, self.version, self.producer)
 
+    @property
+    def engine(self) -> str:
+        """The physics engine it ran in: "pybullet", unless its producer names another
+        (:func:`paragym.baselines.leaderboard.suite.dynamic_producer`)."""
+        return "mujoco" if self.producer and "engine" in json.loads(self.producer) else "pybullet"
+
 
 @dataclass(frozen=True)
 class ValidationRow:

@@ -168,3 +168,41 @@ def test_paragym_validate_runs_in_mujoco(tmp_path, capsys):
     assert json.loads(report.read_text())["engine"] == "mujoco"
     assert main(["validate", "MobileTripodOdometry-v2", "--engine", "mujoco", "--out", str(tmp_path)]) != 0
     assert "--engine mujoco" in capsys.readouterr().err
+
+
+def test_the_leaderboard_runs_the_dynamic_episodes_in_both_engines(tmp_path):
+    """A run on an id whose task runs MuJoCo gives each policy its dynamic episodes in both engines, kept apart:
+    a MuJoCo column beside PyBullet's in the table and the CSV, the engine in the results file, and
+    ``paragym verify`` re-runs the MuJoCo row in MuJoCo; a second run takes both from the database."""
+    import csv
+
+    from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
+    from paragym.baselines.leaderboard.results import read_results, rows_of_results, verify
+
+    env_id = "paragym/HybridSingularityFree-v2"
+    suite = EvalSuite("test", (0,), 1, (("paper", 0),))
+
+    def run():
+        return run_leaderboard(tmp_path / "db.sqlite", suite, env_ids=[env_id], policies=["polynomial-detour"],
+                               out=tmp_path / "out", progress=False, echo=lambda s: None)
+
+    first = run()
+    assert first.new_dynamic == 2
+    (summary,) = first.summaries[env_id]
+    assert summary.dynamic["success_rate"] == summary.dynamic_mujoco["success_rate"] == 1.0
+    assert "MuJoCo" in summary.dynamic_mujoco["settings"] and "MuJoCo" not in summary.dynamic["settings"]
+    (written,) = [p for p in first.files if p.name == "results.json.gz"]
+    board = (written.parent / "LEADERBOARD.md").read_text()
+    assert "MuJoCo: success [95% CI]" in board and "MuJoCo: the same 1 episodes" in board
+    (line,) = csv.DictReader((written.parent / "leaderboard.csv").open())
+    assert line["mujoco_dynamic_success_rate"] == "1.0000" and line["dynamic_success_rate"] == "1.0000"
+    entries = read_results(written)["dynamic"]
+    assert sorted("engine" in d for d in entries) == [False, True]
+    _, rows = rows_of_results(written)
+    assert sorted(r.engine for r in rows) == ["mujoco", "pybullet"]
+    checked = verify(written, sample=0, dynamic=2, echo=lambda s: None)
+    assert not checked.problems and len(checked.episodes) == 2, checked.problems
+    assert all(c.verdict == "identical" for _, c in checked.episodes)
+    assert any("in MuJoCo" in what for what, _ in checked.episodes)
+    again = run()
+    assert (again.new_dynamic, again.skipped_dynamic) == (0, 2)

@@ -8,7 +8,7 @@ from typing import Any
 import gymnasium as gym
 
 from paragym import registry
-from paragym.baselines.leaderboard.suite import dynamic_kwargs, dynamic_producer, episode_seed
+from paragym.baselines.leaderboard.suite import dynamic_kwargs, dynamic_producer, engine_of_job, episode_seed
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 from paragym.baselines.tasks import bench_of, tightest
@@ -116,11 +116,13 @@ def evaluate_validation(spec: PolicySpec, seed: int, producer: str | None = None
 def evaluate_job(kind: str, spec: PolicySpec, a: Any, b: Any, producer: str | None = None
                  ) -> EpisodeRow | DynamicRow | ValidationRow:
     """One job of any kind: an "episode" (evaluation seed ``a``, episode ``b``), a "dynamic" episode
-    (scenario ``a``, reset seed ``b``) or the "validation" of the reference plan (seed ``a``)."""
+    (scenario ``a``, reset seed ``b``; "dynamic@mujoco" in MuJoCo) or the "validation" of the reference plan
+    (seed ``a``)."""
     if kind == "episode":
         return evaluate_episode(spec, a, b, producer)
-    if kind == "dynamic":
-        return evaluate_dynamic(spec, a, b, producer)
+    engine = engine_of_job(kind)
+    if engine is not None:
+        return evaluate_dynamic(spec, a, b, producer, engine)
     if kind == "validation":
         return evaluate_validation(spec, a, producer)
     raise ValueError(f"unknown kind of job {kind!r}")

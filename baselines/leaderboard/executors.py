@@ -19,8 +19,8 @@ from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 
 __all__ = ["EXECUTORS", "RUNNERS", "Job", "Row", "die_with_parent"]
 
-#: a job: its kind ("episode", "dynamic" or "validation"), the spec, the kind's two arguments (the evaluation
-#: seed and the episode; the scenario and the reset seed; the seed and None:
+#: a job: its kind ("episode", "dynamic", "dynamic@mujoco" or "validation"), the spec, the kind's two arguments
+#: (the evaluation seed and the episode; the scenario and the reset seed; the seed and None:
 #: :func:`~paragym.baselines.leaderboard.evaluate.evaluate_job`), and the producer its row records (computed
 #: once, by the run that planned the job: a worker never recomputes what identifies the policy)
 Job = tuple[str, PolicySpec, Any, Any, str]

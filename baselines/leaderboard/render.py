@@ -26,7 +26,7 @@ def _verdict(s: Summary) -> str:
     return "PASS" if s.validation["passed"] else "FAIL"
 
 
-def _columns(env: str, dynamic: bool = False) -> list[tuple[str, Callable[[Summary], str]]]:
+def _columns(env: str, dynamic: bool = False, mujoco: bool = False) -> list[tuple[str, Callable[[Summary], str]]]:
     cols: list[tuple[str, Callable[[Summary], str]]] = [
         ("#", lambda s: str(s.rank)), ("policy", lambda s: s.policy), ("kind", lambda s: s.kind),
         ("success [95% CI]", lambda s: f"{s.success_rate:.2f} {_ci(s.success_ci, '.2f')}"),
@@ -47,6 +47,11 @@ def _columns(env: str, dynamic: bool = False) -> list[tuple[str, Callable[[Summa
                      d["return_mean"] if key == "return" else d["metrics"].get(key, math.nan), fmt))),
                  ("dynamic: KF, own episode", lambda s: _dyn(s, lambda d: "" if d["kf"] is None else (
                      "PASS" if d["kf"]["passed"] else "FAIL")))]
+    if mujoco:
+        cols += [("MuJoCo: success [95% CI]", lambda s: _dyn(s, lambda d: f"{d['success_rate']:.2f} "
+                                                                     f"{_ci(d['success_ci'], '.2f')}", "mujoco")),
+                 ("MuJoCo: KF, own episode", lambda s: _dyn(s, lambda d: "" if d["kf"] is None else (
+                     "PASS" if d["kf"]["passed"] else "FAIL"), "mujoco"))]
     return cols
 
 
@@ -70,13 +75,19 @@ def smoke_note(suite: EvalSuite) -> str:
             f"episodes per policy or more (no --quick, --episodes 10 or more).")
 
 
-def _dyn(s: Summary, cell: Callable[[dict[str, Any]], str]) -> str:
-    return "" if s.dynamic is None else cell(s.dynamic)
+def _dyn(s: Summary, cell: Callable[[dict[str, Any]], str], engine: str = "pybullet") -> str:
+    d = s.dynamic if engine == "pybullet" else s.dynamic_mujoco
+    return "" if d is None else cell(d)
+
+
+def _has(summaries: list[Summary]) -> tuple[bool, bool]:
+    """Whether any of one env's summaries has dynamic episodes in PyBullet, and in MuJoCo."""
+    return any(s.dynamic is not None for s in summaries), any(s.dynamic_mujoco is not None for s in summaries)
 
 
 def terminal_table(summaries: list[Summary]) -> str:
     """A plain-text table of one env's summaries."""
-    cols = _columns(summaries[0].env, any(s.dynamic is not None for s in summaries))
+    cols = _columns(summaries[0].env, *_has(summaries))
     cells = [[label for label, _ in cols]] + [[f(s) for _, f in cols] for s in summaries]
     widths = [max(len(row[i]) for row in cells) for i in range(len(cols))]
     lines = ["  ".join(c.ljust(w) if i in (1, 2) else c.rjust(w)
@@ -90,7 +101,7 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
     """LEADERBOARD.md: one section per env (table, picture, notes)."""
     out = [header, ""]
     for env, summaries in all_summaries.items():
-        cols = _columns(env, any(s.dynamic is not None for s in summaries))
+        cols = _columns(env, *_has(summaries))
         out += [f"## `{env}`", "", "| " + " | ".join(label for label, _ in cols) + " |",
                 "|" + "|".join("---" for _ in cols) + "|"]
         out += ["| " + " | ".join(f(s).replace("|", "/") for _, f in cols) + " |" for s in summaries]
@@ -107,6 +118,12 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
                     f"({dyn['settings']}), the paper's case first; KF: the accelerometers and the Kalman filter on "
                     "the policy's own paper-case episode, what it executed against what it commanded "
                     "(`paragym validate ENV --policy NAME`). Beside the kinematic columns, the sim-to-sim gap.", ""]
+        mj = next((s.dynamic_mujoco for s in summaries if s.dynamic_mujoco is not None), None)
+        if mj is not None:
+            out += [f"MuJoCo: the same {mj['episodes']} episodes per policy under MuJoCo's dynamics "
+                    f"(`engine=\"mujoco\"`; {mj['settings']}), judged alike "
+                    "(`paragym validate ENV --policy NAME --engine mujoco`); the engines compared: "
+                    "docs/conformance.md.", ""]
         elif bench_of(env).dynamics is not None and not suite.runs_dynamic_on(env):
             out += [f"Dynamic: the {suite.name} suite runs the dynamic episodes on each task's newest id "
                     f"(`{registry.rows_of(registry.task_of(env))[-1].id}`); the full suite runs them here too.", ""]
@@ -154,6 +171,7 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
                      "noise_floor_success_drop", "noise_floor_metric", "noise_floor_metric_gap",
                      *keys, "wall_seconds_per_episode", "kf_validation", "dynamic_episodes", "dynamic_success_rate",
                      "dynamic_return_mean", *(f"dynamic_{k}" for k in keys), "dynamic_kf_own_episode",
+                     "mujoco_dynamic_episodes", "mujoco_dynamic_success_rate", "mujoco_dynamic_kf_own_episode",
                      "producer_sha256", "producer"])
     for ss in all_summaries.values():
         floor = noise_floor(ss)
@@ -165,7 +183,7 @@ def write_csv(all_summaries: dict[str, list[Summary]], path: Path) -> Path:
                              *(f"{v:.6g}" for v in s.return_ci), f"{s.return_std:.6g}", _apart(s), *floor_cells,
                              *(f"{s.metrics[k]:.6g}" if k in s.metrics else "" for k in keys),
                              f"{s.wall_seconds:.4f}", _verdict(s), *_dynamic_cells(s, keys),
-                             producer_id(s.producer), s.producer])
+                             *_mujoco_cells(s), producer_id(s.producer), s.producer])
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text(buf.getvalue())
     return path
@@ -177,6 +195,14 @@ def _dynamic_cells(s: Summary, keys: list[str]) -> list[str]:
         return [""] * (4 + len(keys))
     return [str(d["episodes"]), f"{d['success_rate']:.4f}", f"{d['return_mean']:.6g}",
             *(f"{d['metrics'][k]:.6g}" if k in d["metrics"] else "" for k in keys),
+            "" if d["kf"] is None else ("PASS" if d["kf"]["passed"] else "FAIL")]
+
+
+def _mujoco_cells(s: Summary) -> list[str]:
+    d = s.dynamic_mujoco
+    if d is None:
+        return ["", "", ""]
+    return [str(d["episodes"]), f"{d['success_rate']:.4f}",
             "" if d["kf"] is None else ("PASS" if d["kf"]["passed"] else "FAIL")]
 
 

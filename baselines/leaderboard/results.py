@@ -70,8 +70,8 @@ __all__ = ["FORMAT", "TOLERANCE", "Comparison", "Verification", "compare", "desc
 
 FORMAT = "paragym-results/1"
 #: the packages whose versions decide an episode's numbers
-PACKAGES = ("numpy", "scipy", "numba", "gymnasium", "pybullet", "torch", "stable_baselines3", "sb3_contrib",
-            "filterpy")
+PACKAGES = ("numpy", "scipy", "numba", "gymnasium", "pybullet", "mujoco", "torch", "stable_baselines3",
+            "sb3_contrib", "filterpy")
 #: how far a re-run of a kinematic-fidelity episode on another machine may move its return and each continuous
 #: metric: ``|a - b| <= atol + rtol * max(|a|, |b|)``. Set above the largest deviation that
 #: benchmarks/cpu_dependence.py measured on simulated CPUs (docs/reports/cpu.md); recorded in every results file.
@@ -139,8 +139,8 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
                       "wall_seconds": round(r.wall_seconds, 4)} for r in rows],
         "dynamic": [{"policy": index[r.env, r.policy, _base(r.producer)], "scenario": r.scenario, "seed": r.seed,
                      "return": r.episode_return, "success": r.success, "metrics": r.metrics,
-                     "kf_passed": r.kf_passed, "kf": r.kf, "physics": json.loads(r.producer).get("dynamics")}
-                    for r in dynamic],
+                     "kf_passed": r.kf_passed, "kf": r.kf, "physics": json.loads(r.producer).get("dynamics"),
+                     **_engine_of(r.producer)} for r in dynamic],
     }
     text = json.dumps({**body, "sha256": _digest(body)}, sort_keys=True, separators=(",", ":"))
     path = Path(path)
@@ -151,10 +151,18 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
 
 
 def _base(dynamic_producer: str) -> str:
-    """A dynamic row's producer without its physics settings: the policy's own producer."""
+    """A dynamic row's producer without its physics settings and engine: the policy's own producer."""
     made = json.loads(dynamic_producer)
     made.pop("dynamics", None)
+    made.pop("engine", None)
     return json.dumps(made, sort_keys=True)
+
+
+def _engine_of(dynamic_producer: str) -> dict[str, str]:
+    """A dynamic row's engine settings as its entry in the results file holds them: ``{"engine": settings}`` in
+    MuJoCo, nothing in PyBullet (the file of a PyBullet-only run is as it was before MuJoCo came)."""
+    made = json.loads(dynamic_producer)
+    return {"engine": made["engine"]} if "engine" in made else {}
 
 
 def read_results(path: str | Path) -> dict[str, Any]:
@@ -196,7 +204,8 @@ def rows_of_results(path: str | Path) -> tuple[list[EpisodeRow], list[DynamicRow
                            e["wall_seconds"], version, who[e["policy"]]["producer"]) for e in data["episodes"]]
     dynamic = [DynamicRow(who[d["policy"]]["env"], who[d["policy"]]["policy"], d["scenario"], d["seed"], d["return"],
                           d["success"], d["metrics"], d["kf_passed"], d["kf"], 0.0, version,
-                          json.dumps({**json.loads(who[d["policy"]]["producer"]), "dynamics": d["physics"]},
+                          json.dumps({**json.loads(who[d["policy"]]["producer"]), "dynamics": d["physics"],
+                                      **({"engine": d["engine"]} if "engine" in d else {})},
                                      sort_keys=True)) for d in data["dynamic"]]
     return episodes, dynamic
 
@@ -348,7 +357,8 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
         who = data["policies"][entry["policy"]]
         env, name = who["env"], who["policy"]
         what = (f"{env.split('/')[-1]} {name} seed {entry['seed']} episode {entry['episode']}" if kind == "episode"
-                else f"{env.split('/')[-1]} {name} dynamic {entry['scenario']} {entry['seed']}")
+                else f"{env.split('/')[-1]} {name} dynamic{' in MuJoCo' if 'engine' in entry else ''} "
+                     f"{entry['scenario']} {entry['seed']}")
         result.checked += 1
         try:
             specs = found.setdefault(env, policies_for(env, models_dir))
@@ -369,10 +379,16 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
                      "metrics": row.metrics}
             fidelity = "kinematic"
         else:
-            if json.loads(dynamic_producer(spec)).get("dynamics") != entry["physics"]:
+            engine = "mujoco" if "engine" in entry else "pybullet"
+            here = json.loads(dynamic_producer(spec, engine))
+            if here.get("dynamics") != entry["physics"] or here.get("engine") != entry.get("engine"):
                 result.problems.append(f"{what}: this version's physics settings differ from the file's")
                 continue
-            d = evaluate_dynamic(spec, entry["scenario"], entry["seed"])
+            try:
+                d = evaluate_dynamic(spec, entry["scenario"], entry["seed"], engine=engine)
+            except ImportError as exc:  # a MuJoCo row where MuJoCo is not installed
+                result.problems.append(f"{what}: {exc}")
+                continue
             again = {"return": d.episode_return, "success": d.success, "metrics": d.metrics}
             fidelity = "dynamic"
         rule = result.tolerance.setdefault((env, fidelity), _rule(data, env, fidelity))

@@ -16,7 +16,7 @@ from paragym.baselines.agents import unreadable
 from paragym.baselines.leaderboard.executors import EXECUTORS, RUNNERS, Job, Row
 from paragym.baselines.leaderboard.render import smoke_note, terminal_table, write_reports
 from paragym.baselines.leaderboard.results import write_episodes_csv, write_results
-from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_producer
+from paragym.baselines.leaderboard.suite import FULL, EvalSuite, dynamic_engines, dynamic_job, dynamic_producer
 from paragym.baselines.leaderboard.summary import Summary, dynamic_summary, noise_floor, summarise
 from paragym.baselines.policies import PolicySpec, policies_for
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
@@ -200,11 +200,12 @@ def _by_turns(jobs: list[Any]) -> list[Any]:
 def _plan_dynamic(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suite: EvalSuite,
                   producers: dict[tuple[str, str], str]) -> tuple[list[Job], int]:
     """The dynamic-fidelity episodes ``store`` lacks for the current producers
-    (the policy's and the physics settings: :func:`dynamic_producer`), and how many the suite has."""
+    (the policy's, the physics settings and the engine: :func:`dynamic_producer`), in every engine the env's
+    task runs (:func:`dynamic_engines`), and how many the suite has."""
     done = store.dynamic_keys()
-    made = {key: dynamic_producer(spec) for key, spec in ((k, chosen[k[0]][k[1]]) for k in producers)}
-    wanted = [("dynamic", spec, scenario, seed, made[spec.env_id, spec.name]) for env, specs in chosen.items()
-              if bench_of(env).dynamics is not None for spec in specs.values() if suite.runs_dynamic(spec)
+    wanted = [(dynamic_job(engine), spec, scenario, seed, dynamic_producer(spec, engine))
+              for env, specs in chosen.items() if bench_of(env).dynamics is not None
+              for engine in dynamic_engines(env) for spec in specs.values() if suite.runs_dynamic(spec)
               for scenario, seed in suite.dynamic]
     return _by_turns([job for job in wanted
                       if (job[1].env_id, job[1].name, job[2], job[3], store.version, job[4]) not in done]), len(wanted)
@@ -272,9 +273,10 @@ def _selected(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], suit
     keys = set(suite.keys())
     rows = [r for r in store.rows() if producers.get((r.env, r.policy)) == r.producer and (r.seed, r.episode) in keys]
     wanted = set(suite.dynamic)
-    made = {key: dynamic_producer(chosen[key[0]][key[1]]) for key in producers}
+    made = {(*key, engine): dynamic_producer(chosen[key[0]][key[1]], engine) for key in producers
+            for engine in dynamic_engines(key[0])}
     dynamic = [r for r in store.dynamic_rows()
-               if made.get((r.env, r.policy)) == r.producer and (r.scenario, r.seed) in wanted]
+               if made.get((r.env, r.policy, r.engine)) == r.producer and (r.scenario, r.seed) in wanted]
     return rows, dynamic
 
 
@@ -282,12 +284,13 @@ def _summaries(store: ResultStore, chosen: dict[str, dict[str, PolicySpec]], sui
                rows: list[EpisodeRow], dynamic_rows: list[DynamicRow]) -> dict[str, list[Summary]]:
     """The table of each env from the selected rows (:func:`_selected`), with each policy's description."""
     all_summaries = summarise(rows, store)
-    dynamic: dict[tuple[str, str], list[DynamicRow]] = {}
+    dynamic: dict[tuple[str, str, str], list[DynamicRow]] = {}
     for r in dynamic_rows:
-        dynamic.setdefault((r.env, r.policy), []).append(r)
+        dynamic.setdefault((r.env, r.policy, r.engine), []).append(r)
     for env, ss in all_summaries.items():
         for s in ss:
-            s.dynamic = dynamic_summary(dynamic.get((env, s.policy), []), suite)
+            s.dynamic = dynamic_summary(dynamic.get((env, s.policy, "pybullet"), []), suite)
+            s.dynamic_mujoco = dynamic_summary(dynamic.get((env, s.policy, "mujoco"), []), suite)
     for env, ss in all_summaries.items():
         for s in ss:
             s.description = chosen[env][s.policy].description

@@ -10,7 +10,7 @@ from paragym import registry
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.tasks import bench_of
 
-__all__ = ["FULL", "QUICK", "EvalSuite", "dynamic_kwargs", "dynamic_producer", "episode_seed"]
+__all__ = ["FULL", "QUICK", "EvalSuite", "dynamic_engines", "dynamic_kwargs", "dynamic_producer", "episode_seed"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +93,26 @@ def dynamic_producer(spec: PolicySpec, engine: str = "pybullet") -> str:
     if engine != "pybullet":
         made["engine"] = repr(dynamic_kwargs(spec.env_id, engine)["engine"])
     return json.dumps(made, sort_keys=True)
+
+
+def dynamic_engines(env_id: str) -> tuple[str, ...]:
+    """The engines the leaderboard runs ``env_id``'s dynamic episodes in: its task's (:attr:`paragym.registry.
+    EnvRow.engines`), MuJoCo's only where ``mujoco`` is installed (the ``mujoco`` extra)."""
+    import importlib.util
+
+    have = importlib.util.find_spec("mujoco") is not None
+    return tuple(e for e in registry.row(env_id).engines if e == "pybullet" or have)
+
+
+def engine_of_job(kind: str) -> str | None:
+    """The engine of a dynamic job's kind ("dynamic": PyBullet's, "dynamic@<engine>"), None for another kind."""
+    head, _, engine = kind.partition("@")
+    return (engine or "pybullet") if head == "dynamic" else None
+
+
+def dynamic_job(engine: str) -> str:
+    """The kind of a dynamic job in ``engine`` (:func:`engine_of_job`)."""
+    return "dynamic" if engine == "pybullet" else f"dynamic@{engine}"
 
 
 def episode_seed(seed: int, episode: int) -> int:

@@ -45,6 +45,8 @@ class Summary:
     #: the dynamic fidelity's episodes: episodes, success_rate, return_mean, metrics (means), kf (the verdict on
     #: the paper episode: passed, worst, position_error_mm); None when they were not run
     dynamic: dict[str, Any] | None = None
+    #: the same of its dynamic episodes in MuJoCo (``engine="mujoco"``), where its task runs them
+    dynamic_mujoco: dict[str, Any] | None = None
 
     def sort_key(self) -> tuple[float, float, float, str]:
         """Success rate, then the env's primary metric, then the return (all best first)."""
@@ -153,9 +155,15 @@ def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] 
     if not rows:
         return None
     paper = next((r for r in rows if r.scenario == suite.dynamic[0][0] and r.seed == suite.dynamic[0][1]), None)
-    d = dynamic_kwargs(rows[0].env)["dynamics"]
-    settings = (f"`{type(d).__name__}`: a {d.time_step * 1e3:g} ms step, {d.solver_iterations} solver iterations"
-                + (f", the {d.layout} layout" if getattr(d, "layout", "tree") != "tree" else ""))
+    kwargs = dynamic_kwargs(rows[0].env, rows[0].engine)
+    d = kwargs["dynamics"]
+    if "engine" in kwargs:  # MuJoCo: its own step and servos, the bench's masses and force limits
+        m = kwargs["engine"]
+        settings = (f"`{type(d).__name__}`'s masses and force limits, `{type(m).__name__}`: a "
+                    f"{m.time_step * 1e3:g} ms step, the exported loops and servos")
+    else:
+        settings = (f"`{type(d).__name__}`: a {d.time_step * 1e3:g} ms step, {d.solver_iterations} solver "
+                    "iterations" + (f", the {d.layout} layout" if getattr(d, "layout", "tree") != "tree" else ""))
     wins = sum(bool(r.success) for r in rows)
     return {"episodes": len(rows), "success_rate": wins / len(rows), "success_ci": wilson(wins, len(rows)),
             "return_mean": float(np.mean([r.episode_return for r in rows])),
