@@ -29,11 +29,15 @@ def make(env_id: str, engine: object = "mujoco", **kwargs: object) -> gym.Env:
         return gym.make(env_id, fidelity="dynamic", engine=engine, **kwargs)
 
 
+@pytest.mark.parametrize("preset", ["default", "fast"])
 @pytest.mark.parametrize("env_id", IDS)
-def test_mujoco_runs_the_env_with_its_spaces_and_loops_closed(env_id):
-    """The env's spaces are the same in both engines; in MuJoCo random in-Box actions keep every loop closed
-    (CaPaMan within 0.05 mm, hybrid 0.5 mm), as ``info["loop_residual_m"]`` reports it every step."""
-    env, reference = make(env_id), make(env_id, "pybullet")
+def test_mujoco_runs_the_env_with_its_spaces_and_loops_closed(env_id, preset):
+    """The env's spaces are the same in both engines; in MuJoCo, at either preset, random in-Box actions keep
+    every loop closed (CaPaMan within 0.05 mm, hybrid 0.5 mm), as ``info["loop_residual_m"]`` reports it every
+    step, and the engine steps at the preset's step."""
+    settings = MuJoCoSettings() if preset == "default" else MuJoCoSettings.fast()
+    env, reference = make(env_id, settings), make(env_id, "pybullet")
+    assert env.unwrapped.physics_time_step == settings.time_step
     try:
         assert env.observation_space == reference.observation_space
         assert env.action_space == reference.action_space
@@ -136,7 +140,7 @@ def test_the_engine_argument_is_checked():
             make(env_id)
         make(env_id, "pybullet").close()  # the argument is every task's
     with pytest.raises(ValueError, match="time_step"):
-        MuJoCoSettings(time_step=0.002)
+        MuJoCoSettings(time_step=0.005)
     with pytest.raises(ValueError, match="servo_bandwidth"):
         MuJoCoSettings(servo_bandwidth=2.0)
     with pytest.raises(ValueError, match="control_period"):
