@@ -230,8 +230,8 @@ def test_reference_dynamic_counts_the_reference_s_dynamic_episodes(tmp_path):
     out = _run("benchmarks/reference_dynamic.py", "--env", "paragym/Orthoglide2PRRKappa-v2", "--episodes", "2",
                "--record", str(tmp_path))
     row = _recorded(tmp_path, "reference_dynamic")["rows"][0]
-    assert row[:2] == ["paragym/Orthoglide2PRRKappa-v2", "gradient-c-limited"]
-    assert row[2].startswith("2/2 = 1.00 [") and row[4].startswith("2/2 = 1.00 [") and row[5] == "meets", out
+    assert row[:3] == ["paragym/Orthoglide2PRRKappa-v2", "pybullet", "gradient-c-limited"]
+    assert row[3].startswith("2/2 = 1.00 [") and row[5].startswith("2/2 = 1.00 [") and row[6] == "meets", out
 
 
 def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp_path):
@@ -240,11 +240,17 @@ def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp
     the motors' holding torques agree between the engines."""
     pytest = __import__("pytest")
     pytest.importorskip("mujoco")
-    _run("benchmarks/conformance.py", "--env", "paragym/CaPaManCollisionFree-v1", "--seconds", "0.2", "--record",
-         str(tmp_path))
+    _run("benchmarks/conformance.py", "--env", "paragym/CaPaManCollisionFree-v1", "--seconds", "0.2", "--episodes",
+         "1", "--record", str(tmp_path))
     rows = {r[1]: r for r in _recorded(tmp_path, "conformance")["rows"]}
     assert set(rows) == {"MuJoCo, exported loops", "MuJoCo, default loops", "PyBullet (the env's)"}
     assert float(rows["MuJoCo, exported loops"][3]) < 0.01 < 0.5 < float(rows["MuJoCo, default loops"][3])
     assert float(rows["PyBullet (the env's)"][3]) < 0.01
     # the statics of one mechanism: the cranks hold the plate with the same torques in both engines (0.78 N m)
     assert 0.5 < float(rows["PyBullet (the env's)"][5]) and float(rows["MuJoCo, exported loops"][6]) < 0.05
+    # contact: MuJoCo stops the pushed tool within 1 mm of PyBullet's stop; the reference's paper case in both
+    pushes = _recorded(tmp_path, "conformance_contact")["rows"]
+    assert [r[1] for r in pushes] == ["PyBullet", "MuJoCo"] * 2 and all(float(r[3]) < 1.0 for r in pushes[1::2])
+    played = _recorded(tmp_path, "conformance_reference")
+    assert [r[1] for r in played["rows"]] == ["pybullet", "mujoco"] and "MuJoCo" in played["source"]
+    assert all(r[3].startswith("1/1") and r[4].startswith("1/1") for r in played["rows"])
