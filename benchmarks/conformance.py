@@ -8,8 +8,9 @@ and motor gains) and in MuJoCo (the file ``paragym export`` writes; position ser
 the latter both with the exported loop settings and with MuJoCo's default ``solref``/``solimp`` (the sag that
 mujoco #2698 reports). The table gives, per engine, the loop-closure residual over the run (mean and largest,
 mm), how far any link ended from its kinematic pose (mm: the sag under gravity, the gap to the kinematic model),
-the motors' holding forces at the end (the largest, and the largest difference from PyBullet's, motor by motor:
-the statics of one mechanism, which two engines must agree on) and the physics steps per second of this machine
+the motors' holding forces at the end (the largest, the largest difference from PyBullet's, motor by motor, and
+from the hand statics: virtual work on the mechanism's tree and loops, :mod:`paragym.sim.statics`, which neither
+engine computes) and the physics steps per second of this machine
 (each engine's step with the residual's measurement after it, in Python: a measure of the run here, not of
 either engine's speed alone).
 
@@ -40,6 +41,7 @@ from paragym import registry
 from paragym.baselines.stats import wilson
 from paragym.sim import export
 from paragym.sim.client import motors_of
+from paragym.sim.statics import holding_forces
 
 #: the first random scenario's reset seed of the reference's episodes (as benchmarks/reference_dynamic.py)
 FIRST_SEED = 300_001
@@ -110,6 +112,7 @@ def holding(env_ids: list[str], seconds: float, seed: int) -> list[list[str]]:
                 print(f"{env_id}: no loop closure to hold (its loops close through the ground)")
                 continue
             text = export.mjcf(scene, env_id.split("/")[1])
+            statics = holding_forces(scene)  # at the pose the kinematics gives, before either engine moves it
             runs = [("MuJoCo, exported loops", *mujoco_hold(scene, text, seconds)),
                     ("MuJoCo, default loops", *mujoco_hold(scene, with_default_loops(text), seconds)),
                     ("PyBullet (the env's)", *pybullet_hold(scene, seconds))]
@@ -119,7 +122,8 @@ def holding(env_ids: list[str], seconds: float, seed: int) -> list[list[str]]:
         for engine, residuals, drift, rate, forces in runs:
             gap = "-" if forces is held else f"{np.max(np.abs(forces - held)):.3g}"
             rows.append([env_id, engine, f"{residuals.mean() * 1e3:.3g}", f"{residuals.max() * 1e3:.3g}",
-                         f"{drift * 1e3:.3g}", f"{np.max(np.abs(forces)):.3g}", gap, f"{rate:,.0f}"])
+                         f"{drift * 1e3:.3g}", f"{np.max(np.abs(forces)):.3g}", gap,
+                         f"{np.max(np.abs(forces - statics)):.3g}", f"{rate:,.0f}"])
             print(" | ".join(rows[-1]), flush=True)
     return rows
 
@@ -213,7 +217,8 @@ def main() -> None:
     record("conformance", "Two engines on one mechanism: holding a pose under gravity",
            f"{intro} {paragraph(__doc__, 1)}",
            ["env", "engine", "loop residual, mean [mm]", "loop residual, max [mm]", "largest link drift [mm]",
-            "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]", "physics steps/s"],
+            "largest holding force [N or N m]", "largest difference to PyBullet's [N or N m]",
+            "largest difference to the hand statics [N or N m]", "physics steps/s"],
            held, order=62, folder=args.record, source=engine_versions())
     record("conformance_contact", "Two engines on one mechanism: contact stops", paragraph(__doc__, 2),
            ["push", "engine", "tool stopped at x y z [mm]", "from PyBullet's stop [mm]", "loop gap, max [mm]",

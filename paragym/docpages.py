@@ -431,7 +431,8 @@ def conformance_page(results: str | Path) -> str:
            "`benchmarks/conformance.py` (and `benchmarks/reference_dynamic.py` for 30 episodes per engine), "
            "with the date, the machine, the commit and the engines' versions of that run.", "",
            "How to read them. *Holding*: where a loop mechanism's motors hold it under gravity, both engines must "
-           "find the same holding forces (statics) and keep the loops closed; the MuJoCo rows with its default "
+           "find the holding forces that virtual work on the mechanism gives by hand (`paragym.sim.statics`, "
+           "which neither engine computes) and keep the loops closed; the MuJoCo rows with its default "
            "`solref`/`solimp` show the sag that closed chains meet there, the exported rows the settings that "
            "fix it (a loop time constant of two steps, a harder impedance). *Contact*: the CaPaMan pushed into "
            "a box at its torque limit stops at nearly the same place in both; MuJoCo's default contacts are soft "

@@ -248,6 +248,8 @@ def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp
     assert float(rows["PyBullet (the env's)"][3]) < 0.01
     # the statics of one mechanism: the cranks hold the plate with the same torques in both engines (0.78 N m)
     assert 0.5 < float(rows["PyBullet (the env's)"][5]) and float(rows["MuJoCo, exported loops"][6]) < 0.05
+    # and both as the hand statics has them (virtual work, paragym.sim.statics)
+    assert float(rows["PyBullet (the env's)"][7]) < 0.01 and float(rows["MuJoCo, exported loops"][7]) < 0.01
     # contact: MuJoCo stops the pushed tool within 1 mm of PyBullet's stop; the reference's paper case in both
     pushes = _recorded(tmp_path, "conformance_contact")["rows"]
     assert [r[1] for r in pushes] == ["PyBullet", "MuJoCo"] * 2 and all(float(r[3]) < 1.0 for r in pushes[1::2])

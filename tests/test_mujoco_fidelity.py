@@ -210,3 +210,32 @@ def test_the_leaderboard_runs_the_dynamic_episodes_in_both_engines(tmp_path):
     assert any("in MuJoCo" in what for what, _ in checked.episodes)
     again = run()
     assert (again.new_dynamic, again.skipped_dynamic) == (0, 2)
+
+
+@pytest.mark.parametrize("env_id, within", [("paragym/CaPaManCollisionFree-v1", 2e-3),
+                                             ("paragym/HybridSingularityFree-v2", 1.5)])
+def test_the_hand_statics_is_what_both_engines_hold(env_id, within):
+    """Virtual work on the tree and its loops (paragym.sim.statics) gives the motors' holding forces that each
+    engine's motors find after holding the pose for 0.5 s: the CaPaMan's to 2e-3 N m (0.78 N m the largest),
+    the hybrid's to 1.5 N (39 N the largest; its platforms sag a little under PyBullet's motors). With gravity
+    halved the statics halves, so it is not the engines' numbers read back."""
+    from paragym.sim import export
+    from paragym.sim.client import motors_of
+    from paragym.sim.statics import holding_forces
+
+    for engine in (None, MuJoCoSettings()):
+        env = export.dynamic_env(env_id)
+        try:
+            scene = export.scene_of(env)
+            statics = holding_forces(scene)
+            halved = holding_forces(scene, gravity=scene.dynamics.gravity / 2)
+            assert np.allclose(halved, statics / 2, rtol=1e-6, atol=1e-9)
+            if engine is not None:
+                from paragym.sim.mujoco_sim import simulate_in
+
+                simulate_in(scene, engine)
+            scene.hold(0.5)
+            held = scene.sim.motor_forces(motors_of([(b, j) for b, j, _ in scene.motor_limits()]))
+            assert np.abs(held - statics).max() < within, (engine, held, statics)
+        finally:
+            env.close()
