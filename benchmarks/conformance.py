@@ -35,6 +35,7 @@ import time
 import warnings
 
 import numpy as np
+from reference_dynamic import scenario_of
 from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
@@ -42,9 +43,6 @@ from paragym.baselines.stats import wilson
 from paragym.sim import export
 from paragym.sim.client import motors_of
 from paragym.sim.statics import holding_forces
-
-#: the first random scenario's reset seed of the reference's episodes (as benchmarks/reference_dynamic.py)
-FIRST_SEED = 300_001
 
 
 def pybullet_hold(scene, seconds: float) -> tuple[np.ndarray, float, float, np.ndarray]:
@@ -176,7 +174,7 @@ def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
             won = passed = steps = 0
             residuals, errors, wall = [], [], 0.0
             for i in range(episodes):
-                scenario, seed = ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
+                scenario, seed = scenario_of(i)
                 arg = registry.row(env_id).paper_scenario if scenario == "paper" else scenario
                 with warnings.catch_warnings():
                     warnings.simplefilter("ignore")

@@ -31,6 +31,11 @@ FIRST_SEED = 300_001
 TARGET = 0.90
 
 
+def scenario_of(i: int) -> tuple[str, int]:
+    """Episode ``i``'s scenario and reset seed: the paper's case first, then random ones from :data:`FIRST_SEED`."""
+    return ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
+
+
 def rate(k: int, n: int) -> str:
     low, high = wilson(k, n)
     return f"{k}/{n} = {k / n:.2f} [{low:.2f}, {high:.2f}]"
@@ -54,7 +59,7 @@ def main() -> None:
         t0 = time.perf_counter()
         won = passed = both = 0
         for i in range(args.episodes):
-            scenario, seed = ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
+            scenario, seed = scenario_of(i)
             row = evaluate_dynamic(spec, scenario, seed, engine=args.engine)
             won, passed, both = won + row.success, passed + row.kf_passed, both + (row.success and row.kf_passed)
             if not (row.success and row.kf_passed):

@@ -118,15 +118,15 @@ def markdown(all_summaries: dict[str, list[Summary]], suite: EvalSuite, images: 
                     f"({dyn['settings']}), the paper's case first; KF: the accelerometers and the Kalman filter on "
                     "the policy's own paper-case episode, what it executed against what it commanded "
                     "(`paragym validate ENV --policy NAME`). Beside the kinematic columns, the sim-to-sim gap.", ""]
+        elif bench_of(env).dynamics is not None and not suite.runs_dynamic_on(env):
+            out += [f"Dynamic: the {suite.name} suite runs the dynamic episodes on each task's newest id "
+                    f"(`{registry.rows_of(registry.task_of(env))[-1].id}`); the full suite runs them here too.", ""]
         mj = next((s.dynamic_mujoco for s in summaries if s.dynamic_mujoco is not None), None)
         if mj is not None:
             out += [f"MuJoCo: the same {mj['episodes']} episodes per policy under MuJoCo's dynamics "
                     f"(`engine=\"mujoco\"`; {mj['settings']}), judged alike "
                     "(`paragym validate ENV --policy NAME --engine mujoco`); the engines compared: "
                     "docs/conformance.md.", ""]
-        elif bench_of(env).dynamics is not None and not suite.runs_dynamic_on(env):
-            out += [f"Dynamic: the {suite.name} suite runs the dynamic episodes on each task's newest id "
-                    f"(`{registry.rows_of(registry.task_of(env))[-1].id}`); the full suite runs them here too.", ""]
         for s in summaries:
             if s.validation is not None:
                 v = s.validation

@@ -39,7 +39,7 @@ import numpy as np
 from paragym.sim import export
 from paragym.sim.client import depth_first, physics_steps
 
-__all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "check_engine", "engine_name", "simulate_in"]
+__all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "check_engine", "simulate_in"]
 
 #: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
 ENGINES = ("pybullet", "mujoco")
@@ -101,11 +101,6 @@ def check_engine(engine: Any, engines: tuple[str, ...], fidelity: str) -> MuJoCo
                          f"fidelity={fidelity!r})")
     _import_mujoco()
     return settings
-
-
-def engine_name(settings: MuJoCoSettings | None) -> str:
-    """The engine's name of a checked ``engine`` argument (:func:`check_engine`)."""
-    return "pybullet" if settings is None else "mujoco"
 
 
 def simulate_in(scene: Any, settings: MuJoCoSettings | None) -> None:

@@ -54,6 +54,7 @@ from numba import njit
 
 from paragym.kernels import KernelArrays
 from paragym.mechanisms import capaman
+from paragym.sim import mujoco_sim
 from paragym.sim.obstacles import ENCODING_SIZE
 from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import (
@@ -140,8 +141,8 @@ class CaPaManRules:
         return MAX_OBSTACLES if self.rung is None else LADDER[self.rung].max_obstacles
 
 
-#: the engines of the dynamic fidelity (the env's ``engine`` argument, :mod:`paragym.sim.mujoco_sim`)
-ENGINES = ("pybullet", "mujoco")
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
+ENGINES = mujoco_sim.ENGINES
 #: the rules of CaPaManCollisionFree-v0 and -v1
 RULES = {0: CaPaManRules(0, goal_relative=False, reach_tolerance=1 * DEG, collision_penalty=5.0, time_penalty=0.0),
          1: CaPaManRules(1, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0, time_penalty=0.01)}

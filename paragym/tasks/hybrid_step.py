@@ -53,6 +53,7 @@ from numba import njit
 
 from paragym.kernels import KernelArrays
 from paragym.mechanisms import hybrid
+from paragym.sim import mujoco_sim
 from paragym.tasks import hybrid as scenarios_module
 from paragym.tasks.base import (
     check_choice,
@@ -121,8 +122,8 @@ class HybridRules:
     rung: int | None = None
 
 
-#: the engines of the dynamic fidelity (the env's ``engine`` argument, :mod:`paragym.sim.mujoco_sim`)
-ENGINES = ("pybullet", "mujoco")
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
+ENGINES = mujoco_sim.ENGINES
 #: the rules of HybridSingularityFree-v0, -v1 and -v2
 RULES = {0: HybridRules(0, sees_the_end=False, strict_dynamics=False),
          1: HybridRules(1, sees_the_end=True, strict_dynamics=False),
