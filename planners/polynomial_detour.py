@@ -15,6 +15,14 @@ split Delta, and detour via poses (section 2).
    ``j_bar`` from the nominal; the offsets of a stretch of such poses are
    joined into one smooth bump (zero value and slope at its ends, so the path
    stays C1) and the serial optimisation is run again on the detoured path.
+4. **Detours where the split cannot follow** (``max_repairs`` > 0): the split may change by at most
+   ``max_delta_step`` a sample, so a path on which some Delta works at every pose can still have no
+   schedule, where the working splits jump (a band closes and another opens far from it). Then the
+   first sample that no schedule reaches is treated as step 3 treats a blocked one, with one
+   difference: the via offset must make a split work there that the schedule can reach from the
+   sample before (the same x, then y, then z search); the serial optimisation is run again, up to
+   ``max_repairs`` times. Paper 002 has no rate limit on Delta, so it has no such case; this is
+   step 3 applied to it, and 0 turns it off (the planner as first written).
 
 All poses are displacements of E from home (m, rad); see
 :mod:`paragym.mechanisms.hybrid`.
@@ -78,17 +86,21 @@ class PolynomialDetourPlanner:
             the path allows it (else at the limits, as paper 002 does): a
             simulated actuator that chases a stroke planned at its limit
             overshoots it (0: the paper's plan).
+        max_repairs: how many samples step 4 (module docstring) may detour where the split schedule
+            dies; 0: none.
     """
 
     def __init__(self, geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, tau: float = 0.01,
                  delta0: float = 0.5, delta_points: int = 101, max_delta_step: float = 0.05,
                  j_bar: float = 0.02, detour_step: float = 0.001, prefer_weight: float = 0.05,
-                 stroke_margin: float = 0.0) -> None:
+                 stroke_margin: float = 0.0, max_repairs: int = 0) -> None:
         if not 0 <= delta0 <= 1:
             raise ValueError(f"delta0 must lie in [0, 1]; got {delta0}")
         if not (np.isfinite(stroke_margin) and 0 <= stroke_margin < (geometry.l_max - geometry.l_min) / 2):
             raise ValueError(f"stroke_margin must be >= 0 m and under half the stroke range; got {stroke_margin!r}")
-        self.stroke_margin = float(stroke_margin)
+        if isinstance(max_repairs, bool) or not isinstance(max_repairs, int | np.integer) or max_repairs < 0:
+            raise ValueError(f"max_repairs must be a whole number >= 0; got {max_repairs!r}")
+        self.stroke_margin, self.max_repairs = float(stroke_margin), int(max_repairs)
         self.geometry, self.tau, self.delta0 = geometry, tau, delta0
         self.deltas = np.linspace(0.0, 1.0, delta_points)
         self.max_delta_step, self.j_bar, self.detour_step = max_delta_step, j_bar, detour_step
@@ -123,24 +135,49 @@ class PolynomialDetourPlanner:
             idx[i - 1] = back[i, idx[i]]
         return d[idx]
 
-    def _detour(self, nominal: np.ndarray, blocked: np.ndarray) -> np.ndarray:
-        """Offsets (K, 3): for every blocked sample the smallest offset along x,
-        then y, then z that lets some Delta work; each stretch of blocked samples
-        becomes one smooth bump per axis."""
+    def _dead_end(self, table: np.ndarray) -> tuple[int, np.ndarray]:
+        """Where the split schedule dies on a feasibility table (K, D) that :meth:`_serial` found no schedule
+        on: the first sample that no schedule from the start reaches, and the splits (D,) one step of the rate
+        limit can reach there from those reachable at the sample before."""
+        d = self.deltas
+        step_ok = np.abs(d[:, None] - d[None, :]) <= self.max_delta_step + 1e-12
+        start = np.isclose(d, self.delta0) & table[0]
+        reach = start if start.any() else table[0]
+        for i in range(1, len(table)):
+            near = step_ok[reach].any(axis=0)
+            if not (near & table[i]).any():
+                return i, near
+            reach = near & table[i]
+        raise AssertionError("the table has a schedule")  # _serial found none: unreachable
+
+    def _need(self, pose: np.ndarray, allowed: np.ndarray, i: int) -> np.ndarray:
+        """The via offset (3,) of one blocked sample ``i`` at ``pose`` (6,): the smallest offset along x, then y,
+        then z that lets some Delta of ``allowed`` (D,) work."""
         steps = np.arange(self.detour_step, self.j_bar + 1e-12, self.detour_step)
         candidates = np.concatenate([steps, -steps])[np.argsort(np.concatenate([steps, steps]), kind="stable")]
+        need = np.zeros(3)
+        for axis in range(3):  # each axis searched in one batch
+            trial = np.repeat(pose[None], len(candidates), axis=0)
+            trial[:, axis] += candidates
+            ok = (self._table(trial) & allowed).any(axis=1)
+            if ok.any():
+                need[axis] = candidates[np.argmax(ok)]
+                return need
+        raise PlanningError(f"no via pose within j_bar = {self.j_bar * 1000:.0f} mm at u = {i * self.tau:.2f}")
+
+    def _detour(self, nominal: np.ndarray, blocked: np.ndarray, allowed: np.ndarray | None = None,
+                found: dict[tuple[int, bytes], np.ndarray] | None = None) -> np.ndarray:
+        """Offsets (K, 3): for every blocked sample its :meth:`_need` (with the splits of ``allowed`` (K, D),
+        where given; ``found`` keeps the needs already searched); each stretch of blocked samples becomes one
+        smooth bump per axis."""
         need = np.zeros((len(nominal), 3))
-        for i in np.flatnonzero(blocked):  # the blocked samples only, each searched in one batch
-            for axis in range(3):
-                trial = np.repeat(nominal[i:i + 1], len(candidates), axis=0)
-                trial[:, axis] += candidates
-                ok = self._table(trial).any(axis=1)
-                if ok.any():
-                    need[i, axis] = candidates[np.argmax(ok)]
-                    break
-            else:
-                raise PlanningError(f"no via pose within j_bar = {self.j_bar * 1000:.0f} mm at u = "
-                                    f"{i * self.tau:.2f}")
+        found = {} if found is None else found
+        for i in np.flatnonzero(blocked):
+            mask = np.ones(len(self.deltas), bool) if allowed is None else allowed[i]
+            key = (int(i), mask.tobytes())
+            if key not in found:
+                found[key] = self._need(nominal[i], mask, int(i))
+            need[i] = found[key]
         offsets = np.zeros_like(need)
         u = np.arange(len(nominal))
         runs = np.split(np.flatnonzero(blocked), np.flatnonzero(np.diff(np.flatnonzero(blocked)) > 1) + 1)
@@ -165,7 +202,7 @@ class PolynomialDetourPlanner:
             inner = PolynomialDetourPlanner(replace(g, l_min=g.l_min + self.stroke_margin,
                                                     l_max=g.l_max - self.stroke_margin), self.tau, self.delta0,
                                             len(self.deltas), self.max_delta_step, self.j_bar, self.detour_step,
-                                            self.prefer_weight)
+                                            self.prefer_weight, max_repairs=self.max_repairs)
             try:
                 plan = inner.plan(p0, p1)
             except PlanningError:
@@ -184,14 +221,25 @@ class PolynomialDetourPlanner:
         offsets = np.zeros((len(u), 3))
         path = nominal
         blocked = ~table.any(axis=1)
-        if blocked.any():
-            offsets = self._detour(nominal, blocked)
-            path = nominal.copy()
-            path[:, :3] += offsets
-            table = self._table(path)
-        delta = self._serial(table)
-        if delta is None:
-            raise PlanningError("no Delta(u) keeps the path singularity-free within the rate limit")
+        allowed, found = np.ones_like(table), {}
+        for repair in range(self.max_repairs + 1):
+            if blocked.any():
+                offsets = self._detour(nominal, blocked, allowed, found)
+                path = nominal.copy()
+                path[:, :3] += offsets
+                table = self._table(path)
+            delta = self._serial(table)
+            if delta is not None:
+                break
+            if repair == self.max_repairs:
+                raise PlanningError("no Delta(u) keeps the path singularity-free within the rate limit"
+                                    + (f" after {self.max_repairs} detours where the split could not follow"
+                                       if self.max_repairs else ""))
+            i, near = self._dead_end(table)  # step 4: a detour there, to a split the schedule reaches
+            if blocked[i] and not (allowed[i] & ~near).any():
+                raise PlanningError(f"no Delta(u) keeps the path singularity-free within the rate limit: the "
+                                    f"detour at u = {i * self.tau:.2f} leaves no split the schedule reaches")
+            blocked[i], allowed[i] = True, allowed[i] & near
         state = hybrid.solve(path, delta, self.geometry, validate=False)
         method = np.where(np.any(offsets != 0, axis=1), 2, np.where(np.abs(delta - self.delta0) > 1e-12, 1, 0))
         base = hybrid.home_pose(self.geometry)

@@ -104,6 +104,35 @@ def test_detour_where_no_split_works():
     np.testing.assert_array_equal(plan.offsets[[0, -1]], 0.0)  # the end poses stay exact
 
 
+def test_detour_where_the_split_cannot_follow_the_splits_that_work():
+    """Step 4: the easy rung's seed 0 has a working split at every pose, but near u = 0.7 the working band
+    jumps from above 0.54 to below it faster than Delta may move (0.05 a sample). The planner as first written
+    finds no schedule; with repairs it detours there and the plan is whole: every pose free, the rate limit
+    kept, the offsets within j_bar and zero at both ends."""
+    _, info = gym.make("paragym/HybridSingularityFree-Easy-v0").reset(seed=0)
+    p0, p1 = np.array(info["scenario"].p0), np.array(info["scenario"].p1)
+    with pytest.raises(PlanningError, match="rate limit"):
+        PolynomialDetourPlanner().plan(p0, p1)
+    table = PolynomialDetourPlanner()._table(nominal_path(p0, p1)[1])
+    assert table.any(axis=1).all()  # no pose is blocked: only the schedule dies
+    plan = PolynomialDetourPlanner(max_repairs=20).plan(p0, p1)
+    assert plan.free.all() and (plan.method == 2).any()
+    assert np.abs(np.diff(plan.delta)).max() <= 0.05 + 1e-12 and plan.delta[0] == 0.5
+    assert np.abs(plan.offsets).max() <= 0.02 + 1e-12
+    np.testing.assert_array_equal(plan.offsets[[0, -1]], 0.0)
+
+
+def test_repairs_leave_a_plan_that_needs_none_as_it_was():
+    for p0, p1 in ((paper_scenario().p0, paper_scenario().p1), DETOUR):
+        a = PolynomialDetourPlanner().plan(np.array(p0), np.array(p1))
+        b = PolynomialDetourPlanner(max_repairs=20).plan(np.array(p0), np.array(p1))
+        for name in ("path", "offsets", "delta", "lengths"):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+    for bad in (-1, 1.5, True, "3"):
+        with pytest.raises(ValueError, match="max_repairs"):
+            PolynomialDetourPlanner(max_repairs=bad)
+
+
 def test_unreachable_goal_and_bad_input_are_refused():
     with pytest.raises(PlanningError, match="not singularity-free"):
         PolynomialDetourPlanner().plan(np.zeros(6), np.array([0.3, 0, 0, 0, 0, 0]))
