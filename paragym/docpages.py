@@ -254,10 +254,25 @@ def _ladder_rows(csv_path: str | Path) -> dict[str, dict[str, dict[str, dict[str
     return out
 
 
+def rung_verdict(methods: dict[str, dict[str, dict[str, str]]], env_id: str) -> str:
+    """Whether a rung is hard (``methods``: one task's :func:`_ladder_rows`): "hard" when the reference's
+    95 % interval lies above every other ranked method's, floors and learners alike; else "sanity:" and the
+    methods whose interval reaches the reference's (a rung that a cheap method or a learner solves as well
+    measures nothing beyond that); "-" where the reference has no row."""
+    ref = methods.get("reference", {}).get(env_id)
+    if ref is None:
+        return "-"
+    low = float(ref["success_ci_low"])
+    close = [m for m, rows in methods.items()
+             if m != "reference" and env_id in rows and float(rows[env_id]["success_ci_high"]) >= low]
+    return "hard" if not close else "sanity: " + ", ".join(close)
+
+
 def ladder_table(csv_path: str | Path) -> str:
     """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task, each
     method's success on every rung with its 95 % interval (Wilson; kinematic fidelity, the leaderboard's
-    episodes), and the reference's in dynamic fidelity (its successes of the episodes run there)."""
+    episodes), the reference's in dynamic fidelity (its successes of the episodes run there), and each rung's
+    :func:`rung_verdict`."""
 
     found = _ladder_rows(csv_path)
     lines = ["| task | method | " + " | ".join(registry.RUNG_NAMES) + " |",
@@ -277,6 +292,7 @@ def ladder_table(csv_path: str | Path) -> str:
                 lines.append(f"| {task} | {method} | " + " | ".join(cells) + " |")
         cells = [_dynamic_successes(methods.get("reference", {}).get(env_id)) or "-" for env_id in ids]
         lines.append(f"| {task} | reference, dynamic | " + " | ".join(cells) + " |")
+        lines.append(f"| {task} | **verdict** | " + " | ".join(rung_verdict(methods, e) for e in ids) + " |")
     return "\n".join(lines)
 
 
@@ -334,6 +350,12 @@ def ladders_page(csv_path: str | Path) -> str:
         "reference's episodes, so they show how well the paper's method can be imitated, not learned anew; a "
         "dash is a rung without that learner shipped. Generated from the committed "
         "`leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
+        "The verdict row holds each rung to the rule a benchmark's hard rung must meet: it is **hard** only where "
+        "the reference's interval lies above that of every other method ranked on it, floors and learners alike; "
+        "elsewhere it is a **sanity** rung, and the row names the methods that reach the reference's interval. "
+        "Methods the leaderboard does not rank yet (a search of linear policies, a two-line rule read from the "
+        "observation) have been measured to solve some rungs called hard here; until they are ranked, a "
+        "\"hard\" verdict is an upper bound.", "",
         "![success against rung](reports/ladders.png)", "",
         ladder_table(csv_path), "",
         f"Rungs: {rungs}.", ""])

@@ -154,4 +154,7 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     assert table[4] == "| hybrid | PPO | 0.90 [0.79, 0.96] | - | - |"  # each algorithm's best seed per rung
     assert table[5] == "| hybrid | BC | - | - | 0.10 [0.04, 0.21] |"
     assert table[6] == "| hybrid | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
-    assert len(table) == 7  # the v2 row is no rung
+    # hard only where the reference's interval lies above every other method's: PPO's reaches it on the easy
+    # rung; the medium rung ranks no other method, the hard rung's BC lies below
+    assert table[7] == "| hybrid | **verdict** | sanity: PPO | hard | hard |"
+    assert len(table) == 8  # the v2 row is no rung

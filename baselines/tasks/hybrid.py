@@ -18,6 +18,7 @@ from paragym.baselines.tasks import (
     Column,
     Option,
     Target,
+    best_constant_floors,
     init_defaults,
     tightest,
     zero_factory,
@@ -36,6 +37,11 @@ STROKE_MARGIN = 0.001
 #: work (the planner's step 4, ``max_repairs``): the rungs draw paths on which some split works at every pose but
 #: the working splits jump faster than the rate limit lets Delta move
 MAX_REPAIRS = 20
+#: the best constant action of each rung: :func:`paragym.baselines.simple.best_constant` over {-1, 0, 1}^4 on reset
+#: seeds 0-29 (26, 26 and 24 of 30 successes on the easy, medium and hard rungs: the rungs are drawn for the split
+#: alone, and E held 20 mm above its path clears the leg limit). On v2 the
+#: zero action is the best (13 of 30), which the zero floor already ranks.
+BEST_CONSTANT = {LADDER[0]: (0.0, 0.0, 0.0, 1.0), LADDER[1]: (0.0, 0.0, 0.0, 1.0), LADDER[2]: (0.0, 0.0, 0.0, 1.0)}
 #: the ids whose observation shows the end pose's stroke excess and its change with the split (v1's indices 45-47)
 SHOWS_EXCESS = ("paragym/HybridSingularityFree-v1", "paragym/HybridSingularityFree-v2", *LADDER)
 
@@ -229,6 +235,8 @@ BENCH = Bench(
                 "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)"),
         BuiltIn("greedy-split", greedy_split, "floor", "the naive controller: the nominal path, the split stepped "
                 "toward the end pose's lower stroke excess shown in the observation", ids=SHOWS_EXCESS),
+        *best_constant_floors(BEST_CONSTANT, "the split's rate and E's offset from the nominal path {action} "
+                              "(in the action's units), the best of {{-1, 0, 1}}^4 on reset seeds 0-29"),
     ),
     dynamics=HybridDynamics.fast,  # the env's default
     demo="polynomial + serial + detour (paper 002)",
