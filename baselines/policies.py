@@ -38,6 +38,7 @@ import yaml
 
 from paragym.baselines.actor import MlpActor, actor_from_file, actor_from_model
 from paragym.baselines.agents import identity, sha256_of_file
+from paragym.baselines.cem import read_linear
 from paragym.baselines.tasks import bench_of, init_defaults, random_factory
 from paragym.baselines.training import check_env_id, env_name, load_model
 from paragym.models import shared_with, shipped_models_dir, shipped_models_folder
@@ -157,6 +158,11 @@ def _cached_actor(path: str, sha256: str) -> tuple[MlpActor | None, Any]:
     return actor_from_file(path)
 
 
+@lru_cache(maxsize=64)
+def _cached_linear(path: str, sha256: str) -> MlpActor:
+    return read_linear(path)
+
+
 @dataclass(frozen=True)
 class _LearnedFactory:
     """Loads the model once per process (picklable, for worker pools and Ray),
@@ -170,6 +176,12 @@ class _LearnedFactory:
         if not p.is_file() or _sha256(p) != self.sha256:
             raise ValueError(f"model {p} changed (or went) since the leaderboard listed it: its episodes would not "
                              f"be the model's recorded in their rows (SHA-256 {self.sha256[:12]}); run again")
+        if p.suffix == ".npz":  # a linear policy of paragym.baselines.cem: arrays only
+            actor = _cached_linear(str(p), self.sha256)
+            if actor.layers[0][0].shape[1:] != env.observation_space.shape:
+                raise ValueError(f"model {p} expects observations of shape {actor.layers[0][0].shape[1:]}, "
+                                 f"the env gives {env.observation_space.shape}")
+            return LearnedPolicy(actor=actor)
         actor, observation = _cached_actor(str(p), self.sha256)  # an MLP acts in numpy: PyTorch is not loaded
         policy = LearnedPolicy(actor=actor) if actor is not None else LearnedPolicy(_cached_model(str(p), self.sha256))
         if actor is None:
@@ -187,8 +199,9 @@ def _learned(env_id: str, models_dir: Path | None, prefix: str, origin: str) -> 
     if origin == "shipped" and shared_with(env_id):
         origin += f" (trained on {shared_with(env_id)}, whose episodes this id's default mode runs bit for bit)"
     found = {}
-    for path in sorted(folder.glob("*_seed*.zip")):
-        m = re.fullmatch(r"(ppo|sac|td3|tqc|bc|dagger)_seed(\d+)", path.stem)
+    for path in sorted([*folder.glob("*_seed*.zip"), *folder.glob("cem_seed*.npz")]):
+        m = re.fullmatch(r"(ppo|sac|td3|tqc|bc|dagger)_seed(\d+)" if path.suffix == ".zip" else r"(cem)_seed(\d+)",
+                         path.stem)
         if m:
             name = f"{prefix}{m[1]}-seed{m[2]}"
             sha = _sha256(path)
@@ -261,6 +274,10 @@ def _what_trained(path: Path, algo: str) -> str:
         return f"behaviour cloning of {info.get('dataset_id', 'a Minari dataset')}{sha} (a PPO policy)"
     if algo == "dagger":
         return f"DAgger with the expert {info.get('expert', '(unknown)')} (a PPO policy)"
+    if algo == "cem":
+        done = (f", {info['generations']} generations in {info['train_seconds']:.0f} s"
+                if "generations" in info and "train_seconds" in info else "")
+        return f"a linear policy by the cross-entropy method (paragym.baselines.cem{done})"
     what = "TQC (sb3-contrib)" if algo == "tqc" else f"{algo.upper()} (Stable-Baselines3)"
     start = (info.get("hyperparams") or {}).get("init_from")
     if isinstance(start, dict):

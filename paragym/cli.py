@@ -171,6 +171,20 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    if args.algo == "cem":  # a search of linear policies: no PyTorch, no SB3
+        from paragym.baselines.cem import CemSettings, train_cem
+
+        if args.timesteps is not None:
+            raise ValueError("--timesteps does not apply to cem: it searches for --budget seconds")
+        res = train_cem(args.env_id, seed=args.seed, settings=CemSettings(budget_seconds=args.budget,
+                                                                              generations=args.generations),
+                        models_dir=args.models, force=args.force, echo=None if args.no_progress else print)
+        meta = res.meta
+        print(f"CEM seed {meta['seed']} on {meta['env_id']}: {meta['generations']} generations, "
+              f"{meta['episodes_played']:,} episodes in {meta['train_seconds']:.0f} s; the mean's last generation "
+              f"{meta['curve']['mean_success'][-1]:.0%} success")
+        print(f"wrote {res.model} and {res.model.with_suffix('.json').name}")
+        return 0
     from paragym.baselines.training import LOADABLE, check_algo, train
 
     algo = check_algo(args.algo, LOADABLE)
@@ -397,7 +411,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("env_id", help="e.g. CaPaManCollisionFree-v0")
     p.add_argument("--algo", default="ppo", help="ppo, sac, td3 or tqc (hyper-parameters: baselines/hyperparams/); "
                                                  "bc: behaviour cloning of the dataset `paragym demos` records; "
-                                                 "dagger: DAgger with the expert of paragym.yml's dagger section")
+                                                 "dagger: DAgger with the expert of paragym.yml's dagger section; "
+                                                 "cem: a cross-entropy search of linear policies (no PyTorch)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--timesteps", type=int, default=None, help="env steps (default: the yml's n_timesteps)")
     p.add_argument("--models", default="runs/models",
@@ -408,6 +423,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vectorized", action="store_true",
                    help="train on the env's native vector env (N robots per numpy call)")
     p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
+    p.add_argument("--budget", type=float, default=300.0, help="cem: seconds of search (default %(default)s)")
+    p.add_argument("--generations", type=int, default=1000,
+                   help="cem: at most this many generations (default %(default)s); a model's JSON says how many it "
+                        "ran: that number with --budget inf makes the same model on any machine")
     p.set_defaults(func=_cmd_train)
     p = sub.add_parser("demos", help="record a policy's episodes (default: the reference) as a Minari dataset "
                                      "(needs the 'demos' extra)")

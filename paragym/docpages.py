@@ -229,7 +229,7 @@ def _dynamic_successes(r: dict[str, str] | None) -> str | None:
 
 
 #: the learned rows of the ladders' table, by algorithm (a shipped model's policy name is ``<algo>-seed<N>``)
-LEARNED_NAMES = {"ppo": "PPO", "sac": "SAC", "td3": "TD3", "bc": "BC", "dagger": "DAgger"}
+LEARNED_NAMES = {"ppo": "PPO", "sac": "SAC", "td3": "TD3", "bc": "BC", "dagger": "DAgger", "cem": "linear CEM"}
 
 
 def _ladder_rows(csv_path: str | Path) -> dict[str, dict[str, dict[str, dict[str, str]]]]:
