@@ -38,6 +38,7 @@ import numpy as np
 
 from paragym import __version__
 from paragym.baselines.actor import MlpActor
+from paragym.baselines.run_files import writable_models_dir
 from paragym.baselines.training import check_env_id, env_name
 
 __all__ = ["CemResult", "CemSettings", "linear_actor", "read_linear", "train_cem"]
@@ -140,16 +141,16 @@ def _play(vec: Any, params: np.ndarray, seeds: list[int], n_obs: int, low: np.nd
 
 def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, models_dir: str | Path | None = None,
               force: bool = False, echo: Any = None) -> CemResult:
-    """Search a linear policy for ``env_id`` (module docstring) with training seed ``seed``; with ``models_dir``,
-    write ``<models_dir>/<Name>-vN/cem_seed<seed>.npz`` and its ``.json`` (an existing file is kept unless
-    ``force``). ``echo``: called with a line per generation (None: silent)."""
+    """Search a linear policy for ``env_id`` (module docstring) with training seed ``seed``; with ``models_dir``
+    (never the shipped models' folder), write ``<models_dir>/<Name>-vN/cem_seed<seed>.npz`` and its ``.json`` (an
+    existing file is kept unless ``force``). ``echo``: called with a line per generation (None: silent)."""
     env_id = check_env_id(env_id)
     settings = settings or CemSettings()
     if isinstance(seed, bool) or not isinstance(seed, int) or seed < 0:
         raise ValueError(f"seed must be a whole number >= 0; got {seed!r}")
     model = None
     if models_dir is not None:
-        folder = Path(models_dir) / env_name(env_id)
+        folder = Path(writable_models_dir(models_dir)) / env_name(env_id)
         model = folder / f"cem_seed{seed}.npz"
         if model.exists() and not force:
             raise FileExistsError(f"{model} exists: force=True (--force) replaces it")

@@ -307,7 +307,7 @@ def ladder_figure(csv_path: str | Path, path: str | Path) -> Path:
     found = _ladder_rows(csv_path)
     fig, axes = plt.subplots(1, len(found), figsize=(4.0 * len(found), 3.4), squeeze=False)
     colours = {"reference": "tab:green", "zero": "tab:gray", "random": "tab:red", "PPO": "tab:blue",
-               "SAC": "tab:cyan", "BC": "tab:purple", "DAgger": "tab:pink"}
+               "SAC": "tab:cyan", "BC": "tab:purple", "DAgger": "tab:pink", "linear CEM": "tab:brown"}
     for ax, (task, methods) in zip(axes[0], found.items(), strict=True):
         ids = [r.id for r in registry.ladder_of(task)]
         for j, (method, rows) in enumerate(methods.items()):

@@ -73,3 +73,10 @@ def test_paragym_train_runs_the_search(tmp_path, capsys):
     assert code == 0 and "1 generations" in out
     assert (tmp_path / "Orthoglide2PRRKappa-Hard-v0" / "cem_seed0.npz").is_file()
     assert main(["train", "Orthoglide2PRRKappa-Hard-v0", "--algo", "cem", "--timesteps", "5"]) == 2
+
+
+def test_the_shipped_models_are_read_only_to_the_search():
+    from paragym.models import shipped_models_dir
+
+    with pytest.raises(ValueError, match="read-only"):
+        train_cem(ENV, settings=TINY, models_dir=shipped_models_dir())
