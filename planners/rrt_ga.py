@@ -43,7 +43,14 @@ import numpy as np
 
 from paragym.mechanisms import capaman
 from paragym.planners.base import PathFollowingPolicy, PlanningError
-from paragym.planners.rrt_ga_space import LEG_INTERVALS, Forest, JointSpaceModel, RrtGaSettings, fitness
+from paragym.planners.rrt_ga_space import (
+    LEG_INTERVALS,
+    CapsuleSpaceModel,
+    Forest,
+    JointSpaceModel,
+    RrtGaSettings,
+    fitness,
+)
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks.capaman import LADDER_MAX_OBSTACLES, MAX_OBSTACLES, CaPaManScenario, validate_scenario
 from paragym.trajectories import JointPath, JointTrajectory
@@ -86,13 +93,24 @@ class RrtGaPlanner:
         settings: the planner's parameters.
         geometry: the CaPaMan's dimensions.
         seed: seed of the planner's random generator (RRT samples, GA).
+        collision_model: what Theta is made from: "psi", the paper's Cartesian matrix of ``settings.cell``
+            cells and the cluster points (eqs 1-2); "capsules", the capsule model's exact clearance at Theta's
+            nodes, for scenes of capsule posts only (:class:`~paragym.planners.rrt_ga_space.CapsuleSpaceModel`,
+            ``capsule_margin`` m from every post).
+        capsule_margin: the clearance (m) a node of Theta must keep in the capsule model.
     """
 
     def __init__(self, settings: RrtGaSettings | None = None,
-                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, seed: int = 0) -> None:
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, seed: int = 0,
+                 collision_model: str = "psi", capsule_margin: float = 0.001) -> None:
+        if collision_model not in ("psi", "capsules"):
+            raise ValueError(f"collision_model must be 'psi' or 'capsules'; got {collision_model!r}")
+        if not (isinstance(capsule_margin, int | float) and 0 <= capsule_margin < 0.01):
+            raise ValueError(f"capsule_margin must be a clearance in [0, 0.01) m; got {capsule_margin!r}")
         self.settings = settings or RrtGaSettings()
         self.geometry = geometry
         self.seed = seed
+        self.collision_model, self.capsule_margin = collision_model, float(capsule_margin)
         self._scene: CaPaManScene | None = None
 
     @property
@@ -113,7 +131,8 @@ class RrtGaPlanner:
         configuration collides) and build its :class:`JointSpaceModel`
         (:class:`PlanningError` if a task point collides in the grid model)."""
         validate_scenario(scenario, self.scene, max(MAX_OBSTACLES, LADDER_MAX_OBSTACLES))  # a rung's too
-        model = JointSpaceModel(scenario, self.settings, self.geometry)
+        model = (JointSpaceModel(scenario, self.settings, self.geometry) if self.collision_model == "psi" else
+                 CapsuleSpaceModel(scenario, self.settings, self.geometry, self.capsule_margin))
         bad = np.flatnonzero(~model.configs(scenario.alpha))
         if len(bad):
             raise PlanningError(f"T.P.{bad[0] + 1} collides in the grid model (eq 2): it lies within the "

@@ -19,10 +19,10 @@ from scipy import ndimage
 
 from paragym.mechanisms import capaman
 from paragym.sim import capaman_grid
-from paragym.tasks.capaman import CaPaManScenario
+from paragym.tasks.capaman import CaPaManScenario, posts_of, scene_clearance
 from paragym.units import DEG
 
-__all__ = ["LEG_INTERVALS", "Forest", "JointSpaceModel", "RrtGaSettings", "fitness"]
+__all__ = ["LEG_INTERVALS", "CapsuleSpaceModel", "Forest", "JointSpaceModel", "RrtGaSettings", "fitness"]
 
 LEG_INTERVALS = (7, 7, 6)  # 20 intervals: m = 21 configurations, T.P.s at 0, 7, 14, 20
 
@@ -183,6 +183,51 @@ class JointSpaceModel:
             for i, ok in zip(todo, self.evaluate(a[todo], b[todo]), strict=True):
                 self.memo[keys[i]] = bool(ok)
         return np.array([self.memo[k] for k in keys])
+
+
+class CapsuleSpaceModel(JointSpaceModel):
+    """:class:`JointSpaceModel` for scenes of capsule obstacles (the difficulty ladder's posts), with Theta taken
+    from the capsule model's exact clearance instead of the Cartesian matrix Psi: a node collides where the
+    whole manipulator passes closer than ``margin`` (m) to a post (:func:`paragym.tasks.capaman.scene_clearance`,
+    the model the rungs' generator proves a tour in). Psi's cells are ``settings.cell`` wide and a cluster
+    point is blocked by any cell it touches, so passages between posts narrower than a few cells close in Psi
+    while they stay open here. Everything else (rho, the cell rule, the segment checks, the exact check near a
+    task point, now in the capsule model) is the parent's, as is PyBullet's final dense check in the planner."""
+
+    def __init__(self, scenario: CaPaManScenario, settings: RrtGaSettings,
+                 geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY, margin: float = 0.001) -> None:
+        t0 = time.perf_counter()
+        s, g = settings, geometry
+        self.settings, self.geometry, self.margin = s, g, margin
+        self.posts = posts_of(scenario.obstacles)
+        axis = np.linspace(g.alpha_min, g.alpha_max, s.theta_points)
+        nodes = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+        self.theta = (self._clearance(nodes) < margin).reshape((len(axis),) * 3)
+        self.lo, self.eps, self.n = axis[0], axis[1] - axis[0], len(axis)
+        self.rho_grid = (ndimage.distance_transform_edt(~self.theta, sampling=self.eps) if self.theta.any()
+                         else np.full(self.theta.shape, np.inf))
+        free = ~self.theta
+        self.cell_free = (free[:-1, :-1, :-1] & free[1:, :-1, :-1] & free[:-1, 1:, :-1] & free[:-1, :-1, 1:]
+                          & free[1:, 1:, :-1] & free[1:, :-1, 1:] & free[:-1, 1:, 1:] & free[1:, 1:, 1:])
+        self.task_points = scenario.alpha
+        self.step = s.check_step
+        self.memo = {}
+        self.build_seconds = time.perf_counter() - t0
+
+    def _clearance(self, q: np.ndarray) -> np.ndarray:
+        return scene_clearance(np.ascontiguousarray(q, np.float64), self.posts, self.geometry,
+                               cap=self.margin + 0.004)
+
+    def configs(self, q: np.ndarray) -> np.ndarray:
+        """Whether each configuration (K, 3) is free: its cell's eight nodes are, or, near a task point, the
+        capsule model's clearance there is positive."""
+        idx = np.clip(((q - self.lo) / self.eps).astype(int), 0, self.n - 2)
+        ok = self.cell_free[idx[:, 0], idx[:, 1], idx[:, 2]]
+        near = np.linalg.norm(q[:, None] - self.task_points[None], axis=2).min(axis=1) < 2 * self.eps
+        exact = ~ok & near
+        if exact.any():
+            ok[exact] = self._clearance(q[exact]) > 0
+        return ok
 
 
 class Forest:

@@ -206,3 +206,40 @@ def test_the_floors_fail_and_the_papers_planner_succeeds_on_every_rung(env_id):
             pass
     assert wins >= 2
     env.close()
+
+
+def test_the_rungs_reference_plans_in_the_capsule_model_where_psi_closes_the_passage():
+    """The hard rung's draw of reset seed 100012 (one of the leaderboard's) has a tour the rung's witness proves in
+    the capsule model; the paper's 5 mm Psi closes the passage, and RRT + GA there finds no path from T.P.1 to
+    T.P.2. The rungs' reference plans on a Theta of the capsule model's exact clearance instead, and its episode
+    succeeds (the motion checked by PyBullet along the way)."""
+    from paragym.planners import RrtGaPlanner
+    from paragym.planners.rrt_ga import RrtGaSettings
+
+    env = gym.make(RUNGS[2])
+    _, info = env.reset(seed=100012)
+    scenario = info["scenario"]
+    assert solvable(scenario)
+    with pytest.raises(PlanningError, match="RRT found no path"):
+        RrtGaPlanner(seed=100012).plan(scenario)
+    planner = RrtGaPlanner(RrtGaSettings(theta_points=46), seed=100012, collision_model="capsules")
+    assert planner.solve(scenario).min_clearance > 0  # PyBullet's dense check of the whole tour
+    planner.close()
+    spec = get_policy(RUNGS[2], "rrt-ga")
+    assert "capsule" in spec.description
+    assert run_episode(env, spec.factory(env, 100012), seed=100012).success
+    env.close()
+
+
+def test_the_capsule_model_takes_capsule_scenes_and_named_settings_only():
+    from paragym.planners import RrtGaPlanner
+
+    with pytest.raises(ValueError, match="collision_model"):
+        RrtGaPlanner(collision_model="boxes")
+    with pytest.raises(ValueError, match="capsule_margin"):
+        RrtGaPlanner(capsule_margin=-0.001)
+    env = gym.make("paragym/CaPaManCollisionFree-v1", scenario="paper")
+    _, info = env.reset(seed=0)
+    with pytest.raises(ValueError, match="Capsule obstacles"):
+        RrtGaPlanner(collision_model="capsules").model(info["scenario"])
+    env.close()
