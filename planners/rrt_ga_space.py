@@ -106,7 +106,14 @@ class JointSpaceModel:
         self.settings, self.geometry = s, g
         self.grid = capaman_grid.OccupancyGrid.from_obstacles(scenario.obstacles, resolution=s.cell)
         clusters = _clusters(g, s.cluster_spacing)
-        self.theta, axis = capaman_grid.joint_matrix(self.grid, clusters, s.theta_points, g)
+        self._set_theta(*capaman_grid.joint_matrix(self.grid, clusters, s.theta_points, g), scenario)
+        self.clusters = clusters.subset(capaman_grid.reachable_parts(self.grid, g))
+        self.build_seconds = time.perf_counter() - t0
+
+    def _set_theta(self, theta: np.ndarray, axis: np.ndarray, scenario: CaPaManScenario) -> None:
+        """Theta (n, n, n, True where a node collides) on the grid ``axis`` (n,), and what follows from it:
+        rho's distance transform, the free cells, the task points, an empty memo of segments."""
+        self.theta = theta
         self.lo, self.eps, self.n = axis[0], axis[1] - axis[0], len(axis)
         self.rho_grid = (ndimage.distance_transform_edt(~self.theta, sampling=self.eps) if self.theta.any()
                          else np.full(self.theta.shape, np.inf))
@@ -114,10 +121,8 @@ class JointSpaceModel:
         self.cell_free = (free[:-1, :-1, :-1] & free[1:, :-1, :-1] & free[:-1, 1:, :-1] & free[:-1, :-1, 1:]
                           & free[1:, 1:, :-1] & free[1:, :-1, 1:] & free[:-1, 1:, 1:] & free[1:, 1:, 1:])
         self.task_points = scenario.alpha
-        self.clusters = clusters.subset(capaman_grid.reachable_parts(self.grid, g))
-        self.step = s.check_step
+        self.step = self.settings.check_step
         self.memo: dict[bytes, bool] = {}
-        self.build_seconds = time.perf_counter() - t0
 
     def rho(self, q: np.ndarray) -> np.ndarray:
         """Joint-space distance (rad) to the nearest colliding Theta node, (...,) for q (..., 3)."""
@@ -202,16 +207,7 @@ class CapsuleSpaceModel(JointSpaceModel):
         self.posts = posts_of(scenario.obstacles)
         axis = np.linspace(g.alpha_min, g.alpha_max, s.theta_points)
         nodes = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
-        self.theta = (self._clearance(nodes) < margin).reshape((len(axis),) * 3)
-        self.lo, self.eps, self.n = axis[0], axis[1] - axis[0], len(axis)
-        self.rho_grid = (ndimage.distance_transform_edt(~self.theta, sampling=self.eps) if self.theta.any()
-                         else np.full(self.theta.shape, np.inf))
-        free = ~self.theta
-        self.cell_free = (free[:-1, :-1, :-1] & free[1:, :-1, :-1] & free[:-1, 1:, :-1] & free[:-1, :-1, 1:]
-                          & free[1:, 1:, :-1] & free[1:, :-1, 1:] & free[:-1, 1:, 1:] & free[1:, 1:, 1:])
-        self.task_points = scenario.alpha
-        self.step = s.check_step
-        self.memo = {}
+        self._set_theta((self._clearance(nodes) < margin).reshape((len(axis),) * 3), axis, scenario)
         self.build_seconds = time.perf_counter() - t0
 
     def _clearance(self, q: np.ndarray) -> np.ndarray:
