@@ -29,6 +29,7 @@ import json
 import math
 import platform
 import time
+from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -119,28 +120,31 @@ def read_linear(path: str | Path) -> MlpActor:
 
 
 def _play(vec: Any, params: np.ndarray, seeds: list[int], n_obs: int, low: np.ndarray, high: np.ndarray
-          ) -> tuple[np.ndarray, np.ndarray]:
+          ) -> tuple[np.ndarray, np.ndarray, int]:
     """Successes and returns (R,) of each robot's first episode, robot r acting with ``params[r]``
-    ((actions, observations + 1): W beside b), reset with ``seeds[r]``."""
+    ((actions, observations + 1): W beside b), reset with ``seeds[r]``; and the steps those episodes took."""
     obs, _ = vec.reset(seed=seeds)
     n = len(seeds)
     done = np.zeros(n, bool)
     success = np.zeros(n, bool)
     returns = np.zeros(n)
+    steps = 0
     W, b = params[:, :, :n_obs].astype(np.float32), params[:, :, n_obs].astype(np.float32)
     while not done.all():
         actions = np.clip(np.einsum("rao,ro->ra", W, obs.astype(np.float32)) + b, low, high).astype(np.float32)
         obs, reward, terminated, truncated, info = vec.step(actions)
         live = ~done
+        steps += int(live.sum())
         returns[live] += reward[live]
         ended = live & (terminated | truncated)
         success[ended] = np.asarray(info["is_success"], bool)[ended]
         done |= ended
-    return success, returns
+    return success, returns, steps
 
 
 def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, models_dir: str | Path | None = None,
-              force: bool = False, echo: Any = None) -> CemResult:
+              force: bool = False, echo: Any = None, stop: Callable[[MlpActor, float, int], bool] | None = None
+              ) -> CemResult:
     """Search a linear policy for ``env_id`` (module docstring) with training seed ``seed``; with ``models_dir``
     (never the shipped models' folder), write ``<models_dir>/<Name>-vN/cem_seed<seed>.npz`` and its ``.json`` (an
     existing file is kept unless ``force``). ``echo``: called with a line per generation (None: silent)."""
@@ -170,19 +174,21 @@ def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, m
     curve: dict[str, list[float]] = {"generation": [], "seconds": [], "mean_success": [], "mean_return": [],
                                      "best_success": []}
     start = time.perf_counter()
-    generation = 0
-    while generation < settings.generations and time.perf_counter() - start < settings.budget_seconds:
+    generation, steps, outside, stopped = 0, 0, 0.0, False
+    while (generation < settings.generations and not stopped
+           and time.perf_counter() - start - outside < settings.budget_seconds):
         candidates = mean + std * rng.standard_normal((p, n_act, n_obs + 1))
         candidates[0] = mean
         first = FIRST_SEED + seed * SEED_STRIDE + generation * e
         seeds = [first + k % e for k in range(p * e)]  # robot c * e + k: candidate c on episode k
-        success, returns = _play(vec, np.repeat(candidates, e, axis=0), seeds, n_obs, low, high)
+        success, returns, played = _play(vec, np.repeat(candidates, e, axis=0), seeds, n_obs, low, high)
+        steps += played
         wins = success.reshape(p, e).sum(axis=1)
         mean_return = returns.reshape(p, e).mean(axis=1)
         order = np.lexsort((-mean_return, -wins))  # most successes first, then the highest mean return
         elite = candidates[order[:keep]]
         curve["generation"].append(generation)
-        curve["seconds"].append(time.perf_counter() - start)
+        curve["seconds"].append(time.perf_counter() - start - outside)
         curve["mean_success"].append(float(wins[0] / e))
         curve["mean_return"].append(float(mean_return[0]))
         curve["best_success"].append(float(wins[order[0]] / e))
@@ -192,10 +198,16 @@ def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, m
                  f"{curve['seconds'][-1]:.0f} s")
         mean, std = elite.mean(axis=0), elite.std(axis=0) + floor
         generation += 1
+        if stop is not None:
+            before = time.perf_counter()
+            searched = before - start - outside
+            stopped = bool(stop(linear_actor(mean[:, :n_obs], mean[:, n_obs], low, high), searched, steps))
+            outside += time.perf_counter() - before
     vec.close()
     W, b = mean[:, :n_obs].astype(np.float32), mean[:, n_obs].astype(np.float32)
     meta = {"env_id": env_id, "algo": "cem", "seed": seed, "settings": asdict(settings), "generations": generation,
-            "episodes_played": generation * p * e, "train_seconds": time.perf_counter() - start,
+            "episodes_played": generation * p * e, "steps_played": steps,
+            "train_seconds": time.perf_counter() - start - outside, "stopped": stopped,
             "parameters": {"policy": int(W.size + b.size)}, "first_reset_seed": FIRST_SEED + seed * SEED_STRIDE,
             "versions": {"paragym": __version__, "numpy": np.__version__, "gymnasium": gym.__version__,
                          "python": platform.python_version()},

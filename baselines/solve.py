@@ -24,7 +24,8 @@ from paragym.baselines.training import EVAL_SEED
 from paragym.registry import check_env_id
 from paragym.rollout import run_episode
 
-__all__ = ["SolveCheck", "SolvePoint", "Target", "stop_when_solved"]  # Target: the benches' (tasks)
+# Target: the benches' (tasks)
+__all__ = ["SolveCheck", "SolvePoint", "Target", "stop_search_when_solved", "stop_when_solved"]
 
 
 @dataclass
@@ -132,3 +133,20 @@ def stop_when_solved(check: SolveCheck, every_seconds: float, budget_seconds: fl
             return not solved and self.learning < budget_seconds
 
     return StopWhenSolved()
+
+
+def stop_search_when_solved(check: SolveCheck, every_seconds: float, points: list[SolvePoint]) -> Any:
+    """:func:`stop_when_solved` for the linear search (:func:`paragym.baselines.cem.train_cem`'s ``stop``): every
+    ``every_seconds`` of search it checks the search's mean policy, appends a :class:`SolvePoint` (its steps: the
+    env steps the search has played) and stops the search once solved. The budget is the search's own."""
+    due = [every_seconds]
+
+    def stop(actor: Any, seconds: float, steps: int) -> bool:
+        if seconds < due[0]:
+            return False
+        solved, figures = check.check(LearnedPolicy(actor=actor))
+        points.append(SolvePoint(steps, seconds, figures, solved))
+        due[0] = seconds + every_seconds
+        return solved
+
+    return stop

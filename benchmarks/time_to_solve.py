@@ -1,15 +1,15 @@
-"""Time to solve: wall-clock minutes of PPO from scratch until each task counts as solved.
+"""Time to solve: wall-clock minutes of PPO from scratch (or of a linear search) until a task counts as solved.
 
 For each env id (default: the newest version of every task) and each seed,
 ``paragym train`` trains PPO from scratch with the env's settings in
 ``baselines/hyperparams/ppo.yml`` (as a user would run it, its own
 evaluations and checkpoints included; ``init_from``, a behaviour clone to
-start from, is dropped). Every ``--check-every`` seconds of
-learning, the deterministic policy plays ``--episodes`` validation episodes
-and the task's targets are checked (:mod:`paragym.baselines.solve`; the
-targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The
-checks' own time is left out of the clock. A run stops when solved or after
-``--budget`` minutes of learning.
+start from, is dropped); with ``--algo cem``, the cross-entropy search of linear
+policies (:mod:`paragym.baselines.cem`, its default settings) runs instead, its
+mean checked the same way. Every ``--check-every`` seconds of learning, the deterministic policy plays
+``--episodes`` validation episodes and the task's targets are checked (:mod:`paragym.baselines.solve`; the
+targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The checks' own time is left out of
+the clock. A run stops when solved or after ``--budget`` minutes of learning.
 
 Each run is written to ``OUT/<env name>-seed<N>.json`` (the points, the
 targets and their bounds, what produced it) as soon as it ends, and a run
@@ -41,7 +41,8 @@ import numpy as np
 from results_file import add_record_option, record  # this folder is on the path when it runs
 
 import paragym
-from paragym.baselines.solve import SolveCheck, stop_when_solved
+from paragym.baselines.cem import CemSettings, train_cem
+from paragym.baselines.solve import SolveCheck, stop_search_when_solved, stop_when_solved
 from paragym.baselines.stats import mean_ci
 from paragym.baselines.tasks import bench_of
 from paragym.baselines.training import train
@@ -57,21 +58,26 @@ PARAGRAPH = (
 
 
 def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
-    """One training run of PPO on ``env_id`` from ``seed``, checked as it learns (module docstring)."""
+    """One training run of ``args.algo`` on ``env_id`` from ``seed``, checked as it learns (module docstring)."""
     check = SolveCheck(env_id, args.episodes)
     points: list[Any] = []
-    stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
     t0 = time.perf_counter()
-    train(env_id, "ppo", seed, timesteps=args.max_timesteps, models_dir=args.out / "models", progress_bar=False,
-          threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
-          hyperparams={"init_from": None})  # from scratch, also where the yml starts from a behaviour clone
+    if args.algo == "cem":  # the linear search: its budget, its checks' time left out
+        train_cem(env_id, seed, CemSettings(budget_seconds=args.budget * 60, generations=10**9),
+                  models_dir=args.out / "models", force=True,
+                  stop=stop_search_when_solved(check, args.check_every, points))
+    else:
+        stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
+        train(env_id, "ppo", seed, timesteps=args.max_timesteps, models_dir=args.out / "models", progress_bar=False,
+              threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
+              hyperparams={"init_from": None})  # from scratch, also where the yml starts from a behaviour clone
     wall = time.perf_counter() - t0
     check.close()
     solved = next((p for p in points if p.solved), None)
     return {
         "env_id": env_id, "seed": seed, "targets": check.describe(), "keys": [t.key for t in check.targets],
         "bounds": list(check.bounds),
-        "vectorized": args.vectorized, "episodes": args.episodes,
+        "algo": args.algo, "vectorized": args.vectorized, "episodes": args.episodes,
         "budget_minutes": args.budget, "check_every_seconds": args.check_every,
         "solved": solved is not None,
         "minutes": None if solved is None else solved.seconds / 60,
@@ -180,7 +186,10 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads")
     parser.add_argument("--vectorized", action="store_true",
                         help="train on the native vector env (n_envs robots) whatever paragym.yml says")
-    parser.add_argument("--out", type=Path, default=Path("results/time_to_solve"))
+    parser.add_argument("--algo", choices=("ppo", "cem"), default="ppo",
+                        help="PPO from scratch, or cem: the search of linear policies, its budget the same minutes")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="where the runs go (default results/time_to_solve, and results/time_to_solve_cem for cem)")
     parser.add_argument("--force", action="store_true", help="run again the runs already in OUT")
     parser.add_argument("--report-only", action="store_true", help="train nothing: the report of the runs in OUT")
     add_record_option(parser)
@@ -191,6 +200,7 @@ def main() -> None:
         parser.error(f"--episodes must be at least 2 (a target against another policy compares episode by "
                      f"episode); got {args.episodes}")
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
+    args.out = args.out or Path("results/time_to_solve" + ("_cem" if args.algo == "cem" else ""))
     args.out.mkdir(parents=True, exist_ok=True)
     by_env: dict[str, list[dict[str, Any]]] = {}
     missing: list[str] = []

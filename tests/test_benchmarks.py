@@ -1,5 +1,6 @@
 """The benchmark scripts run (quick settings); their figures are theirs to print."""
 
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -9,8 +10,6 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def _recorded(folder: Path, name: str) -> dict:
     """The result file a benchmark's ``--record`` wrote: what produced it, and its rows."""
-    import json
-
     data = json.loads((folder / f"{name}.json").read_text())
     assert data["command"].startswith("python benchmarks/") and data["date"] and data["machine"] and data["commit"]
     assert data["rows"] and all(len(r) == len(data["columns"]) for r in data["rows"]), data
@@ -105,6 +104,18 @@ def test_time_to_solve_writes_its_runs_and_takes_them_back(tmp_path):
     again = _run(*args[:4], "2", *args[5:], "--report-only", "--record", str(tmp_path))  # seed 1 not trained
     assert again.count("taken from") == 1 and "seed 1: not run yet" in again and row in again
     assert _recorded(tmp_path, "time_to_solve")["rows"][0][0] == "Orthoglide2PRRKappa-v1"
+
+
+def test_time_to_solve_times_the_linear_search_too(tmp_path):
+    """``--algo cem``: the search's mean is checked every --check-every seconds of search, and its run is written
+    apart from PPO's (its own folder by default, its algo recorded)."""
+    _run("benchmarks/time_to_solve.py", "--algo", "cem", "--env", "Orthoglide2PRRKappa-Hard-v0", "--seeds", "1",
+         "--budget", "0.02", "--check-every", "0.3", "--episodes", "2", "--out", str(tmp_path))
+    run = json.loads((tmp_path / "Orthoglide2PRRKappa-Hard-v0-seed0.json").read_text())
+    assert run["algo"] == "cem" and run["points"] and (tmp_path / "models" / "Orthoglide2PRRKappa-Hard-v0" /
+                                                        "cem_seed0.npz").is_file()
+    minutes = [p["minutes"] for p in run["points"]]
+    assert minutes == sorted(minutes) and minutes[-1] < run["wall_minutes"]  # the checks' time is not search time
 
 
 def test_capaman_detours_splits_success_by_tour(tmp_path):

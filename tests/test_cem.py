@@ -80,3 +80,20 @@ def test_the_shipped_models_are_read_only_to_the_search():
 
     with pytest.raises(ValueError, match="read-only"):
         train_cem(ENV, settings=TINY, models_dir=shipped_models_dir())
+
+
+def test_a_stop_ends_the_search_and_its_time_is_not_search_time():
+    import time
+
+    calls = []
+
+    def stop(actor, seconds, steps):
+        calls.append((seconds, steps))
+        time.sleep(0.3)
+        return len(calls) == 2
+
+    res = train_cem(ENV, settings=CemSettings(population=4, episodes=1, elite=0.5, budget_seconds=math.inf,
+                                              generations=10), stop=stop)
+    assert res.meta["generations"] == 2 and res.meta["stopped"] and len(calls) == 2
+    assert calls[1][1] > calls[0][1] > 0 and res.meta["steps_played"] == calls[1][1]
+    assert res.meta["train_seconds"] < 0.3  # the two 0.3 s sleeps are the stop's, not the search's
