@@ -5,7 +5,9 @@ For each newest id and each rung (or ``--env``) and each of its named scenarios,
 the task's naive controller), the reference and the shipped learned agents of training seed 0 play ``--episodes``
 episodes (the leaderboard's reset seeds, 100000 + k), and the table gives each success rate with Wilson's
 95 % interval against issue 40's bounds: zero and random at most 0.10, a naive floor at most 0.30 and its
-interval below the reference's, the reference at least 0.90 (the learned agents have none). A family that
+interval below the reference's, the reference at least 0.90 (the learned agents have none), and each family's
+verdict by the ladder's rule (:func:`paragym.docpages.rung_verdict`): hard only where the reference's interval
+lies above that of every other method played, floors and learned agents alike (PPO, BC, linear CEM). A family that
 misses a bound is one a difficulty ladder has to redesign. The figure shows every rate with its interval.
 
     python benchmarks/headroom.py [--env ID ...] [--episodes 50] [--figure PNG] [--record]
@@ -26,6 +28,7 @@ from paragym.baselines.leaderboard.suite import episode_seed
 from paragym.baselines.policies import policies_for
 from paragym.baselines.stats import ahead, wilson
 from paragym.baselines.tasks import bench_of
+from paragym.docpages import rung_verdict
 from paragym.planners.base import PlanningError
 from paragym.rollout import run_episode
 
@@ -61,7 +64,7 @@ def main() -> None:
     ids = [registry.check_env_id(e) for e in args.env] if args.env else [
         *registry.newest(), *(r.id for task in dict.fromkeys(r.task for r in registry.rows())
                               for r in registry.ladder_of(task))]
-    rows, missed, points = [], 0, []
+    rows, missed, points, hard = [], 0, [], 0
     for env_id in ids:
         bench = bench_of(env_id)
         specs = {name: spec for name, spec in policies_for(env_id).items()
@@ -89,8 +92,19 @@ def main() -> None:
                              f"{side} {bound:.2f}" + (", apart from the reference" if role == "naive" else ""),
                              "ok" if ok else "MISSED"])
                 print(" | ".join(rows[-1]), flush=True)
-    judged = sum(r[-1] != "-" for r in rows)
-    print(f"\n{missed} of {judged} rows miss their bound ({args.episodes} episodes each)")
+            # the ladder's rule (docs/ladders.md): hard only where the reference's interval lies above every other's
+            cis = {("reference" if n == bench.reference else n): {env_id: dict(zip(
+                ("success_ci_low", "success_ci_high"), wilson(w, args.episodes), strict=True))}
+                for n, w in found.items()}
+            verdict = rung_verdict(cis, env_id)
+            hard += verdict == "hard"
+            rows.append([env_id.split("/")[-1], scenario, "(every method)", "verdict", "-",
+                         "the reference's interval above every other's", verdict])
+            print(" | ".join(rows[-1]), flush=True)
+    judged = sum(r[-1] != "-" and r[3] != "verdict" for r in rows)
+    families = sum(r[3] == "verdict" for r in rows)
+    print(f"\n{missed} of {judged} rows miss their bound ({args.episodes} episodes each); {hard} of {families} "
+          f"scenario families hard, the rest sanity")
     figure = Path(args.figure) if args.figure else None
     if figure is None and args.record:  # the speed page's picture, or beside a result file written elsewhere
         folder = Path(args.record).resolve()

@@ -225,8 +225,12 @@ def test_headroom_checks_floors_and_reference_against_the_bounds(tmp_path):
     out = _run("benchmarks/headroom.py", "--env", "Orthoglide2PRRKappa-v1", "--episodes", "2", "--record",
                str(tmp_path))
     rows = _recorded(tmp_path, "headroom")["rows"]
-    judged = {(r[1], r[2]) for r in rows if r[3] != "learned"}
+    judged = {(r[1], r[2]) for r in rows if r[3] not in ("learned", "verdict")}
     assert judged == {(s, p) for s in ("paper", "random") for p in ("gradient-c-limited", "zero", "random")}, rows
+    # each family's verdict by the ladder's rule: zero's 2 of 2 on the random family reach the reference's
+    verdicts = {r[1]: r[-1] for r in rows if r[3] == "verdict"}
+    assert set(verdicts) == {"paper", "random"} and verdicts["random"].startswith("sanity: ") and "zero" in \
+        verdicts["random"] and "scenario families hard" in out
     assert {r[2] for r in rows if r[3] == "learned"} and all(r[2].endswith("-seed0") for r in rows if r[3] == "learned")
     by = {(r[1], r[2]): r for r in rows}
     assert by[("random", "zero")][-1] == "MISSED" and by[("random", "gradient-c-limited")][-1] == "ok"  # 2 of 2 each
