@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+import os
 import platform
 import time
 from collections.abc import Callable
@@ -211,15 +212,10 @@ def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, m
             "parameters": {"policy": int(W.size + b.size)}, "first_reset_seed": FIRST_SEED + seed * SEED_STRIDE,
             "versions": {"paragym": __version__, "numpy": np.__version__, "gymnasium": gym.__version__,
                          "python": platform.python_version()},
-            "machine": f"{platform.machine()}, {_cores()} cores", "curve": curve}
+            "machine": f"{platform.machine()}, {os.cpu_count()} cores", "curve": curve}
     if model is not None:
         model.parent.mkdir(parents=True, exist_ok=True)
         np.savez(model, W=W, b=b, low=low.astype(np.float64), high=high.astype(np.float64))
         model.with_suffix(".json").write_text(json.dumps(meta, indent=1) + "\n")
     return CemResult(W, b, model, meta)
 
-
-def _cores() -> int:
-    import os
-
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)

@@ -142,8 +142,12 @@ class JointSpaceModel:
         near = np.linalg.norm(q[:, None] - self.task_points[None], axis=2).min(axis=1) < 2 * self.eps
         exact = ~ok & near
         if exact.any():
-            ok[exact] = ~capaman_grid.grid_collision(q[exact], self.grid, self.clusters, self.geometry)
+            ok[exact] = self._exact_free(q[exact])
         return ok
+
+    def _exact_free(self, q: np.ndarray) -> np.ndarray:
+        """Whether configurations (K, 3) near a task point are free in the model itself: eq 2 on Psi."""
+        return ~capaman_grid.grid_collision(q, self.grid, self.clusters, self.geometry)
 
     def config_free(self, q0: float, q1: float, q2: float) -> bool:
         """:meth:`configs` for one configuration in Python floats (for
@@ -214,16 +218,9 @@ class CapsuleSpaceModel(JointSpaceModel):
         return scene_clearance(np.ascontiguousarray(q, np.float64), self.posts, self.geometry,
                                cap=self.margin + 0.004)
 
-    def configs(self, q: np.ndarray) -> np.ndarray:
-        """Whether each configuration (K, 3) is free: its cell's eight nodes are, or, near a task point, the
-        capsule model's clearance there is positive."""
-        idx = np.clip(((q - self.lo) / self.eps).astype(int), 0, self.n - 2)
-        ok = self.cell_free[idx[:, 0], idx[:, 1], idx[:, 2]]
-        near = np.linalg.norm(q[:, None] - self.task_points[None], axis=2).min(axis=1) < 2 * self.eps
-        exact = ~ok & near
-        if exact.any():
-            ok[exact] = self._clearance(q[exact]) > 0
-        return ok
+    def _exact_free(self, q: np.ndarray) -> np.ndarray:
+        """Near a task point: the capsule model's clearance is positive."""
+        return self._clearance(q) > 0
 
 
 class Forest:

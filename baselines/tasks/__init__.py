@@ -249,6 +249,10 @@ class Bench:
             return "floor"
         return next((p.kind for p in self.policies if p.name == name and p.plays(env_id)), stored)
 
+    def reference_of(self, env_id: str) -> BuiltIn:
+        """The built-in reference policy that plays ``env_id`` (an id of several versions may have several)."""
+        return next(p for p in self.policies if p.name == self.reference and p.plays(env_id))
+
 
 def bench_of(env_id: str) -> Bench:
     """The bench of ``env_id``'s task (its row's bench module's ``BENCH``)."""
@@ -294,12 +298,14 @@ def missing(bench: Bench, env_id: str) -> list[str]:
     return out
 
 
-def init_defaults(cls: type, **overrides: Any) -> dict[str, Any]:
+def init_defaults(cls: type, omit: tuple[str, ...] = (), **overrides: Any) -> dict[str, Any]:
     """The keyword defaults of ``cls.__init__`` (dataclasses as dicts), with
-    ``overrides``: a planner's parameters as its constructor sets them."""
+    ``overrides``: a planner's parameters as its constructor sets them. ``omit``: parameters left out, those
+    added to the constructor after rows were recorded whose default keeps the policy as it was (so that its
+    producer, and its stored rows, stay)."""
     out: dict[str, Any] = {}
     for name, p in inspect.signature(cls.__init__).parameters.items():
-        if name != "self" and p.default is not inspect.Parameter.empty:
+        if name != "self" and name not in omit and p.default is not inspect.Parameter.empty:
             out[name] = p.default
     out.update(overrides)
     return {k: dataclasses.asdict(v) if dataclasses.is_dataclass(v) else v for k, v in out.items()}

@@ -53,10 +53,9 @@ def rrt_ga_params() -> dict[str, Any]:
     from paragym.planners.rrt_ga import RrtGaSettings
 
     # the planner as these rows were made: Theta from Psi alone (the collision model had no name then)
-    planner = {k: v for k, v in init_defaults(RrtGaPlanner, settings=RrtGaSettings(), seed="the episode's seed"
-                                                ).items() if k not in ("collision_model", "capsule_margin")}
     return {"policy": {**init_defaults(RrtGaPolicy, planner=None), "arrival": RrtGaPolicy.ARRIVAL},
-            "planner": planner}
+            "planner": init_defaults(RrtGaPlanner, omit=("collision_model", "capsule_margin"),
+                                     settings=RrtGaSettings(), seed="the episode's seed")}
 
 
 #: the rungs' reference plans in the capsule model the rungs' generator proves a tour in (Theta at its witness's
@@ -160,8 +159,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     obs, info = env.reset(seed=args.seed)
     scenario = info["scenario"]
     frame = env.render()
-    reference = next(p for p in BENCH.policies if p.name == BENCH.reference and p.plays(env.spec.id))
-    planner = reference.factory(env, args.seed).planner  # the id's reference planner, as it plans an episode
+    planner = BENCH.reference_of(env.spec.id).factory(env, args.seed).planner  # as the id's reference plans
     result = planner.solve(scenario)
     planner.close()
     traj = result.trajectory(args.dt)

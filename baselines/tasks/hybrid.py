@@ -68,7 +68,7 @@ def polynomial_detour_params() -> dict[str, Any]:
     from paragym.planners.polynomial_detour import PolynomialDetourPlanner
 
     # the planner as v0's and v1's rows were made: step 4 did not exist (max_repairs 0), so it is not named
-    return {"planner": {k: v for k, v in init_defaults(PolynomialDetourPlanner).items() if k != "max_repairs"}}
+    return {"planner": init_defaults(PolynomialDetourPlanner, omit=("max_repairs",))}
 
 
 def polynomial_detour_margin(env: gym.Env, seed: int) -> Any:
@@ -106,8 +106,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     obs, info = env.reset(seed=args.seed)
     sc = info["scenario"]
     g = sc.geometry
-    reference = next(p for p in BENCH.policies if p.name == BENCH.reference and p.plays(env.spec.id))
-    policy = reference.factory(env, args.seed)
+    policy = BENCH.reference_of(env.spec.id).factory(env, args.seed)
     policy.reset(obs, info)
     plan = policy.plan
     nominal = hybrid.solve(nominal_path(np.array(sc.p0), np.array(sc.p1))[1], 0.5, g, validate=False)
