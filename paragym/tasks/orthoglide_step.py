@@ -292,10 +292,7 @@ def least_norm_kappa(params: OrthoglideParams, scenarios: list[OrthoglideScenari
     n = len(scenarios)
     shadow = OrthoglideState.empty(n)
     reset(shadow, own, np.arange(n), scenarios)
-    zeros, active = np.zeros((n, 1)), ~shadow.terminated
-    while active.any():
-        _advance(shadow, own, zeros, active, True)
-        active = ~shadow.terminated
+    shadow.call(_run_to_end, (shadow.kernel_arrays(), own.kernel_args), own)
     return np.where(shadow.failed, np.inf, shadow.mean_kappa)
 
 
@@ -339,6 +336,20 @@ def decide(k: int, last: int, failed: bool, mean_kappa: float, bound: float) -> 
     place the task decides success: the transition calls it for every robot it evaluates, and
     :meth:`~paragym.tasks.orthoglide_task.OrthoglideTask.evaluate` reports what it decided."""
     return k >= last and not failed and mean_kappa <= bound
+
+
+@njit(cache=True, error_model="numpy")
+def _run_to_end(arrays, params):
+    """Step every robot with the zero action (null-space mode) until its episode ends: the whole of
+    :func:`least_norm_kappa`'s loop in one call, each pass the transition's own kernel over the robots still
+    running, so that the numbers are those of stepping them one call a pass."""
+    terminated = arrays[11]
+    zeros = np.zeros((len(terminated), 1))
+    active = ~terminated
+    while active.any():
+        _advance_kernel(arrays, zeros, active, True, _ALL, params)
+        active = ~terminated
+    return 0
 
 
 def _advance(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, rows: np.ndarray,
