@@ -11,6 +11,7 @@ import pytest
 import paragym  # noqa: F401
 from paragym import registry
 from paragym.baselines.policies import get_policy
+from paragym.baselines.tasks.capaman import SlideRule
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.planners.base import PlanningError
@@ -243,3 +244,17 @@ def test_the_capsule_model_takes_capsule_scenes_and_named_settings_only():
     with pytest.raises(ValueError, match="Capsule obstacles"):
         RrtGaPlanner(collision_model="capsules").model(info["scenario"])
     env.close()
+
+
+def test_the_slide_rule_reads_the_obstacles_the_straight_line_is_blind_to():
+    """The two-line rule floor (issue 51): on the easy rung's seeds 0-9 it gets round posts where the naive
+    controller hits them, and it refuses v0, whose observation has no look-ahead."""
+    env = gym.make(RUNGS[0])
+    wins = {name: sum(run_episode(env, get_policy(RUNGS[0], name).factory(env, s), seed=s).success
+                      for s in range(10)) for name in ("slide-rule", "straight-line")}
+    env.close()
+    assert wins["slide-rule"] >= 6 and wins["straight-line"] <= 1, wins
+    v0 = gym.make("paragym/CaPaManCollisionFree-v0")
+    with pytest.raises(ValueError, match="look-ahead"):
+        SlideRule(v0)
+    v0.close()
