@@ -2,43 +2,78 @@
 
 Each env id (default: every one with a native vector env) is made with
 ``gym.make_vec(ID, num_envs=N, vectorization_mode="vector_entry_point")``,
-reset with seed 0 and stepped with uniformly random actions (16 batches drawn
-once) for ``--seconds``; the robots whose episodes end are reset by the env
-itself, so the rate counts autoresets, as training sees them. When panda-gym
-is installed its PandaReach-v3 (one robot, steps/s) is measured in the same
-run, between the rows, and each rate is also given as a ratio to it. The last
-columns say how many robots were reset per batch step and the share of the
-time their resets took (the task's ``_start``).
+reset with seed 0 and stepped for ``--seconds``, or for ``--episodes`` E
+times the id's episode limit (its ``max_episode_steps``) in batch steps, so
+that every robot lives through E episodes' worth of steps. The actions are
+uniformly random (16 batches drawn once), or with ``--policy cem`` those of
+the id's shipped linear policy (``models/<id>/cem_seed0.npz``), a policy
+that survives where random actions end episodes at once; only the env's
+steps are timed, not the policy's. The robots whose episodes end are reset
+by the env itself, so the rate counts autoresets, as training sees them;
+``--train-scenarios K`` makes the envs with a finite training set of K
+scenarios (Procgen's ``num_levels``: a reset picks one of K drawn once).
+When panda-gym is installed its PandaReach-v3 (one robot, steps/s) is
+measured in the same run, between the rows, and each rate is also given as
+a ratio to it. The last columns say how many robots were reset per batch
+step and the share of the time their resets took (the task's ``_start``).
 
     python benchmarks/native_speed.py --env CaPaManCollisionFree-v1 --env CaPaManCollisionFree-v0
+    python benchmarks/native_speed.py --env HybridSingularityFree-Hard-v0 --episodes 1.25 --policy cem
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import time
 import warnings
+from collections.abc import Callable
+from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from results_file import add_record_option, paragraph, record  # this folder is on the path when the script runs
 
 import paragym
 from paragym.registry import check_env_id
 
+MODELS = Path(__file__).resolve().parent.parent / "models"
 
-def robot_steps_per_second(env_id: str, n: int, seconds: float, resets: dict[str, float] | None = None) -> float:
-    """The native env's robot-steps/s at ``n`` robots, random actions, autoresets counted (a few warm-up steps
-    first: numba's kernels load, the first scenarios are drawn). ``resets``, when given, receives the robots
-    reset during the measurement (``robots``) and the share of the time their resets took (``share``)."""
+
+def cem_policy(env_id: str) -> Callable[[np.ndarray], np.ndarray]:
+    """The id's shipped linear policy as a batched function of the observations (N, D) -> actions (N, A)."""
+    from paragym.baselines.cem import read_linear
+
+    path = MODELS / env_id.split("/")[-1] / "cem_seed0.npz"
+    if not path.exists():
+        raise SystemExit(f"--policy cem: {env_id} has no shipped linear policy ({path})")
+    actor = read_linear(path)
+    (W, b, _), = actor.layers
+    low, high = actor.low, actor.high
+    return lambda obs: np.clip(obs @ W.T + b, low, high).astype(np.float32)
+
+
+def robot_steps_per_second(env_id: str, n: int, seconds: float, resets: dict[str, float] | None = None,
+                           policy: Callable[[np.ndarray], np.ndarray] | None = None, steps: int | None = None,
+                           **kwargs: object) -> float:
+    """The native env's robot-steps/s at ``n`` robots, autoresets counted (a few warm-up steps first: numba's
+    kernels load, the first scenarios are drawn), over ``seconds`` or, given, ``steps`` batch steps. Actions:
+    uniformly random, or ``policy``'s (its time is not counted). ``kwargs`` go to the env. ``resets``, when given,
+    receives the robots reset during the measurement (``robots``), the share of the time their resets took
+    (``share``) and the batch steps (``steps``)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point")
-    env.reset(seed=0)
+        env = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point", **kwargs)
+    obs, _ = env.reset(seed=0)
     rng = np.random.default_rng(0)
     actions = [rng.uniform(env.action_space.low, env.action_space.high).astype(env.action_space.dtype)
                for _ in range(16)]
+
+    def act(k: int, obs: np.ndarray) -> np.ndarray:
+        return actions[k % 16] if policy is None else policy(obs)
+
     for k in range(5):
-        env.step(actions[k])
+        obs = env.step(act(k, obs))[0]
     clock = {"seconds": 0.0, "robots": 0}
     start = env._start  # the task's reset of the given robots, which every native env calls (ParagymVectorEnv)
 
@@ -51,15 +86,17 @@ def robot_steps_per_second(env_id: str, n: int, seconds: float, resets: dict[str
             clock["robots"] += len(rows)
 
     env._start = timed
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        env.step(actions[steps % 16])
-        steps += 1
-    total = time.perf_counter() - t0
+    done, total, began = 0, 0.0, time.perf_counter()
+    while (done < steps) if steps is not None else (time.perf_counter() - began < seconds):
+        a = act(done, obs)
+        t = time.perf_counter()
+        obs = env.step(a)[0]
+        total += time.perf_counter() - t
+        done += 1
     env.close()
     if resets is not None:
-        resets.update(robots=clock["robots"], share=clock["seconds"] / total, steps=steps)
-    return steps * n / total
+        resets.update(robots=clock["robots"], share=clock["seconds"] / total, steps=done)
+    return done * n / total
 
 
 def anchor_steps_per_second(seconds: float) -> float | None:
@@ -86,23 +123,44 @@ def main() -> None:
     parser.add_argument("--env", action="append", help="only this env id (repeatable; the 'paragym/' may be omitted)")
     parser.add_argument("--robots", type=int, default=1024, help="N (default %(default)s)")
     parser.add_argument("--seconds", type=float, default=4.0, help="duration of each measurement")
+    parser.add_argument("--episodes", type=float, default=None,
+                        help="instead of --seconds: this many times the id's episode limit, in batch steps")
+    parser.add_argument("--policy", choices=("random", "cem"), default="random",
+                        help="the actions: uniformly random, or the id's shipped linear policy (default random)")
+    parser.add_argument("--train-scenarios", type=int, default=None, metavar="K",
+                        help="a finite training set of K scenarios (the envs' train_scenarios)")
+    add_record_option(parser)
     args = parser.parse_args()
     ids = [check_env_id(e) for e in args.env] if args.env else list(paragym.VECTOR_ENTRY_POINTS)
+    extra = {} if args.train_scenarios is None else {"train_scenarios": args.train_scenarios}
     rows = []
     for env_id in ids:
+        limit = gym.spec(env_id).max_episode_steps
+        steps = None if args.episodes is None else math.ceil(args.episodes * limit)
+        policy = cem_policy(env_id) if args.policy == "cem" else None
         before = anchor_steps_per_second(args.seconds / 2)
         resets: dict[str, float] = {}
-        rate = robot_steps_per_second(env_id, args.robots, args.seconds, resets)
+        rate = robot_steps_per_second(env_id, args.robots, args.seconds, resets, policy, steps, **extra)
         after = anchor_steps_per_second(args.seconds / 2)
         anchor = None if before is None else (before + after) / 2
         rows.append((env_id, rate, anchor, resets))
     print(f"\n{'environment':40s} {'N':>6s} {'robot-steps/s':>14s} {'anchor steps/s':>15s} {'x anchor':>9s} "
           f"{'resets/step':>12s} {'resets':>7s}")
+    table = []
     for env_id, rate, anchor, resets in rows:
         ratio = f"{rate / anchor:9.0f}" if anchor else f"{'-':>9s}"
         shown = f"{anchor:15,.0f}" if anchor else f"{'-':>15s}"
         print(f"{env_id.split('/')[-1]:40s} {args.robots:6d} {rate:14,.0f} {shown} {ratio} "
               f"{resets['robots'] / resets['steps']:12.1f} {100 * resets['share']:6.0f}%")
+        table.append([env_id.split("/")[-1], f"{rate:,.0f}", f"{rate / anchor:.0f}" if anchor else "-",
+                      f"{resets['robots'] / resets['steps']:.1f}", f"{100 * resets['share']:.0f} %"])
+    how = (f"{args.episodes:g} episode limits" if args.episodes is not None else f"{args.seconds:g} s") + \
+        f", {args.policy} actions" + ("" if args.train_scenarios is None else
+                                      f", train_scenarios={args.train_scenarios}")
+    if args.record:
+        record(f"native_speed_{args.policy}", f"The native vector envs at N = {args.robots}, {how}",
+               paragraph(__doc__, 1), ["env", "robot-steps/s", "x PandaReach-v3", "resets/step", "time in resets"],
+               table, folder=Path(args.record))
 
 
 if __name__ == "__main__":

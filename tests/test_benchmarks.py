@@ -75,6 +75,15 @@ def test_native_speed_prints_a_row_per_env_beside_the_anchor():
     assert row[1] == "8" and float(row[2].replace(",", "")) > 0 and len(row) == 7 and row[6].endswith("%")
 
 
+def test_native_speed_steps_a_rung_for_its_episodes_with_its_shipped_linear_policy(tmp_path):
+    out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-Easy-v0", "--robots", "4", "--episodes",
+               "0.05", "--policy", "cem", "--train-scenarios", "3", "--seconds", "0.1", "--record", str(tmp_path))
+    (row,) = _recorded(tmp_path, "native_speed_cem")["rows"]
+    assert row[0] == "CaPaManCollisionFree-Easy-v0" and float(row[1].replace(",", "")) > 0
+    assert "0.05 episode limits, cem actions, train_scenarios=3" in _recorded(tmp_path, "native_speed_cem")["title"]
+    assert "CaPaManCollisionFree-Easy-v0 " in out
+
+
 def test_learner_speed_prints_each_learner_beside_sb3(tmp_path):
     out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512",
                "--record", str(tmp_path))
