@@ -18,6 +18,7 @@ from paragym.baselines.tasks import (
     Column,
     Option,
     Target,
+    best_constant_floors,
     init_defaults,
     tightest,
     zero_factory,
@@ -29,6 +30,11 @@ from paragym.units import DEG
 #: the rungs of the CaPaMan's difficulty ladder (:func:`paragym.registry.ladder_of`): v1's rules on their own scenes
 LADDER = tuple(r.id for r in registry.ladder_of("capaman"))
 V1 = ("paragym/CaPaManCollisionFree-v1", *LADDER)
+#: the best constant crank rates of the rungs: :func:`paragym.baselines.simple.best_constant` over
+#: {-1, -0.5, 0, 0.5, 1} for each crank on reset seeds 0-29. No constant succeeds on any rung (a constant rate runs
+#: a crank into its stop and cannot visit three targets); on the easy rung the best (by return) is zero, a floor
+#: already
+BEST_CONSTANT = {LADDER[1]: (-1.0, -1.0, 1.0), LADDER[2]: (0.0, 1.0, -1.0)}
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -327,6 +333,8 @@ BENCH = Bench(
         BuiltIn("zero", zero_factory, "floor", "stand still at T.P.1"),
         BuiltIn("straight-line", straight_line, "floor", "the naive controller: each crank straight at the current "
                 "target, blind to the obstacles"),
+        *best_constant_floors(BEST_CONSTANT, "crank rates {action} of max_joint_step, the best of "
+                              "{{-1, -0.5, 0, 0.5, 1}} per crank on reset seeds 0-29"),
         BuiltIn("slide-rule", slide_rule, "floor", "a two-line rule on v1's observation: straight at the target, "
                 "sliding along the clearance's look-ahead where the clearance is low", slide_rule_params, ids=V1),
     ),
