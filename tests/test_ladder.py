@@ -302,3 +302,25 @@ def test_the_orthoglide_hard_rungs_best_constant_is_what_its_search_finds():
     action, wins, _ = best_constant(hard, levels=(-1.0, -0.5, 0.0, 0.5, 1.0))
     assert action == JOINT_BEST_CONSTANT[hard] and wins == 0
     assert set(policies_for(hard)) >= {"gradient-c", "least-norm", "zero", "random", "best-constant"}
+
+
+def test_the_orthoglide_hill_climb_rule_is_ranked_and_lowers_kappa_by_reversing():
+    """The two-line extremum-seeking floor (issue 51): it reverses the table when the observed log kappa rises,
+    and on the easy rung it meets the kappa bound that the least-norm motion (zero) never meets."""
+    from paragym.baselines.tasks.orthoglide import KappaHillClimb
+
+    rule = KappaHillClimb()
+    rule.reset(np.zeros(11), {})
+    obs = np.zeros(11, np.float32)
+    moves = []
+    for log_kappa in (0.3, 0.2, 0.25, 0.1):
+        obs[7] = log_kappa
+        moves.append(float(rule.act(obs, {})[0]))
+    assert moves == [1.0, 1.0, -1.0, -1.0]
+    easy = ORTHOGLIDE_RUNGS[0]
+    assert "hill-climb" in policies_for(easy) and "hill-climb" in policies_for("paragym/Orthoglide2PRRKappa-v2")
+    env = gym.make(easy)
+    wins = {name: sum(run_episode(env, get_policy(easy, name).factory(env, s), seed=s).success for s in range(5))
+            for name in ("hill-climb", "zero")}
+    env.close()
+    assert wins == {"hill-climb": 5, "zero": 0}, wins

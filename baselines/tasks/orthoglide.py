@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
@@ -74,6 +75,39 @@ def least_norm(env: gym.Env, seed: int) -> Any:
     from paragym.baselines.simple import ZeroPolicy
 
     return in_env_actions(env, ZeroPolicy(gym.spaces.Box(-1.0, 1.0, (1,), np.float32)))
+
+
+class KappaHillClimb:
+    """A two-line rule read from the observation: drive the table along n at ``gain`` of the full null-space
+    rate, and reverse it whenever the observed log kappa (index 7) rose over the last step. Extremum seeking
+    with no model of the mechanism: the naive way to lower kappa, beside the paper's gradient (eqs 9-10) that
+    computes which way it falls. ``gain`` 1 is the best of {0.1, 0.25, 0.5, 1} by return on reset seeds 0-29
+    of v2 and the easy and medium rungs. Played in joint rates (:func:`in_env_actions`) where the policy drives
+    the joints."""
+
+    def __init__(self, gain: float = 1.0) -> None:
+        self.gain = gain
+        self.direction, self.last = 1.0, math.inf
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        self.direction, self.last = 1.0, math.inf
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        log_kappa = float(obs[7])
+        if log_kappa > self.last:
+            self.direction = -self.direction
+        self.last = log_kappa
+        return np.array([self.gain * self.direction], np.float32)
+
+
+def hill_climb(env: gym.Env, seed: int) -> Any:
+    """The extremum-seeking rule (:class:`KappaHillClimb`) in the env's actions: a floor."""
+    return in_env_actions(env, KappaHillClimb())
+
+
+def hill_climb_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
+    return {"policy": init_defaults(KappaHillClimb)}
 
 
 #: the table's acceleration along n (m/s^2) that the reference ``gradient-c-limited`` allows itself: the change
@@ -201,6 +235,8 @@ BENCH = Bench(
         BuiltIn("least-norm", least_norm, "floor",
                 "case (b) in joint rates: rho_dot = J^+ t_dot (paper 003, eq 5 with z = 0), the path tracked and "
                 "kappa left alone", ids=JOINT_IDS),
+        BuiltIn("hill-climb", hill_climb, "floor", "a two-line rule: the table along n at full rate, reversed "
+                "whenever the observed kappa rose (extremum seeking, no model)", hill_climb_params),
         *best_constant_floors(BEST_CONSTANT, "the table driven along n at {action} of max_null_rate, the best of "
                               "{{-1, -0.5, -0.25, 0, 0.25, 0.5, 1}} on reset seeds 0-29"),
         *best_constant_floors(JOINT_BEST_CONSTANT, "joint rates {action} of max_joint_rate, the best of "
