@@ -1,10 +1,11 @@
-"""Time to solve: wall-clock minutes of PPO from scratch (or of a linear search) until a task counts as solved.
+"""Time to solve: wall-clock minutes of PPO from scratch (or SAC, TQC, a linear search) until a task counts as solved.
 
 For each env id (default: the newest version of every task) and each seed,
 ``paragym train`` trains PPO from scratch with the env's settings in
 ``baselines/hyperparams/ppo.yml`` (as a user would run it, its own
 evaluations and checkpoints included; ``init_from``, a behaviour clone to
-start from, is dropped); with ``--algo cem``, the cross-entropy search of linear
+start from, is dropped); ``--algo sac`` or ``tqc`` trains that algorithm with its own yml's settings instead;
+with ``--algo cem``, the cross-entropy search of linear
 policies (:mod:`paragym.baselines.cem`, its default settings) runs instead, its
 mean checked the same way. Every ``--check-every`` seconds of learning, the deterministic policy plays
 ``--episodes`` validation episodes and the task's targets are checked (:mod:`paragym.baselines.solve`; the
@@ -66,11 +67,11 @@ def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
         train_cem(env_id, seed, CemSettings(budget_seconds=args.budget * 60, generations=10**9),
                   models_dir=args.out / "models", force=True,
                   stop=stop_search_when_solved(check, args.check_every, points))
-    else:
+    else:  # from scratch, also where PPO's yml starts from a behaviour clone
         stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
-        train(env_id, "ppo", seed, timesteps=args.max_timesteps, models_dir=args.out / "models", progress_bar=False,
-              threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
-              hyperparams={"init_from": None})  # from scratch, also where the yml starts from a behaviour clone
+        train(env_id, args.algo, seed, timesteps=args.max_timesteps, models_dir=args.out / "models",
+              progress_bar=False, threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
+              hyperparams={"init_from": None} if args.algo == "ppo" else None)
     wall = time.perf_counter() - t0
     check.close()
     solved = next((p for p in points if p.solved), None)
@@ -186,10 +187,12 @@ def main() -> None:
     parser.add_argument("--threads", type=int, default=2, help="PyTorch's threads")
     parser.add_argument("--vectorized", action="store_true",
                         help="train on the native vector env (n_envs robots) whatever paragym.yml says")
-    parser.add_argument("--algo", choices=("ppo", "cem"), default="ppo",
-                        help="PPO from scratch, or cem: the search of linear policies, its budget the same minutes")
+    parser.add_argument("--algo", choices=("ppo", "sac", "tqc", "cem"), default="ppo",
+                        help="PPO from scratch, SAC or TQC with their yml settings, or cem: the search of linear "
+                             "policies, its budget the same minutes")
     parser.add_argument("--out", type=Path, default=None,
-                        help="where the runs go (default results/time_to_solve, and results/time_to_solve_cem for cem)")
+                        help="where the runs go (default results/time_to_solve, and results/time_to_solve_<algo> "
+                             "for another algorithm)")
     parser.add_argument("--force", action="store_true", help="run again the runs already in OUT")
     parser.add_argument("--report-only", action="store_true", help="train nothing: the report of the runs in OUT")
     add_record_option(parser)
@@ -200,7 +203,7 @@ def main() -> None:
         parser.error(f"--episodes must be at least 2 (a target against another policy compares episode by "
                      f"episode); got {args.episodes}")
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
-    args.out = args.out or Path("results/time_to_solve" + ("_cem" if args.algo == "cem" else ""))
+    args.out = args.out or Path("results/time_to_solve" + ("" if args.algo == "ppo" else f"_{args.algo}"))
     args.out.mkdir(parents=True, exist_ok=True)
     by_env: dict[str, list[dict[str, Any]]] = {}
     missing: list[str] = []

@@ -127,6 +127,15 @@ def test_time_to_solve_times_the_linear_search_too(tmp_path):
     assert minutes == sorted(minutes) and minutes[-1] < run["wall_minutes"]  # the checks' time is not search time
 
 
+def test_time_to_solve_times_sac_with_its_own_settings(tmp_path):
+    """``--algo sac``: SAC trains with its yml's settings under the same checks, its run written as SAC's."""
+    _run("benchmarks/time_to_solve.py", "--algo", "sac", "--env", "Orthoglide2PRRKappa-Easy-v0", "--seeds", "1",
+         "--budget", "0.03", "--check-every", "0.5", "--episodes", "2", "--threads", "1", "--out", str(tmp_path))
+    run = json.loads((tmp_path / "Orthoglide2PRRKappa-Easy-v0-seed0.json").read_text())
+    assert run["algo"] == "sac" and run["points"]
+    assert (tmp_path / "models" / "Orthoglide2PRRKappa-Easy-v0" / "sac_seed0.zip").is_file()
+
+
 def test_capaman_detours_splits_success_by_tour(tmp_path):
     """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes), and
     the grid's expert completes the detour without a step against its target (v1's progress never went below 0
