@@ -136,6 +136,14 @@ def test_time_to_solve_times_sac_with_its_own_settings(tmp_path):
     assert (tmp_path / "models" / "Orthoglide2PRRKappa-Easy-v0" / "sac_seed0.zip").is_file()
 
 
+def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
+    out = _run("benchmarks/hybrid_levers.py", "--candidates", "4096")
+    counts = [int(ln.rsplit(" ", 1)[1].replace(",", "")) for ln in out.splitlines() if ln.startswith("  ")]
+    kept = int(next(ln for ln in out.splitlines() if "break a leg limit" in ln).split()[0].replace(",", ""))
+    assert len(counts) == 4 and kept > 0
+    assert counts[0] <= kept and counts[1] <= kept and counts[3] <= counts[2] <= counts[1]
+
+
 def test_capaman_detours_splits_success_by_tour(tmp_path):
     """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes), and
     the grid's expert completes the detour without a step against its target (v1's progress never went below 0
