@@ -25,10 +25,10 @@ def main(argv: list[str] | None = None) -> int:
     if not args.check:
         from paragym.docpages import conformance_page, ladder_figure, ladders_page, speed_page, write_pages
 
-        write_pages(DOCS / "envs", images=not args.no_images)
+        board = DOCS.parent / "leaderboard" / "leaderboard.csv"
+        write_pages(DOCS / "envs", images=not args.no_images, board=board)
         (DOCS / "speed.md").write_text(speed_page(DOCS.parent / "benchmarks" / "results"))
         (DOCS / "conformance.md").write_text(conformance_page(DOCS.parent / "benchmarks" / "results"))
-        board = DOCS.parent / "leaderboard" / "leaderboard.csv"
         (DOCS / "ladders.md").write_text(ladders_page(board))
         if not args.no_images:
             ladder_figure(board, DOCS / "reports" / "ladders.png")

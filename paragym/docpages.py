@@ -95,14 +95,18 @@ def _space(space: Any) -> str:
     return re.sub(r"\s+", " ", repr(space))
 
 
-def env_page(env_id: str, image: str | None = None) -> str:
-    """The MyST page of ``env_id``; ``image``: the path of its rendered frame, relative to the page."""
+def env_page(env_id: str, image: str | None = None, board: str | Path | None = None) -> str:
+    """The MyST page of ``env_id``; ``image``: the path of its rendered frame, relative to the page; ``board``:
+    the committed run's ``leaderboard.csv``, whose :func:`rung_verdict` a rung's page shows under its status."""
     from paragym.baselines.tasks import bench_of
 
     row = registry.row(env_id)
     cls = env_class(env_id)
     summary, own = sections(cls)
     bench = bench_of(env_id)
+    verdict = "-"
+    if board is not None and row.rung is not None:
+        verdict = rung_verdict(_ladder_rows(board).get(row.task, {}), env_id)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         import gymnasium as gym
@@ -122,6 +126,8 @@ def env_page(env_id: str, image: str | None = None) -> str:
               f"| make | {make} |",
               f"| vector env | {vector} |",
               f"| status | {status(env_id)} |",
+              *([f"| verdict | {verdict} (the committed leaderboard: hard only where the reference's interval lies "
+                 f"above every floor's and learner's; [the ladders](../ladders.md)) |"] if verdict != "-" else []),
               f"| action space | `{action_space}` |",
               f"| observation space | `{observation_space}` |",
               f"| episode length | at most {row.max_episode_steps} steps (`TimeLimit`) |",
@@ -377,9 +383,11 @@ def render_frame(env_id: str, path: Path) -> Path:
     return path
 
 
-def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | None = None) -> list[Path]:
+def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | None = None,
+                board: str | Path | None = None) -> list[Path]:
     """Write ``folder/index.md`` and a page per env id (``env_ids``: those only; default all), and with
-    ``images`` each id's frame to ``folder/images/<name>.png``; returns the files written."""
+    ``images`` each id's frame to ``folder/images/<name>.png``; ``board``: the committed run's
+    ``leaderboard.csv``, whose :func:`rung_verdict` each rung's page shows. Returns the files written."""
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     written = []
@@ -390,7 +398,7 @@ def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | No
         if images:
             written.append(render_frame(r.id, png))
         page = folder / f"{r.name}.md"
-        page.write_text(env_page(r.id, f"images/{r.name}.png"))
+        page.write_text(env_page(r.id, f"images/{r.name}.png", board))
         written.append(page)
     index = folder / "index.md"
     index.write_text(index_page())

@@ -38,7 +38,8 @@ def _snippets() -> list[tuple[str, str]]:
 def test_each_env_page_is_what_the_generator_writes(row):
     page = DOCS / "envs" / f"{row.name}.md"
     assert page.is_file(), f"{page} is missing: run python docs/build.py"
-    assert page.read_text() == env_page(row.id, f"images/{row.name}.png"), \
+    board = ROOT / "leaderboard" / "leaderboard.csv"
+    assert page.read_text() == env_page(row.id, f"images/{row.name}.png", board), \
         f"{page} is stale: run python docs/build.py"
     assert (DOCS / "envs" / "images" / f"{row.name}.png").is_file()
 
@@ -158,3 +159,8 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     # rung; the medium rung ranks no other method, the hard rung's BC lies below
     assert table[7] == "| hybrid | **verdict** | sanity: PPO | hard | hard |"
     assert len(table) == 8  # the v2 row is no rung
+    from paragym.docpages import env_page  # and each rung's page says its verdict, a version's page none
+
+    assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)
+    assert "| verdict | hard (" in env_page(hard, board=path)
+    assert "| verdict |" not in env_page("paragym/HybridSingularityFree-v2", board=path)
