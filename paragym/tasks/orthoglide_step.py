@@ -290,7 +290,13 @@ def least_norm_kappa(params: OrthoglideParams, scenarios: list[OrthoglideScenari
     module's own transition; inf where that motion fails."""
     own = params.least_norm
     n = len(scenarios)
-    shadow = OrthoglideState.empty(n)
+    # the shadow states of the last few numbers of robots are kept on the parameters, so that their kernels are
+    # typed once, not at every reset (a millisecond each)
+    shadows = own.__dict__.setdefault("_least_norm_shadows", {})
+    shadow = shadows.pop(n, None) or OrthoglideState.empty(n)
+    shadows[n] = shadow  # the most recent last
+    if len(shadows) > 16:
+        del shadows[next(iter(shadows))]
     reset(shadow, own, np.arange(n), scenarios)
     shadow.call(_run_to_end, (shadow.kernel_arrays(), own.kernel_args), own)
     return np.where(shadow.failed, np.inf, shadow.mean_kappa)
