@@ -354,14 +354,17 @@ def ladders_page(csv_path: str | Path) -> str:
         "95 % interval; the last row of each task is the reference's dynamic episodes. PPO is trained from "
         "scratch (seed 0, at most 30 minutes on 2 cores on the rungs); BC and DAgger learn from 200 of the "
         "reference's episodes, so they show how well the paper's method can be imitated, not learned anew; "
-        "linear CEM is a five-minute cross-entropy search of linear policies (`paragym train ID --algo cem`); a "
+        "linear CEM is a five-minute cross-entropy search of linear policies (`paragym train ID --algo cem`); SAC "
+        "is trained with its yml's settings (seed 0, `paragym train ID --algo sac --vectorized`); a "
         "dash is a rung without that learner shipped. Generated from the committed "
         "`leaderboard/leaderboard.csv` by `python docs/build.py`.", "",
         "The verdict row holds each rung to the rule a benchmark's hard rung must meet: it is **hard** only where "
         "the reference's interval lies above that of every other method ranked on it, floors and learners alike; "
         "elsewhere it is a **sanity** rung, and the row names the methods that reach the reference's interval. "
-        "Rules read from the observation beyond each task's naive floor are not ranked yet (a two-line rule was "
-        "measured at 0.40 on the CaPaMan's hard rung); until they are, a \"hard\" verdict is an upper bound.", "",
+        "The floors besides zero and random are the cheap methods a reviewer tries first: each task's naive "
+        "controller, the best constant action of a grid over the action box (where it is not zero), and rules "
+        "read from the observation in two lines (the Orthoglide's `hill-climb`, the CaPaMan's `slide-rule`); "
+        "each floor's page entry says how it was chosen.", "",
         "![success against rung](reports/ladders.png)", "",
         ladder_table(csv_path), "",
         f"Rungs: {rungs}.", ""])
