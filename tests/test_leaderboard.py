@@ -217,11 +217,13 @@ SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "p
                                                for k in range(3)],
            "paragym/MobileTripodOdometry-v1": [f"{a}-seed{k}" for a in ("bc", "ppo", "sac") for k in range(3)],
            "paragym/HybridSingularityFree-v1": [f"{a}-seed{k}" for a in ("ppo", "sac") for k in range(3)],
-           # the rungs: a clone each, a linear CEM search each, and PPO from scratch where
-           # benchmarks/time_to_solve.py trained it
-           **{r.id: ["bc-seed0", "cem-seed0"] if r.id in ("paragym/MobileTripodOdometry-Medium-v0",
-                                                          "paragym/CaPaManCollisionFree-Medium-v0")
-              else ["bc-seed0", "cem-seed0", "ppo-seed0"] for r in registry.rows() if r.rung is not None}}
+           # the rungs: a clone each, a linear CEM search each, PPO from scratch where
+           # benchmarks/time_to_solve.py trained it, and SAC with its yml's settings where it was trained (issue 51)
+           **{r.id: ["bc-seed0", "cem-seed0"]
+              + ([] if r.id in ("paragym/MobileTripodOdometry-Medium-v0", "paragym/CaPaManCollisionFree-Medium-v0")
+                 else ["ppo-seed0"])
+              + ["sac-seed0"]
+              for r in registry.rows() if r.rung is not None}}
 
 
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):
