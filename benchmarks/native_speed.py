@@ -16,6 +16,9 @@ When panda-gym is installed its PandaReach-v3 (one robot, steps/s) is
 measured in the same run, between the rows, and each rate is also given as
 a ratio to it. The last columns say how many robots were reset per batch
 step and the share of the time their resets took (the task's ``_start``).
+``--record`` writes the table for the speed page as
+``native_speed_<policy>.json`` (``native_speed_<policy>_levels.json`` with a
+training set).
 
     python benchmarks/native_speed.py --env CaPaManCollisionFree-v1 --env CaPaManCollisionFree-v0
     python benchmarks/native_speed.py --env HybridSingularityFree-Hard-v0 --episodes 1.25 --policy cem
@@ -158,7 +161,8 @@ def main() -> None:
         f", {args.policy} actions" + ("" if args.train_scenarios is None else
                                       f", train_scenarios={args.train_scenarios}")
     if args.record:
-        record(f"native_speed_{args.policy}", f"The native vector envs at N = {args.robots}, {how}",
+        name = f"native_speed_{args.policy}" + ("" if args.train_scenarios is None else "_levels")
+        record(name, f"The native vector envs at N = {args.robots}, {how}",
                paragraph(__doc__, 1), ["env", "robot-steps/s", "x PandaReach-v3", "resets/step", "time in resets"],
                table, folder=Path(args.record))
 

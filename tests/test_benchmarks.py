@@ -78,9 +78,10 @@ def test_native_speed_prints_a_row_per_env_beside_the_anchor():
 def test_native_speed_steps_a_rung_for_its_episodes_with_its_shipped_linear_policy(tmp_path):
     out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-Easy-v0", "--robots", "4", "--episodes",
                "0.05", "--policy", "cem", "--train-scenarios", "3", "--seconds", "0.1", "--record", str(tmp_path))
-    (row,) = _recorded(tmp_path, "native_speed_cem")["rows"]
+    (row,) = _recorded(tmp_path, "native_speed_cem_levels")["rows"]
     assert row[0] == "CaPaManCollisionFree-Easy-v0" and float(row[1].replace(",", "")) > 0
-    assert "0.05 episode limits, cem actions, train_scenarios=3" in _recorded(tmp_path, "native_speed_cem")["title"]
+    assert "0.05 episode limits, cem actions, train_scenarios=3" in _recorded(tmp_path, "native_speed_cem_levels")[
+        "title"]
     assert "CaPaManCollisionFree-Easy-v0 " in out
 
 
