@@ -253,7 +253,8 @@ def test_headroom_checks_floors_and_reference_against_the_bounds(tmp_path):
                str(tmp_path))
     rows = _recorded(tmp_path, "headroom")["rows"]
     judged = {(r[1], r[2]) for r in rows if r[3] not in ("learned", "verdict")}
-    assert judged == {(s, p) for s in ("paper", "random") for p in ("gradient-c-limited", "zero", "random")}, rows
+    floors = ("zero", "random", "hill-climb")
+    assert judged == {(s, p) for s in ("paper", "random") for p in ("gradient-c-limited", *floors)}, rows
     # each family's verdict by the ladder's rule: zero's 2 of 2 on the random family reach the reference's
     verdicts = {r[1]: r[-1] for r in rows if r[3] == "verdict"}
     assert set(verdicts) == {"paper", "random"} and verdicts["random"].startswith("sanity: ") and "zero" in \
