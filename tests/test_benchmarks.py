@@ -130,11 +130,11 @@ def test_time_to_solve_times_the_linear_search_too(tmp_path):
 
 def test_time_to_solve_times_sac_with_its_own_settings(tmp_path):
     """``--algo sac``: SAC trains with its yml's settings under the same checks, its run written as SAC's."""
-    _run("benchmarks/time_to_solve.py", "--algo", "sac", "--env", "Orthoglide2PRRKappa-Easy-v0", "--seeds", "1",
-         "--budget", "0.03", "--check-every", "0.5", "--episodes", "2", "--threads", "1", "--out", str(tmp_path))
-    run = json.loads((tmp_path / "Orthoglide2PRRKappa-Easy-v0-seed0.json").read_text())
+    _run("benchmarks/time_to_solve.py", "--algo", "sac", "--env", "HybridSingularityFree-v2", "--seeds", "1",
+         "--budget", "0.01", "--check-every", "0.3", "--episodes", "2", "--threads", "1", "--out", str(tmp_path))
+    run = json.loads((tmp_path / "HybridSingularityFree-v2-seed0.json").read_text())
     assert run["algo"] == "sac" and run["points"]
-    assert (tmp_path / "models" / "Orthoglide2PRRKappa-Easy-v0" / "sac_seed0.zip").is_file()
+    assert (tmp_path / "models" / "HybridSingularityFree-v2" / "sac_seed0.zip").is_file()
 
 
 def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
