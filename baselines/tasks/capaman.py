@@ -145,7 +145,8 @@ class SlideRule(StraightLine):
 
 #: the grid :class:`SlideRule`'s two numbers were searched over, on reset seeds 0-29 of the easy and the hard
 #: rung, in two forms: as the class plays it, and with the push alone added to the straight action (no
-#: projection, no rescaling; at best 0.30 and 0.03). Threshold 0.1 of the cap, push 0.25 came first on both rungs
+#: projection, no rescaling; at best 0.30 and 0.03). Threshold 0.1 of the cap came first on both rungs, push 0.25
+#: first of those tied with it
 SLIDE_GRID = {"threshold": (0.05, 0.1, 0.2, 0.3), "push": (0.25, 0.5, 1.0)}
 
 
