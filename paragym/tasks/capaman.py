@@ -35,6 +35,7 @@ import numpy as np
 from numba import njit
 from scipy import ndimage
 
+from paragym.kernels import entry
 from paragym.mechanisms import capaman
 from paragym.sim import capaman_grid
 from paragym.sim.capaman_posts import forward_table, k_post_clearance, kernel_constants, post_ceiling, post_clearance
@@ -348,21 +349,28 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
 
 
 @njit(cache=True, error_model="numpy")
-def _ladder_batch(u, pending, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
-                  alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp,
-                  tips, posts):
-    """:func:`_ladder_kernel` for each generator r still ``pending`` on its block ``u[r]``: one call for a
-    reset's robots. A scenario made clears ``pending[r]``."""
-    for r in range(u.shape[0]):
-        if pending[r]:
-            pending[r] = _ladder_kernel(u[r], blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge,
-                                        alpha_min, alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank,
-                                        tool_half, radius, half, cap, tp[r], tips[r], posts[r]) < 0
+def _ladder_draw(rng, max_blocks, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
+                 alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp,
+                 tips, posts):
+    """One generator's scenario of the rung: blocks of :data:`_BLOCK` attempts of uniforms drawn from ``rng`` (a
+    ``numpy.random.Generator``; numba draws numpy's own stream from it, and the generator moves on as in
+    Python) until :func:`_ladder_kernel` makes one of them a scenario, at most ``max_blocks``; whether it did."""
+    for _ in range(max_blocks):
+        u = rng.random((_BLOCK, _ATTEMPT))
+        if _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
+                          alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
+                          cap, tp, tips, posts) >= 0:
+            return True
+    return False
+
+
+#: :func:`_ladder_draw`'s compiled entry per rung, geometry and kind of bit generator (the types of its call)
+_DRAWS: dict[tuple[Any, ...], Any] = {}
 
 
 @lru_cache(maxsize=16)
 def _ladder_args(rung: CaPaManRung, geometry: capaman.CaPaManGeometry) -> tuple[Any, ...]:
-    """The knobs and constants :func:`_ladder_batch` takes after ``pending``, made once per rung and geometry."""
+    """The knobs and constants :func:`_ladder_draw` takes after ``max_blocks``, made once per rung and geometry."""
     g = geometry
     top_high = min(POST_TOP[1], post_ceiling(g))
     return (rung.blocked_legs, rung.clutter, *rung.radius, rung.spread, rung.gap, POST_TOP[0], top_high, LADDER_EDGE,
@@ -374,23 +382,19 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
                      max_blocks: int = 10_000) -> list[CaPaManScenario]:
     """One scenario of a rung per generator (named "random" on the rung's env id): each generator gives blocks
     of :data:`_BLOCK` attempts of uniforms until :func:`_ladder_kernel` makes one of them a scenario (the
-    stream is numpy's, so the same on every machine; one compiled call per round for every generator still
-    drawing). The posts are :class:`~paragym.sim.obstacles.Capsule` s standing on the fixed plate (their
-    segment from z = 0). That a collision-free tour exists is checked by :func:`solvable` over 1,000 seeds per
+    stream is numpy's, so the same on every machine; one compiled call per generator, :func:`_ladder_draw`).
+    The posts are :class:`~paragym.sim.obstacles.Capsule` s standing on the fixed plate (their segment from
+    z = 0). That a collision-free tour exists is checked by :func:`solvable` over 1,000 seeds per
     rung in the tests."""
     n = len(rngs)
     args = _ladder_args(rung, geometry)
     tp, tips, posts = np.empty((n, 3, 3)), np.empty((n, 3, 3)), np.empty((n, rung.max_obstacles, 5))
-    pending = np.ones(n, np.bool_)
-    u = np.empty((n, _BLOCK, _ATTEMPT))
-    for _ in range(max_blocks):
-        for r in np.flatnonzero(pending):
-            u[r] = rngs[r].random((_BLOCK, _ATTEMPT))
-        _ladder_batch(u, pending, *args, tp, tips, posts)
-        if not pending.any():
-            break
-    else:
-        raise RuntimeError(f"no scenario of the rung in {max_blocks * _BLOCK} attempts")
+    for r, rng in enumerate(rngs):
+        call = (rng, max_blocks, *args, tp[r], tips[r], posts[r])
+        key = (rung, geometry, type(rng.bit_generator))
+        draw = _DRAWS.get(key) or _DRAWS.setdefault(key, entry(_ladder_draw, call))  # typed once, not per call
+        if not draw(*call):
+            raise RuntimeError(f"no scenario of the rung in {max_blocks * _BLOCK} attempts")
     out = []
     for r in range(n):
         obstacles = tuple(Capsule((float(x), float(y), float(high) / 2), float(radius), float(high))
