@@ -39,20 +39,19 @@ import numpy as np
 from paragym.mechanisms import hybrid
 from paragym.planners.base import PlanningError
 from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-from paragym.tasks.hybrid import SPLITS, nominal_rows
+from paragym.tasks.hybrid import POSE_HIGH, POSE_LOW, SPLITS, nominal_rows
+from paragym.tasks.hybrid_step import LADDER_RULES, HybridParams
 
-#: the box of poses the hybrid's generators draw both ends from (m, m, m, rad, rad, rad)
-LOW = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
-HIGH = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
-MAX_DELTA_STEP, J_BAR = 0.05, 0.02  # the task's defaults
+#: the split's rate and the offset's range of the rungs' defaults (the task's parameters)
+_DEFAULTS = HybridParams.from_kwargs(LADDER_RULES[0])
+MAX_DELTA_STEP, J_BAR = _DEFAULTS.max_delta_step, _DEFAULTS.j_bar
 
 
 def constants_clear(path: np.ndarray, grid: np.ndarray, g: hybrid.HybridGeometry) -> np.ndarray:
     """Which constant actions (C, 4) keep every sample of ``path`` (K, 6) free (eq 14), the offset set at every
     sample but the last."""
     k = len(path)
-    split = np.clip(0.5 + np.arange(k)[None] * grid[:, :1] * MAX_DELTA_STEP, 0.0, 1.0)
-    split[:, 0] = 0.5
+    split = np.clip(0.5 + np.arange(k)[None] * grid[:, :1] * MAX_DELTA_STEP, 0.0, 1.0)  # 0.5 at sample 0
     poses = np.repeat(path[None], len(grid), 0)
     poses[:, 1:-1, :3] += grid[:, None, 1:] * J_BAR
     free = hybrid.solve_rows(poses.reshape(-1, 6), split.reshape(-1), g)[4]
@@ -74,7 +73,7 @@ def main() -> None:
     count = dict(drawn=0, kept=0, set=0, integrated=0, scheduled=0, go_and_return=0)
     t0 = time.perf_counter()
     while count["drawn"] < args.candidates:
-        p0, p1 = rng.uniform(LOW, HIGH, (4096, 6)), rng.uniform(LOW, HIGH, (4096, 6))
+        p0, p1 = rng.uniform(POSE_LOW, POSE_HIGH, (4096, 6)), rng.uniform(POSE_LOW, POSE_HIGH, (4096, 6))
         count["drawn"] += 4096
         idx = np.flatnonzero(hybrid.within_limits(p0, 0.5, g) & hybrid.within_limits(p1, 0.5, g))
         middle = nominal_rows(p0[idx], p1[idx], every=4)[:, 1:-1]

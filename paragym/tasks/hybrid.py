@@ -17,9 +17,9 @@ from paragym.tasks import base
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
-__all__ = ["LADDER", "SCENARIOS", "HybridRung", "HybridScenario", "draw_scenarios", "knob_table", "ladder_scenarios",
-           "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios", "resolve_scenario",
-           "validate_scenario"]
+__all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "HybridRung", "HybridScenario", "draw_scenarios",
+           "knob_table", "ladder_scenarios", "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios",
+           "resolve_scenario", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -43,6 +43,12 @@ def paper_scenario(geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY) ->
 
 
 SPLITS = np.linspace(0, 1, 11)  # the splits Delta the scenario checks try (0.5 among them, exactly)
+#: the box both end poses of a random pair are drawn from, v2's and the rungs' alike (E's displacement from home:
+#: m, m, m, rad, rad, rad), read-only
+POSE_LOW = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
+POSE_HIGH = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
+POSE_LOW.setflags(write=False)
+POSE_HIGH.setflags(write=False)
 
 
 def _some_split(p: np.ndarray, test: Any, passed: np.ndarray | None = None, at_once: int = 4096) -> np.ndarray:
@@ -114,8 +120,7 @@ def random_scenarios(rngs: list[np.random.Generator],
     Each generator draws what it would alone (whether hard, then candidate
     pairs 16 at a time, the first that passes taken); the candidates of all
     generators are screened and checked together."""
-    low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
-    high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
+    low, high = POSE_LOW, POSE_HIGH
     batch = 16
     hard = np.array([rng.random() < hard_share for rng in rngs], bool)
     out: list[HybridScenario | None] = [None] * len(rngs)
@@ -190,8 +195,7 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: HybridRung,
     sample) at 0.5 breaks a limit at some sample strictly between its ends; at every such sample some split of
     :data:`SPLITS` keeps the legs within limits, at the hardest at most ``most_splits`` of the 11; and eq 14
     holds in full at P0 (0.5) and at P1 (some split)."""
-    low = np.array([-0.10, -0.10, 0.0, -0.3, -0.3, -0.4])
-    high = np.array([0.10, 0.10, 0.12, 0.3, 0.3, 0.4])
+    low, high = POSE_LOW, POSE_HIGH
     batch, g = 64, geometry
     out: list[HybridScenario | None] = [None] * len(rngs)
     for i, rng in enumerate(rngs):
