@@ -18,6 +18,13 @@ offset lever:
   (it reaches its bound and stays): the constants left are the split's
   ramps at zero offset, ``a_0`` in 21 steps over [-1, 1].
 
+With ``--returning MM`` it measures instead the pairs of the ladder v1's easy rung
+(:func:`~paragym.tasks.hybrid.split_ladder_scenarios`: no split ramp gets through at zero offset, a split
+schedule does): how many some constant action clears were the offset back, with a range of MM per axis, moving
+at most a tenth of it a sample and held within what can still come back to zero by the end (so that a constant
+offset rises, rides and returns): 21 split rates x {-1, -0.5, 0, 0.5, 1}^3 offset rates. This is why the ladder
+v1 takes the offset away rather than bounding it.
+
 Printed: the kept pairs, those that no constant clears under each reading,
 and, of the latter under ``integrated``, those the reference's split
 schedule (:class:`~paragym.planners.polynomial_detour.PolynomialDetourPlanner`
@@ -26,6 +33,7 @@ none works) gets through without a detour, and of those, how many no single spli
 through (the split must go and come back).
 
     python benchmarks/hybrid_levers.py --candidates 300000
+    python benchmarks/hybrid_levers.py --returning 2 --pairs 150
 """
 
 from __future__ import annotations
@@ -39,7 +47,7 @@ import numpy as np
 from paragym.mechanisms import hybrid
 from paragym.planners.base import PlanningError
 from paragym.planners.polynomial_detour import PolynomialDetourPlanner
-from paragym.tasks.hybrid import POSE_HIGH, POSE_LOW, SPLITS, nominal_rows
+from paragym.tasks.hybrid import POSE_HIGH, POSE_LOW, SPLIT_LADDER, SPLITS, nominal_rows, split_ladder_scenarios
 from paragym.tasks.hybrid_step import LADDER_RULES, HybridParams
 
 #: the split's rate and the offset's range of the rungs' defaults (the task's parameters)
@@ -58,11 +66,49 @@ def constants_clear(path: np.ndarray, grid: np.ndarray, g: hybrid.HybridGeometry
     return free.reshape(len(grid), k).all(axis=1)
 
 
+def returning_clear(path: np.ndarray, grid: np.ndarray, j_bar: float, g: hybrid.HybridGeometry) -> np.ndarray:
+    """Which constant actions (C, 4) keep every sample of ``path`` (K, 6) free (eq 14) with the offset moving at
+    ``a_1..3 * j_bar / 10`` a sample, held within ``min(j_bar, (K - 1 - k) j_bar / 10)`` at sample k (so that it
+    is back at zero at the end)."""
+    k = np.arange(len(path))
+    split = np.zeros((len(grid), len(path)))
+    delta = np.full(len(grid), 0.5)
+    for i in range(1, len(path)):  # the split as the step moves it, a clipped sum
+        delta = np.clip(delta + grid[:, 0] * MAX_DELTA_STEP, 0.0, 1.0)
+        split[:, i] = delta
+    split[:, 0] = 0.5
+    room = np.minimum(1.0, 0.1 * (len(path) - 1 - k))[None, :, None]
+    offset = np.clip(k[None, :, None] * grid[:, None, 1:] * 0.1, -room, room) * j_bar
+    poses = np.repeat(path[None], len(grid), 0)
+    poses[:, :, :3] += offset
+    free = hybrid.solve_rows(poses.reshape(-1, 6), split.reshape(-1), g)[4]
+    return free.reshape(len(grid), len(path)).all(axis=1)
+
+
+def returning(j_bar_mm: float, pairs: int, seed: int) -> None:
+    """The ``--returning`` measurement (module docstring)."""
+    g = hybrid.DEFAULT_GEOMETRY
+    levels = (-1.0, -0.5, 0.0, 0.5, 1.0)
+    grid = np.array([(c, *o) for c in np.linspace(-1.0, 1.0, 21) for o in itertools.product(levels, repeat=3)])
+    t0 = time.perf_counter()
+    drawn = split_ladder_scenarios([np.random.default_rng([seed, i]) for i in range(pairs)], SPLIT_LADDER[0], g)
+    cleared = sum(bool(returning_clear(nominal_rows(np.array([d.p0]), np.array([d.p1]))[0], grid, j_bar_mm / 1000,
+                                       g).any()) for d in drawn)
+    print(f"{pairs} pairs of the ladder v1's easy rung (seed {seed}), {len(grid):,} constants, offset back at the end "
+          f"within {j_bar_mm:g} mm: {cleared} cleared by some constant ({time.perf_counter() - t0:.0f} s)")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--candidates", type=int, default=300_000, help="pairs drawn from the box")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--returning", type=float, default=None, metavar="MM",
+                        help="measure the ladder v1's easy rung under a returning offset of this range (mm)")
+    parser.add_argument("--pairs", type=int, default=150, help="with --returning: pairs of the rung")
     args = parser.parse_args()
+    if args.returning is not None:
+        returning(args.returning, args.pairs, args.seed)
+        return
     g = hybrid.DEFAULT_GEOMETRY
     levels = (-1.0, -0.5, 0.0, 0.5, 1.0)
     set_grid = np.array(list(itertools.product(levels, repeat=4)))

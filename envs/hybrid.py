@@ -10,13 +10,24 @@ from __future__ import annotations
 from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
-from paragym.tasks.hybrid import HybridScenario, knob_table, paper_scenario, random_scenario, random_scenarios
-from paragym.tasks.hybrid_task import LADDER_RULES, RULES, TASK
+from paragym.tasks.hybrid import (
+    HybridScenario,
+    knob_table,
+    paper_scenario,
+    random_scenario,
+    random_scenarios,
+    split_knob_table,
+)
+from paragym.tasks.hybrid_task import LADDER_RULES, RULES, SPLIT_LADDER_RULES, TASK
 
-__all__ = ["HybridScenario", "HybridSingularityFreeEasyEnv", "HybridSingularityFreeEasyVectorEnv",
-           "HybridSingularityFreeEnv", "HybridSingularityFreeHardEnv", "HybridSingularityFreeHardVectorEnv",
-           "HybridSingularityFreeMediumEnv", "HybridSingularityFreeMediumVectorEnv", "HybridSingularityFreeV1Env",
-           "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env", "HybridSingularityFreeV2VectorEnv",
+__all__ = ["HybridScenario", "HybridSingularityFreeEasyEnv", "HybridSingularityFreeEasyV1Env",
+           "HybridSingularityFreeEasyV1VectorEnv", "HybridSingularityFreeEasyVectorEnv",
+           "HybridSingularityFreeEnv", "HybridSingularityFreeHardEnv", "HybridSingularityFreeHardV1Env",
+           "HybridSingularityFreeHardV1VectorEnv", "HybridSingularityFreeHardVectorEnv",
+           "HybridSingularityFreeMediumEnv", "HybridSingularityFreeMediumV1Env",
+           "HybridSingularityFreeMediumV1VectorEnv", "HybridSingularityFreeMediumVectorEnv",
+           "HybridSingularityFreeV1Env", "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env",
+           "HybridSingularityFreeV2VectorEnv",
            "HybridSingularityFreeVectorEnv", "paper_scenario",
            "random_scenario", "random_scenarios"]
 
@@ -308,6 +319,116 @@ class HybridSingularityFreeHardVectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeHardEnv` stepped together."""
 
     rules = LADDER_RULES[2]
+
+
+class HybridSingularityFreeEasyV1Env(HybridSingularityFreeV2Env):
+    """``paragym/HybridSingularityFree-Easy-v1``: rung 0 of the hybrid's ladder v1: v2's task on paths that break
+    a leg limit midway at the starting split, with the split as the only lever, on pairs no constant action
+    gets through.
+
+    ## Description
+    On the ladder v0 a constant action solves most pairs: E held up to 20 mm off its path clears the limit the
+    pair was drawn to break (``benchmarks/hybrid_levers.py``: every such pair of v2's box is cleared by some
+    constant; with an offset that must move at a bounded rate and come back, 5 mm of it still clear 94 % of
+    the easy rung's pairs below, 2 mm 65 %). So
+    on the ladder v1 E stays on its nominal path and the action is the split's rate alone, and each pair is
+    drawn by :func:`paragym.tasks.hybrid.split_ladder_scenarios` from the rung's knob
+    (:data:`paragym.tasks.hybrid.SPLIT_LADDER`): from v2's box of poses, a pair whose ends are within the
+    limits at Delta = 0.5 and whose nominal path breaks one midway; that no constant split rate (-1, -0.9,
+    ..., 1) gets through singularity-free within the limits; that a split schedule within the rate limit
+    does, on the reference's grid (its certificate: the reference plans every drawn pair); and that the
+    lookahead rule (:func:`paragym.tasks.hybrid.lookahead_split`: the split rate among -1, 0, +1 that keeps
+    the next H samples furthest from eq 14's bounds) fails at each of the rung's horizons:
+
+{knobs}
+
+    ## Action Space
+    ``Box(-1, 1, (1,), float32)``: the change of Delta, times ``max_delta_step`` = 0.05, Delta held in [0, 1].
+    E stays on its nominal path. An action outside the Box is clipped to it; NaN/inf or a wrong shape raise
+    ``ValueError``.
+
+    ## Observation Space
+    ``Box(-10, 10, (48,), float32)``, v2's:
+
+    ==========  ==========================================================
+    0           u, the path parameter (0 to 1)
+    1-6         the nominal pose of E at this step (x, y, z / 0.1 m, roll, pitch, yaw / 0.5 rad)
+    7-12        the nominal pose at the next step, scaled the same
+    13          Delta, the split between the stages (0 to 1)
+    14-22       the nine strokes, mapped so that L_min -> -1 and L_max -> +1 (hexapod 14-19, tripod 20-22)
+    23-24       the singularity measures of the hexapod and the tripod (1 at home, singular below 0.2)
+    25-27       the offset of E from the nominal path / j_bar: always 0 here
+    28-33       the end pose P1, scaled as 1-6
+    34-42       P1's strokes at the current Delta, mapped as 14-22
+    43-44       P1's singularity measures at the current Delta
+    45          P1's stroke excess (beyond the limits, in half stroke ranges) times 10
+    46-47       the excess's change one Delta step up and one down, times 100
+    ==========  ==========================================================
+
+    ## Rewards, Starting State, Episode End
+    v2's: per step ``- w_delta |change of Delta| / max_delta_step - w_singular * sum of (0.4 - mu)_+ / 0.4
+    - w_limit * (legs out of limits)`` (the offset's term is 0), each term in the info as ``reward_<name>``;
+    u = 0, Delta = 0.5, E at P0; terminated at u = 1 (100 steps), ``info["is_success"]`` when every pose was
+    free (eq 14), in dynamic fidelity also tracked, the mechanism whole.
+
+    ## Arguments
+    v2's; ``scenario`` "random" (the default) is the rung's pair; "paper" and custom pairs are v2's.
+    ``j_bar`` has no effect (there is no offset).
+
+    ## Version History
+    * v1 (paragym 0.10): the ladder v1, above; the ladder v0's ids (``-Easy-v0`` ...) are unchanged.
+    """
+
+    rules = SPLIT_LADDER_RULES[0]
+
+
+HybridSingularityFreeEasyV1Env.__doc__ = HybridSingularityFreeEasyV1Env.__doc__.format(knobs=split_knob_table("    "))
+
+
+class HybridSingularityFreeMediumV1Env(HybridSingularityFreeEasyV1Env):
+    """``paragym/HybridSingularityFree-Medium-v1``: rung 1 of the hybrid's ladder v1: the easy rung's pairs where
+    the lookahead rule with one sample of sight fails too.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v1 of the easy rung (``paragym/HybridSingularityFree-Easy-v1``), with rung 1's knob.
+
+    ## Version History
+    * v1 (paragym 0.10): the rung above.
+    """
+
+    rules = SPLIT_LADDER_RULES[1]
+
+
+class HybridSingularityFreeHardV1Env(HybridSingularityFreeEasyV1Env):
+    """``paragym/HybridSingularityFree-Hard-v1``: rung 2 of the hybrid's ladder v1: the easy rung's pairs where
+    the lookahead rule fails with one and with five samples of sight.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v1 of the easy rung (``paragym/HybridSingularityFree-Easy-v1``), with rung 2's knob.
+
+    ## Version History
+    * v1 (paragym 0.10): the rung above.
+    """
+
+    rules = SPLIT_LADDER_RULES[2]
+
+
+class HybridSingularityFreeEasyV1VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeEasyV1Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES[0]
+
+
+class HybridSingularityFreeMediumV1VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeMediumV1Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES[1]
+
+
+class HybridSingularityFreeHardV1VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeHardV1Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES[2]
 
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning

@@ -81,7 +81,8 @@ def status(env_id: str) -> str:
     fidelities = "kinematic + dynamic" if "fidelity" in inspect.signature(env_class(env_id)).parameters \
         else "kinematic"
     if row.rung is not None:
-        return f"rung {row.rung} of {len(registry.ladder_of(row.task))} (0 the easiest); {fidelities}"
+        ladder = next(rungs for rungs in registry.ladders(row.task) if row in rungs)
+        return f"rung {row.rung} of {len(ladder)} (0 the easiest) of the ladder v{row.version}; {fidelities}"
     newest = registry.rows_of(row.task)[-1].id
     return f"{'latest' if newest == env_id else f'superseded by `{newest}`'}; {fidelities}"
 
@@ -174,7 +175,17 @@ def index_page() -> str:
 def readme_env_table() -> str:
     """The README's table of env ids (its status column from :func:`status`), between its markers."""
     lines = ["| env id | status | what it is |", "|---|---|---|"]
-    lines += [f"| [`{r.id}`](docs/envs/{r.name}.md) | {status(r.id)} | {r.summary} |" for r in registry.rows()]
+    done: set[str] = set()
+    for r in registry.rows():
+        if r.rung is None:
+            lines.append(f"| [`{r.id}`](docs/envs/{r.name}.md) | {status(r.id)} | {r.summary} |")
+        elif r.id not in done:  # a ladder in one row: its rungs, easiest first
+            rungs = next(ladder for ladder in registry.ladders(r.task) if r in ladder)
+            done.update(x.id for x in rungs)
+            ids = ", ".join(f"[`{x.id}`](docs/envs/{x.name}.md)" for x in rungs)
+            kind = status(r.id).split("; ", 1)[1]
+            lines.append(f"| {ids} | ladder v{r.version}, rungs 0-{len(rungs) - 1} (0 the easiest); {kind} | "
+                         f"{r.summary.rsplit(': rung', 1)[0]} |")
     return "\n".join(lines)
 
 
@@ -274,6 +285,22 @@ def rung_verdict(methods: dict[str, dict[str, dict[str, str]]], env_id: str) -> 
     return "hard" if not close else "sanity: " + ", ".join(close)
 
 
+def _ladders_found(found: dict[str, dict[str, dict[str, dict[str, str]]]]
+                   ) -> list[tuple[str, list[str], dict[str, dict[str, dict[str, str]]]]]:
+    """Every ladder with rows in ``found`` (:func:`_ladder_rows`): its label (the task, and the ladder's version
+    where the task has more than one), its rung ids, easiest first, and the methods that ranked on it."""
+    out = []
+    for task, methods in found.items():
+        ladders = registry.ladders(task)
+        for rungs in ladders:
+            ids = [r.id for r in rungs]
+            mine = {m: {e: r for e, r in rows.items() if e in ids} for m, rows in methods.items()}
+            mine = {m: rows for m, rows in mine.items() if rows}
+            if mine:
+                out.append((task if len(ladders) == 1 else f"{task} v{rungs[0].version}", ids, mine))
+    return out
+
+
 def ladder_table(csv_path: str | Path) -> str:
     """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task, each
     method's success on every rung with its 95 % interval (Wilson; kinematic fidelity, the leaderboard's
@@ -283,8 +310,7 @@ def ladder_table(csv_path: str | Path) -> str:
     found = _ladder_rows(csv_path)
     lines = ["| task | method | " + " | ".join(registry.RUNG_NAMES) + " |",
              "|---|---|" + "---|" * len(registry.RUNG_NAMES)]
-    for task, methods in found.items():
-        ids = [r.id for r in registry.ladder_of(task)]
+    for task, ids, methods in _ladders_found(found):
         learned = [m for m in LEARNED_NAMES.values() if m in methods]
         order = ["reference", *sorted(m for m in methods if m not in ("reference", "zero", "random", *learned)),
                  "zero", "random", *learned]
@@ -310,12 +336,11 @@ def ladder_figure(csv_path: str | Path, path: str | Path) -> Path:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    found = _ladder_rows(csv_path)
+    found = _ladders_found(_ladder_rows(csv_path))
     fig, axes = plt.subplots(1, len(found), figsize=(4.0 * len(found), 3.4), squeeze=False)
     colours = {"reference": "tab:green", "zero": "tab:gray", "random": "tab:red", "PPO": "tab:blue",
                "SAC": "tab:cyan", "BC": "tab:purple", "DAgger": "tab:pink", "linear CEM": "tab:brown"}
-    for ax, (task, methods) in zip(axes[0], found.items(), strict=True):
-        ids = [r.id for r in registry.ladder_of(task)]
+    for ax, (task, ids, methods) in zip(axes[0], found, strict=True):
         for j, (method, rows) in enumerate(methods.items()):
             xs = [k + (j - (len(methods) - 1) / 2) * 0.06 for k, env_id in enumerate(ids) if env_id in rows]
             got = [rows[env_id] for env_id in ids if env_id in rows]
@@ -347,7 +372,11 @@ def ladders_page(csv_path: str | Path) -> str:
         "Each task has three rung ids, `-Easy`, `-Medium` and `-Hard` (v0 each), whose scenarios a seeded "
         "generator draws from the rung's knobs (the table on each rung's page): the newest version's task on "
         "scenarios where doing nothing, random actions and the task's naive controller fail and the paper's "
-        "method succeeds. Each rung is ranked as its own table of the leaderboard. How long PPO from scratch "
+        "method succeeds. A ladder has versions as a task has: the hybrid's ladder v1 (`-Easy-v1` ...) takes "
+        "away the offset lever that let a constant action solve the ladder v0, and draws only pairs that no "
+        "constant split rate gets through, that the reference provably plans, and, up the ladder, that a "
+        "lookahead rule with one, then five samples of sight fails. Each rung is ranked as its own table of the "
+        "leaderboard. How long PPO from scratch "
         "takes to solve a rung on 2 cores is measured by `python benchmarks/time_to_solve.py --env <rung>` "
         "(the CHANGELOG has the figures).", "",
         "Success per rung and method, over the leaderboard's 50 episodes (kinematic fidelity) with Wilson's "
@@ -363,7 +392,8 @@ def ladders_page(csv_path: str | Path) -> str:
         "elsewhere it is a **sanity** rung, and the row names the methods that reach the reference's interval. "
         "The floors besides zero and random are the cheap methods a reviewer tries first: each task's naive "
         "controller, the best constant action of a grid over the action box (where it is not zero), and rules "
-        "read from the observation in two lines (the Orthoglide's `hill-climb`, the CaPaMan's `slide-rule`); "
+        "read from the observation in two lines (the Orthoglide's `hill-climb`, the CaPaMan's `slide-rule`, the "
+        "hybrid's `stroke-rule`), and on the hybrid's ladder v1 the model's `lookahead-H` rules; "
         "each floor's page entry says how it was chosen.", "",
         "![success against rung](reports/ladders.png)", "",
         ladder_table(csv_path), "",

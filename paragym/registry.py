@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "RUNG_NAMES", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "newest", "row", "rows",
-           "rows_of", "task_of"]
+__all__ = ["ROWS", "RUNG_NAMES", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "ladders", "newest",
+           "row", "rows", "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -38,7 +38,8 @@ class EnvRow:
             leaderboard know of the task; None: ``paragym.baselines.tasks.<task>``.
         rung: the id's rung on its task's difficulty ladder (0 the easiest, :func:`ladder_of`), an id of its
             own with its own version line and leaderboard table; None: a version of the task itself
-            (:func:`rows_of`, :func:`newest`).
+            (:func:`rows_of`, :func:`newest`). A ladder has versions as a task has: the rungs ``-v1`` of a
+            task are a ladder of their own (:func:`ladders`).
     """
 
     id: str
@@ -89,15 +90,18 @@ class EnvRow:
         return int(self.id.rsplit("-v", 1)[1])
 
 
-#: the names of a ladder's rungs, easiest first: rung k of a task is ``paragym/<Name>-<RUNG_NAMES[k]>-v0``
+#: the names of a ladder's rungs, easiest first: rung k of a task's ladder vN is ``paragym/<Name>-<RUNG_NAMES[k]>-vN``
 RUNG_NAMES = ("Easy", "Medium", "Hard")
 
 
-def _ladder(name: str, module: str, steps: int, task: str, summary: str) -> tuple[EnvRow, ...]:
-    """The rows of a task's ladder: ``paragym/<name>-<rung>-v0``, its classes ``<name><rung>Env`` and
-    ``<name><rung>VectorEnv`` in ``module``; ``summary`` is completed with the rung."""
-    return tuple(EnvRow(f"paragym/{name}-{rung}-v0", f"{module}:{name}{rung}Env", f"{module}:{name}{rung}VectorEnv",
-                        steps, task, "random", ("random",), f"{summary}: rung {k} ({rung.lower()})", rung=k)
+def _ladder(name: str, module: str, steps: int, task: str, summary: str, version: int = 0) -> tuple[EnvRow, ...]:
+    """The rows of a task's ladder ``version``: ``paragym/<name>-<rung>-v<version>``, its classes
+    ``<name><rung>Env`` and ``<name><rung>VectorEnv`` (``<name><rung>V<version>Env`` and so on past v0) in
+    ``module``; ``summary`` is completed with the rung."""
+    tag = f"V{version}" if version else ""
+    return tuple(EnvRow(f"paragym/{name}-{rung}-v{version}", f"{module}:{name}{rung}{tag}Env",
+                        f"{module}:{name}{rung}{tag}VectorEnv", steps, task, "random", ("random",),
+                        f"{summary}: rung {k} ({rung.lower()})", rung=k)
                  for k, rung in enumerate(RUNG_NAMES))
 
 
@@ -151,6 +155,9 @@ ROWS: tuple[EnvRow, ...] = (
              "hybrid ladder: v2's task on generated paths that break a leg limit midway at the start split"),
     *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
              "mobile tripod ladder: v2's task on generated drives with pushes odometry alone cannot see"),
+    *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
+             "hybrid ladder v1: v2's task, the split its only lever, on paths that no constant split rate clears",
+             version=1),
 )
 
 _BY_ID = {r.id: r for r in ROWS}
@@ -202,8 +209,18 @@ def rows_of(task: str) -> tuple[EnvRow, ...]:
 
 
 def ladder_of(task: str) -> tuple[EnvRow, ...]:
-    """The rungs of ``task``'s difficulty ladder, easiest first (empty: it has none)."""
-    return tuple(sorted((r for r in rows() if r.task == task and r.rung is not None), key=lambda r: r.rung))
+    """The rungs of ``task``'s difficulty ladders, easiest first, the oldest ladder first (empty: it has none)."""
+    return tuple(sorted((r for r in rows() if r.task == task and r.rung is not None),
+                        key=lambda r: (r.version, r.rung)))
+
+
+def ladders(task: str) -> tuple[tuple[EnvRow, ...], ...]:
+    """``task``'s difficulty ladders, the oldest first: each its rungs, easiest first (:func:`ladder_of` by
+    version)."""
+    out: dict[int, list[EnvRow]] = {}
+    for r in ladder_of(task):
+        out.setdefault(r.version, []).append(r)
+    return tuple(tuple(rungs) for rungs in out.values())
 
 
 def newest() -> tuple[str, ...]:

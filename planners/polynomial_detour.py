@@ -249,10 +249,12 @@ class PolynomialDetourPlanner:
 
 class PolynomialDetourPolicy:
     """The reference policy of ``HybridSingularityFree-v0``: plans at reset,
-    then commands the plan's Delta and offsets step by step."""
+    then commands the plan's Delta and offsets step by step (``split_only``: Delta's rate alone, the action of
+    the ladder v1, whose planner has ``j_bar`` 0 so that it plans no offset)."""
 
-    def __init__(self, planner: PolynomialDetourPlanner | None = None) -> None:
+    def __init__(self, planner: PolynomialDetourPlanner | None = None, split_only: bool = False) -> None:
         self.planner = planner
+        self.split_only = split_only
         self.plan: HybridPlan | None = None
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
@@ -266,5 +268,7 @@ class PolynomialDetourPolicy:
         if self.plan is None:
             raise RuntimeError("call reset(obs, info) before act")
         k = min(info["step"] + 1, len(self.plan.u) - 1)
-        d_delta = (self.plan.delta[k] - info["delta"]) / self._max_step
-        return np.concatenate([[np.clip(d_delta, -1, 1)], self.plan.offsets[k] / self._j_bar]).astype(np.float32)
+        d_delta = np.clip((self.plan.delta[k] - info["delta"]) / self._max_step, -1, 1)
+        if self.split_only:
+            return np.array([d_delta], np.float32)
+        return np.concatenate([[d_delta], self.plan.offsets[k] / self._j_bar]).astype(np.float32)

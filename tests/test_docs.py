@@ -133,7 +133,7 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     from paragym import registry
     from paragym.docpages import ladder_table
 
-    easy, medium, hard = (r.id for r in registry.ladder_of("hybrid"))
+    easy, medium, hard = (r.id for r in registry.ladders("hybrid")[0])
     fields = ["env", "rank", "policy", "kind", "success_rate", "success_ci_low", "success_ci_high",
               "dynamic_episodes", "dynamic_success_rate"]
     rows = [(easy, 1, "polynomial-detour", "reference", 0.98, 0.90, 1.0, 3, 2 / 3),
@@ -143,22 +143,26 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
             (easy, 3, "ppo-seed1", "learned", 0.9, 0.79, 0.96, "", ""),
             (easy, 4, "ppo-seed0", "learned", 0.8, 0.67, 0.89, "", ""),
             (hard, 2, "bc-seed0", "learned", 0.1, 0.04, 0.21, "", ""),
-            ("paragym/HybridSingularityFree-v2", 1, "zero", "floor", 1.0, 1.0, 1.0, "", "")]
+            ("paragym/HybridSingularityFree-v2", 1, "zero", "floor", 1.0, 1.0, 1.0, "", ""),
+            ("paragym/HybridSingularityFree-Hard-v1", 1, "polynomial-detour", "reference", 1.0, 0.93, 1.0, "", "")]
     path = tmp_path / "board.csv"
     with path.open("w", newline="") as f:
         writer = csv.writer(f)
         writer.writerow(fields)
         writer.writerows(rows)
     table = ladder_table(path).splitlines()
-    assert table[2] == "| hybrid | reference | 0.98 [0.90, 1.00] | 0.94 [0.84, 0.98] | 0.90 [0.79, 0.96] |"
-    assert table[3] == "| hybrid | greedy-split | 0.02 [0.00, 0.10] | - | - |"
-    assert table[4] == "| hybrid | PPO | 0.90 [0.79, 0.96] | - | - |"  # each algorithm's best seed per rung
-    assert table[5] == "| hybrid | BC | - | - | 0.10 [0.04, 0.21] |"
-    assert table[6] == "| hybrid | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
+    assert table[2] == "| hybrid v0 | reference | 0.98 [0.90, 1.00] | 0.94 [0.84, 0.98] | 0.90 [0.79, 0.96] |"
+    assert table[3] == "| hybrid v0 | greedy-split | 0.02 [0.00, 0.10] | - | - |"
+    assert table[4] == "| hybrid v0 | PPO | 0.90 [0.79, 0.96] | - | - |"  # each algorithm's best seed per rung
+    assert table[5] == "| hybrid v0 | BC | - | - | 0.10 [0.04, 0.21] |"
+    assert table[6] == "| hybrid v0 | reference, dynamic | 2/3 [0.21, 0.94] | 3/3 [0.44, 1.00] | - |"
     # hard only where the reference's interval lies above every other method's: PPO's reaches it on the easy
     # rung; the medium rung ranks no other method, the hard rung's BC lies below
-    assert table[7] == "| hybrid | **verdict** | sanity: PPO | hard | hard |"
-    assert len(table) == 8  # the v2 row is no rung
+    assert table[7] == "| hybrid v0 | **verdict** | sanity: PPO | hard | hard |"
+    # the hybrid's ladder v1 is a table group of its own, under the same rung columns
+    assert table[8:] == ["| hybrid v1 | reference | - | - | 1.00 [0.93, 1.00] |",
+                         "| hybrid v1 | reference, dynamic | - | - | - |", "| hybrid v1 | **verdict** | - | - | hard |"]
+    assert len(table) == 11  # the v2 row is no rung
     from paragym.docpages import env_page  # and each rung's page says its verdict, a version's page none
 
     assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)

@@ -223,7 +223,9 @@ SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "p
               + ([] if r.id in ("paragym/MobileTripodOdometry-Medium-v0", "paragym/CaPaManCollisionFree-Medium-v0")
                  else ["ppo-seed0"])
               + ["sac-seed0"]
-              for r in registry.rows() if r.rung is not None}}
+              for r in registry.rows() if r.rung is not None and r.version == 0},
+           # the hybrid's ladder v1: a linear CEM search, PPO and SAC with their yml's settings
+           **{r.id: ["cem-seed0", "ppo-seed0", "sac-seed0"] for r in registry.ladders("hybrid")[1]}}
 
 
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):

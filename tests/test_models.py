@@ -79,14 +79,16 @@ def test_every_shipped_model_loads_without_unpickling_and_acts_as_sb3_does():
 
     files = sorted(shipped_models_dir().glob("*/*_seed*.zip"))
     # v0: PPO and SAC x 3 seeds; CaPaMan v1: bc, PPO, SAC, DAgger x 3; tripod v1: bc, PPO, SAC x 3; hybrid v1: PPO, SAC;
-    # the twelve rungs of the ladders: bc and SAC seed 0, and PPO seed 0 on ten (not the tripod's nor the CaPaMan's
-    # medium rung)
-    assert len(files) == 24 + 12 + 9 + 6 + 12 + 12 + 10
+    # the twelve rungs of the ladders v0: bc and SAC seed 0, and PPO seed 0 on ten (not the tripod's nor the
+    # CaPaMan's medium rung); the hybrid's ladder v1: PPO and SAC seed 0 on each rung
+    assert len(files) == 24 + 12 + 9 + 6 + 12 + 12 + 10 + 6
     from paragym import registry
 
-    rungs = [r.name for r in registry.rows() if r.rung is not None]
+    first = [r.name for r in registry.rows() if r.rung is not None and r.version == 0]
     assert all((shipped_models_dir() / name / f"{algo}_seed0.zip").is_file()
-               for name in rungs for algo in ("bc", "sac"))
+               for name in first for algo in ("bc", "sac"))
+    assert all((shipped_models_dir() / r.name / f"{algo}_seed0.zip").is_file()
+               for r in registry.ladders("hybrid")[1] for algo in ("ppo", "sac"))
     for path in files[::4]:
         ours = load_model(path)
         theirs = (SAC if path.stem.startswith("sac") else PPO).load(path, device="cpu")  # a clone is a PPO policy

@@ -36,7 +36,7 @@ def test_wheel_installs_and_registers_the_envs(wheel, tmp_path):
     env = dict(os.environ, PYTHONPATH=str(target))
     res = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, env=env, capture_output=True, text=True)
     assert res.returncode == 0, res.stderr
-    assert "(38,) paper" in res.stdout and "85 shipped models" in res.stdout
+    assert "(38,) paper" in res.stdout and "91 shipped models" in res.stdout
 
 
 def test_cli_lists_envs_and_writes_a_demo_picture(tmp_path):

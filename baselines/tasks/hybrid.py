@@ -26,8 +26,10 @@ from paragym.baselines.tasks import (
 from paragym.rollout import Episode
 from paragym.sim.hybrid_dynamic import HybridDynamics
 
-#: the rungs of the hybrid's difficulty ladder (:func:`paragym.registry.ladder_of`): v2's rules on their own pairs
-LADDER = tuple(r.id for r in registry.ladder_of("hybrid"))
+#: the rungs of the hybrid's difficulty ladder v0 (:func:`paragym.registry.ladders`): v2's rules on their own pairs
+LADDER = tuple(r.id for r in registry.ladders("hybrid")[0])
+#: the rungs of its ladder v1: v2's rules with the split as the only lever, on their own pairs
+SPLIT_LADDER = tuple(r.id for r in registry.ladders("hybrid")[1])
 V2 = ("paragym/HybridSingularityFree-v2", *LADDER)
 BEFORE_V2 = ("paragym/HybridSingularityFree-v0", "paragym/HybridSingularityFree-v1")
 #: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a
@@ -42,6 +44,9 @@ MAX_REPAIRS = 20
 #: alone, and E held 20 mm above its path clears the leg limit). On v2 the
 #: zero action is the best (13 of 30), which the zero floor already ranks.
 BEST_CONSTANT = {LADDER[0]: (0.0, 0.0, 0.0, 1.0), LADDER[1]: (0.0, 0.0, 0.0, 1.0), LADDER[2]: (0.0, 0.0, 0.0, 1.0)}
+#: the horizons (samples) of the lookahead rule ranked on the ladder v1: each rung's generator makes it fail at
+#: its own (:data:`paragym.tasks.hybrid.SPLIT_LADDER`); 20 is a longer sight than any rung's
+LOOKAHEADS = (1, 5, 20)
 #: the ids whose observation shows the end pose's stroke excess and its change with the split (v1's indices 45-47)
 SHOWS_EXCESS = ("paragym/HybridSingularityFree-v1", "paragym/HybridSingularityFree-v2", *LADDER)
 
@@ -86,6 +91,75 @@ def polynomial_detour_margin_params() -> dict[str, Any]:
 
     return {"planner": {**init_defaults(PolynomialDetourPlanner, geometry=None), "stroke_margin": STROKE_MARGIN,
                         "j_bar": "the env's", "max_repairs": MAX_REPAIRS}}
+
+
+def split_reference(env: gym.Env, seed: int) -> Any:
+    """A fresh policy for one episode (a :class:`BuiltIn` factory): the ladder v1's reference, paper 002's
+    serial optimisation of the split (the planner with no offset to detour by: ``j_bar`` 0) commanding the
+    split alone; the rung's generator certifies that it plans every drawn pair."""
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner, PolynomialDetourPolicy
+
+    return PolynomialDetourPolicy(PolynomialDetourPlanner(env.unwrapped.geometry, j_bar=0.0,
+                                                          stroke_margin=STROKE_MARGIN), split_only=True)
+
+
+def split_reference_params() -> dict[str, Any]:
+    """The settings its policy plays with, as the leaderboard records them."""
+    from paragym.planners.polynomial_detour import PolynomialDetourPlanner
+
+    return {"planner": {**init_defaults(PolynomialDetourPlanner, geometry=None), "stroke_margin": STROKE_MARGIN,
+                        "j_bar": 0.0}, "split_only": True}
+
+
+class Lookahead:
+    """The ladder v1's model rule: the split rate among 0, -1, +1 that keeps the next ``horizon`` samples of the
+    nominal path furthest inside eq 14's bounds, the split moved at that rate
+    (:func:`paragym.tasks.hybrid.lookahead_split`, the rule each rung's generator makes fail at its horizons).
+    It knows the kinematics and the whole path (``info["scenario"]``) and plans nothing."""
+
+    def __init__(self, horizon: int) -> None:
+        self.horizon = horizon
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        from paragym.mechanisms import hybrid
+        from paragym.tasks.hybrid import nominal_rows
+
+        sc = info["scenario"]
+        g = sc.geometry
+        self.path = nominal_rows(np.array([sc.p0]), np.array([sc.p1]))[0]
+        self.consts, self.limits = hybrid.kernel_consts(g), np.array([g.l_min, g.l_max, g.singularity_threshold])
+        self.step, self.work, self.lengths = info["max_delta_step"], np.empty((5, 6, 6)), np.empty(9)
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        from paragym.tasks.hybrid import lookahead_split
+
+        rate = lookahead_split(self.path, info["step"], info["delta"], self.horizon, self.step, self.consts,
+                               self.limits, self.lengths, self.work)
+        return np.array([rate], np.float32)
+
+
+def lookahead(horizon: int) -> Any:
+    """The :class:`BuiltIn` factory of :class:`Lookahead` at ``horizon``."""
+    return lambda env, seed: Lookahead(horizon)
+
+
+class StrokeRule:
+    """The ladder v1's two-line rule, read from the observation: when the hexapod's strokes (indices 14-19) are
+    the nearer to a limit and beyond ``threshold`` of the half range, step Delta ``sign``; when the tripod's
+    (20-22) are, step it the other way; else hold. ``sign`` and ``threshold`` are the best of {+1, -1} x
+    {0.5, 0.7, 0.85, 0.95} on the easy rung's reset seeds 0-29 (by successes, then mean return)."""
+
+    def __init__(self, threshold: float = 0.7, sign: float = 1.0) -> None:
+        self.threshold, self.sign = threshold, sign
+
+    def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
+        pass
+
+    def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:
+        hexapod, tripod = float(np.abs(obs[14:20]).max()), float(np.abs(obs[20:23]).max())
+        if max(hexapod, tripod) <= self.threshold:
+            return np.zeros(1, np.float32)
+        return np.array([self.sign if hexapod >= tripod else -self.sign], np.float32)
 
 
 def plot_episode(ep: Episode, path: Path) -> Path:
@@ -230,6 +304,16 @@ BENCH = Bench(
         BuiltIn("polynomial-detour", polynomial_detour_margin, "reference",
                 "7th-degree path, serial optimisation of Delta, detour via poses (paper 002), strokes planned 1 mm "
                 "inside their limits where the path allows", polynomial_detour_margin_params, ids=V2),
+        BuiltIn("polynomial-detour", split_reference, "reference",
+                "7th-degree path, serial optimisation of Delta (paper 002; no offset to detour by: the split is the "
+                "only lever), strokes planned 1 mm inside their limits where the path allows", split_reference_params,
+                ids=SPLIT_LADDER),
+        *(BuiltIn(f"lookahead-{h}", lookahead(h), "floor", f"the model rule: the split rate of 0, -1, +1 that keeps "
+                  f"the next {h} samples furthest inside eq 14's bounds", {"horizon": h}, ids=SPLIT_LADDER)
+          for h in LOOKAHEADS),
+        BuiltIn("stroke-rule", lambda env, seed: StrokeRule(), "floor", "the two-line rule: Delta stepped up when "
+                "the hexapod's strokes are the nearer to a limit and beyond 0.7 of the half range, down when the "
+                "tripod's are", lambda: init_defaults(StrokeRule), ids=SPLIT_LADDER),
         BuiltIn("zero", zero_factory, "floor",
                 "= nominal only: the unplanned 7th-degree path at Delta = 0.5 (paper 002's starting point)"),
         BuiltIn("greedy-split", greedy_split, "floor", "the naive controller: the nominal path, the split stepped "

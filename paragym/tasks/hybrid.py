@@ -6,20 +6,24 @@ drawn and validated here once.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
+from types import SimpleNamespace
 from typing import Any
 
 import numpy as np
+from numba import njit
 
+from paragym.kernels import entry
 from paragym.mechanisms import hybrid
 from paragym.tasks import base
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
-__all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "HybridRung", "HybridScenario", "draw_scenarios",
-           "knob_table", "ladder_scenarios", "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios",
-           "resolve_scenario", "validate_scenario"]
+__all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "SPLIT_LADDER", "HybridRung", "HybridScenario", "SplitRung",
+           "draw_scenarios", "knob_table", "ladder_scenarios", "lookahead_split", "nominal_rows", "paper_scenario",
+           "random_scenario", "random_scenarios", "resolve_scenario", "split_ladder_scenarios", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -186,6 +190,239 @@ def knob_table(indent: str = "") -> str:
     return base.knob_table(LADDER, {"most_splits": "splits through the hardest sample, at most"}, indent)
 
 
+@dataclass(frozen=True)
+class SplitRung:
+    """The knobs of one rung of the hybrid's ladder v1 (:func:`split_ladder_scenarios`), where the split Delta is
+    the action's only lever.
+
+    Attributes:
+        lookahead: the horizons H (samples) of the lookahead rule (:func:`lookahead_split`) that must fail on
+            the rung's pairs: the longer, the further ahead the split must be planned.
+    """
+
+    lookahead: tuple[int, ...]
+
+
+#: the hybrid's ladder v1, easiest first. On every rung the split is the only lever (E stays on its nominal
+#: path), both end poses are within the limits at the start split 0.5 and the nominal path there breaks a leg
+#: limit midway (as on the ladder v0); no constant rate of the split keeps the path free (eq 14), so the split
+#: must be scheduled; a schedule within the rate limit exists on the reference's grid (the rung's certificate:
+#: the reference plans it); and the lookahead rule fails at each of the rung's horizons.
+SPLIT_LADDER = (SplitRung(()), SplitRung((1,)), SplitRung((1, 5)))
+#: the constant split rates a pair of the ladder v1 must defeat (the action's units; float32, as the env
+#: receives them): -1, -0.9, ..., 1
+SPLIT_RATES = np.linspace(-1.0, 1.0, 21).astype(np.float32).astype(np.float64)
+SPLIT_RATES.setflags(write=False)
+#: the splits of the ladder v1's certificate: every fifth of the reference's 101 (0, 0.05, ..., 1), one step
+#: of the rate limit apart, Delta0 = 0.5 among them
+CERTIFICATE_SPLITS = np.linspace(0.0, 1.0, 101)[::5].copy()
+CERTIFICATE_SPLITS.setflags(write=False)
+_BLOCK = 256  # candidates a compiled draw makes uniforms for at once
+
+
+def split_knob_table(indent: str = "") -> str:
+    """The knobs of every rung of :data:`SPLIT_LADDER` as a reStructuredText table (the rung pages show it)."""
+    shown = tuple(SimpleNamespace(lookahead=", ".join(map(str, r.lookahead)) or "none") for r in SPLIT_LADDER)
+    return base.knob_table(shown, {"lookahead": "horizons (samples) at which the lookahead rule fails"}, indent)
+
+
+@njit(cache=True, error_model="numpy")
+def _margin(pose, delta, consts, limits, lengths, work):
+    """Eq 14 at one pose (6,) and split: its margin, the least of the strokes' distance inside their limits (in
+    half stroke ranges) and of both measures above the threshold, and whether eq 14 holds (the step's test,
+    exactly). ``limits``: L_min, L_max (m), the singularity threshold."""
+    base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
+    l_min, l_max, thr = limits
+    mu_h, mu_t = hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, True, lengths, work)
+    half, mid = 0.5 * (l_max - l_min), 0.5 * (l_max + l_min)
+    margin, within = min(mu_h - thr, mu_t - thr), True
+    for c in range(9):
+        within = within and l_min <= lengths[c] <= l_max
+        margin = min(margin, 1.0 - abs(lengths[c] - mid) / half)
+    return margin, within and mu_h >= thr and mu_t >= thr
+
+
+@njit(cache=True, error_model="numpy")
+def _within(pose, delta, consts, limits, lengths, work):
+    """Whether the nine legs are within their limits at one pose (6,) and split (eq 13: the legs alone)."""
+    base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
+    hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
+    for c in range(9):
+        if not limits[0] <= lengths[c] <= limits[1]:
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _free(pose, delta, consts, limits, lengths, work):
+    """Whether eq 14 holds at one pose (6,) and split, as :func:`_margin` decides it, the legs solved first and
+    the measures only where the legs are within their limits."""
+    return _within(pose, delta, consts, limits, lengths, work) and _margin(pose, delta, consts, limits, lengths,
+                                                                          work)[1]
+
+
+@njit(cache=True, error_model="numpy")
+def lookahead_split(path, k, delta, horizon, step, consts, limits, lengths, work):
+    """The lookahead rule's split rate at sample ``k`` of ``path`` (K, 6) with the split at ``delta``: of 0, -1
+    and +1 (ties in that order), the rate whose split, moved by ``rate * step`` a sample (clipped to [0, 1], as
+    the step moves it), keeps the worst :func:`_margin` of samples k+1 ... k+``horizon`` the highest. A model's
+    one-line rule: it sees ``horizon`` samples ahead and plans nothing."""
+    last = path.shape[0] - 1
+    best, choice = -math.inf, 0.0
+    for rate in (0.0, -1.0, 1.0):
+        worst, d = math.inf, delta
+        for h in range(1, horizon + 1):
+            d = min(1.0, max(0.0, d + rate * step))
+            worst = min(worst, _margin(path[min(k + h, last)], d, consts, limits, lengths, work)[0])
+        if worst > best:
+            best, choice = worst, rate
+    return choice
+
+
+@njit(cache=True, error_model="numpy")
+def _plays_free(path, horizon, step, consts, limits, lengths, work):
+    """Whether :func:`lookahead_split` at ``horizon`` keeps every sample of ``path`` free from Delta = 0.5, the
+    split moved as the step moves it."""
+    d = 0.5
+    for k in range(path.shape[0] - 1):
+        d = min(1.0, max(0.0, d + lookahead_split(path, k, d, horizon, step, consts, limits, lengths, work) * step))
+        if not _free(path[k + 1], d, consts, limits, lengths, work):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _ramp_free(path, rate, step, consts, limits, lengths, work):
+    """Whether the constant split ``rate`` keeps every sample of ``path`` free from Delta = 0.5, the split moved as
+    the step moves it: the legs along the whole ramp first (where a ramp fails, it mostly fails there), then eq
+    14 in full."""
+    for full in (False, True):
+        d = 0.5
+        for k in range(path.shape[0] - 1):
+            d = min(1.0, max(0.0, d + rate * step))
+            ok = _free(path[k + 1], d, consts, limits, lengths, work) if full else \
+                _within(path[k + 1], d, consts, limits, lengths, work)
+            if not ok:
+                return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _scheduled(path, splits, consts, limits, lengths, work):
+    """Whether a split schedule on ``splits`` (D,) from Delta = 0.5, at most one grid step a sample, keeps every
+    sample of ``path`` free: a depth-first search (the split held, else raised, else lowered) that remembers the
+    cells (sample, split) from which no schedule reaches the end, so that each is solved at most once."""
+    n, last = splits.shape[0], path.shape[0] - 1
+    dead = np.zeros((path.shape[0], n), np.bool_)
+    split, tried = np.empty(path.shape[0], np.int64), np.zeros(path.shape[0], np.int64)
+    split[0] = np.argmin(np.abs(splits - 0.5))
+    if not _free(path[0], splits[split[0]], consts, limits, lengths, work):
+        return False
+    k = 0
+    while k >= 0:
+        if k == last:
+            return True
+        if tried[k] == 3:  # every move from here is dead: so is this cell
+            dead[k, split[k]] = True
+            k -= 1
+            continue
+        j = split[k] + (0 if tried[k] == 0 else 1 if tried[k] == 1 else -1)
+        tried[k] += 1
+        if j < 0 or j >= n or dead[k + 1, j]:
+            continue
+        if not _free(path[k + 1], splits[j], consts, limits, lengths, work):
+            dead[k + 1, j] = True
+            continue
+        k += 1
+        split[k], tried[k] = j, 0
+    return False
+
+
+@njit(cache=True, error_model="numpy")
+def _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, path):
+    """Whether the pair (P0, P1) is a pair of the ladder v1's rung (:data:`SPLIT_LADDER`'s module comment):
+    ``shape`` s(u) at the samples, ``lookahead`` the rung's horizons; ``path`` (K, 6) receives the nominal path."""
+    base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
+    l_min, l_max = limits[0], limits[1]
+    for end in (p0, p1):  # both ends within the limits at 0.5 (legs alone: cheap)
+        hybrid.k_solve(end, 0.5, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
+        for c in range(9):
+            if not l_min <= lengths[c] <= l_max:
+                return False
+    breaks = False
+    for k in range(shape.shape[0]):
+        for c in range(6):
+            path[k, c] = p0[c] + (p1[c] - p0[c]) * shape[k]
+        if k % 4 == 0 and 0 < k < shape.shape[0] - 1 and not breaks:  # midway at 0.5, every fourth sample
+            hybrid.k_solve(path[k], 0.5, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
+            for c in range(9):
+                breaks = breaks or not l_min <= lengths[c] <= l_max
+    if not breaks:
+        return False
+    for rate in SPLIT_RATES:
+        if _ramp_free(path, rate, step, consts, limits, lengths, work):
+            return False
+    if not _scheduled(path, CERTIFICATE_SPLITS, consts, limits, lengths, work):
+        return False
+    for h in lookahead:
+        if _plays_free(path, h, step, consts, limits, lengths, work):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limits, pair):
+    """One generator's pair of the rung: blocks of :data:`_BLOCK` candidates of uniforms drawn from ``rng`` (a
+    ``numpy.random.Generator``: numba draws numpy's own stream), P0 then P1 of each candidate in ``low`` +
+    (``high`` - ``low``) u, until :func:`_split_pair` keeps one (into ``pair`` (2, 6)), at most ``max_blocks``;
+    whether it did."""
+    lengths, work, path = np.empty(9), np.empty((5, 6, 6)), np.empty((shape.shape[0], 6))
+    p0, p1 = np.empty(6), np.empty(6)
+    for _ in range(max_blocks):
+        u = rng.random((_BLOCK, 12))
+        for i in range(_BLOCK):
+            for c in range(6):
+                p0[c] = low[c] + (high[c] - low[c]) * u[i, c]
+                p1[c] = low[c] + (high[c] - low[c]) * u[i, 6 + c]
+            if _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, path):
+                pair[0] = p0
+                pair[1] = p1
+                return True
+    return False
+
+
+#: :func:`_split_draw`'s compiled entry per rung, geometry and kind of bit generator (the types of its call)
+_SPLIT_DRAWS: dict[tuple[Any, ...], Any] = {}
+
+
+def split_ladder_scenarios(rngs: list[np.random.Generator], rung: SplitRung,
+                           geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, max_delta_step: float = 0.05,
+                           tau: float = 0.01, max_blocks: int = 20_000) -> list[HybridScenario]:
+    """One pair of poses of a rung of the ladder v1 per generator (named "random" on the rung's env id): blocks of
+    candidates from v2's box (:data:`POSE_LOW`, :data:`POSE_HIGH`), the first that passes taken, in one compiled
+    call per generator (:func:`_split_draw`). A pair passes when both ends are within the limits at Delta = 0.5
+    and the nominal path there breaks a limit midway (every fourth sample); no constant split rate of
+    :data:`SPLIT_RATES` keeps every sample of the nominal path free (eq 14); a schedule on
+    :data:`CERTIFICATE_SPLITS` from 0.5, one ``max_delta_step`` a sample at most, does (so the reference's
+    serial optimisation, on a grid that holds these splits, finds one); and :func:`lookahead_split` fails at
+    each of the rung's horizons."""
+    g = geometry
+    shape = np.ascontiguousarray(_path_shape(tau))
+    limits = np.array([g.l_min, g.l_max, g.singularity_threshold])
+    consts = hybrid.kernel_consts(g)
+    lookahead = np.array(rung.lookahead, np.int64)
+    out = []
+    for rng in rngs:
+        pair = np.empty((2, 6))
+        call = (rng, max_blocks, POSE_LOW, POSE_HIGH, shape, lookahead, float(max_delta_step), consts, limits, pair)
+        key = (type(rng.bit_generator),)
+        draw = _SPLIT_DRAWS.get(key) or _SPLIT_DRAWS.setdefault(key, entry(_split_draw, call))  # typed once
+        if not draw(*call):
+            raise RuntimeError(f"no pair of poses of the rung in {max_blocks * _BLOCK} candidates")
+        out.append(HybridScenario("random", tuple(map(float, pair[0])), tuple(map(float, pair[1])), geometry))
+    return out
+
+
 def ladder_scenarios(rngs: list[np.random.Generator], rung: HybridRung,
                      geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
                      max_tries: int = 200_000) -> list[HybridScenario]:
@@ -270,15 +507,19 @@ def resolve_scenario(choice: Any) -> str | HybridScenario:
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
-                   geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY, rung: int | None = None
+                   geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY,
+                   rung: HybridRung | SplitRung | None = None, max_delta_step: float = 0.05, tau: float = 0.01
                    ) -> list[HybridScenario]:
     """One episode's scenario per generator (single env, vector env and CLI
     alike): the paper's, random pairs drawn from the generators, or the
-    custom one once :func:`resolve_scenario` accepts it. On a rung of the ladder (``rung``, an index of
-    :data:`LADDER`) "random" is the rung's pair (:func:`ladder_scenarios`)."""
+    custom one once :func:`resolve_scenario` accepts it. On a rung of a ladder (``rung``, of :data:`LADDER`
+    or :data:`SPLIT_LADDER`) "random" is the rung's pair (:func:`ladder_scenarios`,
+    :func:`split_ladder_scenarios` with the split's rate and the path's step)."""
     choice = resolve_scenario(choice)
+    if choice == "random" and isinstance(rung, SplitRung):
+        return split_ladder_scenarios(rngs, rung, geometry, max_delta_step, tau)
     if choice == "random" and rung is not None:
-        return ladder_scenarios(rngs, LADDER[rung], geometry)
+        return ladder_scenarios(rngs, rung, geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario(geometry) if choice == "paper" else choice] * len(rngs)

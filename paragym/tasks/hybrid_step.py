@@ -67,8 +67,8 @@ from paragym.tasks.hybrid import HybridScenario, nominal_rows
 from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
-__all__ = ["FAILURES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "LADDER_RULES", "RULES", "HybridParams",
-           "HybridRules", "HybridState", "decide", "reset", "step"]
+__all__ = ["FAILURES", "LADDER_RULES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "RULES",
+           "SPLIT_LADDER_RULES", "HybridParams", "HybridRules", "HybridState", "decide", "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
 FAILURES = (None, "broken", "tracking", "leg limit", "singular")
@@ -112,14 +112,17 @@ class HybridRules:
         strict_dynamics: in dynamic fidelity E's orientation is tracked too (``track_angle_tolerance``), a
             broken mechanism ends the episode as a failure, and a ``control_period`` the physics step does
             not divide is refused (else simulated rounded, with a warning).
-        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.hybrid.LADDER`): its pairs of
-            poses are the "random" scenario; None: a version of the task.
+        rung: a rung of a difficulty ladder (one of :data:`paragym.tasks.hybrid.LADDER` or
+            :data:`~paragym.tasks.hybrid.SPLIT_LADDER`): its generator draws the "random" scenario's pairs of
+            poses; None: a version of the task.
+        split_only: the action is the split's rate alone (shape (1,)): E stays on its nominal path (no offset).
     """
 
     version: int
     sees_the_end: bool
     strict_dynamics: bool
-    rung: int | None = None
+    rung: scenarios_module.HybridRung | scenarios_module.SplitRung | None = None
+    split_only: bool = False
 
 
 #: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
@@ -130,7 +133,12 @@ RULES = {0: HybridRules(0, sees_the_end=False, strict_dynamics=False),
          2: HybridRules(2, sees_the_end=True, strict_dynamics=True)}
 #: the rules of the ladder's rungs, HybridSingularityFree-Easy, -Medium and -Hard (v0 each): v2's, on the rung's
 #: pairs of poses
-LADDER_RULES = {k: HybridRules(0, sees_the_end=True, strict_dynamics=True, rung=k) for k in range(3)}
+LADDER_RULES = {k: HybridRules(0, sees_the_end=True, strict_dynamics=True, rung=rung)
+                for k, rung in enumerate(scenarios_module.LADDER)}
+#: the rules of the ladder v1's rungs, HybridSingularityFree-Easy, -Medium and -Hard (v1 each): v2's, with the
+#: split as the only lever, on the rung's pairs of poses (:data:`paragym.tasks.hybrid.SPLIT_LADDER`)
+SPLIT_LADDER_RULES = {k: HybridRules(1, sees_the_end=True, strict_dynamics=True, rung=rung, split_only=True)
+                      for k, rung in enumerate(scenarios_module.SPLIT_LADDER)}
 
 
 @dataclass(frozen=True)
@@ -279,11 +287,13 @@ def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios:
 
 def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: np.ndarray,
          world: DynamicWorld | None = None) -> None:
-    """Move the ``active`` robots (N,) one sample on with ``actions`` (N, 4)
-    inside the Box (the env clips), and solve them. ``world``: the dynamics
+    """Move the ``active`` robots (N,) one sample on with ``actions`` (N, 4), or (N, 1) where the rules are
+    ``split_only``, inside the Box (the env clips), and solve them. ``world``: the dynamics
     of one robot (dynamic fidelity): the step's commanded pose is solved for
     its strokes, the simulated actuators chase them, and the robot is then
     evaluated where the simulation put it (:class:`DynamicWorld`)."""
+    if params.rules.split_only:  # the split's rate alone: E stays on its path (offset 0)
+        actions = np.concatenate([actions, np.zeros((len(actions), 3))], axis=1)
     if world is None:
         _advance(state, params, actions, active, True, _ALL)
         return

@@ -17,6 +17,7 @@ from paragym.tasks.hybrid_step import (
     LADDER_RULES,
     REWARD_TERMS,
     RULES,
+    SPLIT_LADDER_RULES,
     HybridParams,
     HybridRules,
     HybridState,
@@ -25,7 +26,7 @@ from paragym.tasks.hybrid_step import (
 )
 from paragym.tasks.hybrid_worlds import DynamicWorld
 
-__all__ = ["LADDER_RULES", "RULES", "TASK", "HybridTask"]
+__all__ = ["LADDER_RULES", "RULES", "SPLIT_LADDER_RULES", "TASK", "HybridTask"]
 
 
 class HybridTask(TaskBase):
@@ -54,10 +55,11 @@ class HybridTask(TaskBase):
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
                        world: Any) -> list[HybridScenario]:
-        return scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung)
+        return scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung, params.max_delta_step,
+                                               params.tau)
 
     def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
-        return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (4,)))
+        return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (1 if params.rules.split_only else 4,)))
 
     def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
         if params.fidelity != "dynamic":
