@@ -145,6 +145,25 @@ def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
     assert counts[0] <= kept and counts[1] <= kept and counts[3] <= counts[2] <= counts[1]
 
 
+def test_hybrid_levers_counts_the_ladder_v1_pairs_a_returning_offset_clears():
+    out = _run("benchmarks/hybrid_levers.py", "--returning", "5", "--pairs", "2")
+    line = next(ln for ln in out.splitlines() if ln.startswith("2 pairs of the ladder v1's easy rung"))
+    assert "2,625 constants" in line and "within 5 mm" in line
+    assert 0 <= int(line.split(": ")[1].split()[0]) <= 2
+
+
+def test_kappa_share_places_each_method_on_the_rungs_own_scale():
+    """The committed episodes on the Orthoglide's rungs: the reference succeeds on each with a mean kappa below the
+    rung's share of the least-norm excess (its success says so), read back from the env at each episode's seed."""
+    from paragym.tasks.orthoglide import LADDER
+
+    out = _run("benchmarks/kappa_share.py")
+    for k, name in enumerate(("Easy", "Medium", "Hard")):
+        row = next(ln.split() for ln in out.splitlines() if ln.startswith(f"Orthoglide2PRRKappa-{name}-v0 ")
+                   and " gradient-c-limited " in ln)
+        assert float(row[2]) == 1.0 and 0 < float(row[3]) <= float(row[4]) <= LADDER[k].share
+
+
 def test_capaman_detours_splits_success_by_tour(tmp_path):
     """The straight-line controller completes a tour exactly when no leg needs a detour (on these episodes), and
     the grid's expert completes the detour without a step against its target (v1's progress never went below 0
