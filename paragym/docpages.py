@@ -81,8 +81,8 @@ def status(env_id: str) -> str:
     fidelities = "kinematic + dynamic" if "fidelity" in inspect.signature(env_class(env_id)).parameters \
         else "kinematic"
     if row.rung is not None:
-        ladder = next(rungs for rungs in registry.ladders(row.task) if row in rungs)
-        return f"rung {row.rung} of {len(ladder)} (0 the easiest) of the ladder v{row.version}; {fidelities}"
+        rungs = len(registry.ladder(env_id))
+        return f"rung {row.rung} of {rungs} (0 the easiest) of the ladder v{row.version}; {fidelities}"
     newest = registry.rows_of(row.task)[-1].id
     return f"{'latest' if newest == env_id else f'superseded by `{newest}`'}; {fidelities}"
 
@@ -180,7 +180,7 @@ def readme_env_table() -> str:
         if r.rung is None:
             lines.append(f"| [`{r.id}`](docs/envs/{r.name}.md) | {status(r.id)} | {r.summary} |")
         elif r.id not in done:  # a ladder in one row: its rungs, easiest first
-            rungs = next(ladder for ladder in registry.ladders(r.task) if r in ladder)
+            rungs = registry.ladder(r.id)
             done.update(x.id for x in rungs)
             ids = ", ".join(f"[`{x.id}`](docs/envs/{x.name}.md)" for x in rungs)
             kind = status(r.id).split("; ", 1)[1]

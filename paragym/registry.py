@@ -13,8 +13,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["ROWS", "RUNG_NAMES", "EnvRow", "add", "check_env_id", "first_version", "ladder_of", "ladders", "newest",
-           "row", "rows", "rows_of", "task_of"]
+__all__ = ["ROWS", "RUNG_NAMES", "EnvRow", "add", "check_env_id", "first_version", "ladder", "ladder_of", "ladders",
+           "newest", "row", "rows", "rows_of", "task_of"]
 
 
 @dataclass(frozen=True)
@@ -212,6 +212,14 @@ def ladder_of(task: str) -> tuple[EnvRow, ...]:
     """The rungs of ``task``'s difficulty ladders, easiest first, the oldest ladder first (empty: it has none)."""
     return tuple(sorted((r for r in rows() if r.task == task and r.rung is not None),
                         key=lambda r: (r.version, r.rung)))
+
+
+def ladder(env_id: str) -> tuple[EnvRow, ...]:
+    """The rungs of the ladder the rung ``env_id`` is on, easiest first (a ValueError for an id that is no rung)."""
+    r = row(env_id)
+    if r.rung is None:
+        raise ValueError(f"{r.id} is no rung of a ladder")
+    return next(rungs for rungs in ladders(r.task) if r in rungs)
 
 
 def ladders(task: str) -> tuple[tuple[EnvRow, ...], ...]:

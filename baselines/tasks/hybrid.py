@@ -121,13 +121,11 @@ class Lookahead:
         self.horizon = horizon
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
-        from paragym.mechanisms import hybrid
-        from paragym.tasks.hybrid import nominal_rows
+        from paragym.tasks.hybrid import nominal_rows, split_args
 
         sc = info["scenario"]
-        g = sc.geometry
         self.path = nominal_rows(np.array([sc.p0]), np.array([sc.p1]))[0]
-        self.consts, self.limits = hybrid.kernel_consts(g), np.array([g.l_min, g.l_max, g.singularity_threshold])
+        _, self.consts, self.limits = split_args(sc.geometry)
         self.step, self.work, self.lengths = info["max_delta_step"], np.empty((5, 6, 6)), np.empty(9)
 
     def act(self, obs: np.ndarray, info: dict[str, Any]) -> np.ndarray:

@@ -23,7 +23,8 @@ from paragym.units import MM
 
 __all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "SPLIT_LADDER", "HybridRung", "HybridScenario", "SplitRung",
            "draw_scenarios", "knob_table", "ladder_scenarios", "lookahead_split", "nominal_rows", "paper_scenario",
-           "random_scenario", "random_scenarios", "resolve_scenario", "split_ladder_scenarios", "validate_scenario"]
+           "random_scenario", "random_scenarios", "resolve_scenario", "split_args", "split_ladder_scenarios",
+           "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -342,21 +343,14 @@ def _scheduled(path, splits, consts, limits, lengths, work):
 def _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, path):
     """Whether the pair (P0, P1) is a pair of the ladder v1's rung (:data:`SPLIT_LADDER`'s module comment):
     ``shape`` s(u) at the samples, ``lookahead`` the rung's horizons; ``path`` (K, 6) receives the nominal path."""
-    base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
-    l_min, l_max = limits[0], limits[1]
-    for end in (p0, p1):  # both ends within the limits at 0.5 (legs alone: cheap)
-        hybrid.k_solve(end, 0.5, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
-        for c in range(9):
-            if not l_min <= lengths[c] <= l_max:
-                return False
+    if not (_within(p0, 0.5, consts, limits, lengths, work) and _within(p1, 0.5, consts, limits, lengths, work)):
+        return False  # both ends within the limits at 0.5 (legs alone: cheap)
     breaks = False
     for k in range(shape.shape[0]):
         for c in range(6):
             path[k, c] = p0[c] + (p1[c] - p0[c]) * shape[k]
         if k % 4 == 0 and 0 < k < shape.shape[0] - 1 and not breaks:  # midway at 0.5, every fourth sample
-            hybrid.k_solve(path[k], 0.5, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
-            for c in range(9):
-                breaks = breaks or not l_min <= lengths[c] <= l_max
+            breaks = not _within(path[k], 0.5, consts, limits, lengths, work)
     if not breaks:
         return False
     for rate in SPLIT_RATES:
@@ -391,8 +385,18 @@ def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limi
     return False
 
 
-#: :func:`_split_draw`'s compiled entry per rung, geometry and kind of bit generator (the types of its call)
+#: :func:`_split_draw`'s compiled entry per kind of bit generator (the only type of its call that varies)
 _SPLIT_DRAWS: dict[tuple[Any, ...], Any] = {}
+
+
+@lru_cache(maxsize=16)
+def split_args(geometry: hybrid.HybridGeometry, tau: float = 0.01) -> tuple[np.ndarray, Any, np.ndarray]:
+    """The path's shape s(u), the geometry's kernel constants and the limits (L_min, L_max, the singularity
+    threshold) that :func:`_split_draw` and :func:`lookahead_split` take, made once per geometry and path step (a
+    reset must not rebuild them)."""
+    g = geometry
+    return (np.ascontiguousarray(_path_shape(tau)), hybrid.kernel_consts(g),
+            np.array([g.l_min, g.l_max, g.singularity_threshold]))
 
 
 def split_ladder_scenarios(rngs: list[np.random.Generator], rung: SplitRung,
@@ -406,10 +410,7 @@ def split_ladder_scenarios(rngs: list[np.random.Generator], rung: SplitRung,
     :data:`CERTIFICATE_SPLITS` from 0.5, one ``max_delta_step`` a sample at most, does (so the reference's
     serial optimisation, on a grid that holds these splits, finds one); and :func:`lookahead_split` fails at
     each of the rung's horizons."""
-    g = geometry
-    shape = np.ascontiguousarray(_path_shape(tau))
-    limits = np.array([g.l_min, g.l_max, g.singularity_threshold])
-    consts = hybrid.kernel_consts(g)
+    shape, consts, limits = split_args(geometry, tau)
     lookahead = np.array(rung.lookahead, np.int64)
     out = []
     for rng in rngs:
