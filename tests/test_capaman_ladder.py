@@ -12,11 +12,12 @@ import paragym  # noqa: F401
 from paragym import registry
 from paragym.baselines.policies import get_policy
 from paragym.baselines.tasks.capaman import BEST_CONSTANT, SlideRule
+from paragym.kernels import shares
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import quat_to_matrix
 from paragym.planners.base import PlanningError
 from paragym.rollout import run_episode
-from paragym.sim.capaman_posts import part_capsules, parts_in_reach, plate_floor, post_clearance
+from paragym.sim.capaman_posts import forward_table, part_capsules, parts_in_reach, plate_floor, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.obstacles import Capsule, Cylinder
 from paragym.tasks.capaman import (
@@ -74,6 +75,23 @@ def test_skipping_the_parts_out_of_reach_changes_no_answer():
                                                                                           reach=every)
     for a, b in zip(skipping, placing, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("given_poses", [False, True])
+def test_a_batch_shared_among_threads_is_answered_as_in_one_call(monkeypatch, given_poses):
+    # a native env's batch is shared among worker threads (paragym.kernels.shares): each configuration's answer
+    # must be the one a single call gives, bit for bit
+    rng = np.random.default_rng(2)
+    alpha = rng.uniform(G.alpha_min, G.alpha_max, (700, 3))
+    posts, counts = _posts(rng, 700, 3)
+    poses = forward_table(alpha) if given_poses else None
+    answers = []
+    for threads in ("1", "3"):
+        monkeypatch.setenv("PARAGYM_THREADS", threads)
+        answers.append(post_clearance(alpha, posts, counts, poses=poses))
+    assert shares(len(alpha)) is not None  # three threads took part
+    for one, shared in zip(*answers, strict=True):
+        np.testing.assert_array_equal(one, shared)
 
 
 def test_the_capsule_model_is_conservative_against_pybullets_parts():

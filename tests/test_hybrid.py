@@ -248,8 +248,26 @@ def test_the_measures_are_the_smallest_singular_values():
     poses = rng.uniform(-1, 1, (200, 6)) * [0.1, 0.1, 0.1, 0.3, 0.3, 0.4]
     t_e, t_a, t_t = hybrid.split(poses, rng.uniform(0, 1, 200))
     for m in (hybrid.hexapod_matrix(t_a), hybrid.tripod_matrix(t_t)):
-        ours = np.array([hybrid._sigma_min(np.ascontiguousarray(x.T)) for x in m])
+        ours = np.empty(len(m))
+        hybrid._sigma_mins(np.ascontiguousarray(m.transpose(0, 2, 1)), ours)
         np.testing.assert_allclose(ours, np.linalg.svd(m, compute_uv=False)[:, -1], atol=1e-13)
+
+
+def test_a_pair_of_poses_solves_as_each_alone():
+    # k_solve_pair finds four measures in one call of Jacobi rotations: each exactly k_solve's
+    rng = np.random.default_rng(2)
+    consts = hybrid.kernel_consts(hybrid.DEFAULT_GEOMETRY)
+    work = np.empty((7, 6, 6))
+    for _ in range(100):
+        pose, other = rng.uniform(-1, 1, (2, 6)) * [0.04, 0.04, 0.03, 0.15, 0.15, 0.2]
+        delta = rng.uniform(0, 1)
+        lengths, other_lengths, alone_lengths, alone_other = (np.empty(9) for _ in range(4))
+        got = hybrid.k_solve_pair(pose, other, delta, *consts, lengths, other_lengths, work)
+        alone = (*hybrid.k_solve(pose, delta, *consts, True, alone_lengths, np.empty((5, 6, 6))),
+                 *hybrid.k_solve(other, delta, *consts, True, alone_other, np.empty((5, 6, 6))))
+        assert got == alone
+        np.testing.assert_array_equal(lengths, alone_lengths)
+        np.testing.assert_array_equal(other_lengths, alone_other)
 
 
 def test_random_scenarios_in_a_batch_equal_one_at_a_time():

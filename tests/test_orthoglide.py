@@ -1,5 +1,6 @@
 """The 2PRR + table of paper 003: kinematics, Jacobians, condition number, null space."""
 
+import gymnasium as gym
 import numpy as np
 import pytest
 
@@ -168,3 +169,42 @@ def test_env_policies_and_modes():
         gym.make("paragym/Orthoglide2PRRKappa-v0", scenario=far).reset(seed=0)
     with pytest.raises(ValueError, match="action_mode"):
         gym.make("paragym/Orthoglide2PRRKappa-v0", action_mode="torque")
+
+
+def _hard_rung_run(robots: int, steps: int) -> list[np.ndarray]:
+    env = gym.make_vec("paragym/Orthoglide2PRRKappa-Hard-v0", num_envs=robots,
+                       vectorization_mode="vector_entry_point", train_scenarios=6)
+    obs, _ = env.reset(seed=5)
+    actions = np.random.default_rng(1).uniform(-1, 1, (steps, robots, *env.single_action_space.shape))
+    out = [obs]
+    for a in actions.astype(np.float32):  # random joint rates fail within steps: resets every step
+        obs, reward, terminated, truncated, _ = env.step(a)
+        state = env.unwrapped.state  # the rung's kappa bound decides success only at a path's end: compare it
+        out += [obs, reward, terminated, truncated, state.bound.copy(), state.rho.copy()]
+    env.close()
+    return out
+
+
+def test_a_remembered_start_is_the_start_computed_anew(monkeypatch):
+    # a reset remembers each scenario's start (its table position, sliders and the rung's kappa bound): with a
+    # training set each is computed once, and must then be what computing it again gives, bit for bit
+    from paragym.tasks import orthoglide_step
+
+    remembered = _hard_rung_run(24, 30)
+    monkeypatch.setattr(orthoglide_step, "_STARTS_KEPT", 0)  # nothing kept: every reset computes anew
+    for got, want in zip(remembered, _hard_rung_run(24, 30), strict=True):
+        np.testing.assert_array_equal(got, want)
+
+
+def test_two_scenarios_of_one_name_have_their_own_starts():
+    from paragym.tasks.orthoglide import circle_task
+    from paragym.tasks.orthoglide_step import _starts
+
+    params = gym.make("paragym/Orthoglide2PRRKappa-Hard-v0").unwrapped.params
+    a, b = circle_task((0.1, 0.55), 0.4, 10.0, start=0.0), circle_task((0.1, 0.55), 0.4, 10.0, start=2.0)
+    first, second = _starts(params, [a]), _starts(params, [b])
+    assert a.name == b.name and not np.array_equal(first[0], second[0])
+    assert {id(a), id(b)} <= params.__dict__["_starts"].keys()  # both remembered, each by its own identity
+    for got, want in zip(_starts(params, [b, a]), (np.concatenate([second[0], first[0]]),
+                                                   np.concatenate([second[1], first[1]])), strict=True):
+        np.testing.assert_array_equal(got, want)

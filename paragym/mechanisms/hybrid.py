@@ -42,7 +42,7 @@ function here (``solve``, ``solve_rows``, ``split``, ``hexapod_matrix``, ...)
 loops them over N, and the env's step calls the same loop, so one robot and
 4096 run the same code. The smallest singular values are the square roots of
 the smallest eigenvalues of M^T M, found by cyclic Jacobi rotations
-(:func:`paragym.mechanisms.geometry.k_jacobi`) rather than LAPACK: OpenBLAS, under LAPACK, picks
+(:func:`paragym.mechanisms.geometry.k_jacobi_lanes`) rather than LAPACK: OpenBLAS, under LAPACK, picks
 its kernels per CPU, and its eigenvalues differed in the last bits between
 CPUs (issue 38); the rotations use +, *, / and sqrt only, the same bits
 everywhere.
@@ -57,13 +57,13 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from paragym.mechanisms.geometry import euler_matrix, k_jacobi, matrix_euler
+from paragym.mechanisms.geometry import euler_matrix, k_jacobi_lanes, matrix_euler
 from paragym.units import DEG
 
 __all__ = [
     "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
-    "hexapod_matrix", "is_singularity_free", "k_measure", "k_solve", "kernel_consts", "pose_matrix", "solve", "split",
-    "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
+    "hexapod_matrix", "is_singularity_free", "k_measure", "k_solve", "k_solve_pair", "kernel_consts", "pose_matrix",
+    "solve", "split", "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
 ]
 
 
@@ -222,28 +222,26 @@ def _constraints(rt, top, axes, inv_e, rows):
 
 
 @njit(cache=True, error_model="numpy")
-def _min_eigenvalue(a):
-    """The smallest eigenvalue of the symmetric 6x6 ``a`` (overwritten), by Jacobi rotations
-    (:func:`paragym.mechanisms.geometry.k_jacobi`)."""
-    k_jacobi(a, np.empty((6, 6)))
-    low = a[0, 0]
-    for i in range(1, 6):
-        low = min(low, a[i, i])
-    return low
-
-
-@njit(cache=True, error_model="numpy")
-def _sigma_min(rows):
-    """The smallest singular value of a 6x6 matrix: the square root of the
-    smallest eigenvalue of M^T M (:func:`_min_eigenvalue`)."""
-    gram = np.empty((6, 6))
-    for a in range(6):
-        for b in range(6):
-            acc = 0.0
-            for r in range(6):
-                acc += rows[r, a] * rows[r, b]
-            gram[a, b] = acc
-    return math.sqrt(max(_min_eigenvalue(gram), 0.0))
+def _sigma_mins(mats, out):
+    """The smallest singular values of the 6x6 matrices ``mats`` (L, 6, 6) into ``out`` (L,): the square
+    roots of the smallest eigenvalues of their M^T M, all found at once by Jacobi rotations
+    (:func:`paragym.mechanisms.geometry.k_jacobi_lanes`)."""
+    lanes = mats.shape[0]
+    gram = np.empty((lanes, 6, 6))
+    for lane in range(lanes):
+        rows = mats[lane]
+        for a in range(6):
+            for b in range(6):
+                acc = 0.0
+                for r in range(6):
+                    acc += rows[r, a] * rows[r, b]
+                gram[lane, a, b] = acc
+    k_jacobi_lanes(gram, np.empty((1, 0, 0)), lanes)
+    for lane in range(lanes):
+        low = gram[lane, 0, 0]
+        for i in range(1, 6):
+            low = min(low, gram[lane, i, i])
+        out[lane] = math.sqrt(max(low, 0.0))
 
 
 @njit(cache=True, error_model="numpy")
@@ -260,19 +258,46 @@ def k_solve(pose, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, meas
 
 
 @njit(cache=True, error_model="numpy")
+def k_solve_pair(pose, other, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, lengths, other_lengths,
+                 work):
+    """:func:`k_solve` of two poses (6,) at one split ``delta``, with measures: their legs into ``lengths`` and
+    ``other_lengths`` (9,), and the four measures (``pose``'s hexapod and tripod, then ``other``'s), returned.
+    The four smallest singular values are found in one call of Jacobi rotations, each exactly as alone, so the
+    numbers are :func:`k_solve`'s, bit for bit. ``work``: (7, 6, 6) scratch."""
+    ra, pa, rt, pt, re = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], work[1, 3, :3], work[2, :3, :3]
+    _stages(pose, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
+    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, work[3], work[4])
+    _stages(other, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
+    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, other_lengths, work[5], work[6])
+    sigma = np.empty(4)
+    _sigma_mins(work[3:7], sigma)
+    return sigma[0] / sc[3], sigma[1] / sc[4], sigma[2] / sc[3], sigma[3] / sc[4]
+
+
+@njit(cache=True, error_model="numpy")
+def _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, h, t, measures=True):
+    """The nine leg lengths into ``lengths`` (9,) (eqs 1, 4), and eq 11's matrices (transposed) of the
+    hexapod into ``h`` and of the tripod into ``t`` (6, 6): its legs' rows, and its constraints' if
+    ``measures``."""
+    _legs(ra, pa, plat, base, sc[1], lengths, h, 0)
+    _legs(rt, pt, top, tri_base, sc[2], lengths[6:], t, 0)
+    if measures:
+        _constraints(rt, top, axes, sc[2], t)
+
+
+@njit(cache=True, error_model="numpy")
 def k_measure(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, measures, lengths, work):
     """The robot with its stages at (R_A ``ra``, p_A ``pa``) in the base frame
     and (R_T ``rt``, p_T ``pt``) in A's frame, wherever they come from (the
     split of :func:`k_solve`, or a simulation): the nine leg lengths into
     ``lengths`` (9,) (eqs 1, 4) and, if ``measures``, the two singularity
     measures (eq 11's matrices; sigma_min over its home value), returned."""
-    h, t = work[3], work[4]
-    _legs(ra, pa, plat, base, sc[1], lengths, h, 0)
-    _legs(rt, pt, top, tri_base, sc[2], lengths[6:], t, 0)
+    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, work[3], work[4], measures)
     if not measures:
         return 0.0, 0.0
-    _constraints(rt, top, axes, sc[2], t)
-    return _sigma_min(h) / sc[3], _sigma_min(t) / sc[4]
+    sigma = np.empty(2)
+    _sigma_mins(work[3:5], sigma)
+    return sigma[0] / sc[3], sigma[1] / sc[4]
 
 
 @njit(cache=True, error_model="numpy")

@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
+from paragym.kernels import SPLIT_MIN_ROWS, concurrently, shares
 from paragym.mechanisms import capaman
 
 __all__ = ["PARALLEL_FROM", "POST_FIELDS", "forward_table", "k_post_clearance", "kernel_constants", "part_capsules",
@@ -35,9 +36,9 @@ __all__ = ["PARALLEL_FROM", "POST_FIELDS", "forward_table", "k_post_clearance", 
 #: a post as the kernels take it: x, y, the segment's lower and upper z, the radius (m)
 POST_FIELDS = ("x", "y", "z_low", "z_high", "radius")
 #: from this many configurations on, :func:`post_clearance` runs on every core numba has: only grids of the
-#: joint range (:func:`paragym.tasks.capaman.solvable`); a native env's step stays on one thread, where its
-#: resets, serial code between the kernels, do not wait on spinning workers (measured: 2 threads gave the step
-#: 15 % more throughput and its resets twice the share)
+#: joint range (:func:`paragym.tasks.capaman.solvable`); a native env's batch, smaller, is shared among worker
+#: threads that wait without spinning (:func:`paragym.kernels.shares`), so that the serial code between the
+#: kernels, its resets, does not wait on numba's spinning workers
 PARALLEL_FROM = 16384
 
 
@@ -221,6 +222,15 @@ def _serial(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs
              half, cap, out, part, tip)
 
 
+@njit(cache=True, error_model="numpy", nogil=True)
+def _share(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
+           cap, out, part, tip):
+    """:func:`_serial` with the GIL released: one thread's share of a batch (a single env's call keeps the GIL,
+    whose release and return cost it a microsecond)."""
+    _serial(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
+            half, cap, out, part, tip)
+
+
 @njit(cache=True, error_model="numpy", parallel=True)
 def _parallel(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
               half, cap, out, part, tip):
@@ -271,10 +281,18 @@ def post_clearance(alpha: np.ndarray, posts: np.ndarray, counts: np.ndarray, row
     m = len(al)
     rows = np.arange(m) if rows is None else np.ascontiguousarray(rows, np.int64)
     out, part, tip = np.empty(m), np.empty(m, np.int64), np.empty((m, 3))
-    kernel = _parallel if m >= PARALLEL_FROM else _serial
     if reach is None:
         reach = parts_in_reach(posts, counts, geometry, cap)
     poses = _NO_POSES if poses is None else poses
-    kernel(al, poses, rows, posts, counts, reach, *kernel_constants(geometry), float(cap), out, part, tip)
+    consts = kernel_constants(geometry)
+    parts = None if m < SPLIT_MIN_ROWS or m >= PARALLEL_FROM else shares(m)
+    if parts is None:
+        kernel = _parallel if m >= PARALLEL_FROM else _serial
+        kernel(al, poses, rows, posts, counts, reach, *consts, float(cap), out, part, tip)
+        return out, part, tip
+    # a native env's batch: shared among worker threads that wait without spinning (paragym.kernels.shares)
+    calls = [(al[lo:hi], poses[lo:hi] if len(poses) else poses, rows[lo:hi], posts, counts, reach, *consts,
+              float(cap), out[lo:hi], part[lo:hi], tip[lo:hi]) for lo, hi in parts]
+    concurrently(_share, calls)
     return out, part, tip
 

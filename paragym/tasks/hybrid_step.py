@@ -323,11 +323,11 @@ def decide(terminated: bool, all_free: bool) -> bool:
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     actions, rows = np.ascontiguousarray(actions, np.float64), np.ascontiguousarray(rows, np.bool_)
-    state.call(_advance_kernel, (state.kernel_arrays(), actions, rows, move, params.version, stage,
-                                 *params.kernel_args), params, (actions.ndim, rows.ndim))
+    state.call_split(_advance_kernel, (state.kernel_arrays(), actions, rows, move, params.version, stage,
+                                       *params.kernel_args), 2, params, (actions.ndim, rows.ndim))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scale):
     """The transition of every robot with ``rows[i]`` (module docstring). ``arrays``: the state's, in
     ``KERNEL_FIELDS``' order; ``consts``: the geometry, :func:`paragym.mechanisms.hybrid.kernel_consts`.
@@ -340,7 +340,9 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         reward, phi, reason, terms, success = arrays
     base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
-    work = np.empty((5, 6, 6))
+    work = np.empty((7, 6, 6))
+    paired = stage == 0 and version == 1  # the whole step, and the observation shows P1
+    mu_h_end, mu_t_end = 0.0, 0.0
     size = obs.shape[1]
     row = np.empty(size)  # one robot's observation before the clip, reused
     end_lengths = np.empty(9)
@@ -357,8 +359,13 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
                     offset[i, c] = 0.0 if k[i] == last else actions[i, 1 + c] * w.j_bar
             for c in range(6):
                 pose[i, c] = nominal[i, k[i], c] + (offset[i, c] if c < 3 else 0.0)
-            mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home,
-                                              sc, True, lengths[i], work)
+            if paired:  # the pose and P1 at the same split: their four measures in one call
+                mu_h[i], mu_t[i], mu_h_end, mu_t_end = hybrid.k_solve_pair(
+                    pose[i], nominal[i, last], delta[i], base, plat, top, axes, tri_base, pinv_t, home, sc,
+                    lengths[i], end_lengths, work)
+            else:
+                mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home,
+                                                  sc, True, lengths[i], work)
             if stage == 1:
                 continue
         out = 0
@@ -392,8 +399,9 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         for c in range(3):
             row[25 + c] = offset[i, c] / w.j_bar
         if version == 1:  # where the path ends: P1 solved at the current split, its excess, the shaping
-            mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
-                                                pinv_t, home, sc, True, end_lengths, work)
+            if not paired:
+                mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
+                                                    pinv_t, home, sc, True, end_lengths, work)
             excess = _excess(end_lengths, w)
             new_phi = 0.0 if terminated[i] else -excess
             if move:

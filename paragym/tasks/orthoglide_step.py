@@ -26,6 +26,7 @@ p_k, task rate t_k, J and n at k):
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from typing import Any, NamedTuple
@@ -264,10 +265,7 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
     """Start ``rows`` on ``scenarios`` (checked ones: :func:`paragym.tasks.orthoglide.draw_scenarios`):
     at the admissible table position with the lowest kappa at the first path
     point, the sliders by inverse kinematics; then evaluate them."""
-    first = np.array([t.points[0] for t in scenarios])
-    kap, r1 = start_table_position(first, params.geometry)
-    if not np.all(np.isfinite(kap)):
-        raise ValueError("scenario's first point is outside the reachable set")
+    rho, bound = _starts(params, scenarios)
     state._room(max(len(t.t) for t in scenarios))
     for i, task in zip(rows, scenarios, strict=True):
         m = len(task.t)
@@ -275,13 +273,57 @@ def reset(state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
         state.dt[i, :m - 1] = np.diff(task.t)
         state.last[i] = m - 1
         state.scenarios[i] = task
-    rho, _ = og.inverse(r1, first, params.geometry)
     state.rho[rows], state.k[rows], state.failed[rows], state.reason[rows] = rho, 0, False, 0
     state.kappa_sum[rows] = 0.0
-    state.bound[rows] = np.inf if params.rules.rung is None else kappa_bounds(params, scenarios)
+    state.bound[rows] = bound
     mask = np.zeros(len(state.k), bool)
     mask[rows] = True
     _advance(state, params, np.zeros((len(state.k), 3 if params.joint_mode else 1)), mask, False)
+
+
+#: scenarios whose starts each set of parameters on a rung remembers (:func:`_starts`)
+_STARTS_KEPT = 4096
+
+
+def _starts(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> tuple[np.ndarray, np.ndarray]:
+    """Where each of ``scenarios`` starts, the sliders rho (M, 3) m, and the rung's bound on its mean kappa (M,)
+    (inf off a rung). On a rung the bound costs a whole episode of the least-norm motion and the start a sweep
+    of the table, together about 0.1 ms a scenario, so the parameters remember the last :data:`_STARTS_KEPT`
+    scenarios they started, by identity (a weak reference tells a scenario from a new one at a freed address):
+    a finite training set (``train_scenarios``) is computed once. Each is computed alone or in a batch alike
+    (row by row), so a remembered start is the same bits as a new one."""
+    if params.rules.rung is None:  # nothing costly to remember
+        return _start_rho(params, scenarios), np.full(len(scenarios), np.inf)
+    memo = params.__dict__.setdefault("_starts", {})
+    known = [memo.get(id(task)) for task in scenarios]
+    new = [i for i, (task, got) in enumerate(zip(scenarios, known, strict=True)) if got is None or got[0]() is not task]
+    if len(new) == len(scenarios):  # fresh scenarios (no training set): no gathering
+        rho, bound = _start_rho(params, scenarios), kappa_bounds(params, scenarios)
+    else:
+        rho, bound = np.empty((len(scenarios), 3)), np.empty(len(scenarios))
+        for i, got in enumerate(known):
+            if got is not None:
+                rho[i], bound[i] = got[1], got[2]
+        if new:
+            tasks = [scenarios[i] for i in new]
+            rho[new], bound[new] = _start_rho(params, tasks), kappa_bounds(params, tasks)
+    for i in new:
+        task = scenarios[i]
+        memo.pop(id(task), None)
+        memo[id(task)] = (weakref.ref(task), rho[i].copy(), float(bound[i]))
+    while len(memo) > _STARTS_KEPT:  # the oldest first
+        del memo[next(iter(memo))]
+    return rho, bound
+
+
+def _start_rho(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> np.ndarray:
+    """The sliders (M, 3) m at the admissible table position with the lowest kappa at each scenario's first
+    point (:func:`~paragym.tasks.orthoglide.start_table_position`)."""
+    first = np.array([t.points[0] for t in scenarios])
+    kap, r1 = start_table_position(first, params.geometry)
+    if not np.all(np.isfinite(kap)):
+        raise ValueError("scenario's first point is outside the reachable set")
+    return og.inverse(r1, first, params.geometry)[0]
 
 
 def least_norm_kappa(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> np.ndarray:
