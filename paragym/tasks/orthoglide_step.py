@@ -149,6 +149,11 @@ class OrthoglideParams:
                    float(limit_penalty), geometry, 1 if rules.tracking else 0, track_tolerance, scenario,
                    action_mode, fidelity, dynamics, rules)
 
+    def __getstate__(self) -> dict[str, Any]:
+        """A copy or a pickle leaves out the starts the parameters remember (:func:`_starts`): weak references,
+        which do not pickle, to the scenarios of this process."""
+        return {k: v for k, v in self.__dict__.items() if k != "_starts"}
+
     @cached_property
     def least_norm(self) -> OrthoglideParams:
         """These parameters for the least-norm motion (null-space mode, kinematic, v1's rules): what the zero
