@@ -361,8 +361,8 @@ class ParagymEnv(TaskShell, gym.Env):
         return float(self._dynamic_body()[4])
 
     def body_motion(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """The validated body's link now, as simulated: position (m), quaternion (x, y, z, w), velocity
-        (m/s) and angular velocity (rad/s), world frame."""
+        """The validated body's link frame now, as simulated: its origin's position (m), its quaternion (x, y, z,
+        w), the origin's velocity (m/s) and the angular velocity (rad/s), world frame, in either engine."""
         sim, robot, link, _, _ = self._dynamic_body()
         return sim.link_motion(robot, link, velocity=True)
 

@@ -51,12 +51,18 @@ from paragym.validation.motion import pose_path_motion
 from paragym.validation.report import MotionTooShort, Tolerances, ValidationReport, validate
 from paragym.validation.sensors import AccelerometerArray
 
-__all__ = ["EpisodeValidation", "MotionRecorder", "validate_episode"]
+__all__ = ["RECORDER", "EpisodeValidation", "MotionRecorder", "validate_episode"]
+
+#: what the recorder takes of the validated link at every physics step, named in every dynamic row's producer
+#: (:func:`paragym.baselines.leaderboard.suite.dynamic_producer`), so that a change re-runs those rows under a
+#: new producer: its frame's origin, orientation and the origin's velocity, in both engines (before: PyBullet's
+#: velocity of the link's centre of mass, which put the 2PRR's judged point 0.5 m beyond C along link AC)
+RECORDER = "link frame origin"
 
 
 class MotionRecorder:
-    """Records the env's validated body after every physics step (its link's
-    pose and velocities, :meth:`~paragym.envs.base.ParagymEnv.body_motion`);
+    """Records the env's validated body after every physics step (its link frame's
+    pose and its origin's velocities, :meth:`~paragym.envs.base.ParagymEnv.body_motion`; :data:`RECORDER`);
     :meth:`motion` gives the judged point (``env.body_point``) as a
     :class:`RigidMotion`, the accelerations by central differences at the
     simulation rate."""

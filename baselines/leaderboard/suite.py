@@ -85,11 +85,15 @@ def dynamic_kwargs(env_id: str, engine: str = "pybullet") -> dict[str, Any]:
 
 
 def dynamic_producer(spec: PolicySpec, engine: str = "pybullet") -> str:
-    """What makes a dynamic row: the policy's producer and the physics settings it ran under (None: the task
-    has no dynamic fidelity, and no dynamic row); in MuJoCo also the engine and its settings (a PyBullet row's
+    """What makes a dynamic row: the policy's producer, the physics settings it ran under (None: the task
+    has no dynamic fidelity, and no dynamic row) and what the KF's recorder measures
+    (:data:`paragym.validation.episode.RECORDER`); in MuJoCo also the engine and its settings (a PyBullet row's
     producer names no engine, as before MuJoCo came)."""
+    from paragym.validation.episode import RECORDER
+
     settings = bench_of(spec.env_id).dynamics
-    made = {**json.loads(spec.producer()), "dynamics": None if settings is None else repr(settings())}
+    made = {**json.loads(spec.producer()), "dynamics": None if settings is None else repr(settings()),
+            "recorder": RECORDER}
     if engine != "pybullet":
         made["engine"] = repr(dynamic_kwargs(spec.env_id, engine)["engine"])
     return json.dumps(made, sort_keys=True)

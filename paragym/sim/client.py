@@ -355,7 +355,9 @@ class PyBulletSim:
 
     def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
         """A link's frame: world position (m), xyzw quaternion and, with
-        ``velocity``, its linear (m/s) and angular (rad/s) velocity."""
+        ``velocity``, the linear (m/s) velocity of the frame's origin and the angular (rad/s) velocity, as
+        :class:`~paragym.sim.mujoco_sim.MuJoCoSim` gives them. PyBullet reports the linear velocity of the link's
+        centre of mass; the origin's is v_com + omega x (p_origin - p_com)."""
         index = self._links[name][link] if isinstance(link, str) else link
         if index < 0:  # the base
             body, c = self._bodies[name], self._client
@@ -365,7 +367,10 @@ class PyBulletSim:
             return tuple(np.array(v) for v in base)
         state = pb.getLinkState(self._bodies[name], index, computeLinkVelocity=velocity, computeForwardKinematics=True,
                                 physicsClientId=self._client)
-        return tuple(np.array(v) for v in state[4:8 if velocity else 6])
+        if not velocity:
+            return np.array(state[4]), np.array(state[5])
+        origin, omega = np.array(state[4]), np.array(state[7])
+        return origin, np.array(state[5]), np.array(state[6]) + np.cross(omega, origin - np.array(state[0])), omega
 
     # --- dynamics -------------------------------------------------------------------------
     def set_physics(self, gravity: float, time_step: float, solver_iterations: int, erp: float | None = None) -> None:
