@@ -14,7 +14,8 @@ the clearance is capped (the ladder's scenarios are checked for it).
 
 :func:`post_clearance` places the parts with the closed-form kinematics
 (:func:`paragym.mechanisms.capaman.k_forward`, :func:`~paragym.mechanisms.capaman.k_part_frames`) in one
-compiled loop over the configurations, on every core numba has from :data:`PARALLEL_FROM` of them on. A part
+compiled loop over the configurations: on every core numba has from :data:`PARALLEL_FROM` of them on, and
+shared among paragym's worker threads from :data:`paragym.kernels.SPLIT_MIN_ROWS` on (:func:`_share`). A part
 no post comes within the cap of in any pose (:func:`parts_in_reach`), or whose capsule's bounding box is farther
 from a post's than the best distance so far, is skipped (exact: the answer is capped).
 """
