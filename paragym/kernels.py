@@ -98,7 +98,7 @@ def concurrently(run: Callable[..., Any], calls: list[tuple[Any, ...]]) -> None:
     """``run(*args)`` for each of ``calls`` at once: the first in this thread, the others in this process's
     worker threads. ``run`` must release the GIL (a numba kernel compiled with ``nogil=True``) for the calls to
     overlap, and no two calls may write the same memory."""
-    pending = [_pool(thread_count() - 1).submit(run, *args) for args in calls[1:]]
+    pending = [_pool(max(1, thread_count() - 1)).submit(run, *args) for args in calls[1:]]
     try:
         run(*calls[0])
     finally:

@@ -292,8 +292,8 @@ _STARTS_KEPT = 4096
 
 def _starts(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) -> tuple[np.ndarray, np.ndarray]:
     """Where each of ``scenarios`` starts, the sliders rho (M, 3) m, and the rung's bound on its mean kappa (M,)
-    (inf off a rung). On a rung the bound costs a whole episode of the least-norm motion and the start a sweep
-    of the table, together about 0.1 ms a scenario, so the parameters remember the last :data:`_STARTS_KEPT`
+    (inf off a rung). On a rung the bound costs a whole lap of the least-norm motion and the start a sweep of
+    the table, so the parameters remember the last :data:`_STARTS_KEPT`
     scenarios they started, by identity (a weak reference tells a scenario from a new one at a freed address):
     a finite training set (``train_scenarios``) is computed once. Each is computed alone or in a batch alike
     (row by row), so a remembered start is the same bits as a new one."""
