@@ -140,7 +140,7 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
         "dynamic": [{"policy": index[r.env, r.policy, _base(r.producer)], "scenario": r.scenario, "seed": r.seed,
                      "return": r.episode_return, "success": r.success, "metrics": r.metrics,
                      "kf_passed": r.kf_passed, "kf": r.kf, "physics": json.loads(r.producer).get("dynamics"),
-                     **_engine_of(r.producer)} for r in dynamic],
+                     **_settings_of(r.producer)} for r in dynamic],
     }
     text = json.dumps({**body, "sha256": _digest(body)}, sort_keys=True, separators=(",", ":"))
     path = Path(path)
@@ -150,19 +150,25 @@ def write_results(path: str | Path, rows: list[EpisodeRow], dynamic: list[Dynami
     return path
 
 
+#: what a dynamic row's producer holds beyond its policy's, each kept in its entry of the results file when the
+#: producer has it: the MuJoCo engine's settings (a PyBullet row has none) and the KF recorder
+#: (:data:`paragym.validation.episode.RECORDER`; a file written before it was named has none)
+_DYNAMIC_KEYS = ("engine", "recorder")
+
+
 def _base(dynamic_producer: str) -> str:
-    """A dynamic row's producer without its physics settings and engine: the policy's own producer."""
+    """A dynamic row's producer without its physics settings, engine and recorder: the policy's own producer."""
     made = json.loads(dynamic_producer)
-    made.pop("dynamics", None)
-    made.pop("engine", None)
+    for key in ("dynamics", *_DYNAMIC_KEYS):
+        made.pop(key, None)
     return json.dumps(made, sort_keys=True)
 
 
-def _engine_of(dynamic_producer: str) -> dict[str, str]:
-    """A dynamic row's engine settings as its entry in the results file holds them: ``{"engine": settings}`` in
-    MuJoCo, nothing in PyBullet (the file of a PyBullet-only run is as it was before MuJoCo came)."""
+def _settings_of(dynamic_producer: str) -> dict[str, str]:
+    """A dynamic row's engine settings and recorder as its entry in the results file holds them (:data:
+    `_DYNAMIC_KEYS`): ``{"engine": settings}`` in MuJoCo, nothing in PyBullet."""
     made = json.loads(dynamic_producer)
-    return {"engine": made["engine"]} if "engine" in made else {}
+    return {key: made[key] for key in _DYNAMIC_KEYS if key in made}
 
 
 def read_results(path: str | Path) -> dict[str, Any]:
@@ -205,7 +211,7 @@ def rows_of_results(path: str | Path) -> tuple[list[EpisodeRow], list[DynamicRow
     dynamic = [DynamicRow(who[d["policy"]]["env"], who[d["policy"]]["policy"], d["scenario"], d["seed"], d["return"],
                           d["success"], d["metrics"], d["kf_passed"], d["kf"], 0.0, version,
                           json.dumps({**json.loads(who[d["policy"]]["producer"]), "dynamics": d["physics"],
-                                      **({"engine": d["engine"]} if "engine" in d else {})},
+                                      **{key: d[key] for key in _DYNAMIC_KEYS if key in d}},
                                      sort_keys=True)) for d in data["dynamic"]]
     return episodes, dynamic
 
@@ -383,6 +389,11 @@ def verify(path: str | Path, sample: int | None = 20, dynamic: int = 0, seed: in
             here = json.loads(dynamic_producer(spec, engine))
             if here.get("dynamics") != entry["physics"] or here.get("engine") != entry.get("engine"):
                 result.problems.append(f"{what}: this version's physics settings differ from the file's")
+                continue
+            if here.get("recorder") != entry.get("recorder"):
+                result.problems.append(f"{what}: this version's KF recorder ({here.get('recorder')}) differs from "
+                                       f"the file's ({entry.get('recorder', 'unnamed')}): its verdicts cannot be "
+                                       f"compared")
                 continue
             try:
                 d = evaluate_dynamic(spec, entry["scenario"], entry["seed"], engine=engine)
