@@ -28,7 +28,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
-from paragym.kernels import SPLIT_MIN_ROWS, concurrently, shares
+from paragym.kernels import concurrently, shares
 from paragym.mechanisms import capaman
 
 __all__ = ["PARALLEL_FROM", "POST_FIELDS", "forward_table", "k_post_clearance", "kernel_constants", "part_capsules",
@@ -286,7 +286,7 @@ def post_clearance(alpha: np.ndarray, posts: np.ndarray, counts: np.ndarray, row
         reach = parts_in_reach(posts, counts, geometry, cap)
     poses = _NO_POSES if poses is None else poses
     consts = kernel_constants(geometry)
-    parts = None if m < SPLIT_MIN_ROWS or m >= PARALLEL_FROM else shares(m)
+    parts = None if m >= PARALLEL_FROM else shares(m)
     if parts is None:
         kernel = _parallel if m >= PARALLEL_FROM else _serial
         kernel(al, poses, rows, posts, counts, reach, *consts, float(cap), out, part, tip)
