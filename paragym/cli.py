@@ -123,7 +123,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     if bench_of(env_id).dynamics is None:
         raise ValueError(f"{env_id} has no dynamic fidelity, so no simulated mechanism to export")
-    out = args.out or str(Path("runs/export") / env_id.split("/")[1])
+    out = args.out or "runs/export/"
     paths, gaps = write(env_id, args.format, out, overwrite=args.overwrite)
     print(f"wrote {', '.join(str(p) for p in paths)}")
     if gaps is None:
@@ -404,7 +404,8 @@ def build_parser() -> argparse.ArgumentParser:
                                       "closures and motors, or URDF with a loop-closure sidecar (JSON)")
     p.add_argument("env_id", help="e.g. HybridSingularityFree-v2")
     p.add_argument("--format", choices=("mjcf", "urdf"), default="mjcf", help="the model format (default mjcf)")
-    p.add_argument("--out", default=None, help="the file to write (default runs/export/<env name>.xml or .urdf)")
+    p.add_argument("--out", default=None, help="the file to write, or a folder to write <env name>.xml or .urdf "
+                                               "in (default runs/export/)")
     p.add_argument("--overwrite", action="store_true", help="replace files that exist (refused without it)")
     p.set_defaults(func=_cmd_export)
     p = sub.add_parser("train", help="train a Stable-Baselines3 agent (needs the 'rl' extra); resumable")

@@ -456,6 +456,11 @@ class PyBulletSim:
         for link in links:
             pb.changeDynamics(self._bodies[name], link, lateralFriction=lateral, physicsClientId=self._client)
 
+    def contact_friction(self, name: str, link: int) -> float:
+        """The contact friction coefficient of ``link`` of body ``name`` (-1: the base) now, as
+        :meth:`friction` set it (PyBullet's default, 0.5, where nothing did)."""
+        return float(pb.getDynamicsInfo(self._bodies[name], link, physicsClientId=self._client)[1])
+
     def push(self, name: str, link: int, force: Sequence[float]) -> None:
         """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step."""
         pos = self.link_frame(name, link)[0]

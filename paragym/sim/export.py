@@ -12,7 +12,13 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
   robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts
   (1, 2), as in the scene; the fixed parts' contacts take the loops' ``solref``/``solimp``: with MuJoCo's
   defaults the CaPaMan pushed into a box at its torque limit sank 1.8 mm deeper than in PyBullet, with these
-  0.5 mm (``benchmarks/conformance.py``).
+  0.5 mm (``benchmarks/conformance.py``). Ground (the tripod's plane or heightfield) is a world geom
+  (a heightfield an ``hfield`` asset) that takes each robot part's friction coefficient, on MuJoCo's elliptic
+  friction cone at an ``impratio`` of 10: with the defaults (a pyramid at 1) the tripod standing still crept
+  1.5 mm/s at its wheels; with these 0.07 mm/s, at 1 ms as at 0.5 ms or with twice the iterations.
+  A written file (:func:`write`) stands on its own: its ``qpos0`` and ``home`` keyframe are the pose after
+  ``reset(seed=0)``, where the loops close, and its servos are ``general`` actuators whose ``ctrl`` is the
+  target's displacement from home (zero holds it), so that ``MjData`` stepped as loaded holds its loops.
   The loops' ``solref``/``solimp`` (:func:`loop_solref`, :data:`LOOP_SOLIMP`) are stiffer than MuJoCo's
   defaults, with which a closed chain under gravity sags at its pins (mujoco #2698;
   ``benchmarks/conformance.py`` measures both). Gravity and the solver iterations are the scene's; the physics
@@ -23,7 +29,8 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
   joints (about z, y, x, in that order from the parent) through two links of 1e-6 kg. The loop closures and
   actuators go to a JSON sidecar (``<file>.loops.json``): each closure names the two links and the point on each,
   in that link's frame (m), to be closed by a ball joint, as the Extended-URDF proposal and urdfdom's
-  ``<constraint>`` discussion suggest.
+  ``<constraint>`` discussion suggest. The sidecar's ``home`` gives every joint's value at the pose where
+  the loops close (URDF has no reference pose), and ``missing`` what the URDF cannot hold (a ground).
 
 Lengths in m, angles in rad, masses in kg, force limits in N (slides) or N m (hinges).
 """
@@ -80,7 +87,8 @@ def servo_gains(links: list[LinkSpec], frames: dict[str, tuple[np.ndarray, np.nd
     """A position servo's ``kp`` and ``kv`` for the joint of ``link``: critically damped at ``bandwidth`` / h
     rad/s (h: the physics step; :data:`SERVO_BANDWIDTH`, or a scene's ``EXPORT_SERVO_BANDWIDTH``) for what it
     moves: the mass of the link's subtree for a slide, its moment of inertia about the axis for a hinge (point
-    masses at the parts' centres, the links placed at ``frames``, :func:`tree_frames`). The loop closures add
+    masses at the parts' centres, the links placed at ``frames``, :func:`tree_frames`; where those all sit on
+    the axis, as a wheel's, the parts' own moments about it, as solids). The loop closures add
     what they carry on top; the servo is then softer than the one paragym simulates, by at most that ratio."""
     children: dict[str | None, list[LinkSpec]] = {}
     for spec in links:
@@ -101,6 +109,11 @@ def servo_gains(links: list[LinkSpec], frames: dict[str, tuple[np.ndarray, np.nd
             p, r = frames[item.name]
             arm = p + r @ np.asarray(item.shape_offset, float) - pos
             inertia += item.mass * float(np.sum((arm - np.dot(arm, axis) * axis) ** 2))
+        if inertia < 1e-6:  # the masses sit on the axis (a wheel): the parts' own moments about it instead
+            for item in subtree:
+                local = frames[item.name][1].T @ axis
+                shape = item.shape if isinstance(item.shape, PartShape) else None
+                inertia += float(local @ (np.asarray(_inertia(shape, item.mass)) * local))
         inertia = max(inertia, 1e-6)
     omega = bandwidth / time_step
     return inertia * omega**2, 2.0 * inertia * omega
@@ -163,7 +176,7 @@ def _motors(scene: Any) -> dict[tuple[str, str], float]:
 
 
 def _mjcf_geom(parent: ET.Element, shape: PartShape | Any, pos: Any, robot: bool, mass: float | None = None,
-               rgba: Any = None, name: str | None = None) -> None:
+               rgba: Any = None, name: str | None = None, friction: float | None = None) -> None:
     attrs: dict[str, str] = {"pos": _num(pos)}
     if name:
         attrs["name"] = name
@@ -184,15 +197,24 @@ def _mjcf_geom(parent: ET.Element, shape: PartShape | Any, pos: Any, robot: bool
         attrs["mass"] = _num(mass)
     if rgba is not None:
         attrs["rgba"] = _num(rgba)
+    if friction is not None:  # sliding; MuJoCo's default torsional and rolling friction
+        attrs["friction"] = _num([friction, 0.005, 0.0001])
     ET.SubElement(parent, "geom", attrs)
 
 
 def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, bandwidth: float | None = None,
-         iterations: int | None = None) -> str:
+         iterations: int | None = None, home: bool = False) -> str:
     """The scene's mechanism as an MJCF document (module docstring). ``time_step`` (s), the servos'
     ``bandwidth`` (:func:`servo_gains`) and the solver's ``iterations`` replace the exported defaults
     (:func:`mujoco_time_step`, the scene's ``EXPORT_SERVO_BANDWIDTH`` or :data:`SERVO_BANDWIDTH`, the scene's
-    iterations) where given: a MuJoCo dynamic fidelity's settings (:mod:`paragym.sim.mujoco_sim`)."""
+    iterations) where given: a MuJoCo dynamic fidelity's settings (:mod:`paragym.sim.mujoco_sim`).
+
+    With ``home`` the file stands on its own at the scene's pose now (a closed one after a reset): every body is
+    written where that pose puts it, so that the model's reference configuration ``qpos0`` is the pose (a hinge's
+    or slide's ``ref`` is its value there, so its ``qpos`` still means the scene's joint value; a ball's ``qpos``
+    is its rotation from the pose; a free body starts where it is), and a keyframe ``home`` holds ``qpos0`` with
+    every servo's ``ctrl`` at its joint's value there. Without it the bodies are written at joint values of zero:
+    the form :class:`~paragym.sim.mujoco_sim.MuJoCoSim` compiles and poses itself."""
     trees, fixed = bodies_of(scene.sim)
     motors = _motors(scene)
     d = scene.dynamics
@@ -201,34 +223,53 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     h = mujoco_time_step(d.time_step) if time_step is None else float(time_step)
     ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
                   iterations=str(int(d.solver_iterations if iterations is None else iterations)))
-    world = ET.SubElement(root, "worldbody")
+    ground = _ground(root, scene.sim, h)
+    if ground:  # friction that holds below its limit: MuJoCo's pyramid cone at an impratio of 1 lets a loaded
+        # wheel creep; the elliptic cone at 10 holds it, as PyBullet does (``benchmarks/conformance.py``)
+        root.find("option").set("cone", "elliptic")
+        root.find("option").set("impratio", "10")
+    world = root.find("worldbody")
     _fixed_geoms(world, fixed, h)
     stops = getattr(scene.sim, "stops", {})
-    joints: list[tuple[str, str, str]] = []  # (joint name, kind, body)
     for body, links, base_mass, base_shape in trees:
+        posed = dict(zip((link.name for link in depth_first(links)), scene.sim.joint_values(body), strict=True)) \
+            if home else {}
         base = ET.SubElement(world, "body", name=body)
         if base_mass > 0:  # a free body
+            if home:
+                pos, xyzw = scene.sim.link_frame(body, -1)
+                base.set("pos", _num(pos))
+                base.set("quat", _num(_wxyz(xyzw)))
             ET.SubElement(base, "freejoint", name=f"{body}_free")
-            _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass)
+            _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass,
+                       friction=scene.sim.contact_friction(body, -1) if ground else None)
         elements = {None: base}
         for link in depth_first(links):
-            el = ET.SubElement(elements[link.parent], "body", name=model_name(body, link.name, len(trees)),
-                               pos=_num(link.position), quat=_num(_wxyz(link.orientation)))
-            elements[link.name] = el
+            pos, rot = np.asarray(link.position, float), quat_to_matrix(np.asarray(link.orientation, float))
             kind = {"revolute": "hinge", "prismatic": "slide", "spherical": "ball"}.get(link.joint)
+            attrs = {}
+            if link.name in posed and kind is not None:  # the joint's value at the pose goes into the body's frame
+                pos, rot, ref = _posed_frame(link, pos, rot, posed[link.name])
+                if ref is not None:
+                    attrs["ref"] = _num(ref)
+            quat = Rotation.from_matrix(rot).as_quat() if posed else link.orientation
+            el = ET.SubElement(elements[link.parent], "body", name=model_name(body, link.name, len(trees)),
+                               pos=_num(pos), quat=_num(_wxyz(quat)))
+            elements[link.name] = el
             if kind is not None:
-                attrs = {"name": f"{el.get('name')}_joint", "type": kind}
+                attrs = {"name": f"{el.get('name')}_joint", "type": kind, **attrs}
                 if kind != "ball":
                     attrs["axis"] = _num(link.axis)
                 if (body, link.name) in stops:  # a hard stop: MuJoCo's joint limit
                     attrs["range"] = _num(stops[body, link.name])
                 ET.SubElement(el, "joint", attrs)
-                joints.append((attrs["name"], link.joint, body))
             if link.shape is None:
                 ET.SubElement(el, "inertial", pos=_num(link.shape_offset), mass=_num(link.mass),
                               diaginertia=_num([1e-9] * 3))
             else:
-                _mjcf_geom(el, link.shape, link.shape_offset, robot=True, mass=link.mass, rgba=link.rgba)
+                friction = scene.sim.contact_friction(body, scene.sim.link_index(body, link.name)) if ground else None
+                _mjcf_geom(el, link.shape, link.shape_offset, robot=True, mass=link.mass, rgba=link.rgba,
+                           friction=friction)
     sites = []
     for k, ((body_a, link_a, body_b, link_b), (point_a, point_b)) in enumerate(scene.sim.loops.items()):
         for side, body, link, point in (("a", body_a, link_a, point_a), ("b", body_b, link_b, point_b)):
@@ -251,10 +292,79 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
         for (body, link), limit in motors.items():
             joint = f"{model_name(body, link, len(trees))}_joint"
             kp, kv = servo_gains(*posed[body], link, h, bandwidth)
-            ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
-                          forcerange=_num([-limit, limit]))
+            if home:  # ctrl: the target's displacement from home, so that a ctrl of zero holds the home pose
+                ref = float(root.find(f".//joint[@name='{joint}']").get("ref", "0"))
+                ET.SubElement(actuator, "general", name=f"{joint}_motor", joint=joint, gainprm=_num(kp),
+                              biastype="affine", biasprm=_num([kp * ref, -kp, -kv]),
+                              forcerange=_num([-limit, limit]))
+            else:
+                ET.SubElement(actuator, "position", name=f"{joint}_motor", joint=joint, kp=_num(kp), kv=_num(kv),
+                              forcerange=_num([-limit, limit]))
+    if home:
+        _home_key(root)
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _posed_frame(link: LinkSpec, pos: np.ndarray, rot: np.ndarray, value: tuple[float, ...]
+                 ) -> tuple[np.ndarray, np.ndarray, float | None]:
+    """A link's body frame in its parent's (position, rotation) with its joint at ``value`` (:func:`mjcf`'s
+    ``home``), and the joint's ``ref`` there (None for a ball, whose qpos0 is the identity)."""
+    axis = np.asarray(link.axis, float) / np.linalg.norm(link.axis)
+    if link.joint == "revolute":
+        return pos, rot @ Rotation.from_rotvec(axis * value[0]).as_matrix(), float(value[0])
+    if link.joint == "prismatic":
+        return pos + rot @ (axis * value[0]), rot, float(value[0])
+    return pos, rot @ quat_to_matrix(np.asarray(value, float)), None
+
+
+def _home_key(root: ET.Element) -> None:
+    """The keyframe ``home`` of an MJCF written with ``home`` (:func:`mjcf`): ``qpos0`` as MuJoCo compiles it
+    (the joints in the document's order: a free joint's body pose, a ball's identity, a hinge's or slide's
+    ``ref``), and every servo's ``ctrl`` at zero (a displacement from home)."""
+    qpos = []
+    for body in root.iter("body"):
+        for joint in body:
+            if joint.tag == "freejoint":
+                qpos += [float(v) for v in (body.get("pos", "0 0 0") + " " + body.get("quat", "1 0 0 0")).split()]
+            elif joint.tag == "joint" and joint.get("type") == "ball":
+                qpos += [1.0, 0.0, 0.0, 0.0]
+            elif joint.tag == "joint":
+                qpos.append(float(joint.get("ref", "0")))
+    attrs = {"name": "home", "qpos": _num(qpos)}
+    servos = root.find("actuator")
+    if servos is not None:
+        attrs["ctrl"] = _num([0.0] * len(servos))
+    ET.SubElement(ET.SubElement(root, "keyframe"), "key", attrs)
+
+
+def _ground(root: ET.Element, sim: Any, time_step: float) -> bool:
+    """The scene's ground, if it has one (a plane, or a heightfield as an ``hfield`` asset), as a world geom of
+    ``root`` (adding its ``worldbody``): fixed, frictionless itself so that a contact takes the robot part's
+    coefficient (MuJoCo takes the larger of the two; PyBullet multiplies them, and paragym's ground has 1), as
+    stiff as the loops at the physics step ``time_step`` (s). True where there was ground."""
+    world = ET.SubElement(root, "worldbody")
+    grounds = [args for build, args in sim.recipes.values() if build in ("add_plane", "add_heightfield")]
+    for args in grounds:
+        attrs = {"name": args[0], "contype": "1", "conaffinity": "2", "friction": "0 0 0",
+                 "solref": _num(loop_solref(time_step)), "solimp": _num(LOOP_SOLIMP), "rgba": _num(args[-1])}
+        if len(args) == 2:  # a plane: z = 0, without bounds
+            attrs.update(type="plane", size="0 0 1")
+        else:
+            heights, cell, centre = np.asarray(args[1], float), float(args[2]), args[3]
+            ny, nx = heights.shape
+            low, span = float(heights.min()), float(heights.max() - heights.min())
+            assets = root.find("asset") if root.find("asset") is not None else ET.Element("asset")
+            if root.find("asset") is None:
+                root.insert(list(root).index(world), assets)
+            # MuJoCo scales the elevations to [0, 1], times size[2], above the geom's z; its first row is at +y
+            # (paragym's at -y); to a nanometre, as MuJoCo keeps float32
+            ET.SubElement(assets, "hfield", name=args[0], nrow=str(ny), ncol=str(nx),
+                          size=_num([(nx - 1) * cell / 2, (ny - 1) * cell / 2, max(span, 1e-9), 0.1]),
+                          elevation=_num(np.round(heights[::-1] - low, 9).ravel()))
+            attrs.update(type="hfield", hfield=args[0], pos=_num([centre[0], centre[1], low]))
+        ET.SubElement(world, "geom", attrs)
+    return bool(grounds)
 
 
 def _fixed_geoms(world: ET.Element, fixed: list[tuple[str, Any]], time_step: float) -> None:
@@ -373,10 +483,13 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
     for name, shape in fixed:
         _urdf_link(root, name, shape, (0.0, 0.0, 0.0), 0.0)
         _urdf_joint(root, f"{name}_fixed", "fixed", base, name, shape.center, (0.0, 0.0, 0.0))
-    joints = []
-    for link in links:
+    joints, home = [], {}
+    for link, value in zip(links, scene.sim.joint_values(body), strict=True):
         parent = link.parent or base
         if link.joint == "spherical":  # three revolute joints about z, y, x
+            z, y, x = Rotation.from_quat(np.asarray(value, float)).as_euler("ZYX")
+            home.update({f"{link.name}_rz_joint": float(z), f"{link.name}_ry_joint": float(y),
+                         f"{link.name}_joint": float(x)})
             first, second = f"{link.name}_rz", f"{link.name}_ry"
             for child in (first, second):
                 _urdf_link(root, child, None, (0.0, 0.0, 0.0), AXIS_LINK_MASS)
@@ -394,6 +507,8 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
         _urdf_joint(root, f"{link.name}_joint", kind, parent, link.name, link.position, _rpy(link.orientation),
                     link.axis, motors.get(link.name, 0.0))
         joints.append({"link": link.name, "type": link.joint, "joints": [f"{link.name}_joint"]})
+        if link.joint != "fixed":
+            home[f"{link.name}_joint"] = float(value[0])
     sidecar = {
         "format": "paragym loop closures 1",
         "robot": model,
@@ -403,9 +518,13 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
                   for (_, link_a, _, link_b), (point_a, point_b) in scene.sim.loops.items()],
         "actuators": [{"joint": f"{link}_joint", "force_limit": limit} for link, limit in motors.items()],
         "joints": joints,
+        "home": home,
+        "missing": [f"{build[4:]} {name!r}: URDF has no ground; the MJCF export carries it"
+                    for name, (build, _) in scene.sim.recipes.items() if build in ("add_plane", "add_heightfield")],
         "note": "URDF has no ball joint: a spherical joint is three continuous joints about z, y and x through two "
                 f"links of {AXIS_LINK_MASS:g} kg; each loop closes by a ball joint between point_a on link_a "
-                "and point_b on link_b, each in its link's frame",
+                "and point_b on link_b, each in its link's frame; home gives every joint's value (rad or m) at "
+                "a pose where the loops close",
     }
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n", sidecar
@@ -413,16 +532,21 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
 
 def write(env_id: str, fmt: str, out: str | Path,
           overwrite: bool = False) -> tuple[list[Path], dict[str, float] | None]:
-    """Write ``env_id``'s mechanism as ``fmt`` ("mjcf" or "urdf") to ``out`` (a file; its suffix is the
-    format's, added when missing), with the URDF's sidecar beside it. An existing file is refused unless
-    ``overwrite``. Returns the paths written and, where ``mujoco`` is installed, the files checked against the
-    scene after ``reset(seed=0)`` (:func:`check_mjcf`, :func:`check_urdf`; None without ``mujoco``)."""
+    """Write ``env_id``'s mechanism as ``fmt`` ("mjcf" or "urdf") at its pose after ``reset(seed=0)`` to ``out``:
+    a file (its suffix is the format's, added when missing) or a folder (an existing one, or a path ending in a
+    separator), where the file is named after the env. The MJCF stands on its own (:func:`mjcf`'s ``home``); the
+    URDF's sidecar, beside it, holds the same pose. An existing file is refused unless ``overwrite``. Returns the
+    paths written and, where ``mujoco`` is installed, the files checked against the scene (:func:`check_mjcf`,
+    :func:`check_urdf`; None without ``mujoco``)."""
     import importlib.util
+    import os
 
     if fmt not in FORMATS:
         raise ValueError(f"format must be one of {', '.join(FORMATS)}; got {fmt!r}")
     path = Path(out)
-    if path.suffix != FORMATS[fmt]:
+    if path.is_dir() or str(out).endswith((os.sep, "/")):
+        path = path / (env_id.split("/")[-1] + FORMATS[fmt])
+    elif path.suffix != FORMATS[fmt]:
         path = path.with_name(path.name + FORMATS[fmt])
     paths = [path] + ([path.with_name(path.name + ".loops.json")] if fmt == "urdf" else [])
     existing = [str(p) for p in paths if p.exists()]
@@ -433,7 +557,7 @@ def write(env_id: str, fmt: str, out: str | Path,
         scene, model = scene_of(env), env_id.split("/")[-1]
         checks = importlib.util.find_spec("mujoco") is not None
         if fmt == "mjcf":
-            text = mjcf(scene, model)
+            text = mjcf(scene, model, home=True)
             texts, gaps = [text], check_mjcf(scene, text) if checks else None
         else:
             text, sidecar = urdf(scene, model)
@@ -528,7 +652,8 @@ def mujoco_pose(model: Any, links: list[LinkSpec], values: list[tuple[float, ...
 
 
 def check_mjcf(scene: Any, text: str) -> dict[str, float]:
-    """The exported MJCF, loaded in MuJoCo at the scene's joint values now, against the scene's tree
+    """The exported MJCF, loaded in MuJoCo at the scene's joint values now (at its ``home`` keyframe, for a file
+    written at a pose), against the scene's tree
     (:func:`tree_frames`): the largest gap of a link's frame (``frame_m``, m; ``frame_rad``, rad), and the largest
     gap at a loop closure (``loop_m``, m: zero where those joint values close the loops, as the kinematics'
     do)."""
@@ -537,7 +662,12 @@ def check_mjcf(scene: Any, text: str) -> dict[str, float]:
     body, links = tree_of(scene)
     values = scene.sim.joint_values(body)
     model = mujoco.MjModel.from_xml_string(text)
-    data = mujoco_pose(model, links, values, urdf=False)
+    if model.nkey:  # written at its pose (:func:`mjcf`'s ``home``): load that
+        data = mujoco.MjData(model)
+        mujoco.mj_resetDataKeyframe(model, data, model.key("home").id)
+        mujoco.mj_kinematics(model, data)
+    else:
+        data = mujoco_pose(model, links, values, urdf=False)
 
     def got(name: str) -> tuple[np.ndarray, np.ndarray]:
         b = model.body(name).id
