@@ -318,3 +318,17 @@ def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp
     played = _recorded(tmp_path, "conformance_reference")
     assert [r[1] for r in played["rows"]] == ["pybullet", "mujoco"] and "MuJoCo" in played["source"]
     assert all(r[3].startswith("1/1") and r[4].startswith("1/1") for r in played["rows"])
+
+
+def test_convergence_sweeps_one_model_more_finely(tmp_path):
+    """A smoke run of the convergence study (one hybrid episode at the shipped setting, half its step and twice
+    its iterations) records its rows; the half-step row is the same model: PyBullet's per-step motor gain
+    halves with the step, so that the servos stay as fast (unscaled, the finer rows were stiffer servos, and
+    MuJoCo's CaPaMan's KF verdicts moved from 10/10 to 4/10 with the step while its path moved 0.15 mm)."""
+    out = _run("benchmarks/convergence.py", "--env", "paragym/HybridSingularityFree-v2", "--engine", "pybullet",
+               "--episodes", "1", "--quick", "--record", str(tmp_path))
+    rows = _recorded(tmp_path, "convergence")["rows"]
+    assert [r[2].split(" (")[0] for r in rows] == ["shipped", "half step", "2x iterations"], out
+    assert "5 ms, 50 it, position_gain 0.3" in rows[0][2] and "2.5 ms, 50 it, position_gain 0.15" in rows[1][2]
+    assert rows[0][-1] and not rows[1][-1]  # the shipped row says whether it is converged
+    assert "smoke run" in _recorded(tmp_path, "convergence")["title"]

@@ -239,3 +239,20 @@ def test_the_hand_statics_is_what_both_engines_hold(env_id, within):
             assert np.abs(held - statics).max() < within, (engine, held, statics)
         finally:
             env.close()
+
+
+def test_a_refined_setting_is_the_same_model_on_a_finer_step():
+    """What a convergence study sweeps: at half the step and twice the iterations, MuJoCo's servos keep their
+    bandwidth in rad/s (a share per step, halved) and PyBullet's motors theirs (the position gain per step,
+    halved); the iterations double from the settings' own or, where they name none, the scene's."""
+    from paragym.sim.capaman_dynamic import CaPaManDynamics
+    from paragym.sim.client import refined
+
+    fine = MuJoCoSettings().refined(0.5, 2, bandwidth=0.25, solver_iterations=100)
+    assert fine.time_step == 5e-4 and fine.iterations == 200
+    assert fine.servo_bandwidth / fine.time_step == pytest.approx(0.25 / 1e-3)
+    own = MuJoCoSettings(servo_bandwidth=0.5, iterations=40).refined(0.25, 4, bandwidth=0.25, solver_iterations=100)
+    assert own.iterations == 160 and own.servo_bandwidth / own.time_step == pytest.approx(0.5 / 1e-3)
+    d = refined(CaPaManDynamics.split(), 0.5, 2)
+    assert (d.time_step, d.solver_iterations, d.position_gain) == (2.5e-3, 200, 0.15)
+    assert d.layout == "split" and d.velocity_gain == CaPaManDynamics.split().velocity_gain

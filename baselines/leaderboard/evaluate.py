@@ -14,7 +14,7 @@ from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 from paragym.baselines.tasks import bench_of, tightest
 from paragym.rollout import run_episode
 
-__all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job", "evaluate_validation"]
+__all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job", "evaluate_validation", "run_dynamic"]
 
 _ENVS: dict[str, gym.Env] = {}
 
@@ -61,14 +61,12 @@ def evaluate_episode(spec: PolicySpec, seed: int, episode: int, producer: str | 
                       ep.success, metrics, wall, producer=spec.producer() if producer is None else producer)
 
 
-def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str | None = None,
-                     engine: str = "pybullet") -> DynamicRow:
-    """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
-    from reset seed ``seed`` in the dynamic fidelity of ``engine`` (:func:`dynamic_kwargs`),
-    measure it as a kinematic episode is measured, and validate what it
-    executed against what it commanded (the accelerometers and the Kalman
-    filter: :func:`paragym.validation.episode.validate_episode`). A planner
-    that finds no plan stands still, as in :func:`evaluate_episode`."""
+def run_dynamic(spec: PolicySpec, scenario: str, seed: int, kwargs: dict[str, Any]) -> tuple[Any, float]:
+    """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case) from reset seed ``seed`` in the
+    env made with ``kwargs`` (a dynamic fidelity's: :func:`dynamic_kwargs`, or other physics settings), and
+    validate what it executed against what it commanded (:func:`paragym.validation.episode.validate_episode`,
+    its sensors drawn from ``seed``). A planner that finds no plan stands still, as in :func:`evaluate_episode`.
+    Returns the validation and 1.0 where the policy failed so (else 0.0)."""
     import warnings
 
     from paragym.baselines.simple import ZeroPolicy
@@ -76,22 +74,29 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
     from paragym.validation.episode import validate_episode
 
     arg = registry.row(spec.env_id).paper_scenario if scenario == "paper" else scenario
-    t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=".*is out of date.*")
-        env = gym.make(spec.env_id, scenario=arg, **dynamic_kwargs(spec.env_id, engine))
-    failed = 0.0
+        env = gym.make(spec.env_id, scenario=arg, **kwargs)
     try:
         try:
-            val = validate_episode(env, spec.factory(env, seed), seed=seed, sensor_seed=seed)
+            return validate_episode(env, spec.factory(env, seed), seed=seed, sensor_seed=seed), 0.0
         except PlanningError:
-            failed = 1.0
-            val = validate_episode(env, ZeroPolicy(env.action_space), seed=seed, sensor_seed=seed)
+            return validate_episode(env, ZeroPolicy(env.action_space), seed=seed, sensor_seed=seed), 1.0
         except (ValueError, TypeError) as exc:
             raise ValueError(f"policy {spec.name!r} on {spec.env_id}, dynamic fidelity, {scenario} scenario, reset "
                              f"seed {seed}: {exc}") from exc
     finally:
         env.close()
+
+
+def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str | None = None,
+                     engine: str = "pybullet") -> DynamicRow:
+    """Run ``spec``'s episode of ``scenario`` ("paper": the env's paper case)
+    from reset seed ``seed`` in the dynamic fidelity of ``engine`` (:func:`dynamic_kwargs`),
+    measure it as a kinematic episode is measured, and validate what it
+    executed against what it commanded (:func:`run_dynamic`)."""
+    t0 = time.perf_counter()
+    val, failed = run_dynamic(spec, scenario, seed, dynamic_kwargs(spec.env_id, engine))
     metrics = bench_of(spec.env_id).metrics(val.episode)
     metrics["policy_failed"] = failed
     worst = ("not validated: the episode ended before the sensors took enough samples" if val.report is None
@@ -100,7 +105,6 @@ def evaluate_dynamic(spec: PolicySpec, scenario: str, seed: int, producer: str |
     return DynamicRow(spec.env_id, spec.name, scenario, seed, val.episode_return, val.success, metrics, val.passed,
                       kf, time.perf_counter() - t0,
                       producer=dynamic_producer(spec, engine) if producer is None else producer)
-
 
 
 def evaluate_validation(spec: PolicySpec, seed: int, producer: str | None = None) -> ValidationRow:

@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -81,6 +81,9 @@ class CaPaManDynamics:
     motor_torque: float = 8.0  # N m, per crank
     position_gain: float = 0.3
     velocity_gain: float = 1.0
+    #: the settings that are per physics step: PyBullet's motor position gain corrects that share of the error
+    #: per step, a bandwidth of position_gain / time_step; the same model at another step scales them with it
+    PER_STEP: ClassVar[tuple[str, ...]] = ("position_gain",)
     time_step: float = 1e-3  # s
     solver_iterations: int = 150
     gravity: float = 9.81

@@ -29,7 +29,7 @@ from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
 
 __all__ = ["LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
-           "physics_steps"]
+           "physics_steps", "refined"]
 
 #: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
 Motors = Sequence[tuple[str, Sequence[int]]]
@@ -55,6 +55,19 @@ def physics_steps(duration: float, time_step: float) -> int:
     """Physics steps of ``time_step`` s that make up ``duration`` s of control (at least one): the duration
     rounded to whole steps (:func:`exact_time_step` gives the step that makes it up exactly)."""
     return max(1, int(round(duration / time_step)))
+
+
+def refined(dynamics: Any, step: float, iterations: int) -> Any:
+    """The same model as ``dynamics`` (a dynamic scene's settings: a frozen dataclass with ``time_step`` and
+    ``solver_iterations``) integrated at ``step`` times its physics step with ``iterations`` times its solver
+    iterations: its per-step settings (its class's ``PER_STEP`` names, e.g. PyBullet's motor position gain,
+    whose bandwidth is the gain over the step) scaled with the step, so that the servos stay as fast. What a
+    convergence study sweeps (``benchmarks/convergence.py``)."""
+    from dataclasses import replace
+
+    per_step = {name: getattr(dynamics, name) * step for name in getattr(dynamics, "PER_STEP", ())}
+    return replace(dynamics, time_step=dynamics.time_step * step,
+                   solver_iterations=int(dynamics.solver_iterations * iterations), **per_step)
 
 
 def divides(duration: float, time_step: float) -> bool:

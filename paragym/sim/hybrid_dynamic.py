@@ -44,7 +44,7 @@ measured by ``benchmarks/env_speed.py``; the figures are in CHANGELOG.md.
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from scipy.interpolate import PchipInterpolator
@@ -69,6 +69,9 @@ class HybridDynamics:
     motor_force: float = 800.0  # N per actuator
     position_gain: float = 0.3
     velocity_gain: float = 1.0
+    #: the settings that are per physics step: PyBullet's motor position gain corrects that share of the error
+    #: per step, a bandwidth of position_gain / time_step; the same model at another step scales them with it
+    PER_STEP: ClassVar[tuple[str, ...]] = ("position_gain",)
     time_step: float = 1e-3
     solver_iterations: int = 150
     gravity: float = 9.81

@@ -31,7 +31,7 @@ steps. Lengths in m, angles in rad, forces in N or N m.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -70,6 +70,15 @@ class MuJoCoSettings:
     def fast(cls) -> MuJoCoSettings:
         """A 2 ms step (class docstring): half the physics steps of the default."""
         return cls(time_step=MAX_STEP)
+
+    def refined(self, step: float, iterations: int, bandwidth: float, solver_iterations: int) -> MuJoCoSettings:
+        """The same model integrated at ``step`` times this physics step with ``iterations`` times the solver's
+        iterations (these settings', else ``solver_iterations``, the scene's): the servos' bandwidth, a share
+        per step (these settings', else ``bandwidth``, the scene's), scaled with the step, so that they stay as
+        fast in rad/s. What a convergence study sweeps (``benchmarks/convergence.py``)."""
+        return replace(self, time_step=self.time_step * step,
+                       servo_bandwidth=(self.servo_bandwidth or bandwidth) * step,
+                       iterations=int((self.iterations or solver_iterations) * iterations))
 
     def __post_init__(self) -> None:
         if not (isinstance(self.time_step, int | float) and 0 < self.time_step <= MAX_STEP):
