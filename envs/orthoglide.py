@@ -83,7 +83,11 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     ``w_track`` in both action modes, is how far the tool is from the
     path). ``dynamics``: an
     :class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamics`. ``engine``:
-    "pybullet" only (MuJoCo's world of the 2PRR is not built).
+    the dynamic fidelity's physics, "pybullet" (default) or "mujoco" (or a
+    :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`): the same model, rules
+    and checks in MuJoCo (the ``mujoco`` extra; its servos correct an error
+    at 100 /s as PyBullet's motors do, and the sliders ride their guides
+    without touching them; the conformance page compares the engines).
 
     ## Version History
     * v0: initial release (kinematic fidelity).
@@ -103,6 +107,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+    * paragym 0.10, every version and rung: ``engine="mujoco"`` runs the dynamic fidelity in MuJoCo
+      (issue 52); PyBullet's, the default, runs as before.
     """
 
     task, rules = TASK, RULES[0]

@@ -12,9 +12,10 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
   robot's parts do not collide with each other (``contype`` 2, ``conaffinity`` 1) but with the fixed parts
   (1, 2), as in the scene; the fixed parts' contacts take the loops' ``solref``/``solimp``: with MuJoCo's
   defaults the CaPaMan pushed into a box at its torque limit sank 1.8 mm deeper than in PyBullet, with these
-  0.5 mm (``benchmarks/conformance.py``). Ground (the tripod's plane or heightfield) is a world geom
-  (a heightfield an ``hfield`` asset) that takes each robot part's friction coefficient, on MuJoCo's elliptic
-  friction cone at an ``impratio`` of 10: with the defaults (a pyramid at 1) the tripod standing still crept
+  0.5 mm (``benchmarks/conformance.py``). A part that slides along a fixed guide (a scene's
+  ``RIDING`` links, the 2PRR's sliders) touches nothing: its joint is the guide. Ground (the tripod's plane
+  or heightfield) is a world geom (a heightfield an ``hfield`` asset) that takes each robot part's friction
+  coefficient, on MuJoCo's elliptic friction cone at an ``impratio`` of 10: with the defaults (a pyramid at 1) the tripod standing still crept
   1.5 mm/s at its wheels; with these 0.07 mm/s, at 1 ms as at 0.5 ms or with twice the iterations.
   A written file (:func:`write`) stands on its own: its ``qpos0`` and ``home`` keyframe are the pose after
   ``reset(seed=0)``, where the loops close, and its servos are ``general`` actuators whose ``ctrl`` is the
@@ -270,6 +271,9 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
                 friction = scene.sim.contact_friction(body, scene.sim.link_index(body, link.name)) if ground else None
                 _mjcf_geom(el, link.shape, link.shape_offset, robot=True, mass=link.mass, rgba=link.rgba,
                            friction=friction)
+                if link.name in getattr(scene, "RIDING", ()):  # it slides along its guide: its joint is the guide
+                    el[-1].set("contype", "0")
+                    el[-1].set("conaffinity", "0")
     sites = []
     for k, ((body_a, link_a, body_b, link_b), (point_a, point_b)) in enumerate(scene.sim.loops.items()):
         for side, body, link, point in (("a", body_a, link_a, point_a), ("b", body_b, link_b, point_b)):

@@ -308,6 +308,16 @@ class MuJoCoSim:
             return self.mirror.motor_positions(motors)
         return self.data.qpos[self._motors(motors)[1]].copy()
 
+    def joint_positions(self, name: str, joints: Sequence[int]) -> np.ndarray:
+        """The positions of 1-dof joints of body ``name`` now (rad or m), as PyBullet's ``joint_positions``."""
+        return self.motor_positions([(name, joints)])
+
+    def set_time_step(self, time_step: float) -> None:
+        """Change MuJoCo's physics step (s) from the next step on (a scene that steps a duration exactly); the
+        servos and loop closures keep the gains they were written with for :attr:`settings`' step."""
+        self._ready()
+        self.model.opt.timestep = self.time_step = float(time_step)
+
     def motor_forces(self, motors: Sequence[tuple[str, Sequence[int]]]) -> np.ndarray:
         """The force (N) or torque (N m) each servo of ``motors`` applied in the last step, in their order."""
         self._ready()

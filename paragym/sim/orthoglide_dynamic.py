@@ -31,12 +31,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from paragym.mechanisms import orthoglide as og
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, exact_time_step
+from paragym.sim.mujoco_sim import simulate_in
 from paragym.sim.obstacles import Box
 
 __all__ = ["OrthoglideDynamicScene", "OrthoglideDynamics"]
@@ -80,9 +82,18 @@ class OrthoglideDynamicScene:
     #: the x guide's end, or beneath them (v2)
     TABLE_Z = {False: -0.04, True: -0.06}
 
+    #: the links that slide along a fixed guide: their prismatic joints are the guides, so in a model file they
+    #: touch nothing (:func:`paragym.sim.export.mjcf`). PyBullet's rigid contact with the guide's face carries no
+    #: load; MuJoCo's soft one does, with friction along the slide (an overconstrained slider)
+    RIDING = ("slider_a", "slider_b")
+    #: MuJoCo's servos (:func:`paragym.sim.export.servo_gains`): 100 /s at its 1 ms step, the rate at which
+    #: PyBullet's motors correct an error (:attr:`OrthoglideDynamics.bandwidth`). At the export's default,
+    #: 500 /s, they rang against their force limits and the tool fell 5 mm behind within 0.3 s
+    EXPORT_SERVO_BANDWIDTH = 0.1
+
     def __init__(self, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
                  dynamics: OrthoglideDynamics | None = None, gui: bool = False,
-                 table_below_guides: bool = False) -> None:
+                 table_below_guides: bool = False, engine: Any = None) -> None:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or OrthoglideDynamics()
         self.sim = PyBulletSim(gui=gui)
@@ -122,6 +133,10 @@ class OrthoglideDynamicScene:
         sim.ball_joint(self.ROBOT, self.links[0], [half, 0.0, 0.0], self.links[1], [half, 0.0, -0.02])
         self._target = np.zeros(3)
         self._path_bodies: list[str] = []
+        simulate_in(self, engine)  # MuJoCo's physics where ``engine`` is its settings (None: PyBullet's)
+        #: the engine's physics step (s): the dynamics' in PyBullet, the settings' in MuJoCo; a step that must
+        #: divide a duration exactly is shortened from it (:meth:`drive`)
+        self.base_step = self.sim.time_step
 
     def hold(self, duration: float) -> None:
         """Keep the three motors' targets (m) where they are for ``duration`` s of simulated time, the motors
@@ -150,7 +165,7 @@ class OrthoglideDynamicScene:
         physics steps, or, with ``exact``, exactly (the physics step then
         shortened to divide it, the motors' bandwidth kept)."""
         d, rho = self.dynamics, np.asarray(rho, float)
-        step = exact_time_step(duration, d.time_step) if exact else d.time_step
+        step = exact_time_step(duration, self.base_step) if exact else self.base_step
         if step != self.sim.time_step:
             self.sim.set_time_step(step)
         self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, step, d.motor_force,

@@ -36,6 +36,7 @@ from numba import njit
 
 from paragym.kernels import KernelArrays
 from paragym.mechanisms import orthoglide as og
+from paragym.sim import mujoco_sim
 from paragym.tasks import orthoglide as scenarios_module
 from paragym.tasks.base import (
     BROKEN_GAP,
@@ -90,8 +91,8 @@ class OrthoglideRules:
     table_below_guides: bool = False
 
 
-#: the engines of the dynamic fidelity (the env's ``engine`` argument): PyBullet's only
-ENGINES = ("pybullet",)
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
+ENGINES = mujoco_sim.ENGINES
 #: the rules of Orthoglide2PRRKappa-v0, -v1 and -v2
 RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideRules(1, tracking=True, exact_time=True),
          2: OrthoglideRules(2, tracking=True, exact_time=True, table_below_guides=True)}
@@ -119,6 +120,8 @@ class OrthoglideParams:
     fidelity: str = "kinematic"
     dynamics: Any = None
     rules: OrthoglideRules = RULES[0]
+    #: the dynamic fidelity's engine: None (PyBullet) or MuJoCo's settings (:mod:`paragym.sim.mujoco_sim`)
+    engine: Any = None
 
     @classmethod
     def from_kwargs(cls, rules: OrthoglideRules, scenario: Any = "random", action_mode: str | None = None,
@@ -131,7 +134,7 @@ class OrthoglideParams:
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
         refuse_unknown(unknown, (), "Orthoglide2PRRKappa")
-        check_engine(engine, ENGINES, fidelity)  # PyBullet's only: the argument is every task's
+        engine = check_engine(engine, ENGINES, fidelity)
         if not rules.tracking and track_tolerance is not None:
             raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1 and later, not of v0")
         track_tolerance = check_number("track_tolerance", 0.005 if track_tolerance is None else track_tolerance,
@@ -147,7 +150,7 @@ class OrthoglideParams:
         scenario = scenarios_module.resolve_scenario(scenario, geometry)
         return cls(action_mode == "joint_velocity", float(max_null_rate), float(max_joint_rate), float(w_track),
                    float(limit_penalty), geometry, 1 if rules.tracking else 0, track_tolerance, scenario,
-                   action_mode, fidelity, dynamics, rules)
+                   action_mode, fidelity, dynamics, rules, engine)
 
     def __getstate__(self) -> dict[str, Any]:
         """A copy or a pickle leaves out the starts the parameters remember (:func:`_starts`): weak references,

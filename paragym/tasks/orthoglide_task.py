@@ -71,7 +71,7 @@ class OrthoglideTask(TaskBase):
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
 
         scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human",
-                                       table_below_guides=params.rules.table_below_guides)
+                                       table_below_guides=params.rules.table_below_guides, engine=params.engine)
         return DynamicWorld(scene, exact_time=params.rules.exact_time)
 
     def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
@@ -110,7 +110,7 @@ class OrthoglideTask(TaskBase):
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
     """v0 in dynamic fidelity simulates each path step over whole physics steps: say so where that is not the
     path's own time (its hole; v1 simulates it exactly)."""
-    h = world.scene.dynamics.time_step
+    h = world.scene.base_step
     for path in drawn:
         dt = np.diff(path.t)
         if not all(divides(float(d), h) for d in np.unique(dt)):

@@ -20,7 +20,8 @@ __all__ = ["DynamicWorld"]
 
 
 class DynamicWorld:
-    """One robot under PyBullet's dynamics (:class:`paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`).
+    """One robot under physics (:class:`paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`, in PyBullet or
+    MuJoCo).
 
     A step's joints (the least-norm motion and the agent's null-space motion,
     or the agent's joint rates, added to the last command, as a controller
@@ -60,7 +61,7 @@ class DynamicWorld:
         """The tool holder at C on link AC."""
         scene = self.scene
         return (scene.sim, scene.ROBOT, scene.links[0], np.array([scene.geometry.link, 0.0, 0.0]),
-                scene.dynamics.time_step)
+                scene.base_step)
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """C and link AC's direction from the commanded joints (paper 003, eqs 1-6), at the link's height."""
@@ -71,7 +72,7 @@ class DynamicWorld:
         return np.array([c[0], c[1], sim.link_frame(robot, link)[0][2], 0.0, 0.0, yaw])
 
     def step_duration(self, state: Any, params: Any) -> float:
-        h, k = self.scene.dynamics.time_step, int(state.k[0])
+        h, k = self.scene.base_step, int(state.k[0])
         return h * physics_steps(float(state.dt[0, k - 1]), h) if k > 0 else 0.0
 
 
