@@ -441,7 +441,7 @@ def write_pages(folder: str | Path, images: bool = True, env_ids: list[str] | No
 
 #: the result files of the conformance page (:func:`conformance_page`), by their names' beginnings; the speed
 #: page has the others
-CONFORMANCE = ("conformance", "reference_dynamic")
+CONFORMANCE = ("conformance", "convergence", "reference_dynamic")
 
 
 def _result_sections(files: list[dict[str, Any]]) -> list[str]:
@@ -487,12 +487,13 @@ def conformance_page(results: str | Path) -> str:
     ``benchmarks/reference_dynamic.py``'s result files, :data:`CONFORMANCE`), as :func:`speed_page` makes its
     sections, under a guide to reading them. No figure is typed in."""
     out = ["# Conformance: two engines, one mechanism", "",
-           "paragym's dynamic fidelity runs in PyBullet and, for the CaPaMan and the hybrid, in MuJoCo "
+           "paragym's dynamic fidelity runs in PyBullet and, for every task whose ids accept it, in MuJoCo "
            "(`gym.make(id, fidelity=\"dynamic\", engine=\"mujoco\")`, [the dynamics guide](guides/dynamics.md)). "
            "Both engines simulate the same model: MuJoCo's is the MJCF that `paragym export` writes from the "
            "PyBullet scene, its loop closures as `connect` constraints. The tables below come from one run of "
-           "`benchmarks/conformance.py` (and `benchmarks/reference_dynamic.py` for 30 episodes per engine), "
-           "with the date, the machine, the commit and the engines' versions of that run.", "",
+           "`benchmarks/conformance.py` (and `benchmarks/convergence.py`, `benchmarks/reference_dynamic.py` for "
+           "30 episodes per engine), with the date, the machine, the commit and the engines' versions of that run.",
+           "",
            "How to read them. *Holding*: where a loop mechanism's motors hold it under gravity, both engines must "
            "find the holding forces that virtual work on the mechanism gives by hand (`paragym.sim.statics`, "
            "which neither engine computes) and keep the loops closed; the MuJoCo rows with its default "
@@ -502,5 +503,8 @@ def conformance_page(results: str | Path) -> str:
            "and let the tool sink deeper, so the export gives the fixed parts the loops' stiffness. *The "
            "reference*: the paper's method, judged by success and the KF check in each engine on the same "
            "seeds; where the engines part, the episode's own measures (loop residual, distance from the "
-           "command) say which engine drifted.", ""]
+           "command) say which engine drifted. *Convergence*: a verdict is the physics' only where it holds at "
+           "half the step and twice the solver's iterations; each task's reference runs the same episodes at "
+           "the shipped setting and ever finer ones of the same model, and the shipped row says whether its "
+           "verdicts and path held, or what error it carries.", ""]
     return "\n".join(out + _result_sections(_result_files(results, conformance=True)))

@@ -13,7 +13,6 @@ import pytest
 
 from paragym import machine
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
-from paragym.baselines.leaderboard.suite import dynamic_engines
 from paragym.baselines.leaderboard.results import (
     TOLERANCE,
     _digest,
@@ -23,6 +22,7 @@ from paragym.baselines.leaderboard.results import (
     tolerance_of,
     verify,
 )
+from paragym.baselines.leaderboard.suite import dynamic_engines
 from paragym.baselines.store import ResultStore
 
 ORTHO = "paragym/Orthoglide2PRRKappa-v1"

@@ -15,8 +15,8 @@ every link's joint frame, axis, part and mass, every loop closure and every moto
   0.5 mm (``benchmarks/conformance.py``). A part that slides along a fixed guide (a scene's
   ``RIDING`` links, the 2PRR's sliders) touches nothing: its joint is the guide. Ground (the tripod's plane
   or heightfield) is a world geom (a heightfield an ``hfield`` asset) that takes each robot part's friction
-  coefficient, on MuJoCo's elliptic friction cone at an ``impratio`` of 10: with the defaults (a pyramid at 1) the tripod standing still crept
-  1.5 mm/s at its wheels; with these 0.07 mm/s, at 1 ms as at 0.5 ms or with twice the iterations.
+  coefficient, on MuJoCo's elliptic friction cone at an ``impratio`` of 10, under which friction holds below
+  its limit (with the defaults, a pyramid at 1, a loaded wheel creeps; the dynamics guide has the figures).
   A written file (:func:`write`) stands on its own: its ``qpos0`` and ``home`` keyframe are the pose after
   ``reset(seed=0)``, where the loops close, and its servos are ``general`` actuators whose ``ctrl`` is the
   target's displacement from home (zero holds it), so that ``MjData`` stepped as loaded holds its loops.

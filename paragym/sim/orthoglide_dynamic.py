@@ -87,8 +87,8 @@ class OrthoglideDynamicScene:
     #: load; MuJoCo's soft one does, with friction along the slide (an overconstrained slider)
     RIDING = ("slider_a", "slider_b")
     #: MuJoCo's servos (:func:`paragym.sim.export.servo_gains`): 100 /s at its 1 ms step, the rate at which
-    #: PyBullet's motors correct an error (:attr:`OrthoglideDynamics.bandwidth`). At the export's default,
-    #: 500 /s, they rang against their force limits and the tool fell 5 mm behind within 0.3 s
+    #: PyBullet's motors correct an error (:attr:`OrthoglideDynamics.bandwidth`); the export's default rings
+    #: (the dynamics guide)
     EXPORT_SERVO_BANDWIDTH = 0.1
 
     def __init__(self, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,
