@@ -21,8 +21,10 @@ tool stops, how far from PyBullet's stop, and the loops' largest gap under the p
 *The reference*: the bench's reference of each id whose task runs MuJoCo plays ``--episodes`` dynamic episodes
 (the paper's case, then random scenarios from reset seed 300001, the leaderboard's physics settings) in each
 engine, judged as the leaderboard judges them (success, and the KF check of the executed against the commanded
-motion), with the loop residual over every step, the largest distance of the validated body from its command
-(mm) and the env steps per second.
+motion), at the settings it runs there (step and iterations), with the mean episode length (env steps), the
+loop residual over every step, the largest distance of the validated body from its command (mm), how far its
+executed path runs from PyBullet's on the same seed (at equal times, and as curves: mm) and the env steps per
+second.
 
     python benchmarks/conformance.py [--env ID ...] [--seconds 1.0] [--seed 0] [--episodes 10] [--record]
 """
@@ -35,6 +37,7 @@ import time
 import warnings
 
 import numpy as np
+from convergence import curve_gap_mm, path_gap_mm, settings_label
 from reference_dynamic import scenario_of
 from results_file import add_record_option, engine_versions, paragraph, record
 
@@ -151,6 +154,17 @@ def contact() -> list[list[str]]:
     return rows
 
 
+def dynamic_settings(env_id: str, engine: str) -> str:
+    """The physics step and iterations the leaderboard's dynamic episodes of ``env_id`` run at in ``engine``."""
+    from paragym.baselines.leaderboard.suite import dynamic_kwargs
+
+    kwargs = dynamic_kwargs(env_id, engine)
+    if engine == "pybullet":
+        return settings_label(kwargs, engine)
+    s = kwargs["engine"]  # MuJoCo takes the scene's iterations where its settings name none
+    return f"{s.time_step * 1e3:g} ms, {s.iterations or kwargs['dynamics'].solver_iterations} it"
+
+
 def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
     """The reference's table's rows: each id's reference in each engine (module docstring)."""
     import gymnasium as gym
@@ -170,9 +184,11 @@ def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
         if len(engines) < 2:
             continue
         spec = get_policy(env_id, bench_of(env_id).reference)
+        paths: dict[str, list[dict[str, np.ndarray]]] = {}
         for engine in engines:
             won = passed = steps = 0
             residuals, errors, wall = [], [], 0.0
+            paths[engine] = []
             for i in range(episodes):
                 scenario, seed = scenario_of(i)
                 arg = registry.row(env_id).paper_scenario if scenario == "paper" else scenario
@@ -186,11 +202,18 @@ def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
                 finally:
                     env.close()
                 won, passed, steps = won + val.success, passed + val.passed, steps + val.steps
-                residuals += [info["loop_residual_m"] for info in val.episode.infos]
+                residuals += [info["loop_residual_m"] for info in val.episode.infos if "loop_residual_m" in info]
                 errors.append(val.position_error)
-            rows.append([env_id, engine, spec.name, rate(won, episodes), rate(passed, episodes),
-                         f"{np.mean(residuals) * 1e3:.3g}", f"{np.max(residuals) * 1e3:.3g}",
-                         f"{np.max(errors) * 1e3:.3g}", f"{steps / wall:.0f}"])
+                paths[engine].append({"t": val.executed.t, "path": val.executed.position})
+            pairs = list(zip(paths[engine], paths[engines[0]], strict=True))
+            apart = (f"{max(path_gap_mm(a, b) for a, b in pairs):.3g}",
+                     f"{max(curve_gap_mm(a, b) for a, b in pairs):.3g}")
+            rows.append([env_id, engine, spec.name, dynamic_settings(env_id, engine), rate(won, episodes),
+                         rate(passed, episodes), f"{steps / episodes:.1f}",
+                         f"{np.mean(residuals) * 1e3:.3g}" if residuals else "-",
+                         f"{np.max(residuals) * 1e3:.3g}" if residuals else "-",
+                         f"{np.max(errors) * 1e3:.3g}", *(("-", "-") if engine == engines[0] else apart),
+                         f"{steps / wall:.0f}"])
             print(" | ".join(rows[-1]), flush=True)
     return rows
 
@@ -222,8 +245,10 @@ def main() -> None:
            ["push", "engine", "tool stopped at x y z [mm]", "from PyBullet's stop [mm]", "loop gap, max [mm]",
             "simulated seconds per second"], pushed, order=63, folder=args.record, source=engine_versions())
     record("conformance_reference", "Two engines on one mechanism: the paper's method", paragraph(__doc__, 3),
-           ["env", "engine", "policy", "success [95% CI]", "KF PASS [95% CI]", "loop residual, mean [mm]",
-            "loop residual, max [mm]", "largest distance from the command [mm]", "env steps/s"], played,
+           ["env", "engine", "policy", "settings (the leaderboard's)", "success [95% CI]", "KF PASS [95% CI]",
+            "env steps per episode", "loop residual, mean [mm]", "loop residual, max [mm]",
+            "largest distance from the command [mm]", "path from PyBullet's at equal times [mm]",
+            "path from PyBullet's as a curve [mm]", "env steps/s"], played,
            order=64, folder=args.record, source=engine_versions())
 
 

@@ -317,7 +317,10 @@ def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp
     assert [r[1] for r in pushes] == ["PyBullet", "MuJoCo"] * 2 and all(float(r[3]) < 1.0 for r in pushes[1::2])
     played = _recorded(tmp_path, "conformance_reference")
     assert [r[1] for r in played["rows"]] == ["pybullet", "mujoco"] and "MuJoCo" in played["source"]
-    assert all(r[3].startswith("1/1") and r[4].startswith("1/1") for r in played["rows"])
+    assert all(r[4].startswith("1/1") and r[5].startswith("1/1") for r in played["rows"])
+    # at the leaderboard's settings, with the episodes' lengths and the paths' distance from PyBullet's
+    assert played["rows"][0][3] == "5 ms, 100 it, position_gain 0.3" and played["rows"][1][3] == "1 ms, 100 it"
+    assert float(played["rows"][0][6]) > 0 and played["rows"][0][10] == "-" and float(played["rows"][1][11]) < 1
 
 
 def test_convergence_sweeps_one_model_more_finely(tmp_path):
