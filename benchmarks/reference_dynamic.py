@@ -47,13 +47,16 @@ def main() -> None:
     parser.add_argument("--episodes", type=int, default=30, help="dynamic episodes per env, the paper's first")
     parser.add_argument("--policy", default=None, help="a policy name (default: each bench's reference)")
     parser.add_argument("--engine", default="pybullet", choices=("pybullet", "mujoco"),
-                        help="the dynamic fidelity's engine (MuJoCo: the CaPaMan's and the hybrid's ids)")
+                        help="the dynamic fidelity's engine (ids whose task does not run it are left out)")
     add_record_option(parser)
     args = parser.parse_args()
     if args.episodes < 1:
         parser.error(f"--episodes must be at least 1, got {args.episodes}")
     rows = []
     for env_id in args.env or list(registry.newest()):
+        if args.engine not in registry.row(env_id).engines:
+            print(f"{env_id}: its task's dynamic fidelity does not run in {args.engine}; left out", flush=True)
+            continue
         name = args.policy or bench_of(env_id).reference
         spec = get_policy(env_id, name)
         t0 = time.perf_counter()
