@@ -426,8 +426,8 @@ def _creep(dynamics, force: float = 100.0, seconds: float = 2.0) -> float:
     """How far (m) a loaded drive unit slides along its axle in ``seconds`` with its wheels held, pushed that way
     by ``force`` (N) on top of the legs' thrust, once the robot has settled for 0.5 s."""
     from paragym.mechanisms.geometry import quat_to_matrix
-    from paragym.sim.export import scene_of
     from paragym.sim.client import physics_steps
+    from paragym.sim.export import scene_of
 
     env = gym.make("paragym/MobileTripodOdometry-v2", fidelity="dynamic", scenario="initial_heading",
                    dynamics=dynamics)
