@@ -213,9 +213,10 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     With ``home`` the file stands on its own at the scene's pose now (a closed one after a reset): every body is
     written where that pose puts it, so that the model's reference configuration ``qpos0`` is the pose (a hinge's
     or slide's ``ref`` is its value there, so its ``qpos`` still means the scene's joint value; a ball's ``qpos``
-    is its rotation from the pose; a free body starts where it is), and a keyframe ``home`` holds ``qpos0`` with
-    every servo's ``ctrl`` at its joint's value there. Without it the bodies are written at joint values of zero:
-    the form :class:`~paragym.sim.mujoco_sim.MuJoCoSim` compiles and poses itself."""
+    is its rotation from the pose; a free body starts where it is), a keyframe ``home`` holds ``qpos0``, and the
+    servos are ``general`` actuators whose ``ctrl`` is the target's displacement from home (a ``ctrl`` of zero,
+    ``MjData``'s, holds the pose). Without it the bodies are written at joint values of zero and the servos as
+    ``position`` actuators: the form :class:`~paragym.sim.mujoco_sim.MuJoCoSim` compiles and poses itself."""
     trees, fixed = bodies_of(scene.sim)
     motors = _motors(scene)
     d = scene.dynamics
@@ -226,7 +227,7 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
                   iterations=str(int(d.solver_iterations if iterations is None else iterations)))
     ground = _ground(root, scene.sim, h)
     if ground:  # friction that holds below its limit: MuJoCo's pyramid cone at an impratio of 1 lets a loaded
-        # wheel creep; the elliptic cone at 10 holds it, as PyBullet does (``benchmarks/conformance.py``)
+        # wheel creep; the elliptic cone at 10 holds it (the dynamics guide)
         root.find("option").set("cone", "elliptic")
         root.find("option").set("impratio", "10")
     world = root.find("worldbody")
