@@ -493,3 +493,31 @@ def test_the_tripod_kf_check_passes_the_true_plate_and_fails_odometry():
             env.close()
     assert verdicts["truth"].passed and verdicts["truth"].position_error < 0.01, verdicts["truth"].report
     assert not verdicts["odometry"].passed and verdicts["odometry"].position_error > 0.03
+
+
+def test_the_2prr_sliders_rest_on_their_guides_without_load_in_pybullet():
+    """What the MJCF's riding sliders stand on (``OrthoglideDynamicScene.RIDING``): in PyBullet each slider
+    touches its guide's face every step and the contact carries no force, normal or friction, over the
+    reference's episode; the joint is the guide. MuJoCo's soft contact there would carry load, so the exported
+    sliders touch nothing."""
+    import pybullet as pb
+
+    from paragym.baselines.policies import get_policy
+
+    env = gym.make("paragym/Orthoglide2PRRKappa-v2", fidelity="dynamic", scenario="random")
+    try:
+        obs, info = env.reset(seed=300001)
+        policy = get_policy("paragym/Orthoglide2PRRKappa-v2", "gradient-c-limited").factory(env, 300001)
+        policy.reset(obs, info)
+        scene = env.unwrapped.world.scene
+        sim, points = scene.sim, []
+        robot = sim.body(scene.ROBOT)
+        guides = [sim.body(name) for name in ("guide_x", "guide_y")]
+        sim.after_step.append(lambda: points.extend(p for g in guides for p in pb.getContactPoints(
+            robot, g, physicsClientId=sim._client)))
+        for _ in range(100):
+            obs, _, terminated, truncated, info = env.step(policy.act(obs, info))
+        assert {p[3] for p in points} == {sim.link_index(scene.ROBOT, name) for name in scene.RIDING}
+        assert max(abs(p[9]) + abs(p[10]) + abs(p[12]) for p in points) == 0.0
+    finally:
+        env.close()
