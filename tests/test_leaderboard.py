@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard, summarise
+from paragym.baselines.leaderboard.suite import dynamic_engines
 from paragym.baselines.policies import get_policy, policies_for, register_policy
 from paragym.baselines.simple import ZeroPolicy
 from paragym.baselines.store import EpisodeRow, ResultStore
@@ -262,7 +263,7 @@ def test_every_policy_gets_dynamic_episodes_and_its_own_kf_verdict(tmp_path):
     assert ref["metrics"]["mean_kappa"] == pytest.approx(by_policy["gradient-c"].metrics["mean_kappa"], rel=0.05)
     with ResultStore(tmp_path / "r.sqlite") as store:
         rows = store.dynamic_rows()
-        assert len(rows) == 2
+        assert len(rows) == 2 * len(dynamic_engines(ORTHO))  # each policy's episode in each engine the task runs
         assert all("OrthoglideDynamics(" in json.loads(r.producer)["dynamics"] for r in rows)  # what it ran under
     again = run_leaderboard(db=tmp_path / "r.sqlite", **kw)  # stored: nothing runs again
     assert {s.policy: s.dynamic for s in again.summaries[ORTHO]} == {p: s.dynamic for p, s in by_policy.items()}
@@ -326,9 +327,9 @@ def test_one_stream_runs_the_validations_first_then_the_dynamic_episodes_then_th
     kinds = [job[0] for job in jobs]
     assert kinds == sorted(kinds, key=lambda kind: ["validation", "dynamic", "episode"].index(kind.split("@")[0]))
     assert kinds.count("validation") == 1 and kinds.count("dynamic") == 6 and kinds.count("episode") == 6
-    # the hybrid's dynamic episodes run in MuJoCo too (where it is installed), the 2PRR's in PyBullet only
-    hybrid = [job for job in jobs if job[0] == "dynamic" and job[1].env_id != ORTHO]
-    assert kinds.count("dynamic@mujoco") == (len(hybrid) if importlib.util.find_spec("mujoco") else 0)
+    # the dynamic episodes run in MuJoCo too where the task runs it and it is installed
+    both = [job for job in jobs if job[0] == "dynamic" and "mujoco" in registry.row(job[1].env_id).engines]
+    assert both and kinds.count("dynamic@mujoco") == (len(both) if importlib.util.find_spec("mujoco") else 0)
     # v1 validates v0's plan: one job, its verdict stored for both
     [validation] = [job for job in jobs if job[0] == "validation"]
     assert [env for env, *_ in shared[validation[1].env_id, "polynomial-detour"]] == envs[:2]

@@ -298,8 +298,8 @@ class MuJoCoSim:
         out = (self.data.xpos[b].copy(), np.array([x, y, z, w]))
         if not velocity:
             return out
-        v = np.empty(6)
-        self._mj.mj_objectVelocity(self.model, self.data, self._mj.mjtObj.mjOBJ_BODY, b, v, 0)
+        v = np.empty(6)  # mjOBJ_XBODY: at the body's frame (mjOBJ_BODY is at its centre of mass, xipos)
+        self._mj.mj_objectVelocity(self.model, self.data, self._mj.mjtObj.mjOBJ_XBODY, b, v, 0)
         return (*out, v[3:].copy(), v[:3].copy())
 
     def motor_positions(self, motors: Sequence[tuple[str, Sequence[int]]]) -> np.ndarray:
