@@ -7,9 +7,8 @@ shipped one (the leaderboard's: the bench's dynamics in PyBullet, :class:`~parag
 in MuJoCo), half its step, twice its solver iterations, both, and a quarter of the step with four times the
 iterations, which every other row is measured against. It is one model integrated more finely: gains that are
 per physics step (PyBullet's motor position gain, MuJoCo's servo bandwidth) scale with the step, so that the
-servos stay as fast. Per setting: success and KF PASS (Wilson's 95 %
-intervals), the episodes whose verdict (success or KF) differs from the reference row's, the mean episode
-length (env steps), the largest distance between the validated body's executed path and the reference row's,
+servos stay as fast. Per setting: success and KF PASS (Wilson's 95 % intervals), the episodes whose verdict
+(success or KF) differs from the reference row's, the mean episode length (env steps), the largest distance between the validated body's executed path and the reference row's,
 at equal times and as curves (the Hausdorff distance: where a closed-loop policy arrives a step sooner its
 path at equal times moves while the path itself does not; mm), the bench metric that moved most from the
 reference row (largest absolute change over the episodes), the loops' largest residual (mm, where the
