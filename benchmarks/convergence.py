@@ -1,20 +1,20 @@
 """Where the physics stops moving: each task's dynamic verdicts as the time step halves and the iterations double.
 
-For each newest id (or ``--env``) and each engine its task runs (PyBullet; MuJoCo where the task and the
-``mujoco`` extra allow), the bench's reference plays the same ``--episodes`` dynamic episodes (the paper's case,
-then random scenarios from reset seed 300001, as ``benchmarks/reference_dynamic.py``) at five settings: the
-shipped one (the leaderboard's: the bench's dynamics in PyBullet, :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`
-in MuJoCo), half its step, twice its solver iterations, both, and a quarter of the step with four times the
-iterations, which every other row is measured against. It is one model integrated more finely: gains that are
-per physics step (PyBullet's motor position gain, MuJoCo's servo bandwidth) scale with the step, so that the
-servos stay as fast. Per setting: success and KF PASS (Wilson's 95 % intervals), the episodes whose verdict
-(success or KF) differs from the reference row's, the mean episode length (env steps), the largest distance between the validated body's executed path and the reference row's,
-at equal times and as curves (the Hausdorff distance: where a closed-loop policy arrives a step sooner its
-path at equal times moves while the path itself does not; mm), the bench metric that moved most from the
-reference row (largest absolute change over the episodes), the loops' largest residual (mm, where the
-mechanism has loops), the KF's executed-to-commanded distance (median, mm) and the seconds per episode. The
-shipped row says whether it is converged: no verdict changes at half its step or twice its iterations, and
-its path within 1 mm of theirs as a curve.
+For each newest id (or ``--env``) and each engine its task runs (PyBullet; MuJoCo where the task and the ``mujoco``
+extra allow), the bench's reference plays the same ``--episodes`` dynamic episodes (the paper's case, then random
+scenarios from reset seed 300001, as ``benchmarks/reference_dynamic.py``) at five settings: the shipped one (the
+leaderboard's: the bench's dynamics in PyBullet, :class:`~paragym.sim.mujoco_sim.MuJoCoSettings` in MuJoCo), half
+its step, twice its solver iterations, both, and a quarter of the step with four times the iterations, which every
+other row is measured against. It is one model integrated more finely: gains that are per physics step (PyBullet's
+motor position gain, MuJoCo's servo bandwidth) scale with the step, so that the servos stay as fast. Per setting:
+success and KF PASS (Wilson's 95 % intervals), the episodes whose verdict (success or KF) differs from the reference
+row's, the mean episode length (env steps), the largest distance between the validated body's executed path and the
+reference row's, at equal times and as curves (the Hausdorff distance: where a closed-loop policy arrives a step
+sooner its path at equal times moves while the path itself does not; mm), the bench metric that moved most from the
+reference row (largest absolute change over the episodes), the loops' largest residual (mm, where the mechanism has
+loops), the KF's executed-to-commanded distance (median, mm) and the seconds per episode. The shipped row says
+whether it is converged: no verdict changes at half its step or twice its iterations, and its path within 1 mm of
+theirs as a curve.
 
     python benchmarks/convergence.py [--env ID ...] [--engine pybullet|mujoco ...] [--episodes 10] [--quick]
                                      [--record]
