@@ -158,11 +158,7 @@ def dynamic_settings(env_id: str, engine: str) -> str:
     """The physics step and iterations the leaderboard's dynamic episodes of ``env_id`` run at in ``engine``."""
     from paragym.baselines.leaderboard.suite import dynamic_kwargs
 
-    kwargs = dynamic_kwargs(env_id, engine)
-    if engine == "pybullet":
-        return settings_label(kwargs, engine)
-    s = kwargs["engine"]  # MuJoCo takes the scene's iterations where its settings name none
-    return f"{s.time_step * 1e3:g} ms, {s.iterations or kwargs['dynamics'].solver_iterations} it"
+    return settings_label(dynamic_kwargs(env_id, engine), engine)
 
 
 def reference(env_ids: list[str], episodes: int) -> list[list[str]]:

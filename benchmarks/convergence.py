@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import time
+from functools import cache
 from typing import Any
 
 import gymnasium as gym
@@ -58,22 +59,32 @@ def settings(env_id: str, engine: str, step: float, iterations: int) -> dict[str
     if engine == "pybullet":
         kwargs["dynamics"] = refined(kwargs["dynamics"], step, iterations)
     else:
-        env = gym.make(env_id, **kwargs)
-        scene = env.unwrapped.world.scene
-        bandwidth = getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
-        env.close()
-        kwargs["engine"] = kwargs["engine"].refined(step, iterations, bandwidth, kwargs["dynamics"].solver_iterations)
+        kwargs["engine"] = kwargs["engine"].refined(step, iterations, scene_bandwidth(env_id),
+                                                    kwargs["dynamics"].solver_iterations)
     return kwargs
 
 
+@cache
+def scene_bandwidth(env_id: str) -> float:
+    """The share per MuJoCo step at which ``env_id``'s scene has its servos exported (its
+    ``EXPORT_SERVO_BANDWIDTH``, else the export's), read once from the scene the leaderboard's MuJoCo env builds."""
+    env = gym.make(env_id, **dynamic_kwargs(env_id, "mujoco"))
+    try:
+        return getattr(env.unwrapped.world.scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
+    finally:
+        env.close()
+
+
 def settings_label(kwargs: dict[str, Any], engine: str) -> str:
-    """The step (ms) and iterations that ``kwargs`` run at."""
+    """The step (ms) and iterations that ``kwargs`` run at (MuJoCo's: the scene's where its settings name none),
+    and the per-step gains that set the servos' speed where ``kwargs`` name them."""
     if engine == "pybullet":
         d = kwargs["dynamics"]
         gains = ", ".join(f"{name} {getattr(d, name):g}" for name in getattr(d, "PER_STEP", ()))
         return f"{d.time_step * 1e3:g} ms, {d.solver_iterations} it" + (f", {gains}" if gains else "")
     s = kwargs["engine"]
-    return f"{s.time_step * 1e3:g} ms, {s.iterations} it, servos {s.servo_bandwidth / s.time_step:g}/s"
+    servos = "" if s.servo_bandwidth is None else f", servos {s.servo_bandwidth / s.time_step:g}/s"
+    return f"{s.time_step * 1e3:g} ms, {s.iterations or kwargs['dynamics'].solver_iterations} it" + servos
 
 
 def episode(env_id: str, kwargs: dict[str, Any], i: int) -> dict[str, Any]:

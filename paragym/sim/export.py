@@ -225,12 +225,12 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     h = mujoco_time_step(d.time_step) if time_step is None else float(time_step)
     ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
                   iterations=str(int(d.solver_iterations if iterations is None else iterations)))
-    ground = _ground(root, scene.sim, h)
+    world = ET.SubElement(root, "worldbody")
+    ground = _ground(root, world, scene.sim, h)
     if ground:  # friction that holds below its limit: MuJoCo's pyramid cone at an impratio of 1 lets a loaded
         # wheel creep; the elliptic cone at 10 holds it (the dynamics guide)
         root.find("option").set("cone", "elliptic")
         root.find("option").set("impratio", "10")
-    world = root.find("worldbody")
     _fixed_geoms(world, fixed, h)
     stops = getattr(scene.sim, "stops", {})
     for body, links, base_mass, base_shape in trees:
@@ -343,12 +343,11 @@ def _home_key(root: ET.Element) -> None:
     ET.SubElement(ET.SubElement(root, "keyframe"), "key", attrs)
 
 
-def _ground(root: ET.Element, sim: Any, time_step: float) -> bool:
-    """The scene's ground, if it has one (a plane, or a heightfield as an ``hfield`` asset), as a world geom of
-    ``root`` (adding its ``worldbody``): fixed, frictionless itself so that a contact takes the robot part's
+def _ground(root: ET.Element, world: ET.Element, sim: Any, time_step: float) -> bool:
+    """The scene's ground, if it has one, as a geom of ``world`` (a heightfield's elevations an ``hfield`` asset
+    of ``root``, placed before ``world``): fixed, frictionless itself so that a contact takes the robot part's
     coefficient (MuJoCo takes the larger of the two; PyBullet multiplies them, and paragym's ground has 1), as
     stiff as the loops at the physics step ``time_step`` (s). True where there was ground."""
-    world = ET.SubElement(root, "worldbody")
     grounds = [args for build, args in sim.recipes.values() if build in ("add_plane", "add_heightfield")]
     for args in grounds:
         attrs = {"name": args[0], "contype": "1", "conaffinity": "2", "friction": "0 0 0",
@@ -359,8 +358,9 @@ def _ground(root: ET.Element, sim: Any, time_step: float) -> bool:
             heights, cell, centre = np.asarray(args[1], float), float(args[2]), args[3]
             ny, nx = heights.shape
             low, span = float(heights.min()), float(heights.max() - heights.min())
-            assets = root.find("asset") if root.find("asset") is not None else ET.Element("asset")
-            if root.find("asset") is None:
+            assets = root.find("asset")
+            if assets is None:
+                assets = ET.Element("asset")
                 root.insert(list(root).index(world), assets)
             # MuJoCo scales the elevations to [0, 1], times size[2], above the geom's z; its first row is at +y
             # (paragym's at -y); to a nanometre, as MuJoCo keeps float32
