@@ -422,22 +422,22 @@ def test_a_dynamic_step_says_how_far_its_loops_are_open(env_id):
     kinematic.close()
 
 
-def _creep(dynamics, force: float = 100.0, seconds: float = 2.0) -> float:
+def _creep(dynamics, force: float = 100.0, seconds: float = 2.0, engine: object = "pybullet") -> float:
     """How far (m) a loaded drive unit slides along its axle in ``seconds`` with its wheels held, pushed that way
-    by ``force`` (N) on top of the legs' thrust, once the robot has settled for 0.5 s."""
+    by ``force`` (N) on top of the legs' thrust, once the robot has settled for 0.5 s (in ``engine``)."""
     from paragym.mechanisms.geometry import quat_to_matrix
     from paragym.sim.client import physics_steps
     from paragym.sim.export import scene_of
 
     env = gym.make("paragym/MobileTripodOdometry-v2", fidelity="dynamic", scenario="initial_heading",
-                   dynamics=dynamics)
+                   dynamics=dynamics, engine=engine)
     try:
         env.reset(seed=0)
         scene = scene_of(env)
         scene.drive(0.0, 0.5)
         axle = quat_to_matrix(scene.sim.link_frame(scene.ROBOT, scene.chassis[0])[1])[:, 1]
         start = scene.units_true.copy()
-        scene.drive(0.0, seconds, push=(0, axle * force), push_steps=physics_steps(seconds, dynamics.time_step))
+        scene.drive(0.0, seconds, push=(0, axle * force), push_steps=physics_steps(seconds, scene.base_step))
         return abs(float((scene.units_true - start)[0] @ axle))
     finally:
         env.close()

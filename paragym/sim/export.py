@@ -347,11 +347,14 @@ def _ground(root: ET.Element, world: ET.Element, sim: Any, time_step: float) -> 
     """The scene's ground, if it has one, as a geom of ``world`` (a heightfield's elevations an ``hfield`` asset
     of ``root``, placed before ``world``): fixed, frictionless itself so that a contact takes the robot part's
     coefficient (MuJoCo takes the larger of the two; PyBullet multiplies them, and paragym's ground has 1), as
-    stiff as the loops at the physics step ``time_step`` (s). True where there was ground."""
+    stiff as the loops at the physics step ``time_step`` (s), its impedance the contact's (a ``solmix`` that
+    outweighs the robot part's MuJoCo default, which, averaged in, let a loaded wheel slide on a sideways load
+    well below its friction limit). True where there was ground."""
     grounds = [args for build, args in sim.recipes.values() if build in ("add_plane", "add_heightfield")]
     for args in grounds:
         attrs = {"name": args[0], "contype": "1", "conaffinity": "2", "friction": "0 0 0",
-                 "solref": _num(loop_solref(time_step)), "solimp": _num(LOOP_SOLIMP), "rgba": _num(args[-1])}
+                 "solref": _num(loop_solref(time_step)), "solimp": _num(LOOP_SOLIMP), "solmix": "1000000",
+                 "rgba": _num(args[-1])}
         if len(args) == 2:  # a plane: z = 0, without bounds
             attrs.update(type="plane", size="0 0 1")
         else:
@@ -392,7 +395,7 @@ def with_fixed_parts(text: str, fixed: list[tuple[str, Any]]) -> str:
     root = ET.fromstring(text)
     world = root.find("worldbody")
     for geom in world.findall("geom"):
-        if geom.get("contype") == "1":
+        if geom.get("contype") == "1" and geom.get("type") not in ("plane", "hfield"):  # the ground stays
             world.remove(geom)
     _fixed_geoms(world, fixed, float(root.find("option").get("timestep")))
     return ET.tostring(root, encoding="unicode") + "\n"

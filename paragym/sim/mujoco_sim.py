@@ -152,6 +152,9 @@ class MuJoCoSim:
         self.data: Any = None
         self._actuators: dict[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
         self._need_load = True  # the mirror holds the state (a reset): load it before MuJoCo runs
+        self._pushed = False  # a force acts in the next step (:meth:`push`)
+        #: contact friction set since the model was written, (body, link) -> coefficient (:meth:`friction`)
+        self._friction: dict[tuple[str, int], float] = {}
         self._mirror_stale = False  # MuJoCo has moved since the mirror was posed
         self._ready()
 
@@ -176,6 +179,8 @@ class MuJoCoSim:
                     self._joints[name, i] = (b, int(model.jnt_type[j]), int(model.jnt_qposadr[j]))
                 else:
                     self._joints[name, i] = (b, -1, -1)
+        for (name, link), lateral in self._friction.items():
+            self._set_friction(name, link, lateral)
 
     def _ready(self) -> None:
         """Load the mirror's state into MuJoCo if a reset put it there (recompiling for new fixed parts): before
@@ -269,11 +274,21 @@ class MuJoCoSim:
             self.drive(motors, start + (goal - start) * (i / steps), rate, force)
             self.step()
 
+    def push(self, name: str, link: int, force: Sequence[float]) -> None:
+        """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step
+        (MuJoCo's ``xfrc_applied``, cleared after it), as :meth:`PyBulletSim.push`."""
+        self._ready()
+        self.data.xfrc_applied[self._joints[name, link][0], :3] = force
+        self._pushed = True
+
     def step(self) -> None:
         """One MuJoCo step (then the :attr:`after_step` callbacks)."""
         self._ready()
         mj = self._mj
         mj.mj_step2(self.model, self.data)
+        if self._pushed:
+            self.data.xfrc_applied[:] = 0.0
+            self._pushed = False
         mj.mj_step1(self.model, self.data)  # the new state's kinematics and velocities, for the reads
         self.elapsed += self.time_step
         self._mirror_stale = True
@@ -309,8 +324,11 @@ class MuJoCoSim:
         return self.data.qpos[self._motors(motors)[1]].copy()
 
     def joint_positions(self, name: str, joints: Sequence[int]) -> np.ndarray:
-        """The positions of 1-dof joints of body ``name`` now (rad or m), as PyBullet's ``joint_positions``."""
-        return self.motor_positions([(name, joints)])
+        """The positions of 1-dof joints of body ``name`` now (rad or m), as PyBullet's ``joint_positions``:
+        driven or passive."""
+        if self._need_load:
+            return self.mirror.joint_positions(name, joints)
+        return self.data.qpos[[self._joints[name, j][2] for j in joints]].copy()
 
     def set_time_step(self, time_step: float) -> None:
         """Change MuJoCo's physics step (s) from the next step on (a scene that steps a duration exactly); the
@@ -367,6 +385,28 @@ class MuJoCoSim:
         self.mirror.reset_base(name, position, quaternion)
         self._need_load = True
 
+    def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
+        """Set the contact friction coefficient of ``links`` of body ``name`` (-1: the base) in MuJoCo (its geoms'
+        sliding friction: a contact takes the larger of its two geoms', and the ground's is 0,
+        :func:`paragym.sim.export.mjcf`) and in the mirror, from the next step on. The ground's and the fixed
+        parts' stay as written (0: a contact takes the robot part's)."""
+        self.mirror.friction(name, links, lateral)
+        if all(name != tree for tree, _, _ in self._trees):
+            return
+        for link in links:
+            self._friction[name, link] = float(lateral)
+            if self.model is not None:
+                self._set_friction(name, link, float(lateral))
+
+    def _set_friction(self, name: str, link: int, lateral: float) -> None:
+        self.model.geom_friction[self.model.geom_bodyid == self._joints[name, link][0], 0] = lateral
+
+    def rebuild(self) -> None:
+        """A fresh world, as :meth:`PyBulletSim.rebuild`: the mirror is rebuilt (the scene's set-up runs again,
+        through this object) and MuJoCo starts from it at its next step, with nothing of what ran before."""
+        self.mirror.rebuild()
+        self._need_load, self._mirror_stale = True, False
+
     # --- the world's bodies: the mirror's (fixed parts reach MuJoCo at the next load) ---------------------
     def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
         self._pose_mirror()
@@ -401,7 +441,7 @@ class MuJoCoSim:
 _MIRRORED = frozenset({
     "loops", "stops", "recipes", "body_names", "link_name", "link_index", "locate", "body", "connected", "gui",
     "draws", "set_physics", "no_self_collision", "passive", "ball_joint", "no_collision", "joint_stops",
-    "friction", "on_rebuild"})
+    "on_rebuild", "contact_friction"})
 
 
 def _same_parts(a: Any, b: Any) -> bool:

@@ -50,12 +50,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from paragym.mechanisms import tripod as mt
 from paragym.mechanisms.geometry import PartShape, matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim, physics_steps
+from paragym.sim.mujoco_sim import simulate_in
 from paragym.sim.tripod_drive import Terrain
 
 __all__ = ["TripodDynamicScene", "TripodDynamics"]
@@ -103,7 +105,7 @@ class TripodDynamicScene:
 
     def __init__(self, terrain: Terrain, geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY,
                  dynamics: TripodDynamics | None = None, gui: bool = False,
-                 region: tuple[float, float, float, float] = (-3.0, 25.0, -5.0, 5.0)) -> None:
+                 region: tuple[float, float, float, float] = (-3.0, 25.0, -5.0, 5.0), engine: Any = None) -> None:
         self.geometry, self.terrain = g, _ = geometry, terrain
         self.dynamics = d = dynamics or TripodDynamics()
         self.sim = sim = PyBulletSim(gui=gui)
@@ -160,6 +162,9 @@ class TripodDynamicScene:
         self._wheel_target = np.zeros((3, 2))
         self._speed = 0.0
         self._heading = np.zeros(3)
+        simulate_in(self, engine)  # MuJoCo's physics where ``engine`` is its settings (None: PyBullet's)
+        #: the engine's physics step (s): the dynamics' in PyBullet, the settings' in MuJoCo
+        self.base_step = self.sim.time_step
 
     def _set_up_physics(self) -> None:
         """Gravity, the engine's settings, friction, the passive joints (run again when the world is rebuilt)."""
@@ -216,7 +221,7 @@ class TripodDynamicScene:
               push_steps: int = 0) -> np.ndarray:
         """Drive ``duration`` s at ``speed`` (m/s; reached at ``acceleration``), each unit steering to its
         own heading; ``push`` = (unit, force (3,) N) for the first
-        ``push_steps`` physics steps. Returns each unit's wheel travel (3,) (m,
+        ``push_steps`` physics steps (of :attr:`base_step`). Returns each unit's wheel travel (3,) (m,
         the mean of its two encoders' increments times the wheel radius)."""
         d, sim = self.dynamics, self.sim
         turn = np.empty(3)
@@ -225,17 +230,18 @@ class TripodDynamicScene:
             error = math.atan2(math.sin(self._heading[i] - yaw), math.cos(self._heading[i] - yaw))
             turn[i] = d.heading_gain * error * d.wheel_base / 2
         sides = np.repeat(turn, 2) * np.tile([-1.0, 1.0], 3)  # left wheels slower, right faster to turn left
-        steps = physics_steps(duration, d.time_step)
-        gain = d.wheel_bandwidth * d.time_step
+        h = self.base_step
+        steps = physics_steps(duration, h)
+        gain = d.wheel_bandwidth * h
         wheels = [w for pair in self.wheels for w in pair]
         motors = [(self.ROBOT, wheels)]
         target = self._wheel_target.ravel()
         for s in range(steps):  # the wheel servos follow their angle references (a velocity motor alone creeps)
-            step_speed = d.acceleration * d.time_step
+            step_speed = d.acceleration * h
             self._speed = min(speed, self._speed + step_speed) if speed >= self._speed else \
                 max(speed, self._speed - step_speed)
             rates = (self._speed + sides) / d.wheel_radius
-            target += rates * d.time_step
+            target += rates * h
             sim.drive(motors, target, rates, d.wheel_torque, gain, 1.0)
             if push is not None and s < push_steps:
                 sim.push(self.ROBOT, self.chassis[push[0]], push[1])

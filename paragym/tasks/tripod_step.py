@@ -43,6 +43,7 @@ from numba import njit
 
 from paragym.kernels import KernelArrays
 from paragym.mechanisms import tripod as mt
+from paragym.sim import mujoco_sim
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
 from paragym.tasks import tripod as scenarios_module
 from paragym.tasks.base import (
@@ -98,8 +99,8 @@ class TripodRules:
     rung: int | None = None
 
 
-#: the engines of the dynamic fidelity (the env's ``engine`` argument): PyBullet's only
-ENGINES = ("pybullet",)
+#: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
+ENGINES = mujoco_sim.ENGINES
 #: the rules of MobileTripodOdometry-v0, -v1 and -v2
 RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(1, trust_action=True, fold_ends=False),
          2: TripodRules(2, trust_action=True, fold_ends=True)}
@@ -125,6 +126,8 @@ class TripodParams:
     fidelity: str = "kinematic"
     dynamics: Any = None
     rules: TripodRules = RULES[0]
+    #: the dynamic fidelity's engine: None (PyBullet) or MuJoCo's settings (:mod:`paragym.sim.mujoco_sim`)
+    engine: Any = None
 
     @classmethod
     def from_kwargs(cls, rules: TripodRules, scenario: Any = "random", encoder_noise: float = math.radians(1.0),
@@ -137,7 +140,7 @@ class TripodParams:
         from paragym.sim.tripod_dynamic import TripodDynamics
 
         refuse_unknown(unknown, (), "MobileTripodOdometry")
-        check_engine(engine, ENGINES, fidelity)  # PyBullet's only: the argument is every task's
+        engine = check_engine(engine, ENGINES, fidelity)
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
         check_instance("dynamics", dynamics, TripodDynamics)
         if not rules.trust_action and (trust_rate is not None or relative_reward is not None):
@@ -152,7 +155,8 @@ class TripodParams:
                                  refuse=rules.fold_ends, later="paragym/MobileTripodOdometry-v2")
         return cls(encoder_noise, float(max_correction), geometry, 1 if rules.trust_action else 0,
                    trust_rate=trust_rate, relative_reward=bool(relative_reward), fold_ends=rules.fold_ends,
-                   success_error=success_error, scenario=scenario, fidelity=fidelity, dynamics=dynamics, rules=rules)
+                   success_error=success_error, scenario=scenario, fidelity=fidelity, dynamics=dynamics, rules=rules,
+                   engine=engine)
 
     @cached_property
     def kernel_args(self) -> tuple[tuple[float, bool], tuple[float, float, bool]]:

@@ -64,7 +64,7 @@ class TripodTask(TaskBase):
         if params.fidelity != "dynamic":
             return None
         return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human",
-                            calibrated_push=params.rules.rung is not None)
+                            calibrated_push=params.rules.rung is not None, engine=params.engine)
 
     def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
               rngs: list[np.random.Generator], world: Any) -> None:

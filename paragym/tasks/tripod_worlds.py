@@ -42,7 +42,8 @@ def calibrated_push_force(depth: float, push_force: float) -> float:
 
 
 class DynamicWorld:
-    """One robot's drive under PyBullet's dynamics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`).
+    """One robot's drive under the dynamic fidelity's physics (:class:`paragym.sim.tripod_dynamic.TripodDynamicScene`:
+    PyBullet's, or MuJoCo's where ``engine`` is its settings, :mod:`paragym.sim.mujoco_sim`).
 
     It replaces :func:`paragym.sim.tripod_drive.k_drive_step` sample by
     sample: the units drive for one sample's time on their wheels; the true
@@ -62,11 +63,11 @@ class DynamicWorld:
     """
 
     def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False,
-                 calibrated_push: bool = False) -> None:
+                 calibrated_push: bool = False, engine: Any = None) -> None:
         from paragym.sim.tripod_dynamic import TripodDynamics
 
         self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
-        self.calibrated_push = calibrated_push
+        self.calibrated_push, self.engine = calibrated_push, engine
         self._pushing = 0  # which of the drive's pushes acts
         self.scene: Any = None
         self._terrain: Any = None
@@ -86,7 +87,8 @@ class DynamicWorld:
         if self.scene is None or (scenario.terrain, region if scenario.terrain.bumps else None) != self._terrain:
             if self.scene is not None:
                 self.scene.close()
-            self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region)
+            self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region,
+                                            self.engine)
             self._terrain = (scenario.terrain, region if scenario.terrain.bumps else None)
         self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0])
         self.scene.set_friction(np.full(3, self.dynamics.friction))
@@ -105,14 +107,14 @@ class DynamicWorld:
         push = None
         for p in range(d.push.shape[1]):  # a push that starts in this sample replaces one still acting
             if d.t[0] < d.push[0, p, 1] <= d.t[0] + d.dt:  # (NaN: no push)
-                self._push_left, self._pushing = int(round(0.1 / dyn.time_step)), p
+                self._push_left, self._pushing = int(round(0.1 / self.scene.base_step)), p
         if self._push_left:
             unit, depth = int(d.push[0, self._pushing, 0]), d.push[0, self._pushing, 2]
             inward = d.true[0].mean(axis=0) - d.true[0, unit]
             inward[2] = 0.0
             force = calibrated_push_force(depth, dyn.push_force) if self.calibrated_push else dyn.push_force * depth
             push = (unit, force * inward / np.linalg.norm(inward))
-        used = min(physics_steps(d.dt, dyn.time_step), self._push_left)
+        used = min(physics_steps(d.dt, self.scene.base_step), self._push_left)
         travel = self.scene.drive(float(d.speed[0]), d.dt, push, used)
         self._push_left -= used
         heading = float(d.heading[0])
@@ -140,7 +142,7 @@ class DynamicWorld:
     def body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """The upper plate, judged at its centre."""
         scene = self.scene
-        return scene.sim, scene.ROBOT, scene.plate_link, np.zeros(3), self.dynamics.time_step
+        return scene.sim, scene.ROBOT, scene.plate_link, np.zeros(3), scene.base_step
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """The plate the policy claims: fitted to its estimated units, on the legs' angles they imply (paper
@@ -154,7 +156,7 @@ class DynamicWorld:
         return pose6(centre[0], rotation[0])
 
     def step_duration(self, state: Any, params: Any) -> float:
-        h = self.dynamics.time_step
+        h = self.scene.base_step
         return h * physics_steps(state.drive.dt, h)
 
 
