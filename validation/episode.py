@@ -53,11 +53,14 @@ from paragym.validation.sensors import AccelerometerArray
 
 __all__ = ["RECORDER", "EpisodeValidation", "MotionRecorder", "validate_episode"]
 
-#: what the recorder takes of the validated link at every physics step, named in every dynamic row's producer
+#: what the KF check measures of the executed motion, named in every dynamic row's producer
 #: (:func:`paragym.baselines.leaderboard.suite.dynamic_producer`), so that a change re-runs those rows under a
-#: new producer: its frame's origin, orientation and the origin's velocity, in both engines (before: PyBullet's
-#: velocity of the link's centre of mass, which put the 2PRR's judged point 0.5 m beyond C along link AC)
-RECORDER = "link frame origin"
+#: new producer: the recorder takes the validated link's frame origin, orientation and the origin's velocity at
+#: every physics step, in both engines (before: PyBullet's velocity of the link's centre of mass, which put the
+#: 2PRR's judged point 0.5 m beyond C along link AC), and each sensor sample reads the mean over its sample
+#: period (:meth:`~paragym.validation.sensors.AccelerometerArray.read_mean`; before: the instant, which folded
+#: a contact's chatter at the physics step into the judged band)
+RECORDER = "link frame origin, sampled as each period's mean"
 
 
 class MotionRecorder:

@@ -130,7 +130,8 @@ def validate(planned: RigidMotion, executed: RigidMotion, sensors: Accelerometer
              kalman: KalmanSettings | None = None, tolerances: Tolerances | None = None,
              seed: int = 0, smoother: bool = True) -> ValidationReport:
     """Validate ``executed`` against ``planned`` (both about the same body
-    point; the sensors sample both on their own grid over the time they share).
+    point; the sensors sample both on their own grid over the time they share, each sample the mean over its
+    period, :meth:`AccelerometerArray.read_mean`).
 
     The readings, less gravity at the planned attitude, are inverted raw,
     after the forward Kalman filter (the paper's), and after an RTS smoother
@@ -145,9 +146,9 @@ def validate(planned: RigidMotion, executed: RigidMotion, sensors: Accelerometer
     t = np.arange(max(planned.t[0], executed.t[0]), end + 1e-12, 1.0 / sensors.rate)
     if len(t) < MIN_SAMPLES:
         raise MotionTooShort(f"planned and executed motions share fewer than {MIN_SAMPLES} sensor samples")
-    plan, done = planned.at(t), executed.at(t)
+    plan = planned.at(t)
     dt = 1.0 / sensors.rate
-    y_raw = _without_gravity(sensors.read(done, np.random.default_rng(seed)), sensors, plan.rotation)
+    y_raw = _without_gravity(sensors.read_mean(executed, t, np.random.default_rng(seed)), sensors, plan.rotation)
     y_kf = filter_vectorised(y_raw, dt, kalman)
     z_kf = sensors.invert(y_kf)
     raw = _estimates(sensors.invert(y_raw), t)
@@ -161,7 +162,7 @@ def validate(planned: RigidMotion, executed: RigidMotion, sensors: Accelerometer
     # (noise-free readings of the planned motion through the same filter), so that the filter's
     # own lag and smoothing, which the raw theory does not have, are not held against the execution.
     smooth = smooth_vectorised if smoother else filter_vectorised
-    y_plan = _without_gravity(sensors.read(plan), sensors, plan.rotation)
+    y_plan = _without_gravity(sensors.read_mean(planned, t), sensors, plan.rotation)
     reference = _estimates(sensors.invert(smooth(y_plan, dt, kalman)), t)
     judged = smoothed if smoother else filtered
     floor = _noise_floor(sensors, kalman, len(t), seed, smoother)

@@ -19,6 +19,11 @@ every sensor with axes along the plate's. Four coplanar sensors cannot
 separate alpha_x from wy wz (their columns of M coincide); the offset L
 makes M invertible, and it gives the direct formulas of eq 21 their form
 (:meth:`AccelerometerArray.direct`).
+
+A sample is the mean of eq 12 over the sample period (:meth:`AccelerometerArray.read_mean`), as a real
+accelerometer's anti-aliasing filter makes it; the paper's simulated readings are instants of smooth motions,
+where the two agree. A simulated contact chatters at the physics step, far above the sensors' band, and read
+at the instant that chatter folds into the band the filter judges.
 """
 
 from __future__ import annotations
@@ -87,6 +92,30 @@ class AccelerometerArray:
         with Gaussian noise drawn from ``rng`` (None: noise-free). The motion
         should already be on the sensors' time grid (:meth:`RigidMotion.at`)."""
         y = self.true_z(motion) @ self.matrix.T + self.offsets
+        if rng is not None:
+            y = y + rng.normal(0.0, self.noise_std, y.shape)
+        return y
+
+    def read_mean(self, motion: RigidMotion, t: np.ndarray, rng: np.random.Generator | None = None) -> np.ndarray:
+        """Readings y (N, 3 S) at the sample times ``t`` (s) of an array whose every axis reads the mean of eq 12
+        over the sample period 1 / ``rate`` about its sample time (clipped to the motion's span): the band limit
+        that a real accelerometer's anti-aliasing filter gives its samples. ``motion`` is on its own, finer grid
+        (a simulation's steps), and the mean is the trapezoidal integral of z over the period on that grid
+        (linearly interpolated at the period's ends), divided by its length; Gaussian noise from ``rng`` (None:
+        noise-free) as :meth:`read`. Sampling the instant instead folds the motion's content above half the rate
+        (a contact's chatter at the physics step) into the band the filter judges."""
+        t = np.asarray(t, float)
+        z = self.true_z(motion)
+        steps = np.diff(motion.t)[:, None]
+        integral = np.vstack([np.zeros((1, z.shape[1])), np.cumsum(0.5 * (z[1:] + z[:-1]) * steps, axis=0)])
+        half = 0.5 / self.rate
+        a, b = np.clip(t - half, motion.t[0], motion.t[-1]), np.clip(t + half, motion.t[0], motion.t[-1])
+
+        def integral_at(x: np.ndarray) -> np.ndarray:
+            return np.stack([np.interp(x, motion.t, integral[:, j]) for j in range(z.shape[1])], axis=1)
+
+        mean = (integral_at(b) - integral_at(a)) / (b - a)[:, None]
+        y = mean @ self.matrix.T + self.offsets
         if rng is not None:
             y = y + rng.normal(0.0, self.noise_std, y.shape)
         return y
