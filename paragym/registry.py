@@ -94,14 +94,17 @@ class EnvRow:
 RUNG_NAMES = ("Easy", "Medium", "Hard")
 
 
-def _ladder(name: str, module: str, steps: int, task: str, summary: str, version: int = 0) -> tuple[EnvRow, ...]:
+def _ladder(name: str, module: str, steps: int, task: str, summary: str, version: int = 0,
+            models_from: int | None = None) -> tuple[EnvRow, ...]:
     """The rows of a task's ladder ``version``: ``paragym/<name>-<rung>-v<version>``, its classes
     ``<name><rung>Env`` and ``<name><rung>VectorEnv`` (``<name><rung>V<version>Env`` and so on past v0) in
-    ``module``; ``summary`` is completed with the rung."""
+    ``module``; ``summary`` is completed with the rung. ``models_from``: the ladder version whose rungs' shipped
+    models these rungs play (:attr:`EnvRow.models_from`)."""
     tag = f"V{version}" if version else ""
     return tuple(EnvRow(f"paragym/{name}-{rung}-v{version}", f"{module}:{name}{rung}{tag}Env",
                         f"{module}:{name}{rung}{tag}VectorEnv", steps, task, "random", ("random",),
-                        f"{summary}: rung {k} ({rung.lower()})", rung=k)
+                        f"{summary}: rung {k} ({rung.lower()})", rung=k,
+                        models_from=None if models_from is None else f"paragym/{name}-{rung}-v{models_from}")
                  for k, rung in enumerate(RUNG_NAMES))
 
 
@@ -147,6 +150,10 @@ ROWS: tuple[EnvRow, ...] = (
            "paragym.envs.tripod:MobileTripodOdometryV2VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v2: v1's task, where a folded mechanism (a leg past horizontal) ends the episode as a "
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
+    EnvRow("paragym/MobileTripodOdometry-v3", "paragym.envs.tripod:MobileTripodOdometryV3Env",
+           "paragym.envs.tripod:MobileTripodOdometryV3VectorEnv", 700, "tripod", "push", None,
+           "mobile tripod v3: v2's task, its dynamic fidelity at converged solver settings by default",
+           models_from="paragym/MobileTripodOdometry-v1"),
     *_ladder("CaPaManCollisionFree", "paragym.envs.capaman", 400, "capaman",
              "CaPaMan ladder: v1's tour among capsule posts standing on the straight lines between the T.P.s"),
     *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
@@ -158,6 +165,8 @@ ROWS: tuple[EnvRow, ...] = (
     *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
              "hybrid ladder v1: v2's task, the split its only lever, on paths that no constant split rate clears",
              version=1),
+    *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
+             "mobile tripod ladder v1: the ladder v0's drives at v3's converged physics", version=1, models_from=0),
 )
 
 _BY_ID = {r.id: r for r in ROWS}

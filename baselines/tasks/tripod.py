@@ -32,13 +32,17 @@ from paragym.sim.tripod_dynamic import TripodDynamics
 V0 = ("paragym/MobileTripodOdometry-v0",)
 #: the rungs of the tripod's difficulty ladder (:func:`paragym.registry.ladder_of`)
 LADDER = tuple(r.id for r in registry.ladder_of("tripod"))
-#: v1, v2 and the ladder act through trust in the paper's correction: the reference is its test of the faulty unit
-TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2", *LADDER)
+#: v1 to v3 and the ladders act through trust in the paper's correction: the reference is its test of the faulty
+#: unit
+TRUST = ("paragym/MobileTripodOdometry-v1", "paragym/MobileTripodOdometry-v2", "paragym/MobileTripodOdometry-v3",
+         *LADDER)
 #: the best constant trust per unit of each id: :func:`paragym.baselines.simple.best_constant` over
-#: {0, 0.5, 1}^3 on reset seeds 0-29 (13 of 30 successes on v1 and v2; 7, 4 and 2 on the ladder's rungs; a test
-#: searches again)
+#: {0, 0.5, 1}^3 on reset seeds 0-29 (13 of 30 successes on v1 to v3; 7, 4 and 2 on each ladder's rungs, the
+#: ladder v1's drives being v0's; a test searches again)
 BEST_CONSTANT = {"paragym/MobileTripodOdometry-v1": (0.5, 0.0, 1.0), "paragym/MobileTripodOdometry-v2": (0.5, 0.0, 1.0),
-                 LADDER[0]: (0.0, 0.5, 0.5), LADDER[1]: (1.0, 0.5, 0.0), LADDER[2]: (0.0, 0.5, 0.0)}
+                 "paragym/MobileTripodOdometry-v3": (0.5, 0.0, 1.0),
+                 **{rung.id: action for rungs in registry.ladders("tripod") for rung, action in
+                    zip(rungs, ((0.0, 0.5, 0.5), (1.0, 0.5, 0.0), (0.0, 0.5, 0.0)), strict=True)}}
 
 
 def metrics(ep: Episode) -> dict[str, float]:
@@ -195,6 +199,6 @@ BENCH = Bench(
     plot_episode=plot_episode,
     plan=plan,
     # below raw odometry's error; on the ladder, where odometry always fails, the success of a solved rung
-    solved=(Target("final_unit_error_cm", -1, against="zero", ids=(*V0, *TRUST[:2])),
+    solved=(Target("final_unit_error_cm", -1, against="zero", ids=(*V0, *TRUST[:3])),
             Target("success", +1, 0.8, ids=LADDER)),
 )

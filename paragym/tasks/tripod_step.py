@@ -91,21 +91,27 @@ class TripodRules:
         rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.tripod.LADDER`): its drives are
             the "random" scenario, and in dynamic fidelity the push's force is calibrated to its distance
             (:data:`paragym.tasks.tripod_worlds.PUSH_CALIBRATION`); None: a version of the task.
+        converged: the dynamic fidelity's default physics is :meth:`TripodDynamics.converged` (friction that holds
+            below its limit), else :class:`TripodDynamics`' own default (30 solver iterations, as released).
     """
 
     version: int
     trust_action: bool
     fold_ends: bool
     rung: int | None = None
+    converged: bool = False
 
 
 #: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
 ENGINES = mujoco_sim.ENGINES
-#: the rules of MobileTripodOdometry-v0, -v1 and -v2
+#: the rules of MobileTripodOdometry-v0, -v1, -v2 and -v3
 RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(1, trust_action=True, fold_ends=False),
-         2: TripodRules(2, trust_action=True, fold_ends=True)}
+         2: TripodRules(2, trust_action=True, fold_ends=True),
+         3: TripodRules(3, trust_action=True, fold_ends=True, converged=True)}
 #: the rules of the ladder's rungs, MobileTripodOdometry-Easy, -Medium and -Hard (v0 each): v2's, on the rung's drives
 LADDER_RULES = {k: TripodRules(0, trust_action=True, fold_ends=True, rung=k) for k in range(3)}
+#: the rules of the ladder v1's rungs (-Easy-v1 ...): the ladder v0's, at v3's converged physics
+LADDER_RULES_V1 = {k: TripodRules(1, trust_action=True, fold_ends=True, rung=k, converged=True) for k in range(3)}
 
 
 @dataclass(frozen=True)
@@ -143,6 +149,8 @@ class TripodParams:
         engine = check_engine(engine, ENGINES, fidelity)
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
         check_instance("dynamics", dynamics, TripodDynamics)
+        if fidelity == "dynamic" and dynamics is None and rules.converged:
+            dynamics = TripodDynamics.converged()
         if not rules.trust_action and (trust_rate is not None or relative_reward is not None):
             raise ValueError("trust_rate and relative_reward are v1 arguments: use paragym/MobileTripodOdometry-v1")
         trust_rate = check_number("trust_rate", 0.2 if trust_rate is None else trust_rate, high=1.0)

@@ -15,6 +15,7 @@ from paragym.tasks.tripod_step import (
     ENGINES,
     FAILURES,
     LADDER_RULES,
+    LADDER_RULES_V1,
     REWARD_TERMS,
     RULES,
     TripodParams,
@@ -25,7 +26,7 @@ from paragym.tasks.tripod_step import (
 )
 from paragym.tasks.tripod_worlds import DynamicWorld
 
-__all__ = ["LADDER_RULES", "RULES", "TASK", "TripodTask", "detected_fault"]
+__all__ = ["LADDER_RULES", "LADDER_RULES_V1", "RULES", "TASK", "TripodTask", "detected_fault"]
 
 
 class TripodTask(TaskBase):
