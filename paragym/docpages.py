@@ -285,14 +285,15 @@ def rung_verdict(methods: dict[str, dict[str, dict[str, str]]], env_id: str) -> 
     return "hard" if not close else "sanity: " + ", ".join(close)
 
 
-def _ladders_found(found: dict[str, dict[str, dict[str, dict[str, str]]]]
+def _ladders_found(found: dict[str, dict[str, dict[str, dict[str, str]]]], newest: bool = False
                    ) -> list[tuple[str, list[str], dict[str, dict[str, dict[str, str]]]]]:
-    """Every ladder with rows in ``found`` (:func:`_ladder_rows`): its label (the task, and the ladder's version
-    where the task has more than one), its rung ids, easiest first, and the methods that ranked on it."""
+    """Every ladder with rows in ``found`` (:func:`_ladder_rows`), or with ``newest`` each task's newest one: its
+    label (the task, and the ladder's version where the task has more than one), its rung ids, easiest first,
+    and the methods that ranked on it."""
     out = []
     for task, methods in found.items():
         ladders = registry.ladders(task)
-        for rungs in ladders:
+        for rungs in ladders[-1:] if newest else ladders:
             ids = [r.id for r in rungs]
             mine = {m: {e: r for e, r in rows.items() if e in ids} for m, rows in methods.items()}
             mine = {m: rows for m, rows in mine.items() if rows}
@@ -301,16 +302,16 @@ def _ladders_found(found: dict[str, dict[str, dict[str, dict[str, str]]]]
     return out
 
 
-def ladder_table(csv_path: str | Path) -> str:
-    """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task, each
-    method's success on every rung with its 95 % interval (Wilson; kinematic fidelity, the leaderboard's
-    episodes), the reference's in dynamic fidelity (its successes of the episodes run there), and each rung's
-    :func:`rung_verdict`."""
+def ladder_table(csv_path: str | Path, newest: bool = False) -> str:
+    """The headline of the difficulty ladders, from the committed run's ``leaderboard.csv``: per task (with
+    ``newest``, its newest ladder only: the README's), each method's success on every rung with its 95 % interval
+    (Wilson; kinematic fidelity, the leaderboard's episodes), the reference's in dynamic fidelity (its successes
+    of the episodes run there), and each rung's :func:`rung_verdict`."""
 
     found = _ladder_rows(csv_path)
     lines = ["| task | method | " + " | ".join(registry.RUNG_NAMES) + " |",
              "|---|---|" + "---|" * len(registry.RUNG_NAMES)]
-    for task, ids, methods in _ladders_found(found):
+    for task, ids, methods in _ladders_found(found, newest):
         learned = [m for m in LEARNED_NAMES.values() if m in methods]
         order = ["reference", *sorted(m for m in methods if m not in ("reference", "zero", "random", *learned)),
                  "zero", "random", *learned]

@@ -163,6 +163,8 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     assert table[8:] == ["| hybrid v1 | reference | - | - | 1.00 [0.93, 1.00] |",
                          "| hybrid v1 | reference, dynamic | - | - | - |", "| hybrid v1 | **verdict** | - | - | hard |"]
     assert len(table) == 11  # the v2 row is no rung
+    newest = ladder_table(path, newest=True).splitlines()  # the README's: each task's newest ladder alone
+    assert newest == table[:2] + table[8:]
     from paragym.docpages import env_page  # and each rung's page says its verdict, a version's page none
 
     assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)
