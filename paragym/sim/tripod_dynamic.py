@@ -1,6 +1,7 @@
-"""The mobile tripod of paper 004 in PyBullet, dynamic fidelity: wheels on the ground, legs in a closed chain.
+"""The mobile tripod of paper 004 under physics, dynamic fidelity: wheels on the ground, legs in a closed chain.
 
-One multibody on the terrain's heightfield (a plane when it is flat):
+One multibody on the terrain's heightfield (a plane when it is flat), built in PyBullet and simulated there or,
+with ``engine`` MuJoCo's settings, in MuJoCo (:mod:`paragym.sim.mujoco_sim`, the same scene code):
 
 * the plate, free (three passive prismatic joints and a spherical one), with
   the three legs of fixed length r hanging from its vertices on passive
@@ -181,17 +182,28 @@ class TripodDynamicScene:
         return [(self.ROBOT, wheel, self.dynamics.wheel_torque) for pair in self.wheels for wheel in pair]
 
     # --- state ----------------------------------------------------------------------------------------------
-    def reset(self, units: np.ndarray, eta: np.ndarray, heading: float, heading_error: np.ndarray) -> None:
+    def reset(self, units: np.ndarray, eta: np.ndarray, heading: float, heading_error: np.ndarray,
+              on_wheels: bool = False) -> None:
         """Put the robot at rest with its units' ground points at ``units``
         (3, 3) and its legs at ``eta`` (3,) (a consistent pair: the drive's
         start), every unit facing its true heading. The world is rebuilt
         first: PyBullet keeps its contacts' cached impulses across joint
         resets, and an episode must not depend on the one before it (a seed
-        gives the same drive whatever ran earlier)."""
+        gives the same drive whatever ran earlier).
+
+        A unit's level chassis stands ``unit_height`` above the ground under its joint, so on a slope the wheel on
+        the uphill side starts inside the terrain (13.6 mm on one random drive): PyBullet pushes it out over a few
+        steps, MuJoCo's stiff contact launches the unit. With ``on_wheels`` each unit is raised until none of its
+        wheels and casters starts inside the terrain (:meth:`_wheel_lift`), and the legs and plate take the pose
+        the raised joints give."""
         g, d, sim = self.geometry, self.dynamics, self.sim
         sim.rebuild()
         joints = np.asarray(units, float) + [0.0, 0.0, d.unit_height]
-        _, rotation, centre = mt.forward(joints[None], eta0=np.asarray(eta, float), geometry=g)
+        if on_wheels:
+            joints[:, 2] += self._wheel_lift(joints, heading + np.asarray(heading_error, float))
+        eta_posed, rotation, centre = mt.forward(joints[None], eta0=np.asarray(eta, float), geometry=g)
+        if on_wheels:
+            eta = eta_posed[0]
         rotation, centre = rotation[0], centre[0]
         for joint, value in zip(self.plate_float, centre, strict=True):
             sim.reset_joint(self.ROBOT, joint, float(value))
@@ -211,6 +223,22 @@ class TripodDynamicScene:
         self._wheel_target = np.zeros((3, 2))
         self._speed = 0.0
         self._heading = heading + np.asarray(heading_error, float)
+
+    def _wheel_lift(self, joints: np.ndarray, yaws: np.ndarray) -> np.ndarray:
+        """How far (m, (3,)) each unit's joint at ``joints`` (3, 3), its level chassis at yaw ``yaws`` (3,), must
+        rise so that none of its spheres (the two wheels about the axle's ends, the two casters) starts inside the
+        terrain: a sphere of radius r clears the tangent plane of slope s under its centre from r sqrt(1 + s^2)
+        above it."""
+        d = self.dynamics
+        # the spheres in the chassis frame (x forward, y along the axle): (x, y, z, radius), as built in __init__
+        spheres = np.array([[0.0, d.wheel_base / 2, 0.0, d.wheel_radius], [0.0, -d.wheel_base / 2, 0.0, d.wheel_radius],
+                            [0.25, 0.0, 0.05 - d.wheel_radius, 0.04], [-0.25, 0.0, 0.05 - d.wheel_radius, 0.04]])
+        c, s = np.cos(yaws)[:, None], np.sin(yaws)[:, None]
+        xy = joints[:, None, :2] + np.stack([c * spheres[:, 0] - s * spheres[:, 1],
+                                             s * spheres[:, 0] + c * spheres[:, 1]], -1)
+        height, slope = self.terrain.height_and_gradient(xy)
+        lowest = height + spheres[:, 3] * np.sqrt(1.0 + np.sum(slope**2, -1)) - spheres[:, 2]  # the joint's z, (3, 4)
+        return np.maximum(lowest.max(axis=1) - joints[:, 2], 0.0)
 
     def set_friction(self, coefficients: np.ndarray) -> None:
         """Each unit's wheel-ground friction coefficient (3,)."""

@@ -92,7 +92,9 @@ class TripodRules:
             the "random" scenario, and in dynamic fidelity the push's force is calibrated to its distance
             (:data:`paragym.tasks.tripod_worlds.PUSH_CALIBRATION`); None: a version of the task.
         converged: the dynamic fidelity's default physics is :meth:`TripodDynamics.converged` (friction that holds
-            below its limit), else :class:`TripodDynamics`' own default (30 solver iterations, as released).
+            below its limit) and each unit starts on its wheels (``on_wheels`` of
+            :meth:`~paragym.sim.tripod_dynamic.TripodDynamicScene.reset`: none inside the terrain); else
+            :class:`TripodDynamics`' own default (30 solver iterations) and the released start.
     """
 
     version: int

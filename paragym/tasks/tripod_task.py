@@ -65,7 +65,8 @@ class TripodTask(TaskBase):
         if params.fidelity != "dynamic":
             return None
         return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human",
-                            calibrated_push=params.rules.rung is not None, engine=params.engine)
+                            calibrated_push=params.rules.rung is not None, engine=params.engine,
+                            on_wheels=params.rules.converged)
 
     def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
               rngs: list[np.random.Generator], world: Any) -> None:

@@ -63,11 +63,11 @@ class DynamicWorld:
     """
 
     def __init__(self, geometry: mt.TripodGeometry, dynamics: Any, gui: bool = False,
-                 calibrated_push: bool = False, engine: Any = None) -> None:
+                 calibrated_push: bool = False, engine: Any = None, on_wheels: bool = False) -> None:
         from paragym.sim.tripod_dynamic import TripodDynamics
 
         self.geometry, self.dynamics, self.gui = geometry, dynamics or TripodDynamics(), gui
-        self.calibrated_push, self.engine = calibrated_push, engine
+        self.calibrated_push, self.engine, self.on_wheels = calibrated_push, engine, on_wheels
         self._pushing = 0  # which of the drive's pushes acts
         self.scene: Any = None
         self._terrain: Any = None
@@ -90,7 +90,7 @@ class DynamicWorld:
             self.scene = TripodDynamicScene(scenario.terrain, self.geometry, self.dynamics, self.gui, region,
                                             self.engine)
             self._terrain = (scenario.terrain, region if scenario.terrain.bumps else None)
-        self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0])
+        self.scene.reset(d.true[0], d.eta[0], float(d.heading[0]), d.heading_error[0], self.on_wheels)
         self.scene.set_friction(np.full(3, self.dynamics.friction))
         self._push_left = 0
         self.increment[:] = 0.0
