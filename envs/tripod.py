@@ -222,29 +222,32 @@ class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
 
 
 class MobileTripodOdometryV3Env(MobileTripodOdometryV2Env):
-    """``paragym/MobileTripodOdometry-v3``: v2's task, its dynamic fidelity at converged physics by default.
+    """``paragym/MobileTripodOdometry-v3``: v2's task, its dynamic fidelity at converged physics by default, each
+    unit starting on its wheels.
 
     ## Why v3
     v2's dynamic default (a 5 ms step, 30 solver iterations) is not converged: PyBullet's solver lets the drive
     units creep sideways while their wheels' friction is far below its limit, and the reference's success
-    follows the setting rather than the method (v2's page). Changing a released id's default physics changes
-    what it does, so the converged default is v3.
+    follows the setting rather than the method (v2's page). And v2 stands each unit's level chassis at the
+    ground under its joint, so on a bump's flank its uphill wheel starts inside the terrain: PyBullet pushes it
+    out, MuJoCo launches the unit. Changing a released id's physics changes what it does, so these are v3.
 
     ## Dynamic Fidelity
     The default is ``TripodDynamics.converged()``: the same 5 ms step with 100 solver iterations, at which a
     drive unit loaded sideways by 100 N for 2 s, its wheels held, stays within 0.1 mm (at v2's default it
     slides; ``tests/test_dynamic_fidelity.py``), and the leaderboard's setting for every tripod id.
-    ``engine="mujoco"`` runs the drive in MuJoCo. The KF check judges the plate fitted to the policy's
-    estimated units against the real plate: it passes an estimate that is the truth one sample late and fails
-    odometry alone, in either engine; the paper's correction fails it on most drives, its estimate moving in
-    corrections the plate does not make (the dynamics guide measures them).
+    Each unit starts on its wheels: raised until none of its wheels and casters is inside the terrain, the legs
+    and plate posed to match. ``engine="mujoco"`` runs the drive in MuJoCo. The KF check judges the plate
+    fitted to the policy's estimated units against the real plate: it passes an estimate that is the truth one
+    sample late and fails odometry alone, in either engine; the paper's correction fails it on most drives, its
+    estimate moving in corrections the plate does not make (the dynamics guide measures them).
 
     ## Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
     As v2; ``dynamics`` still takes any :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
 
     ## Version History
-    * v3 (paragym 0.10): the converged dynamic default above; the kinematic fidelity is v2's bit for bit, and so
-      are v1's shipped models.
+    * v3 (paragym 0.10): the converged dynamic default and the start on the wheels above; the kinematic fidelity
+      is v2's bit for bit, and so are v1's shipped models.
     """
 
     rules = RULES[3]
@@ -373,8 +376,8 @@ class MobileTripodOdometryEasyV1Env(MobileTripodOdometryEasyEnv):
     fidelity.
 
     ## Dynamic Fidelity
-    As v3 (``paragym/MobileTripodOdometry-v3``): ``TripodDynamics.converged()`` by default, where the ladder v0
-    keeps v2's 30 iterations, at which the units creep.
+    As v3 (``paragym/MobileTripodOdometry-v3``): ``TripodDynamics.converged()`` by default and each unit starting
+    on its wheels, where the ladder v0 keeps v2's 30 iterations, at which the units creep, and v2's start.
 
     ## Version History
     * v1 (paragym 0.10): the ladder v1, above; the ladder v0's ids (``-Easy-v0`` ...) are unchanged, and their

@@ -152,7 +152,7 @@ ROWS: tuple[EnvRow, ...] = (
            "failure", models_from="paragym/MobileTripodOdometry-v1"),
     EnvRow("paragym/MobileTripodOdometry-v3", "paragym.envs.tripod:MobileTripodOdometryV3Env",
            "paragym.envs.tripod:MobileTripodOdometryV3VectorEnv", 700, "tripod", "push", None,
-           "mobile tripod v3: v2's task, its dynamic fidelity at converged solver settings by default",
+           "mobile tripod v3: v2's task; its dynamic fidelity at converged solver settings, the units on their wheels",
            models_from="paragym/MobileTripodOdometry-v1"),
     *_ladder("CaPaManCollisionFree", "paragym.envs.capaman", 400, "capaman",
              "CaPaMan ladder: v1's tour among capsule posts standing on the straight lines between the T.P.s"),

@@ -1,12 +1,14 @@
 """A dynamic scene's physics in MuJoCo: the MuJoCo dynamic fidelity (``engine="mujoco"``).
 
 :class:`MuJoCoSim` stands where a dynamic scene's :class:`~paragym.sim.client.PyBulletSim` stands and answers
-the same calls, so that the scene (:mod:`paragym.sim.capaman_dynamic`, :mod:`paragym.sim.hybrid_dynamic`), its
-world, the task's transition and KF validation run unchanged on either engine. The scene is built in PyBullet
+the same calls, so that the scene (:mod:`paragym.sim.capaman_dynamic`, :mod:`paragym.sim.hybrid_dynamic`,
+:mod:`paragym.sim.orthoglide_dynamic`, :mod:`paragym.sim.tripod_dynamic`), its world, the task's transition and
+KF validation run unchanged on either engine. The scene is built in PyBullet
 as always; its mechanism is then written as MJCF by :func:`paragym.sim.export.mjcf` (the same links, masses,
 loop closures as ``connect`` constraints, motors as force-limited position servos) and simulated by MuJoCo:
 
-* **physics** (every step, every motor, every loop closure and contact with the fixed parts) is MuJoCo's;
+* **physics** (every step, every motor, every loop closure, contact with the fixed parts and the ground, a
+  push's force, a contact's friction as the scene sets it) is MuJoCo's;
 * **geometry** stays PyBullet's: the scene's PyBullet world is kept as a mirror, posed at MuJoCo's joint values
   whenever it is read, and answers the clearance queries (the task's collision rule, one code for both
   engines), renders, and keeps the bodies' bookkeeping (names, link indices, obstacles);
