@@ -1,12 +1,12 @@
 """The paper's method under physics: each newest id's reference over many dynamic episodes, with the KF check.
 
-For each newest id (or ``--env``) the bench's reference plays ``--episodes`` episodes in the dynamic fidelity
-(PyBullet's dynamics under force-limited motors, the leaderboard's settings): the paper's scenario first, then
-random scenarios of reset seeds 300001, 300002, ... (apart from the leaderboard's 200001-200002). Each is run
-and measured by the leaderboard's own :func:`~paragym.baselines.leaderboard.evaluate.evaluate_dynamic`: success,
-and the KF check of what the motors executed against what the policy commanded. The table gives success, KF
-PASS and both, each with Wilson's 95 % interval, against issue 41's target of 0.90 for both; the failing
-episodes are printed with their figures of merit.
+For each newest id and each rung of each task's newest ladder (or ``--env``) the bench's reference plays
+``--episodes`` episodes in the dynamic fidelity (PyBullet's dynamics under force-limited motors, the
+leaderboard's settings): the paper's scenario first, then random scenarios of reset seeds 300001, 300002, ...
+(apart from the leaderboard's 200001-200002). Each is run and measured by the leaderboard's own
+:func:`~paragym.baselines.leaderboard.evaluate.evaluate_dynamic`: success, and the KF check of what the motors
+executed against what the policy commanded. The table gives success, KF PASS and both, each with Wilson's 95 %
+interval, against a target of 0.90 for both; the failing episodes are printed with their figures of merit.
 
     python benchmarks/reference_dynamic.py [--env ID ...] [--episodes 30] [--policy NAME] [--engine mujoco]
                                            [--record]
@@ -27,13 +27,22 @@ from paragym.baselines.tasks import bench_of
 
 #: the first random scenario's reset seed (the leaderboard's dynamic episodes use 200001 onwards)
 FIRST_SEED = 300_001
-#: issue 41's target: the reference succeeds with KF PASS in at least this share of dynamic episodes
+#: the target: the reference succeeds with KF PASS in at least this share of dynamic episodes
 TARGET = 0.90
 
 
 def scenario_of(i: int) -> tuple[str, int]:
     """Episode ``i``'s scenario and reset seed: the paper's case first, then random ones from :data:`FIRST_SEED`."""
     return ("paper", 0) if i == 0 else ("random", FIRST_SEED + i - 1)
+
+
+def default_ids() -> list[str]:
+    """Every newest id, each followed by the rungs of its task's newest ladder, easiest first."""
+    ids = []
+    for env_id in registry.newest():
+        ladders = registry.ladders(registry.task_of(env_id))
+        ids += [env_id] + [r.id for r in (ladders[-1] if ladders else ())]
+    return ids
 
 
 def rate(k: int, n: int) -> str:
@@ -43,7 +52,8 @@ def rate(k: int, n: int) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--env", action="append", default=None, help="an env id (repeatable; default: newest ids)")
+    parser.add_argument("--env", action="append", default=None,
+                        help="an env id (repeatable; default: the newest ids and the rungs of each newest ladder)")
     parser.add_argument("--episodes", type=int, default=30, help="dynamic episodes per env, the paper's first")
     parser.add_argument("--policy", default=None, help="a policy name (default: each bench's reference)")
     parser.add_argument("--engine", default="pybullet", choices=("pybullet", "mujoco"),
@@ -53,7 +63,7 @@ def main() -> None:
     if args.episodes < 1:
         parser.error(f"--episodes must be at least 1, got {args.episodes}")
     rows = []
-    for env_id in args.env or list(registry.newest()):
+    for env_id in args.env or default_ids():
         if args.engine not in registry.row(env_id).engines:
             print(f"{env_id}: its task's dynamic fidelity does not run in {args.engine}; left out", flush=True)
             continue

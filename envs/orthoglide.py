@@ -12,12 +12,14 @@ from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
 from paragym.tasks.orthoglide import knob_table, random_scenario, random_scenarios
 from paragym.tasks.orthoglide_step import KAPPA_LIMIT
-from paragym.tasks.orthoglide_task import LADDER_RULES, RULES, TASK
+from paragym.tasks.orthoglide_task import LADDER_RULES, LADDER_RULES_V1, RULES, TASK
 
-__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEasyEnv", "Orthoglide2PRRKappaEasyVectorEnv", "Orthoglide2PRRKappaEnv",
-           "Orthoglide2PRRKappaHardEnv", "Orthoglide2PRRKappaHardVectorEnv", "Orthoglide2PRRKappaMediumEnv",
-           "Orthoglide2PRRKappaMediumVectorEnv", "Orthoglide2PRRKappaV1Env", "Orthoglide2PRRKappaV1VectorEnv",
-           "Orthoglide2PRRKappaV2Env", "Orthoglide2PRRKappaV2VectorEnv",
+__all__ = ["KAPPA_LIMIT", "Orthoglide2PRRKappaEasyEnv", "Orthoglide2PRRKappaEasyV1Env",
+           "Orthoglide2PRRKappaEasyV1VectorEnv", "Orthoglide2PRRKappaEasyVectorEnv", "Orthoglide2PRRKappaEnv",
+           "Orthoglide2PRRKappaHardEnv", "Orthoglide2PRRKappaHardV1Env", "Orthoglide2PRRKappaHardV1VectorEnv",
+           "Orthoglide2PRRKappaHardVectorEnv", "Orthoglide2PRRKappaMediumEnv", "Orthoglide2PRRKappaMediumV1Env",
+           "Orthoglide2PRRKappaMediumV1VectorEnv", "Orthoglide2PRRKappaMediumVectorEnv", "Orthoglide2PRRKappaV1Env",
+           "Orthoglide2PRRKappaV1VectorEnv", "Orthoglide2PRRKappaV2Env", "Orthoglide2PRRKappaV2VectorEnv",
            "Orthoglide2PRRKappaVectorEnv", "random_scenario", "random_scenarios"]
 
 
@@ -334,6 +336,81 @@ class Orthoglide2PRRKappaHardVectorEnv(Orthoglide2PRRKappaVectorEnv):
     """``num_envs`` copies of :class:`Orthoglide2PRRKappaHardEnv` stepped together."""
 
     rules = LADDER_RULES[2]
+
+
+class Orthoglide2PRRKappaEasyV1Env(Orthoglide2PRRKappaEasyEnv):
+    """``paragym/Orthoglide2PRRKappa-Easy-v1``: rung 0 of the Orthoglide's ladder v1: the easy rung's paths, its
+    dynamic fidelity with v2's table beneath the sliders' guides.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of this rung (``paragym/Orthoglide2PRRKappa-Easy-v0``): the same paths and bound, bit for bit in the
+    kinematic fidelity.
+
+    ## Dynamic Fidelity
+    As v2 (``paragym/Orthoglide2PRRKappa-v2``): the table runs beneath the guides, in PyBullet and in MuJoCo.
+    The ladder v0 keeps v1's table at the guides' height, where it strikes the x guide's end on laps that carry
+    it there, and where MuJoCo holds the table against the guide from the first step, so that the tool starts
+    off the path and the episode fails within its first steps whatever the policy.
+
+    ## Version History
+    * v1 (paragym 0.10): the ladder v1, above; the ladder v0's ids (``-Easy-v0`` ...) are unchanged, and their
+      shipped models play these rungs.
+    """
+
+    rules = LADDER_RULES_V1[0]
+
+
+class Orthoglide2PRRKappaMediumV1Env(Orthoglide2PRRKappaMediumEnv):
+    """``paragym/Orthoglide2PRRKappa-Medium-v1``: rung 1 of the Orthoglide's ladder v1: the medium rung's paths,
+    its dynamic fidelity with v2's table beneath the guides.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of this rung (``paragym/Orthoglide2PRRKappa-Medium-v0``), bit for bit in the kinematic fidelity.
+
+    ## Dynamic Fidelity
+    As ``paragym/Orthoglide2PRRKappa-Easy-v1``.
+
+    ## Version History
+    * v1 (paragym 0.10): the ladder v1, above.
+    """
+
+    rules = LADDER_RULES_V1[1]
+
+
+class Orthoglide2PRRKappaHardV1Env(Orthoglide2PRRKappaHardEnv):
+    """``paragym/Orthoglide2PRRKappa-Hard-v1``: rung 2 of the Orthoglide's ladder v1: the hard rung's laps, its
+    dynamic fidelity with v2's table beneath the guides.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As v0 of this rung (``paragym/Orthoglide2PRRKappa-Hard-v0``), bit for bit in the kinematic fidelity: the
+    policy drives the joints.
+
+    ## Dynamic Fidelity
+    As ``paragym/Orthoglide2PRRKappa-Easy-v1``.
+
+    ## Version History
+    * v1 (paragym 0.10): the ladder v1, above.
+    """
+
+    rules = LADDER_RULES_V1[2]
+
+
+class Orthoglide2PRRKappaEasyV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaEasyV1Env` stepped together."""
+
+    rules = LADDER_RULES_V1[0]
+
+
+class Orthoglide2PRRKappaMediumV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaMediumV1Env` stepped together."""
+
+    rules = LADDER_RULES_V1[1]
+
+
+class Orthoglide2PRRKappaHardV1VectorEnv(Orthoglide2PRRKappaVectorEnv):
+    """``num_envs`` copies of :class:`Orthoglide2PRRKappaHardV1Env` stepped together."""
+
+    rules = LADDER_RULES_V1[2]
 
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning

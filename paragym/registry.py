@@ -167,6 +167,9 @@ ROWS: tuple[EnvRow, ...] = (
              version=1),
     *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
              "mobile tripod ladder v1: the ladder v0's drives at v3's converged physics", version=1, models_from=0),
+    *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
+             "2PRR ladder v1: the ladder v0's laps, in dynamic fidelity with v2's table beneath the guides",
+             version=1, models_from=0),
 )
 
 _BY_ID = {r.id: r for r in ROWS}

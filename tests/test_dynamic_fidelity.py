@@ -210,12 +210,14 @@ def test_orthoglide_default_settings_stay_within_their_stated_lag():
 def test_orthoglide_v2_table_runs_beneath_the_guides(below):
     """Up to v1 the table runs at the sliders' guides' height and meets the x guide's end (a contact that
     stopped the reference's table at step 732 of reset seed 200009); from v2 it runs beneath them, clear by
-    1 cm at every table position, while v1 and the rungs keep its height (a released id never changes)."""
+    1 cm at every table position, while v1 and the ladder v0's rungs keep its height (a released id never
+    changes) and the ladder v1's run beneath them."""
     from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
-    from paragym.tasks.orthoglide_step import LADDER_RULES, RULES
+    from paragym.tasks.orthoglide_step import LADDER_RULES, LADDER_RULES_V1, RULES
 
     assert [RULES[v].table_below_guides for v in (0, 1, 2)] == [False, False, True]
     assert not any(r.table_below_guides for r in LADDER_RULES.values())  # released before v2
+    assert all(r.table_below_guides for r in LADDER_RULES_V1.values())
     scene = OrthoglideDynamicScene(table_below_guides=below)
     try:
         gaps = []
@@ -225,6 +227,22 @@ def test_orthoglide_v2_table_runs_beneath_the_guides(below):
     finally:
         scene.close()
     assert (min(gaps) >= 0.0099) if below else (min(gaps) <= 0.0)
+
+
+@pytest.mark.skipif(importlib.util.find_spec("mujoco") is None, reason="MuJoCo is not installed (the mujoco extra)")
+def test_the_orthoglide_ladder_v1_runs_its_reference_in_mujoco_where_the_ladder_v0_cannot():
+    """In MuJoCo the ladder v0's table, at the guides' height, is held against the x guide from the first step:
+    the tool starts off the path and the reference fails within its first steps (path_completed 0.006 on this
+    lap, the leaderboard's reset seed 200002). The ladder v1 runs the table beneath the guides, and the
+    reference tracks the whole lap with the KF check passing, at the leaderboard's settings."""
+    from paragym.baselines.leaderboard.evaluate import evaluate_dynamic
+    from paragym.baselines.policies import get_policy
+
+    rows = {v: evaluate_dynamic(get_policy(f"paragym/Orthoglide2PRRKappa-Easy-v{v}", "gradient-c-limited"),
+                                "random", 200002, engine="mujoco") for v in (0, 1)}
+    assert not rows[0].success and rows[0].metrics["path_completed"] < 0.05
+    assert rows[1].success and rows[1].kf_passed and rows[1].metrics["path_completed"] == 1.0
+    assert rows[1].metrics["max_tracking_error_mm"] < 1.0
 
 
 def test_capaman_fast_settings_stay_within_their_stated_error_of_the_released_ones():

@@ -207,7 +207,23 @@ def test_a_hybrid_rung_separates_its_floors_from_the_papers_method(env_id):
     vec.close()
 
 
-ORTHOGLIDE_RUNGS = [r.id for r in registry.ladder_of("orthoglide")]
+#: the ladder v0's rungs; the ladder v1's play their paths bit for bit (its dynamic table runs beneath the guides)
+ORTHOGLIDE_RUNGS = [r.id for r in registry.ladders("orthoglide")[0]]
+
+
+def test_the_orthoglide_ladder_v1_is_the_ladder_v0_in_the_kinematic_fidelity():
+    assert [[r.id for r in rungs] for rungs in registry.ladders("orthoglide")] == \
+        [[f"paragym/Orthoglide2PRRKappa-{n}-v{v}" for n in ("Easy", "Medium", "Hard")] for v in (0, 1)]
+    assert [r.models_from for r in registry.ladders("orthoglide")[1]] == ORTHOGLIDE_RUNGS
+    assert registry.newest()[2] == "paragym/Orthoglide2PRRKappa-v2"  # rungs are not the task's newest version
+    for old, new in zip(ORTHOGLIDE_RUNGS, (r.id for r in registry.ladders("orthoglide")[1]), strict=True):
+        runs = []
+        for env_id in (old, new):
+            env = gym.make(env_id)
+            episode = run_episode(env, get_policy(env_id, "gradient-c").factory(env, 0), seed=4001)
+            runs.append((np.array(episode.observations), episode.rewards, episode.success))
+            env.close()
+        assert np.array_equal(runs[0][0], runs[1][0]) and runs[0][1:] == runs[1][1:]
 
 
 @pytest.mark.parametrize("env_id", ORTHOGLIDE_RUNGS)

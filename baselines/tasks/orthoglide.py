@@ -24,17 +24,18 @@ from paragym.rollout import Episode
 from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 from paragym.tasks import orthoglide as scenarios_module
 
-#: the rungs of the Orthoglide's difficulty ladder (:func:`paragym.registry.ladder_of`)
+#: the rungs of the Orthoglide's difficulty ladders (:func:`paragym.registry.ladder_of`), the ladder v0's first
 LADDER = tuple(r.id for r in registry.ladder_of("orthoglide"))
 #: the ids whose policy drives the joints (a rung's ``actions``), and the ids whose policy moves the table along
 #: n (every other id of the task, in its default action mode)
-JOINT_IDS = tuple(env_id for env_id, rung in zip(LADDER, scenarios_module.LADDER, strict=True)
-                  if rung.actions == "joint_velocity")
+JOINT_IDS = tuple(r.id for rungs in registry.ladders("orthoglide")
+                  for r, rung in zip(rungs, scenarios_module.LADDER, strict=True) if rung.actions == "joint_velocity")
 NULL_SPACE_IDS = tuple(env_id for env_id in (*(r.id for r in registry.rows_of("orthoglide")), *LADDER)
                        if env_id not in JOINT_IDS)
 #: the best constant null-space action of each rung: :func:`paragym.baselines.simple.best_constant` over
 #: {-1, -0.5, -0.25, 0, 0.25, 0.5, 1} on reset seeds 0-29 (no constant succeeds on any rung: the first, -1, has the
-#: highest return; a test searches again). On v0 and v1 the best constant is zero, a floor already.
+#: highest return; a test searches again; the ladder v1's rungs are the ladder v0's in the kinematic fidelity). On
+#: v0 and v1 the best constant is zero, a floor already.
 BEST_CONSTANT = {env_id: (-1.0,) for env_id in LADDER if env_id not in JOINT_IDS}
 #: the best constant joint rates of each rung that drives the joints: the same search over {-1, -0.5, 0, 0.5, 1}
 #: for each joint (every constant leaves the path within a few steps; a test searches again)

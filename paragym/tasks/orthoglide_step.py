@@ -48,8 +48,8 @@ from paragym.tasks.base import (
 from paragym.tasks.orthoglide import OrthoglideScenario, start_table_position
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "LADDER_RULES", "OBS_SIZE", "OBS_SIZE_JOINTS", "REWARD_TERMS",
-           "RULES", "OrthoglideParams", "OrthoglideRules", "OrthoglideState", "decide", "kappa_bounds",
+__all__ = ["BROKEN_GAP", "FAILURES", "KAPPA_LIMIT", "LADDER_RULES", "LADDER_RULES_V1", "OBS_SIZE", "OBS_SIZE_JOINTS",
+           "REWARD_TERMS", "RULES", "OrthoglideParams", "OrthoglideRules", "OrthoglideState", "decide", "kappa_bounds",
            "least_norm_kappa", "reset", "step"]
 
 OBS_SIZE = 3 + 2 + 2 + 1 + 3
@@ -99,6 +99,9 @@ RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideR
 #: the rules of the ladder's rungs, Orthoglide2PRRKappa-Easy, -Medium and -Hard (v0 each): v1's, on the rung's
 #: paths and with its bound on the mean kappa (released before v2: their table runs at the guides' height)
 LADDER_RULES = {k: OrthoglideRules(0, tracking=True, exact_time=True, rung=k) for k in range(3)}
+#: the rules of the ladder v1's rungs (-Easy-v1 ...): the ladder v0's, with v2's table beneath the guides
+LADDER_RULES_V1 = {k: OrthoglideRules(1, tracking=True, exact_time=True, rung=k, table_below_guides=True)
+                   for k in range(3)}
 
 
 @dataclass(frozen=True)

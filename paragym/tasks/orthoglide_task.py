@@ -16,6 +16,7 @@ from paragym.tasks.orthoglide_step import (
     ENGINES,
     FAILURES,
     LADDER_RULES,
+    LADDER_RULES_V1,
     REWARD_TERMS,
     RULES,
     OrthoglideParams,
@@ -26,7 +27,7 @@ from paragym.tasks.orthoglide_step import (
 )
 from paragym.tasks.orthoglide_worlds import DynamicWorld
 
-__all__ = ["LADDER_RULES", "RULES", "TASK", "OrthoglideTask"]
+__all__ = ["LADDER_RULES", "LADDER_RULES_V1", "RULES", "TASK", "OrthoglideTask"]
 
 
 class OrthoglideTask(TaskBase):
