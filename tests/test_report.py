@@ -29,7 +29,7 @@ def test_latest_versions_pick_the_newest_version_of_each_task():
     latest = latest_versions()
     assert "paragym/CaPaManCollisionFree-v1" in latest and "paragym/CaPaManCollisionFree-v0" not in latest
     assert "paragym/HybridSingularityFree-v2" in latest and "paragym/HybridSingularityFree-v1" not in latest
-    assert "paragym/MobileTripodOdometry-v2" in latest
+    assert "paragym/MobileTripodOdometry-v3" in latest and "paragym/MobileTripodOdometry-v2" not in latest
     assert "paragym/Orthoglide2PRRKappa-v2" in latest and "paragym/Orthoglide2PRRKappa-v1" not in latest
     assert len(latest) == 4
 
