@@ -296,6 +296,16 @@ def test_reference_dynamic_counts_the_reference_s_dynamic_episodes(tmp_path):
     assert row[3].startswith("2/2 = 1.00 [") and row[5].startswith("2/2 = 1.00 [") and row[6] == "meets", out
 
 
+def test_kf_attitude_puts_each_verdict_beside_the_commanded_attitude_error(tmp_path):
+    """One 2PRR lap under physics for the reference and the zero action: each policy's row gives its verdicts and
+    the attitude and place errors of what it commanded, and the reference's tool holder turns as commanded."""
+    _run("benchmarks/kf_attitude.py", "--env", "paragym/Orthoglide2PRRKappa-v2", "--episodes", "1", "--record",
+         str(tmp_path))
+    rows = _recorded(tmp_path, "kf_attitude_Orthoglide2PRRKappa-v2")["rows"]
+    assert [r[2] for r in rows] == ["gradient-c-limited", "zero"] and rows[0][3] == "1/1"
+    assert float(rows[0][5].split()[0]) < 0.5  # deg RMS
+
+
 def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp_path):
     """The CaPaMan held under gravity for 0.2 s: with the exported loop settings MuJoCo keeps its loops within
     0.01 mm, with MuJoCo's defaults they open by more than 0.5 mm (mujoco #2698), and PyBullet's within 0.01 mm;

@@ -112,6 +112,17 @@ class EpisodeValidation:
         return self.episode.success
 
     @property
+    def attitude_error(self) -> float:
+        """The RMS (deg) over the executed motion's samples of the angle between the executed and the commanded
+        body's orientations: eq 12 removes gravity at the commanded attitude, so an attitude off by theta reads
+        as g sin(theta) of acceleration across the body, whatever the body's place."""
+        end = min(self.commanded.t[-1], self.executed.t[-1])
+        on_grid = self.commanded.at(self.executed.t[self.executed.t <= end])
+        relative = np.einsum("nji,njk->nik", on_grid.rotation, self.executed.rotation[:len(on_grid.t)])
+        cosine = np.clip((np.trace(relative, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+        return float(np.degrees(np.sqrt(np.mean(np.arccos(cosine) ** 2))))
+
+    @property
     def episode_return(self) -> float:
         return self.episode.episode_return
 
