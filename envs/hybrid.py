@@ -17,8 +17,9 @@ from paragym.tasks.hybrid import (
     random_scenario,
     random_scenarios,
     split_knob_table,
+    split_knob_table_v2,
 )
-from paragym.tasks.hybrid_task import LADDER_RULES, RULES, SPLIT_LADDER_RULES, TASK
+from paragym.tasks.hybrid_task import LADDER_RULES, RULES, SPLIT_LADDER_RULES, SPLIT_LADDER_RULES_V2, TASK
 
 __all__ = ["HybridScenario", "HybridSingularityFreeEasyEnv", "HybridSingularityFreeEasyV1Env",
            "HybridSingularityFreeEasyV1VectorEnv", "HybridSingularityFreeEasyVectorEnv",
@@ -27,7 +28,9 @@ __all__ = ["HybridScenario", "HybridSingularityFreeEasyEnv", "HybridSingularityF
            "HybridSingularityFreeMediumEnv", "HybridSingularityFreeMediumV1Env",
            "HybridSingularityFreeMediumV1VectorEnv", "HybridSingularityFreeMediumVectorEnv",
            "HybridSingularityFreeV1Env", "HybridSingularityFreeV1VectorEnv", "HybridSingularityFreeV2Env",
-           "HybridSingularityFreeV2VectorEnv",
+           "HybridSingularityFreeV2VectorEnv", "HybridSingularityFreeEasyV2Env", "HybridSingularityFreeEasyV2VectorEnv",
+           "HybridSingularityFreeMediumV2Env", "HybridSingularityFreeMediumV2VectorEnv",
+           "HybridSingularityFreeHardV2Env", "HybridSingularityFreeHardV2VectorEnv",
            "HybridSingularityFreeVectorEnv", "paper_scenario",
            "random_scenario", "random_scenarios"]
 
@@ -435,6 +438,85 @@ class HybridSingularityFreeHardV1VectorEnv(HybridSingularityFreeVectorEnv):
     """``num_envs`` copies of :class:`HybridSingularityFreeHardV1Env` stepped together."""
 
     rules = SPLIT_LADDER_RULES[2]
+
+
+class HybridSingularityFreeEasyV2Env(HybridSingularityFreeEasyV1Env):
+    """``paragym/HybridSingularityFree-Easy-v2``: rung 0 of the hybrid's ladder v2: the ladder v1's easy rung on
+    pairs whose certificate keeps every stroke 1 mm inside its limits.
+
+    ## Why v2
+    On the ladder v1 the certificate's schedule may touch a limit: where no schedule keeps 1 mm inside them, the
+    reference plans at the limits, and under physics a force-limited actuator chasing a stroke planned there
+    overshoots it, so the episode fails on leg limits whatever the kinematic plan. Over 30 dynamic episodes the
+    reference succeeded on 19, 13 and 9 of the ladder v1's easy, medium and hard rungs in MuJoCo (19 of 30 on
+    the easy rung in PyBullet), and every failure of the easy rung's checked was a pair without a 1 mm schedule.
+    The ladder v2 draws those pairs again; the constant rates and the lookahead rule must still fail at the
+    limits themselves.
+
+    ## Description
+    As the ladder v1's easy rung (``paragym/HybridSingularityFree-Easy-v1``), with the rungs' knobs:
+
+{knobs}
+
+    ## Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As the ladder v1's easy rung (``paragym/HybridSingularityFree-Easy-v1``).
+
+    ## Version History
+    * v2 (paragym 0.10): the ladder v2, above; the ladder v1's ids are unchanged, and their shipped models play
+      these rungs.
+    """
+
+    rules = SPLIT_LADDER_RULES_V2[0]
+
+
+HybridSingularityFreeEasyV2Env.__doc__ = HybridSingularityFreeEasyV2Env.__doc__.format(
+    knobs=split_knob_table_v2("    "))
+
+
+class HybridSingularityFreeMediumV2Env(HybridSingularityFreeEasyV2Env):
+    """``paragym/HybridSingularityFree-Medium-v2``: rung 1 of the hybrid's ladder v2: the ladder v1's medium rung
+    on pairs whose certificate keeps every stroke 1 mm inside its limits.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As the ladder v2's easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 1's knobs.
+
+    ## Version History
+    * v2 (paragym 0.10): the rung above.
+    """
+
+    rules = SPLIT_LADDER_RULES_V2[1]
+
+
+class HybridSingularityFreeHardV2Env(HybridSingularityFreeEasyV2Env):
+    """``paragym/HybridSingularityFree-Hard-v2``: rung 2 of the hybrid's ladder v2: the ladder v1's hard rung on
+    pairs whose certificate keeps every stroke 1 mm inside its limits.
+
+    ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
+    As the ladder v2's easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 2's knobs.
+
+    ## Version History
+    * v2 (paragym 0.10): the rung above.
+    """
+
+    rules = SPLIT_LADDER_RULES_V2[2]
+
+
+class HybridSingularityFreeEasyV2VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeEasyV2Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES_V2[0]
+
+
+class HybridSingularityFreeMediumV2VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeMediumV2Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES_V2[1]
+
+
+class HybridSingularityFreeHardV2VectorEnv(HybridSingularityFreeVectorEnv):
+    """``num_envs`` copies of :class:`HybridSingularityFreeHardV2Env` stepped together."""
+
+    rules = SPLIT_LADDER_RULES_V2[2]
 
 
 #: the names of before paragym 0.9, answered with a DeprecationWarning

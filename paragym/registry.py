@@ -170,6 +170,9 @@ ROWS: tuple[EnvRow, ...] = (
     *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
              "2PRR ladder v1: the ladder v0's laps, in dynamic fidelity with v2's table beneath the guides",
              version=1, models_from=0),
+    *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
+             "hybrid ladder v2: the ladder v1's pairs, certified with every stroke 1 mm inside its limits",
+             version=2, models_from=1),
 )
 
 _BY_ID = {r.id: r for r in ROWS}

@@ -1,8 +1,10 @@
-"""The hybrid's ladder v1: the split as the only lever, on pairs that no constant action gets through, that the
+"""The hybrid's ladders v1 and v2: the split as the only lever, on pairs that no constant action gets through, that the
 reference provably plans, and that the lookahead rule fails at each rung's horizons. Played through the env
 itself, so that a generator that kept the wrong pairs fails here."""
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import gymnasium as gym
 import numpy as np
@@ -15,6 +17,7 @@ from paragym.baselines.simple import ConstantPolicy
 from paragym.baselines.tasks.hybrid import Lookahead
 from paragym.docpages import status
 from paragym.mechanisms import hybrid
+from paragym.planners.polynomial_detour import PolynomialDetourPlanner
 from paragym.rollout import run_episode
 from paragym.tasks.hybrid import SPLIT_LADDER, nominal_rows
 
@@ -41,9 +44,20 @@ def test_a_split_rung_acts_on_the_split_alone():
     env.close()
 
 
-@pytest.mark.parametrize("env_id", SPLIT_RUNGS)
+#: the ladder v2's rungs: the ladder v1's, certified with every stroke 1 mm inside its limits
+SPLIT_RUNGS_V2 = [r.id for r in registry.ladders("hybrid")[2]]
+
+
+def test_the_ladder_v2_is_the_ladder_v1_with_a_margin_in_its_certificate():
+    assert SPLIT_RUNGS_V2 == [f"paragym/HybridSingularityFree-{n}-v2" for n in registry.RUNG_NAMES]
+    assert [r.models_from for r in registry.ladders("hybrid")[2]] == SPLIT_RUNGS
+    assert [gym.make(i).unwrapped.params.rules.rung for i in SPLIT_RUNGS_V2] == \
+        [replace(r, margin=0.001) for r in SPLIT_LADDER]
+
+
+@pytest.mark.parametrize("env_id", SPLIT_RUNGS + SPLIT_RUNGS_V2)
 def test_a_split_rung_draws_pairs_no_constant_nor_its_lookahead_gets_through_and_the_reference_plans(env_id):
-    rung = SPLIT_LADDER[registry.row(env_id).rung]
+    rung = gym.make(env_id).unwrapped.params.rules.rung
     drawn = gym.make(env_id)
     for seed in range(7000, 7002):
         _, info = drawn.reset(seed=seed)
@@ -60,9 +74,25 @@ def test_a_split_rung_draws_pairs_no_constant_nor_its_lookahead_gets_through_and
             assert not run_episode(env, Lookahead(horizon), seed=0).success, horizon
         reference = get_policy(env_id, "polynomial-detour").factory(env, 0)
         assert run_episode(env, reference, seed=0).success  # the rung's certificate: the reference plans it
+        if rung.margin:  # and it plans it with every stroke the margin inside its limits
+            g = hybrid.DEFAULT_GEOMETRY
+            PolynomialDetourPlanner(replace(g, l_min=g.l_min + rung.margin, l_max=g.l_max - rung.margin),
+                                    j_bar=0.0).plan(p0[0], p1[0])
         env.close()
     vec = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
     vec.reset(seed=7000)
     assert vec.unwrapped.state.scenarios[0] == drawn.reset(seed=7000)[1]["scenario"]
     vec.close()
     drawn.close()
+
+
+def test_the_ladder_v2_reference_holds_its_leg_limits_under_physics_where_the_ladder_v1_s_could_not():
+    """Reset seed 300001 of the easy rung: the ladder v1 draws a pair with no schedule 1 mm inside the limits, the
+    reference plans at them and the simulated actuators overshoot (leg-limit poses, a failure); the ladder v2
+    draws again, and the reference's plan, 1 mm inside, holds under physics."""
+    from paragym.baselines.leaderboard.evaluate import evaluate_dynamic
+
+    rows = [evaluate_dynamic(get_policy(env_id, "polynomial-detour"), "random", 300001)
+            for env_id in (SPLIT_RUNGS[0], SPLIT_RUNGS_V2[0])]
+    assert not rows[0].success and rows[0].metrics["limit_violations"] > 0
+    assert rows[1].success and rows[1].metrics["limit_violations"] == 0

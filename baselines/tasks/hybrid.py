@@ -28,8 +28,8 @@ from paragym.sim.hybrid_dynamic import HybridDynamics
 
 #: the rungs of the hybrid's difficulty ladder v0 (:func:`paragym.registry.ladders`): v2's rules on their own pairs
 LADDER = tuple(r.id for r in registry.ladders("hybrid")[0])
-#: the rungs of its ladder v1: v2's rules with the split as the only lever, on their own pairs
-SPLIT_LADDER = tuple(r.id for r in registry.ladders("hybrid")[1])
+#: the rungs of its ladders v1 and v2: v2's rules with the split as the only lever, on their own pairs
+SPLIT_LADDER = tuple(r.id for rungs in registry.ladders("hybrid")[1:] for r in rungs)
 V2 = ("paragym/HybridSingularityFree-v2", *LADDER)
 BEFORE_V2 = ("paragym/HybridSingularityFree-v0", "paragym/HybridSingularityFree-v1")
 #: HybridSingularityFree-v2's reference plans its strokes this far (m) inside their limits, where it can: a

@@ -21,10 +21,10 @@ from paragym.tasks import base
 from paragym.trajectories import nominal_path
 from paragym.units import MM
 
-__all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "SPLIT_LADDER", "HybridRung", "HybridScenario", "SplitRung",
-           "draw_scenarios", "knob_table", "ladder_scenarios", "lookahead_split", "nominal_rows", "paper_scenario",
-           "random_scenario", "random_scenarios", "resolve_scenario", "split_args", "split_ladder_scenarios",
-           "validate_scenario"]
+__all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "SPLIT_LADDER", "SPLIT_LADDER_V2", "HybridRung",
+           "HybridScenario", "SplitRung", "draw_scenarios", "knob_table", "ladder_scenarios", "lookahead_split",
+           "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios", "resolve_scenario", "split_args",
+           "split_knob_table", "split_knob_table_v2", "split_ladder_scenarios", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -199,9 +199,12 @@ class SplitRung:
     Attributes:
         lookahead: the horizons H (samples) of the lookahead rule (:func:`lookahead_split`) that must fail on
             the rung's pairs: the longer, the further ahead the split must be planned.
+        margin: how far (m) inside their limits the certificate's schedule keeps every stroke (0 on the ladder
+            v1: at the limits; the reference then plans at them and a force-limited actuator overshoots them).
     """
 
     lookahead: tuple[int, ...]
+    margin: float = 0.0
 
 
 #: the hybrid's ladder v1, easiest first. On every rung the split is the only lever (E stays on its nominal
@@ -210,6 +213,10 @@ class SplitRung:
 #: must be scheduled; a schedule within the rate limit exists on the reference's grid (the rung's certificate:
 #: the reference plans it); and the lookahead rule fails at each of the rung's horizons.
 SPLIT_LADDER = (SplitRung(()), SplitRung((1,)), SplitRung((1, 5)))
+#: the hybrid's ladder v2: the ladder v1's rungs whose certificate keeps every stroke 1 mm inside its limits, the
+#: margin the reference plans with (a pair whose only schedules touch a limit is drawn again); the constant rates
+#: and the lookahead rule must still fail at the limits themselves
+SPLIT_LADDER_V2 = tuple(SplitRung(r.lookahead, margin=0.001) for r in SPLIT_LADDER)
 #: the constant split rates a pair of the ladder v1 must defeat (the action's units; float32, as the env
 #: receives them): -1, -0.9, ..., 1
 SPLIT_RATES = np.linspace(-1.0, 1.0, 21).astype(np.float32).astype(np.float64)
@@ -225,6 +232,14 @@ def split_knob_table(indent: str = "") -> str:
     """The knobs of every rung of :data:`SPLIT_LADDER` as a reStructuredText table (the rung pages show it)."""
     shown = tuple(SimpleNamespace(lookahead=", ".join(map(str, r.lookahead)) or "none") for r in SPLIT_LADDER)
     return base.knob_table(shown, {"lookahead": "horizons (samples) at which the lookahead rule fails"}, indent)
+
+
+def split_knob_table_v2(indent: str = "") -> str:
+    """The knobs of every rung of :data:`SPLIT_LADDER_V2` as a reStructuredText table (the rung pages show it)."""
+    shown = tuple(SimpleNamespace(lookahead=", ".join(map(str, r.lookahead)) or "none", margin=f"{r.margin * 1000:g}")
+                  for r in SPLIT_LADDER_V2)
+    return base.knob_table(shown, {"lookahead": "horizons (samples) at which the lookahead rule fails",
+                                   "margin": "certificate's margin inside the stroke limits (mm)"}, indent)
 
 
 @njit(cache=True, error_model="numpy")
@@ -340,9 +355,10 @@ def _scheduled(path, splits, consts, limits, lengths, work):
 
 
 @njit(cache=True, error_model="numpy")
-def _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, path):
+def _split_pair(p0, p1, shape, lookahead, step, consts, limits, certified, lengths, work, path):
     """Whether the pair (P0, P1) is a pair of the ladder v1's rung (:data:`SPLIT_LADDER`'s module comment):
-    ``shape`` s(u) at the samples, ``lookahead`` the rung's horizons; ``path`` (K, 6) receives the nominal path."""
+    ``shape`` s(u) at the samples, ``lookahead`` the rung's horizons, ``certified`` the limits the certificate's
+    schedule keeps (``limits`` moved in by the rung's margin); ``path`` (K, 6) receives the nominal path."""
     if not (_within(p0, 0.5, consts, limits, lengths, work) and _within(p1, 0.5, consts, limits, lengths, work)):
         return False  # both ends within the limits at 0.5 (legs alone: cheap)
     breaks = False
@@ -356,7 +372,7 @@ def _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, p
     for rate in SPLIT_RATES:
         if _ramp_free(path, rate, step, consts, limits, lengths, work):
             return False
-    if not _scheduled(path, CERTIFICATE_SPLITS, consts, limits, lengths, work):
+    if not _scheduled(path, CERTIFICATE_SPLITS, consts, certified, lengths, work):
         return False
     for h in lookahead:
         if _plays_free(path, h, step, consts, limits, lengths, work):
@@ -365,7 +381,7 @@ def _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, p
 
 
 @njit(cache=True, error_model="numpy")
-def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limits, pair):
+def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limits, certified, pair):
     """One generator's pair of the rung: blocks of :data:`_BLOCK` candidates of uniforms drawn from ``rng`` (a
     ``numpy.random.Generator``: numba draws numpy's own stream), P0 then P1 of each candidate in ``low`` +
     (``high`` - ``low``) u, until :func:`_split_pair` keeps one (into ``pair`` (2, 6)), at most ``max_blocks``;
@@ -378,7 +394,7 @@ def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limi
             for c in range(6):
                 p0[c] = low[c] + (high[c] - low[c]) * u[i, c]
                 p1[c] = low[c] + (high[c] - low[c]) * u[i, 6 + c]
-            if _split_pair(p0, p1, shape, lookahead, step, consts, limits, lengths, work, path):
+            if _split_pair(p0, p1, shape, lookahead, step, consts, limits, certified, lengths, work, path):
                 pair[0] = p0
                 pair[1] = p1
                 return True
@@ -407,15 +423,18 @@ def split_ladder_scenarios(rngs: list[np.random.Generator], rung: SplitRung,
     call per generator (:func:`_split_draw`). A pair passes when both ends are within the limits at Delta = 0.5
     and the nominal path there breaks a limit midway (every fourth sample); no constant split rate of
     :data:`SPLIT_RATES` keeps every sample of the nominal path free (eq 14); a schedule on
-    :data:`CERTIFICATE_SPLITS` from 0.5, one ``max_delta_step`` a sample at most, does (so the reference's
+    :data:`CERTIFICATE_SPLITS` from 0.5, one ``max_delta_step`` a sample at most, does with every stroke the
+    rung's ``margin`` inside its limits (so the reference's
     serial optimisation, on a grid that holds these splits, finds one); and :func:`lookahead_split` fails at
     each of the rung's horizons."""
     shape, consts, limits = split_args(geometry, tau)
     lookahead = np.array(rung.lookahead, np.int64)
+    certified = limits + np.array([rung.margin, -rung.margin, 0.0])
     out = []
     for rng in rngs:
         pair = np.empty((2, 6))
-        call = (rng, max_blocks, POSE_LOW, POSE_HIGH, shape, lookahead, float(max_delta_step), consts, limits, pair)
+        call = (rng, max_blocks, POSE_LOW, POSE_HIGH, shape, lookahead, float(max_delta_step), consts, limits,
+                certified, pair)
         key = (type(rng.bit_generator),)
         draw = _SPLIT_DRAWS.get(key) or _SPLIT_DRAWS.setdefault(key, entry(_split_draw, call))  # typed once
         if not draw(*call):

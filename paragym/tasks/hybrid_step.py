@@ -68,7 +68,8 @@ from paragym.tasks.hybrid_worlds import DynamicWorld
 from paragym.trajectories import nominal_path
 
 __all__ = ["FAILURES", "LADDER_RULES", "OBS_SIZE", "OBS_SIZE_V1", "POSE_SCALE", "REWARD_TERMS", "RULES",
-           "SPLIT_LADDER_RULES", "HybridParams", "HybridRules", "HybridState", "decide", "reset", "step"]
+           "SPLIT_LADDER_RULES", "SPLIT_LADDER_RULES_V2", "HybridParams", "HybridRules", "HybridState", "decide",
+           "reset", "step"]
 
 #: why a robot's episode failed (``HybridState.reason``, the first reason; 0: it has not)
 FAILURES = (None, "broken", "tracking", "leg limit", "singular")
@@ -139,6 +140,10 @@ LADDER_RULES = {k: HybridRules(0, sees_the_end=True, strict_dynamics=True, rung=
 #: split as the only lever, on the rung's pairs of poses (:data:`paragym.tasks.hybrid.SPLIT_LADDER`)
 SPLIT_LADDER_RULES = {k: HybridRules(1, sees_the_end=True, strict_dynamics=True, rung=rung, split_only=True)
                       for k, rung in enumerate(scenarios_module.SPLIT_LADDER)}
+#: the rules of the ladder v2's rungs (-Easy-v2 ...): the ladder v1's, on pairs whose certificate keeps every stroke
+#: 1 mm inside its limits (:data:`paragym.tasks.hybrid.SPLIT_LADDER_V2`)
+SPLIT_LADDER_RULES_V2 = {k: HybridRules(2, sees_the_end=True, strict_dynamics=True, rung=rung, split_only=True)
+                         for k, rung in enumerate(scenarios_module.SPLIT_LADDER_V2)}
 
 
 @dataclass(frozen=True)

@@ -18,6 +18,7 @@ from paragym.tasks.hybrid_step import (
     REWARD_TERMS,
     RULES,
     SPLIT_LADDER_RULES,
+    SPLIT_LADDER_RULES_V2,
     HybridParams,
     HybridRules,
     HybridState,
@@ -26,7 +27,7 @@ from paragym.tasks.hybrid_step import (
 )
 from paragym.tasks.hybrid_worlds import DynamicWorld
 
-__all__ = ["LADDER_RULES", "RULES", "SPLIT_LADDER_RULES", "TASK", "HybridTask"]
+__all__ = ["LADDER_RULES", "RULES", "SPLIT_LADDER_RULES", "SPLIT_LADDER_RULES_V2", "TASK", "HybridTask"]
 
 
 class HybridTask(TaskBase):
