@@ -459,7 +459,7 @@ class HybridSingularityFreeEasyV2Env(HybridSingularityFreeEasyV1Env):
 {knobs}
 
     ## Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
-    As the ladder v1's easy rung (``paragym/HybridSingularityFree-Easy-v1``).
+    As v1 of the easy rung (``paragym/HybridSingularityFree-Easy-v1``).
 
     ## Version History
     * v2 (paragym 0.10): the ladder v2, above; the ladder v1's ids are unchanged, and their shipped models play
@@ -478,7 +478,7 @@ class HybridSingularityFreeMediumV2Env(HybridSingularityFreeEasyV2Env):
     on pairs whose certificate keeps every stroke 1 mm inside its limits.
 
     ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
-    As the ladder v2's easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 1's knobs.
+    As v2 of the easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 1's knobs.
 
     ## Version History
     * v2 (paragym 0.10): the rung above.
@@ -492,7 +492,7 @@ class HybridSingularityFreeHardV2Env(HybridSingularityFreeEasyV2Env):
     pairs whose certificate keeps every stroke 1 mm inside its limits.
 
     ## Description, Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
-    As the ladder v2's easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 2's knobs.
+    As v2 of the easy rung (``paragym/HybridSingularityFree-Easy-v2``), with rung 2's knobs.
 
     ## Version History
     * v2 (paragym 0.10): the rung above.

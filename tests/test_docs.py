@@ -144,7 +144,8 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
             (easy, 4, "ppo-seed0", "learned", 0.8, 0.67, 0.89, "", ""),
             (hard, 2, "bc-seed0", "learned", 0.1, 0.04, 0.21, "", ""),
             ("paragym/HybridSingularityFree-v2", 1, "zero", "floor", 1.0, 1.0, 1.0, "", ""),
-            ("paragym/HybridSingularityFree-Hard-v1", 1, "polynomial-detour", "reference", 1.0, 0.93, 1.0, "", "")]
+            ("paragym/HybridSingularityFree-Hard-v1", 1, "polynomial-detour", "reference", 1.0, 0.93, 1.0, "", ""),
+            ("paragym/HybridSingularityFree-Easy-v2", 1, "polynomial-detour", "reference", 1.0, 0.93, 1.0, 3, 1.0)]
     path = tmp_path / "board.csv"
     with path.open("w", newline="") as f:
         writer = csv.writer(f)
@@ -160,11 +161,15 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     # rung; the medium rung ranks no other method, the hard rung's BC lies below
     assert table[7] == "| hybrid v0 | **verdict** | sanity: PPO | hard | hard |"
     # the hybrid's ladder v1 is a table group of its own, under the same rung columns
-    assert table[8:] == ["| hybrid v1 | reference | - | - | 1.00 [0.93, 1.00] |",
-                         "| hybrid v1 | reference, dynamic | - | - | - |", "| hybrid v1 | **verdict** | - | - | hard |"]
-    assert len(table) == 11  # the v2 row is no rung
+    assert table[8:11] == ["| hybrid v1 | reference | - | - | 1.00 [0.93, 1.00] |",
+                           "| hybrid v1 | reference, dynamic | - | - | - |",
+                           "| hybrid v1 | **verdict** | - | - | hard |"]
+    assert table[11:] == ["| hybrid v2 | reference | 1.00 [0.93, 1.00] | - | - |",
+                          "| hybrid v2 | reference, dynamic | 3/3 [0.44, 1.00] | - | - |",
+                          "| hybrid v2 | **verdict** | hard | - | - |"]
+    assert len(table) == 14  # the v2 id's row is no rung
     newest = ladder_table(path, newest=True).splitlines()  # the README's: each task's newest ladder alone
-    assert newest == table[:2] + table[8:]
+    assert newest == table[:2] + table[11:]
     from paragym.docpages import env_page  # and each rung's page says its verdict, a version's page none
 
     assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)
