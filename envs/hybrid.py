@@ -11,13 +11,13 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.tasks.base import renamed
 from paragym.tasks.hybrid import (
+    SPLIT_LADDER_V2,
     HybridScenario,
     knob_table,
     paper_scenario,
     random_scenario,
     random_scenarios,
     split_knob_table,
-    split_knob_table_v2,
 )
 from paragym.tasks.hybrid_task import LADDER_RULES, RULES, SPLIT_LADDER_RULES, SPLIT_LADDER_RULES_V2, TASK
 
@@ -475,7 +475,7 @@ class HybridSingularityFreeEasyV2Env(HybridSingularityFreeEasyV1Env):
 
 
 HybridSingularityFreeEasyV2Env.__doc__ = HybridSingularityFreeEasyV2Env.__doc__.format(
-    knobs=split_knob_table_v2("    "))
+    knobs=split_knob_table("    ", SPLIT_LADDER_V2))
 
 
 class HybridSingularityFreeMediumV2Env(HybridSingularityFreeEasyV2Env):

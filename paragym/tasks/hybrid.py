@@ -24,7 +24,7 @@ from paragym.units import MM
 __all__ = ["LADDER", "POSE_HIGH", "POSE_LOW", "SCENARIOS", "SPLIT_LADDER", "SPLIT_LADDER_V2", "HybridRung",
            "HybridScenario", "SplitRung", "draw_scenarios", "knob_table", "ladder_scenarios", "lookahead_split",
            "nominal_rows", "paper_scenario", "random_scenario", "random_scenarios", "resolve_scenario", "split_args",
-           "split_knob_table", "split_knob_table_v2", "split_ladder_scenarios", "validate_scenario"]
+           "split_knob_table", "split_ladder_scenarios", "validate_scenario"]
 
 SCENARIOS = ("paper", "random")
 
@@ -228,18 +228,15 @@ CERTIFICATE_SPLITS.setflags(write=False)
 _BLOCK = 256  # candidates a compiled draw makes uniforms for at once
 
 
-def split_knob_table(indent: str = "") -> str:
-    """The knobs of every rung of :data:`SPLIT_LADDER` as a reStructuredText table (the rung pages show it)."""
-    shown = tuple(SimpleNamespace(lookahead=", ".join(map(str, r.lookahead)) or "none") for r in SPLIT_LADDER)
-    return base.knob_table(shown, {"lookahead": "horizons (samples) at which the lookahead rule fails"}, indent)
-
-
-def split_knob_table_v2(indent: str = "") -> str:
-    """The knobs of every rung of :data:`SPLIT_LADDER_V2` as a reStructuredText table (the rung pages show it)."""
+def split_knob_table(indent: str = "", ladder: tuple[SplitRung, ...] = SPLIT_LADDER) -> str:
+    """The knobs of every rung of ``ladder`` (:data:`SPLIT_LADDER` or :data:`SPLIT_LADDER_V2`) as a
+    reStructuredText table (the rung pages show it); the certificate's margin where a rung has one."""
+    columns = {"lookahead": "horizons (samples) at which the lookahead rule fails"}
+    if any(r.margin for r in ladder):
+        columns["margin"] = "certificate's margin inside the stroke limits (mm)"
     shown = tuple(SimpleNamespace(lookahead=", ".join(map(str, r.lookahead)) or "none", margin=f"{r.margin * 1000:g}")
-                  for r in SPLIT_LADDER_V2)
-    return base.knob_table(shown, {"lookahead": "horizons (samples) at which the lookahead rule fails",
-                                   "margin": "certificate's margin inside the stroke limits (mm)"}, indent)
+                  for r in ladder)
+    return base.knob_table(shown, columns, indent)
 
 
 @njit(cache=True, error_model="numpy")
