@@ -40,6 +40,9 @@ class EnvRow:
             own with its own version line and leaderboard table; None: a version of the task itself
             (:func:`rows_of`, :func:`newest`). A ladder has versions as a task has: the rungs ``-v1`` of a
             task are a ladder of their own (:func:`ladders`).
+        kinematic_as: the id whose kinematic fidelity this one is, bit for bit, in its spaces and every
+            scenario: a later version (or ladder) that changed its dynamic fidelity alone (tested). A test of the
+            kinematic fidelity alone runs on that id for both; None: a kinematic fidelity of its own.
     """
 
     id: str
@@ -53,6 +56,7 @@ class EnvRow:
     models_from: str | None = None
     bench: str | None = None
     rung: int | None = None
+    kinematic_as: str | None = None
 
     @property
     def bench_module(self) -> str:
@@ -95,16 +99,18 @@ RUNG_NAMES = ("Easy", "Medium", "Hard")
 
 
 def _ladder(name: str, module: str, steps: int, task: str, summary: str, version: int = 0,
-            models_from: int | None = None) -> tuple[EnvRow, ...]:
+            models_from: int | None = None, kinematic_as: int | None = None) -> tuple[EnvRow, ...]:
     """The rows of a task's ladder ``version``: ``paragym/<name>-<rung>-v<version>``, its classes
     ``<name><rung>Env`` and ``<name><rung>VectorEnv`` (``<name><rung>V<version>Env`` and so on past v0) in
     ``module``; ``summary`` is completed with the rung. ``models_from``: the ladder version whose rungs' shipped
-    models these rungs play (:attr:`EnvRow.models_from`)."""
+    models these rungs play (:attr:`EnvRow.models_from`); ``kinematic_as``: the ladder version whose rungs'
+    kinematic fidelity these rungs are (:attr:`EnvRow.kinematic_as`)."""
     tag = f"V{version}" if version else ""
     return tuple(EnvRow(f"paragym/{name}-{rung}-v{version}", f"{module}:{name}{rung}{tag}Env",
                         f"{module}:{name}{rung}{tag}VectorEnv", steps, task, "random", ("random",),
                         f"{summary}: rung {k} ({rung.lower()})", rung=k,
-                        models_from=None if models_from is None else f"paragym/{name}-{rung}-v{models_from}")
+                        models_from=None if models_from is None else f"paragym/{name}-{rung}-v{models_from}",
+                        kinematic_as=None if kinematic_as is None else f"paragym/{name}-{rung}-v{kinematic_as}")
                  for k, rung in enumerate(RUNG_NAMES))
 
 
@@ -153,7 +159,7 @@ ROWS: tuple[EnvRow, ...] = (
     EnvRow("paragym/MobileTripodOdometry-v3", "paragym.envs.tripod:MobileTripodOdometryV3Env",
            "paragym.envs.tripod:MobileTripodOdometryV3VectorEnv", 700, "tripod", "push", None,
            "mobile tripod v3: v2's task; its dynamic fidelity at converged solver settings, the units on their wheels",
-           models_from="paragym/MobileTripodOdometry-v1"),
+           models_from="paragym/MobileTripodOdometry-v1", kinematic_as="paragym/MobileTripodOdometry-v2"),
     *_ladder("CaPaManCollisionFree", "paragym.envs.capaman", 400, "capaman",
              "CaPaMan ladder: v1's tour among capsule posts standing on the straight lines between the T.P.s"),
     *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
@@ -166,10 +172,11 @@ ROWS: tuple[EnvRow, ...] = (
              "hybrid ladder v1: v2's task, the split its only lever, on paths that no constant split rate clears",
              version=1),
     *_ladder("MobileTripodOdometry", "paragym.envs.tripod", 700, "tripod",
-             "mobile tripod ladder v1: the ladder v0's drives at v3's converged physics", version=1, models_from=0),
+             "mobile tripod ladder v1: the ladder v0's drives at v3's converged physics", version=1, models_from=0,
+             kinematic_as=0),
     *_ladder("Orthoglide2PRRKappa", "paragym.envs.orthoglide", 1000, "orthoglide",
              "2PRR ladder v1: the ladder v0's laps, in dynamic fidelity with v2's table beneath the guides",
-             version=1, models_from=0),
+             version=1, models_from=0, kinematic_as=0),
     *_ladder("HybridSingularityFree", "paragym.envs.hybrid", 100, "hybrid",
              "hybrid ladder v2: the ladder v1's pairs, certified with every stroke 1 mm inside its limits",
              version=2, models_from=1),

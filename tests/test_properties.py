@@ -12,17 +12,17 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from env_ids import STEP_IDS
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import paragym
 from paragym import registry
 from paragym.sim.tripod_drive import Terrain
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.orthoglide import OrthoglideScenario, circle_task
 from paragym.tasks.tripod import TripodScenario
 
-IDS = sorted(paragym.ENVIRONMENTS)
+IDS = STEP_IDS  # one id per transition and spaces (tests/env_ids.py)
 SCENARIOS = {r.id: ["random", *(n for n in r.scenario_names if n != "random")] for r in registry.ROWS}
 FAST = settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                        HealthCheck.function_scoped_fixture])

@@ -122,3 +122,57 @@ def test_every_task_module_speaks_one_vocabulary_and_answers_to_its_old_names():
     assert len(said) == 4 and all(w.category is DeprecationWarning for w in said), [str(w.message) for w in said]
     with pytest.raises(AttributeError):
         orthoglide.Nope  # noqa: B018
+
+
+TWINS = [r for r in registry.ROWS if r.kinematic_as is not None]
+
+
+def test_a_kinematic_twin_names_an_older_id_of_its_task_that_has_its_own():
+    assert {r.name for r in TWINS} == {"MobileTripodOdometry-v3", *(f"{t}-{n}-v1" for t in
+                                       ("MobileTripodOdometry", "Orthoglide2PRRKappa") for n in registry.RUNG_NAMES)}
+    for r in TWINS:
+        twin = registry.row(r.kinematic_as)
+        assert (twin.task, twin.rung, twin.kinematic_as) == (r.task, r.rung, None) and twin.version < r.version, r.id
+
+
+@pytest.mark.parametrize("row", TWINS, ids=lambda r: r.name)
+def test_a_kinematic_twin_plays_its_twins_episodes_bit_for_bit(row):
+    """What lets the tests of the kinematic fidelity alone run once for both: the same spaces, and whole episodes
+    of every scenario and of five random draws (three played by the reference) the same observations, rewards,
+    ends and numbers, in the single and the vector env."""
+    import pickle
+
+    import numpy as np
+
+    from paragym.baselines.policies import get_policy
+    from paragym.baselines.tasks import bench_of
+
+    runs = []
+    starts = [(name, 11) for name in row.scenario_names] + [("random", seed) for seed in range(12, 17)]
+    for env_id in (row.id, row.kinematic_as):
+        env = gym.make(env_id)
+        vec = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+        rng = np.random.default_rng(7)
+        out = [env.observation_space, env.action_space]
+        for name, seed in starts:
+            obs, info = env.reset(seed=seed, options={"scenario": name})
+            out.append((obs, pickle.dumps(info["scenario"])))
+            reference = get_policy(env_id, bench_of(env_id).reference).factory(env, seed) if seed > 13 else None
+            if reference is not None:
+                reference.reset(obs, info)
+            term = trunc = False
+            while not (term or trunc):
+                action = rng.uniform(-1.2, 1.2, env.action_space.shape) if reference is None else \
+                    reference.act(obs, info)
+                obs, reward, term, trunc, info = env.step(action)
+                out.append((obs, reward, term, trunc, {key: info[key] for key in sorted(info)
+                                                       if isinstance(info[key], (float, int, bool, np.ndarray))}))
+            out.append((info.get("is_success"), info.get("failure")))
+        out.append(vec.reset(seed=[3, 4])[0])
+        out.extend(vec.step(rng.uniform(-1.2, 1.2, vec.action_space.shape))[:4] for _ in range(50))
+        env.close()
+        vec.close()
+        runs.append(out)
+    assert len(runs[0]) == len(runs[1])
+    for mine, theirs in zip(*runs, strict=True):
+        np.testing.assert_equal(mine, theirs)
