@@ -5,9 +5,11 @@ from __future__ import annotations
 import importlib.util
 import json
 import sqlite3
+from pathlib import Path
 
 import numpy as np
 import pytest
+from env_ids import KINEMATIC_IDS
 
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard, summarise
 from paragym.baselines.leaderboard.suite import dynamic_engines
@@ -167,31 +169,70 @@ LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
 
 @pytest.fixture(scope="module")
 def references(shared_folder):
-    """The reference on evaluation seeds 0-1 x 10 episodes of every env, random and zero on seed 0 (run by one
-    xdist worker; the others read its database, where every episode is already stored)."""
-    out: dict[str, dict] = {}
-    with shared_folder("references.sqlite") as db:
-        for seeds, policies in (((0, 1), sorted({bench_of(env).reference for env in paragym.ENVIRONMENTS})),
-                                ((0,), ["random", "zero"])):
-            run = run_leaderboard(db=db, suite=EvalSuite("test", seeds, 10), policies=policies, out=None,
-                                  validate=False, progress=False, echo=lambda s: None, executor="workers", workers=2)
-            for env, ss in run.summaries.items():
-                out.setdefault(env, {}).update({s.policy: s for s in ss})
-    return out
+    """``references(env_id)``: the reference, random and zero on evaluation seed 0 x 10 episodes of one env id, as
+    summaries and as episode rows, run where its test runs (each env in a database of its own: an xdist worker
+    waits only for an env another worker is running, never for all of them)."""
+    cache: dict[str, tuple[dict, list]] = {}
+
+    def of(env_id: str) -> tuple[dict, list]:
+        if env_id not in cache:
+            with shared_folder(f"references-{registry.row(env_id).name}.sqlite") as db:
+                run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 10), out=None, env_ids=[env_id],
+                                      policies=[bench_of(env_id).reference, "random", "zero"], validate=False,
+                                      progress=False, echo=lambda s: None)
+                with ResultStore(db) as store:
+                    episodes = [(r.policy, r.seed, r.episode, bool(r.success), r.length, r.episode_return)
+                                for r in store.rows() if r.env == env_id]
+            cache[env_id] = ({s.policy: s for s in run.summaries[env_id]}, sorted(episodes))
+        return cache[env_id]
+
+    return of
 
 
-@pytest.mark.parametrize("env_id", list(paragym.ENVIRONMENTS))
-def test_each_reference_meets_its_success_threshold_and_beats_the_floor(references, env_id):
-    name, threshold = bench_of(env_id).reference, bench_of(env_id).reference_success
-    rows = references[env_id]
-    assert rows[name].success_rate >= threshold
-    assert rows[name].return_mean > rows["random"].return_mean
-    assert rows[name].return_mean > rows["zero"].return_mean
+def _committed() -> dict:
+    """The committed leaderboard's episodes: (env, policy, seed, episode) -> (success, length, return)."""
+    import gzip
+
+    with gzip.open(Path(__file__).parents[1] / "leaderboard" / "results.json.gz", "rt") as handle:
+        data = json.load(handle)
+    names = [(p["env"], p["policy"]) for p in data["policies"]]
+    return {(*names[e["policy"]], e["seed"], e["episode"]): (e["success"], e["length"], e["return"])
+            for e in data["episodes"]}
+
+
+@pytest.mark.parametrize("env_id", KINEMATIC_IDS)
+def test_each_reference_plays_the_committed_episodes_and_beats_the_floors(references, env_id):
+    """One id per kinematic fidelity (tests/env_ids.py): the reference's and the floors' first 10 episodes of the
+    committed leaderboard, played again here, end as committed (success and length exactly, the return to the
+    results file's tolerance), and the reference's return beats both floors'. The success threshold is held on
+    the committed 50 episodes of every id (below)."""
+    summaries, episodes = references(env_id)
+    committed = _committed()
+    assert len(episodes) == 30
+    for policy, seed, k, success, length, ret in episodes:
+        assert committed[env_id, policy, seed, k][:2] == (success, length), (policy, k)
+        assert ret == pytest.approx(committed[env_id, policy, seed, k][2], rel=1e-6, abs=1e-9), (policy, k)
+    name = bench_of(env_id).reference
+    assert summaries[name].return_mean > summaries["random"].return_mean
+    assert summaries[name].return_mean > summaries["zero"].return_mean
+
+
+def test_every_id_s_reference_meets_its_threshold_in_the_committed_leaderboard():
+    """Every id, its twins too: the reference's success over the committed table's 50 episodes (whose first 10
+    each test above plays again on one id per kinematic fidelity)."""
+    import csv
+
+    with open(Path(__file__).parents[1] / "leaderboard" / "leaderboard.csv", newline="") as handle:
+        rows = {(r["env"], r["policy"]): r for r in csv.DictReader(handle)}
+    for env_id in paragym.ENVIRONMENTS:
+        bench = bench_of(env_id)
+        assert int(rows[env_id, bench.reference]["episodes"]) == 50
+        assert float(rows[env_id, bench.reference]["success_rate"]) >= bench.reference_success, env_id
 
 
 @pytest.mark.parametrize("env_id", ["paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0", TRIPOD])
 def test_the_reference_ranks_first_where_the_paper_method_is_optimal(references, env_id):
-    ranked = sorted(references[env_id].values(), key=lambda s: s.sort_key())
+    ranked = sorted(references(env_id)[0].values(), key=lambda s: s.sort_key())
     assert ranked[0].policy == bench_of(env_id).reference
 
 
@@ -208,7 +249,7 @@ def learned(shared_folder):
                      if spec.kind in ("learned", "floor")})  # the planners' episodes are the references fixture's
     with shared_folder("learned.sqlite") as db:
         run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 5), out=None, validate=False, progress=False,
-                              echo=lambda s: None, executor="workers", workers=2, policies=wanted,
+                              echo=lambda s: None, policies=wanted,
                               env_ids=OWN_MODELS)
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
@@ -253,7 +294,7 @@ def test_every_policy_gets_dynamic_episodes_and_its_own_kf_verdict(tmp_path):
     suite = EvalSuite("test", (0,), 1, (("paper", 0),))
     kw = dict(suite=suite, env_ids=[ORTHO], policies=["zero", "gradient-c"], validate=True, progress=False,
               echo=lambda s: None, out=tmp_path / "out")
-    run = run_leaderboard(db=tmp_path / "r.sqlite", executor="workers", workers=2, **kw)
+    run = run_leaderboard(db=tmp_path / "r.sqlite", **kw)
     by_policy = {s.policy: s for s in run.summaries[ORTHO]}
     for s in by_policy.values():
         assert s.dynamic is not None and s.dynamic["episodes"] == 1

@@ -35,7 +35,7 @@ RECORDED_ENVS = ["paragym/CaPaManCollisionFree-v0", "paragym/CaPaManCollisionFre
 def rows(folder: Path) -> list[dict]:
     db = folder / "rows.sqlite"
     run_leaderboard(db=db, suite=EvalSuite("rows", (0,), 2), policies=POLICIES, out=None, validate=False,
-                    progress=False, echo=lambda s: None, executor="workers", workers=2, env_ids=RECORDED_ENVS)
+                    progress=False, echo=lambda s: None, env_ids=RECORDED_ENVS)
     with ResultStore(db) as store:
         out = [{"env": r.env, "policy": r.policy, "seed": r.seed, "episode": r.episode, "return": r.episode_return,
                 "length": r.length, "success": bool(r.success), "metrics": r.metrics} for r in store.rows()]
