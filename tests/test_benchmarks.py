@@ -345,3 +345,11 @@ def test_convergence_sweeps_one_model_more_finely(tmp_path):
     assert "5 ms, 50 it, position_gain 0.3" in rows[0][2] and "2.5 ms, 50 it, position_gain 0.15" in rows[1][2]
     assert rows[0][-1] and not rows[1][-1]  # the shipped row says whether it is converged
     assert "smoke run" in _recorded(tmp_path, "convergence")["title"]
+
+
+def test_capaman_solvable_finds_a_tour_in_each_rung_s_scenes(tmp_path):
+    """A smoke run over three seeds a rung (the tests check 250; the recorded run 1,000)."""
+    _run("benchmarks/capaman_solvable.py", "--seeds", "3", "--record", str(tmp_path))
+    rows = _recorded(tmp_path, "capaman_solvable")["rows"]
+    assert [r[0] for r in rows] == [f"paragym/CaPaManCollisionFree-{n}-v0" for n in ("Easy", "Medium", "Hard")]
+    assert all(r[1:4] == ["3", "0", "none"] for r in rows), rows
