@@ -96,3 +96,28 @@ def test_the_ladder_v2_reference_holds_its_leg_limits_under_physics_where_the_la
             for env_id in (SPLIT_RUNGS[0], SPLIT_RUNGS_V2[0])]
     assert not rows[0].success and rows[0].metrics["limit_violations"] > 0
     assert rows[1].success and rows[1].metrics["limit_violations"] == 0
+
+
+def test_a_memoised_draw_is_the_draw_and_leaves_the_generator_where_the_draw_does():
+    """The same generator state draws from the memo (a leaderboard's policies meet the same reset seeds): the
+    same pair, and the generator after it in the state the draw leaves, so that what follows draws alike."""
+    from paragym.tasks import hybrid as scenarios
+
+    rung = scenarios.SPLIT_LADDER_V2[1]
+    scenarios._SPLIT_MEMO.clear()
+    drawn, fresh = np.random.default_rng(41), np.random.default_rng(41)
+    first = scenarios.split_ladder_scenarios([drawn], rung)[0]
+    after_draw = drawn.random(3)
+    assert len(scenarios._SPLIT_MEMO) == 1
+    again = scenarios.split_ladder_scenarios([fresh], rung)[0]
+    assert again == first and np.array_equal(fresh.random(3), after_draw)
+    assert len(scenarios._SPLIT_MEMO) == 1  # taken from the memo, not drawn again
+    other = scenarios.split_ladder_scenarios([np.random.default_rng(42)], rung)[0]
+    assert other != first and len(scenarios._SPLIT_MEMO) == 2
+    env = gym.make(SPLIT_RUNGS_V2[1])
+    runs = []
+    for _ in range(2):  # drawn, then from the memo: the same observation and the env's generator where it was
+        obs, _ = env.reset(seed=7)
+        runs.append((obs, env.unwrapped.np_random.random(4)))
+    assert np.array_equal(runs[0][0], runs[1][0]) and np.array_equal(runs[0][1], runs[1][1])
+    env.close()

@@ -7,6 +7,7 @@ drawn and validated here once.
 from __future__ import annotations
 
 import math
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import lru_cache
 from types import SimpleNamespace
@@ -400,6 +401,10 @@ def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limi
 
 #: :func:`_split_draw`'s compiled entry per kind of bit generator (the only type of its call that varies)
 _SPLIT_DRAWS: dict[tuple[Any, ...], Any] = {}
+#: the last :data:`_SPLIT_MEMO_SIZE` draws of this process: (rung, geometry, path step, rate limit, blocks, the
+#: generator's state before) -> (the pair, the generator's state after), oldest first
+_SPLIT_MEMO: OrderedDict[tuple[Any, ...], tuple[np.ndarray, dict[str, Any]]] = OrderedDict()
+_SPLIT_MEMO_SIZE = 4096
 
 
 @lru_cache(maxsize=16)
@@ -429,13 +434,24 @@ def split_ladder_scenarios(rngs: list[np.random.Generator], rung: SplitRung,
     certified = limits + np.array([rung.margin, -rung.margin, 0.0])
     out = []
     for rng in rngs:
-        pair = np.empty((2, 6))
-        call = (rng, max_blocks, POSE_LOW, POSE_HIGH, shape, lookahead, float(max_delta_step), consts, limits,
-                certified, pair)
-        key = (type(rng.bit_generator),)
-        draw = _SPLIT_DRAWS.get(key) or _SPLIT_DRAWS.setdefault(key, entry(_split_draw, call))  # typed once
-        if not draw(*call):
-            raise RuntimeError(f"no pair of poses of the rung in {max_blocks * _BLOCK} candidates")
+        # a draw is a function of the generator's state: the same state (the same reset seed, as every policy of a
+        # leaderboard meets) takes the pair and the state after it from the memo instead of drawing again
+        memo_key = (rung, geometry, tau, float(max_delta_step), max_blocks, repr(rng.bit_generator.state))
+        if memo_key in _SPLIT_MEMO:
+            pair, after = _SPLIT_MEMO[memo_key]
+            _SPLIT_MEMO.move_to_end(memo_key)
+            rng.bit_generator.state = after
+        else:
+            pair = np.empty((2, 6))
+            call = (rng, max_blocks, POSE_LOW, POSE_HIGH, shape, lookahead, float(max_delta_step), consts, limits,
+                    certified, pair)
+            key = (type(rng.bit_generator),)
+            draw = _SPLIT_DRAWS.get(key) or _SPLIT_DRAWS.setdefault(key, entry(_split_draw, call))  # typed once
+            if not draw(*call):
+                raise RuntimeError(f"no pair of poses of the rung in {max_blocks * _BLOCK} candidates")
+            _SPLIT_MEMO[memo_key] = (pair, rng.bit_generator.state)
+            if len(_SPLIT_MEMO) > _SPLIT_MEMO_SIZE:
+                _SPLIT_MEMO.popitem(last=False)
         out.append(HybridScenario("random", tuple(map(float, pair[0])), tuple(map(float, pair[1])), geometry))
     return out
 
