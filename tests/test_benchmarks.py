@@ -304,6 +304,7 @@ def test_kf_attitude_puts_each_verdict_beside_the_commanded_attitude_error(tmp_p
     rows = _recorded(tmp_path, "kf_attitude_Orthoglide2PRRKappa-v2")["rows"]
     assert [r[2] for r in rows] == ["gradient-c-limited", "zero"] and rows[0][3] == "1/1"
     assert float(rows[0][5].split()[0]) < 0.5  # deg RMS
+    assert 0.0 <= float(rows[0][6].split()[0]) <= float(rows[0][5].split()[0]) + 1e-9  # the tilt, within it
 
 
 def test_conformance_shows_the_exported_loops_holding_where_the_defaults_sag(tmp_path):

@@ -483,15 +483,20 @@ class _TrueEstimate:
     def reset(self, obs, info):
         pass
 
-    def __init__(self, env, offset=(0.0, 0.0)):
-        """``offset`` (m, one (x, y) or one per unit): where the estimate stands from the truth, eased in over
-        the drive's first 5 s (100 samples) so that no jump of the estimate is judged."""
-        self.env, self.offset = env.unwrapped, np.asarray(offset, float).reshape(-1, 2)
+    def __init__(self, env, offset=(0.0, 0.0), turn=0.0):
+        """``offset`` (m, one (x, y) or one per unit): where the estimate stands from the truth; ``turn`` (rad):
+        the truth turned about the vertical through the units' centroid; each eased in over the drive's first
+        5 s (100 samples) so that no jump of the estimate is judged."""
+        self.env, self.offset, self.turn = env.unwrapped, np.asarray(offset, float).reshape(-1, 2), turn
 
     def act(self, obs, info):
         state, scale = self.env.state, self.env.params.max_correction
         ease = min(1.0, int(state.drive.k[0]) / 100)
-        gap = (info["true_units"][:, :2] + ease * self.offset - state.estimate[0, :, :2]).ravel()
+        true = info["true_units"][:, :2]
+        c, s = np.cos(ease * self.turn), np.sin(ease * self.turn)
+        centre = true.mean(axis=0)
+        turned = centre + (true - centre) @ np.array([[c, s], [-s, c]])
+        gap = (turned + ease * self.offset - state.estimate[0, :, :2]).ravel()
         return np.clip(gap / scale, -1.0, 1.0).astype(np.float32)
 
 
@@ -526,21 +531,28 @@ def test_the_tripod_kf_check_judges_the_plates_attitude_not_its_place():
     m/s^2 per degree, against tolerances near 0.1). On a flat drive an estimate that is the truth shifted 10 cm
     as a whole (the plate's place wrong, its attitude right) passes as the truth does (0.68 of the tolerance);
     one whose single unit is 5 cm off the truth (two inter-unit distances wrong, the fitted plate tilted 1.0
-    deg RMS) fails (1.54 times it)."""
+    deg RMS) fails (1.54 times it); the truth turned 3 deg about the vertical passes: gravity shows the tilt
+    (``tilt_error``), not the heading."""
     from paragym.sim.tripod_dynamic import TripodDynamics
     from paragym.validation.episode import validate_episode
 
     verdicts = {}
-    for name, offset in (("shifted", [(0.0, 0.10)] * 3), ("one unit off", [(0.0, 0.0), (0.0, 0.0), (0.0, -0.05)])):
+    for name, offset, turn in (("shifted", [(0.0, 0.10)] * 3, 0.0),
+                               ("one unit off", [(0.0, 0.0), (0.0, 0.0), (0.0, -0.05)], 0.0),
+                               ("turned", [(0.0, 0.0)], np.radians(3.0))):
         env = gym.make("paragym/MobileTripodOdometry-v0", fidelity="dynamic", scenario="initial_heading",
                        dynamics=TripodDynamics.converged())
         try:
-            verdicts[name] = validate_episode(env, _TrueEstimate(env, offset), seed=0, sensor_seed=0)
+            verdicts[name] = validate_episode(env, _TrueEstimate(env, offset, turn), seed=0, sensor_seed=0)
         finally:
             env.close()
     assert verdicts["shifted"].passed and verdicts["shifted"].position_error > 0.09, verdicts["shifted"].report
     assert not verdicts["one unit off"].passed and verdicts["one unit off"].position_error < 0.03
     assert verdicts["shifted"].attitude_error < 0.1 < 0.7 < verdicts["one unit off"].attitude_error
+    # a heading 3 deg off is an attitude 3 deg off that gravity cannot show: it passes, its tilt nil
+    turned = verdicts["turned"]
+    assert turned.passed and turned.attitude_error > 2.0 and turned.tilt_error < 0.1, turned.report
+    assert verdicts["one unit off"].tilt_error > 0.7
 
 
 def test_the_2prr_sliders_rest_on_their_guides_without_load_in_pybullet():

@@ -123,6 +123,17 @@ class EpisodeValidation:
         return float(np.degrees(np.sqrt(np.mean(np.arccos(cosine) ** 2))))
 
     @property
+    def tilt_error(self) -> float:
+        """The RMS (deg) of the part of :attr:`attitude_error` the check can see: the angle between the vertical as
+        the executed and as the commanded body see it. Gravity is all the readings hold of the attitude, so a body
+        turned about the vertical (a heading off, however far) reads as the commanded one."""
+        end = min(self.commanded.t[-1], self.executed.t[-1])
+        on_grid = self.commanded.at(self.executed.t[self.executed.t <= end])
+        up_commanded, up_executed = on_grid.rotation[:, 2, :], self.executed.rotation[:len(on_grid.t), 2, :]
+        cosine = np.clip(np.einsum("ni,ni->n", up_commanded, up_executed), -1.0, 1.0)
+        return float(np.degrees(np.sqrt(np.mean(np.arccos(cosine) ** 2))))
+
+    @property
     def episode_return(self) -> float:
         return self.episode.episode_return
 
