@@ -1,6 +1,6 @@
 """The env ids the per-id tests run on (imported by the test modules; pytest puts this folder on the path).
 
-``EVERY_ID``: every registered id. ``KINEMATIC_IDS``: one id per kinematic fidelity: an id whose registry row
+``KINEMATIC_IDS``: one id per kinematic fidelity: an id whose registry row
 says ``kinematic_as`` (its kinematic fidelity is that id's, bit for bit, tested in ``test_registry.py``) is left
 out of the tests that exercise the kinematic fidelity alone. ``STEP_IDS``: of those, one rung per ladder where the
 rungs differ in their generator's knobs alone (the same rules but the rung, the same spaces): the tests of the
@@ -15,7 +15,6 @@ import importlib
 import paragym
 from paragym import registry
 
-EVERY_ID = sorted(paragym.ENVIRONMENTS)
 KINEMATIC_IDS = sorted(r.id for r in registry.rows() if r.id in paragym.ENVIRONMENTS and r.kinematic_as is None)
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import json
 import sqlite3
@@ -12,6 +13,7 @@ import pytest
 from env_ids import KINEMATIC_IDS
 
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard, summarise
+from paragym.baselines.leaderboard.results import rows_of_results, tolerance_of
 from paragym.baselines.leaderboard.suite import dynamic_engines
 from paragym.baselines.policies import get_policy, policies_for, register_policy
 from paragym.baselines.simple import ZeroPolicy
@@ -189,15 +191,11 @@ def references(shared_folder):
     return of
 
 
+@functools.lru_cache(maxsize=1)
 def _committed() -> dict:
-    """The committed leaderboard's episodes: (env, policy, seed, episode) -> (success, length, return)."""
-    import gzip
-
-    with gzip.open(Path(__file__).parents[1] / "leaderboard" / "results.json.gz", "rt") as handle:
-        data = json.load(handle)
-    names = [(p["env"], p["policy"]) for p in data["policies"]]
-    return {(*names[e["policy"]], e["seed"], e["episode"]): (e["success"], e["length"], e["return"])
-            for e in data["episodes"]}
+    """The committed leaderboard's episodes (read once): (env, policy, seed, episode) -> (success, length, return)."""
+    episodes, _ = rows_of_results(Path(__file__).parents[1] / "leaderboard" / "results.json.gz")
+    return {(r.env, r.policy, r.seed, r.episode): (r.success, r.length, r.episode_return) for r in episodes}
 
 
 @pytest.mark.parametrize("env_id", KINEMATIC_IDS)
@@ -207,11 +205,12 @@ def test_each_reference_plays_the_committed_episodes_and_beats_the_floors(refere
     results file's tolerance), and the reference's return beats both floors'. The success threshold is held on
     the committed 50 episodes of every id (below)."""
     summaries, episodes = references(env_id)
-    committed = _committed()
+    committed, tolerance = _committed(), tolerance_of(env_id, "kinematic")
     assert len(episodes) == 30
     for policy, seed, k, success, length, ret in episodes:
         assert committed[env_id, policy, seed, k][:2] == (success, length), (policy, k)
-        assert ret == pytest.approx(committed[env_id, policy, seed, k][2], rel=1e-6, abs=1e-9), (policy, k)
+        assert ret == pytest.approx(committed[env_id, policy, seed, k][2], rel=tolerance["rtol"],
+                                    abs=tolerance["atol"]), (policy, k)
     name = bench_of(env_id).reference
     assert summaries[name].return_mean > summaries["random"].return_mean
     assert summaries[name].return_mean > summaries["zero"].return_mean
