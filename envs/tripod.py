@@ -245,7 +245,11 @@ class MobileTripodOdometryV3Env(MobileTripodOdometryV2Env):
     inter-unit distances tilt the fitted plate by about 0.45 deg RMS or more fails, whatever its place and
     heading. It passes the truth one sample late and fails odometry alone, in either engine; the paper's
     correction fails it on most drives, and v1's shipped SAC, whose estimate keeps its shape while its heading
-    drifts, passes it on all eight drives measured (the dynamics guide measures the tilt).
+    drifts, passes it on all eight drives measured (the dynamics guide measures the tilt). Where several units slip
+    at once the paper's single-fault test singles out none of them and the estimate's inter-unit distances drift
+    from the true ones; the estimators that keep them (a fallback to the most discrepant unit, an unscented Kalman
+    filter on v0) lose the place instead, and none tried holds both on most drives
+    (``benchmarks/tripod_estimators.py``, the conformance page).
 
     ## Arguments, Action Space, Observation Space, Rewards, Starting State, Episode End
     As v2; ``dynamics`` still takes any :class:`~paragym.sim.tripod_dynamic.TripodDynamics`.
@@ -382,7 +386,11 @@ class MobileTripodOdometryEasyV1Env(MobileTripodOdometryEasyEnv):
 
     ## Dynamic Fidelity
     As v3 (``paragym/MobileTripodOdometry-v3``): ``TripodDynamics.converged()`` by default and each unit starting
-    on its wheels, where the ladder v0 keeps v2's 30 iterations, at which the units creep, and v2's start.
+    on its wheels, where the ladder v0 keeps v2's 30 iterations, at which the units creep, and v2's start. The KF
+    check fails every estimator the action can express on these rungs: a push moves a unit 15-50 cm, and the
+    estimate follows the encoders' distances no faster than their smoothing (0.1 per sample, against their +-1 deg
+    noise) lets it, its shape centimetres off for seconds after each push at any trust rate
+    (``benchmarks/tripod_estimators.py``).
 
     ## Version History
     * v1 (paragym 0.10): the ladder v1, above; the ladder v0's ids (``-Easy-v0`` ...) are unchanged, and their
