@@ -493,8 +493,8 @@ def conformance_page(results: str | Path) -> str:
            "Both engines simulate the same model: MuJoCo's is the MJCF that `paragym export` writes from the "
            "PyBullet scene, its loop closures as `connect` constraints. The tables below come from one run of "
            "`benchmarks/conformance.py` (and `benchmarks/convergence.py`, `benchmarks/reference_dynamic.py` for "
-           "30 episodes per engine, `benchmarks/kf_attitude.py` for what the KF check judges, `benchmarks/tripod_estimators.py` for why "
-           "the tripod's reference misses it), with the date, "
+           "30 episodes per engine, `benchmarks/kf_attitude.py` for what the KF check judges, "
+           "`benchmarks/tripod_estimators.py` for why the tripod's reference misses it), with the date, "
            "the machine, the commit and the engines' versions of that run.",
            "",
            "How to read them. *Holding*: where a loop mechanism's motors hold it under gravity, both engines must "
