@@ -171,6 +171,8 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    if args.seeds != 1 or args.sweep or args.ray or args.ray_storage:
+        return _train_runs(args)
     if args.algo == "cem":  # a search of linear policies: no PyTorch, no SB3
         from paragym.baselines.cem import CemSettings, train_cem
 
@@ -239,6 +241,28 @@ def _cmd_train(args: argparse.Namespace) -> int:
           f"{meta['train_seconds']:.0f} s{resumed}; {last}")
     print(f"wrote {res.files.model} ({meta['model_bytes'] / 1024:.0f} KiB, {meta['parameters']['policy']:,} "
           f"parameters), {res.files.meta.name}, {res.files.curve_png.name}")
+    return 0
+
+
+def _train_runs(args: argparse.Namespace) -> int:
+    """``paragym train --seeds/--sweep/--ray``: several runs, here or as Ray Tune trials."""
+    from paragym.baselines.trials import plan_runs, read_sweep, run_all
+
+    if args.ray_storage and not args.ray:
+        raise ValueError("--ray-storage is Ray Tune's: give --ray too")
+    runs = plan_runs(args.seed, args.seeds, args.models, read_sweep(args.sweep) if args.sweep else None)
+    where = f"as Ray Tune trials on {args.ray}" if args.ray else "here, one after the other"
+    print(f"{len(runs)} {args.algo.upper()} runs on {args.env_id}, {where}")
+    outcomes = run_all(args.env_id, args.algo, runs, timesteps=args.timesteps, threads=args.threads,
+                       force=args.force, vectorized=args.vectorized, n_envs=args.n_envs, ray_address=args.ray,
+                       storage=args.ray_storage)
+    for out in outcomes:
+        if out.skipped:
+            print(f"{out.files.model} is already trained for {out.meta.get('timesteps', 0):,} steps (--force "
+                  f"retrains)")
+    print(f"{sum(not o.skipped for o in outcomes)} trained, {sum(o.skipped for o in outcomes)} trained before; "
+          f"rank them: paragym leaderboard --models {args.models}"
+          + (" (a sweep's point: --models <its folder>)" if args.sweep else ""))
     return 0
 
 
@@ -424,6 +448,17 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vectorized", action="store_true",
                    help="train on the env's native vector env (N robots per numpy call)")
     p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
+    p.add_argument("--seeds", type=int, default=1, metavar="N",
+                   help="train seeds --seed .. --seed + N - 1 (default 1), one run each")
+    p.add_argument("--sweep", default=None, metavar="FILE.yml",
+                   help="a hyper-parameter sweep: YAML of names to lists of values, their grid trained with every "
+                        "seed, each point's runs under --models/<point>/ (the training guide)")
+    p.add_argument("--ray", default=None, metavar="ADDRESS",
+                   help="run each seed and sweep point as a Ray Tune trial: 'local' starts a local Ray, else a "
+                        "cluster's address (needs the 'ray' extra; the cluster guide)")
+    p.add_argument("--ray-storage", default=None, metavar="DIR|URI",
+                   help="Ray Tune's storage, which every node reaches (default: a temporary folder here, for a "
+                        "local Ray or one node)")
     p.add_argument("--budget", type=float, default=300.0, help="cem: seconds of search (default %(default)s)")
     p.add_argument("--generations", type=int, default=1000,
                    help="cem: at most this many generations (default %(default)s); a model's JSON says how many it "

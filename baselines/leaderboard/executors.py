@@ -3,7 +3,7 @@
 ``local`` runs them in this process, ``workers`` in a fork-started process
 pool on this machine, ``ray`` as Ray tasks, local or on a cluster. Workers
 die with their parent (:func:`die_with_parent`); a local Ray is reaped
-if its driver dies (:mod:`paragym.baselines.leaderboard.reaper`).
+if its driver dies (:mod:`paragym.baselines.ray_session`).
 """
 
 from __future__ import annotations
@@ -12,9 +12,9 @@ import time
 from collections.abc import Iterator
 from typing import Any
 
-from paragym.baselines.leaderboard import reaper
 from paragym.baselines.leaderboard.evaluate import evaluate_job
 from paragym.baselines.policies import PolicySpec
+from paragym.baselines.ray_session import ray_session
 from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
 
 __all__ = ["EXECUTORS", "RUNNERS", "Job", "Row", "die_with_parent"]
@@ -109,68 +109,25 @@ def _run_pool(jobs: list[Job], workers: int, ray_address: str | None, models_dir
 
 def _run_ray(jobs: list[Job], workers: int, ray_address: str | None, models_dir: str | None) -> Iterator[Row]:
     """Ray tasks (one per episode; the policy spec travels with the task,
-    pickled by Ray) on a local instance, or on the cluster at ``ray_address``."""
-    try:
-        import ray
-    except ImportError as exc:
-        raise ValueError("--executor ray needs Ray: pip install 'paragym[ray]'") from exc
-    started = not ray.is_initialized()
-    reaper_pid = None
+    pickled by Ray) on a local instance, or on the cluster at ``ray_address``
+    (:func:`~paragym.baselines.ray_session.ray_session`)."""
     pending: list[Any] = []
-    try:
-        if started:
-            kwargs: dict[str, Any] = {"address": ray_address} if ray_address else {"num_cpus": workers or None}
-            if not ray_address:  # the local Ray is ours: it goes when we go, even on SIGKILL
-                reaper_pid = _start_reaper()
-            ray.init(include_dashboard=False, log_to_driver=False, **kwargs)
-        remote = ray.remote(num_cpus=1)(evaluate_job)
-        pending = [remote.remote(kind, spec, a, b, made) for kind, spec, a, b, made in jobs]
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1)
-            try:
-                yield ray.get(done[0])
-            except ray.exceptions.RayTaskError as exc:  # the task's own error, without Ray's coloured traceback
-                cause = getattr(exc, "cause", None)
-                if isinstance(cause, ValueError):
-                    raise ValueError(str(cause)) from None
-                raise RuntimeError(f"a Ray task failed: {type(cause).__name__}: {cause}") from None
-    finally:
-        for ref in pending:
-            ray.cancel(ref)
-        if started:
-            ray.shutdown()
-        if reaper_pid is not None:
-            _stop_reaper(reaper_pid)
-
-
-
-def _start_reaper() -> int:
-    """Start :mod:`~paragym.baselines.leaderboard.reaper` (run as a file, so that it imports nothing of
-    paragym and starts in milliseconds), which ends the local Ray's processes (its head,
-    raylet, agents and workers: whatever descends from this process from now
-    on) if this process dies without shutting Ray down (SIGKILL): Ray's own
-    agents otherwise outlive their driver for minutes. Started before Ray, so
-    that it sees every process Ray starts. Returns its pid, to end it when
-    Ray was shut down normally."""
-    import os
-    import subprocess
-    import sys
-
-    proc = subprocess.Popen([sys.executable, reaper.__file__, str(os.getpid())], stdin=subprocess.DEVNULL,
-                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, start_new_session=True, text=True)
-    pid = int(proc.stdout.readline())
-    proc.wait()
-    return pid
-
-
-def _stop_reaper(pid: int) -> None:
-    import os
-    import signal
-
-    try:
-        os.kill(pid, signal.SIGTERM)
-    except OSError:
-        pass
+    with ray_session(ray_address, workers, what="--executor ray") as ray:
+        try:
+            remote = ray.remote(num_cpus=1)(evaluate_job)
+            pending = [remote.remote(kind, spec, a, b, made) for kind, spec, a, b, made in jobs]
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                try:
+                    yield ray.get(done[0])
+                except ray.exceptions.RayTaskError as exc:  # the task's own error, without Ray's coloured traceback
+                    cause = getattr(exc, "cause", None)
+                    if isinstance(cause, ValueError):
+                        raise ValueError(str(cause)) from None
+                    raise RuntimeError(f"a Ray task failed: {type(cause).__name__}: {cause}") from None
+        finally:
+            for ref in pending:
+                ray.cancel(ref)
 
 
 EXECUTORS = ("local", "workers", "ray")

@@ -2,7 +2,7 @@
 Ray down (SIGKILL), since Ray's own agents otherwise outlive it for minutes.
 
 Run as a file (``python reaper.py DRIVER_PID``) by
-:func:`paragym.baselines.leaderboard.executors._start_reaper`, before Ray starts, so that it sees every
+:func:`paragym.baselines.ray_session.ray_session`, before Ray starts, so that it sees every
 process Ray starts and imports nothing of paragym. It forks into the background, prints its pid and
 leaves the driver's family (Ray ends a dead driver's child processes), disarms any parent-death signal the
 driver's fork hooks armed, then notes the driver's descendants every 0.2 s (pid and start time, so that a
