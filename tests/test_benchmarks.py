@@ -367,3 +367,18 @@ def test_tripod_estimators_shows_the_single_fault_test_letting_the_shape_drift(t
     paper, worst = rows["paper"], rows["paper+worst-unit"]
     assert paper[4].startswith("0/1") and worst[4].startswith("1/1"), rows  # KF PASS
     assert float(paper[7].split()[0]) > 2 * float(worst[7].split()[0]), rows  # the largest distance error, cm
+
+
+def test_mujoco_batch_steps_copies_of_the_env_s_own_model_by_each_route(tmp_path):
+    """Four CaPaMan copies for a moment: a row per step and route, each with its physics steps per control step
+    (the 20 ms control period at 1 and 2 ms) and its rates, the physics' the control steps' times that."""
+    pytest = __import__("pytest")
+    pytest.importorskip("mujoco")
+    _run("benchmarks/mujoco_batch.py", "--env", "paragym/CaPaManCollisionFree-Easy-v0", "--num-envs", "4",
+         "--seconds", "0.1", "--record", str(tmp_path))
+    rows = _recorded(tmp_path, "mujoco_batch")["rows"]
+    assert [(r[1], r[2], r[3]) for r in rows] == [(ms, k, route) for ms, k in (("1", "20"), ("2", "10"))
+                                                  for route in ("sequential", "rollout-1", "rollout-2")]
+    for r in rows:
+        control, physics = float(r[5].replace(",", "")), float(r[6].replace(",", ""))
+        assert control > 0 and abs(physics - control * int(r[2])) <= 0.5 * int(r[2]) + 1
