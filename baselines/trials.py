@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from paragym import check_env_id
-from paragym.baselines.config import ALGOS, _read_config, check_algo
+from paragym.baselines.config import ALGOS, PARAGYM_KEYS, _read_config, check_algo
 from paragym.baselines.run_files import RunFiles, _finished_run, run_files, writable_models_dir
 
 __all__ = ["Run", "RunOutcome", "plan_runs", "read_sweep", "run_all"]
@@ -112,6 +112,7 @@ def run_all(env_id: str, algo: str, runs: list[Run], timesteps: int | None = Non
     if str(algo).lower() not in ALGOS:
         raise ValueError(f"--seeds, --sweep and --ray train {', '.join(ALGOS)}; got {algo!r}")
     env_id, algo = check_env_id(env_id), check_algo(algo)
+    _check_names(algo, {name for run in runs for name in run.hyperparams})
     outcomes: dict[int, RunOutcome] = {}
     todo = []
     for i, run in enumerate(runs):
@@ -139,6 +140,19 @@ def run_all(env_id: str, algo: str, runs: list[Run], timesteps: int | None = Non
 
         _on_ray(env_id, algo, [runs[i] for i in todo], settings, ray_address, storage, deliver)
     return [outcomes[i] for i in range(len(runs))]
+
+
+def _check_names(algo: str, names: set[str]) -> None:
+    """A ValueError naming the hyper-parameters in ``names`` that neither the algorithm's constructor nor paragym's
+    yml takes (a sweep's typo, caught before any run starts)."""
+    import inspect
+
+    from paragym.baselines.loading import _algorithm
+
+    known = set(inspect.signature(_algorithm(algo).__init__).parameters) | set(PARAGYM_KEYS)
+    unknown = sorted(names - known - {"self", "env"})
+    if unknown:
+        raise ValueError(f"--sweep: {algo.upper()} takes no hyper-parameter {', '.join(unknown)}")
 
 
 def _line(out: RunOutcome) -> str:
