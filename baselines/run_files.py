@@ -42,6 +42,21 @@ class RunFiles:
 USER_MODELS = Path("runs") / "models"
 
 
+#: the fidelities a run trains in
+FIDELITIES = ("kinematic", "dynamic")
+
+
+def fidelity_dir(models_dir: str | Path, fidelity: str = "kinematic", engine: str = "pybullet") -> Path:
+    """The folder of a run's ``<env name>/`` folder: ``models_dir`` for the kinematic fidelity, its
+    ``dynamic-<engine>/`` for the dynamic fidelity in ``engine`` ("pybullet" or "mujoco"), so that the two never
+    take each other's models; ``paragym leaderboard --models`` takes either folder."""
+    from paragym.tasks.base import check_choice
+
+    check_choice("fidelity", fidelity, FIDELITIES)
+    check_choice("engine", engine, ("pybullet", "mujoco"))
+    return Path(models_dir) if fidelity == "kinematic" else Path(models_dir) / f"dynamic-{engine}"
+
+
 def run_files(env_id: str, algo: str, seed: int, models_dir: str | Path = USER_MODELS) -> RunFiles:
     """The files of a run under ``models_dir/<env name>/``."""
     folder = Path(models_dir) / env_name(env_id)

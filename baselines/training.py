@@ -67,6 +67,7 @@ from paragym.baselines.run_files import (  # noqa: F401
     _save_run,
     count_parameters,
     env_name,
+    fidelity_dir,
     run_files,
     versions,
     writable_models_dir,
@@ -147,7 +148,8 @@ def _make_callbacks(hp: dict[str, Any], eval_env: Any, n_envs: int, ckpt: Path, 
 def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, models_dir: str | Path = USER_MODELS,
           progress_bar: bool = True, threads: int = 1, force: bool = False, verbose: int = 0,
           hyperparams: dict[str, Any] | None = None, callbacks: list[Any] | None = None,
-          vectorized: bool = False, n_envs: int | None = None) -> TrainResult:
+          vectorized: bool = False, n_envs: int | None = None, fidelity: str = "kinematic",
+          engine: str = "pybullet") -> TrainResult:
     """Train ``algo`` on ``env_id`` with ``seed`` for ``timesteps`` env steps
     (default: the yml's ``n_timesteps``) and save the model, its JSON and its
     curve under ``models_dir`` (default ``runs/models``; the shipped models'
@@ -158,6 +160,10 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     env's native vector env (:func:`paragym.baselines.sb3_vec.as_sb3_vecenv`)
     instead of one env per copy (also when paragym.yml says ``vec_env:
     native``); ``n_envs`` overrides the yml's number of copies (robots).
+    ``fidelity="dynamic"`` trains under physics in ``engine`` ("pybullet" or "mujoco") at the leaderboard's
+    settings (:func:`paragym.baselines.leaderboard.suite.dynamic_kwargs`), one env per copy in processes of
+    their own (at most the machine's cores unless ``n_envs`` says), evaluated there too, and writes under
+    ``models_dir/dynamic-<engine>/`` (:func:`~paragym.baselines.run_files.fidelity_dir`).
 
     The steps, as rl-baselines3-zoo's ExperimentManager takes them: read the
     config (:func:`_read_config`), check what is on disk
@@ -169,14 +175,20 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     env_id, algo = check_env_id(env_id), check_algo(algo)
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
+    folder = fidelity_dir(writable_models_dir(models_dir), fidelity, engine)
+    if fidelity == "dynamic" and n_envs is None:  # one env per process, as many as the cores
+        n_envs = min(int(_read_config(env_id, algo, timesteps, hyperparams, None)[0]["n_envs"]), os.cpu_count() or 1)
     hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
-    vectorized = bool(vectorized) or hp.get("vec_env") == "native"
-    files = run_files(env_id, algo, seed, writable_models_dir(models_dir))
+    vectorized = bool(vectorized) or (hp.get("vec_env") == "native" and fidelity == "kinematic")
+    if vectorized and fidelity == "dynamic":
+        raise ValueError("the native vector envs run the kinematic fidelity only: train the dynamic fidelity "
+                         "without --vectorized (one env per process)")
+    files = run_files(env_id, algo, seed, folder)
     done = _finished_run(files, algo, total, force)
     if done is not None:
         return done
     torch.set_num_threads(int(threads))
-    env, eval_env = _make_envs(env_id, hp, int(seed), vectorized, files, force)
+    env, eval_env = _make_envs(env_id, hp, int(seed), vectorized, files, force, fidelity, engine)
     model, curve, resumed_from = _build_model(algo, hp, env, int(seed), verbose, files, force)
     own = _make_callbacks(hp, eval_env, int(hp["n_envs"]), files.checkpoints, curve, algo != "ppo")
     learned, seconds = _learn(model, algo, int(hp["n_envs"]), total - resumed_from, resumed_from == 0,
@@ -186,7 +198,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     meta = {
         "env_id": env_id, "algo": algo, "seed": int(seed), "timesteps": total, "resumed_from": resumed_from,
         "num_timesteps": int(model.num_timesteps),
-        "vectorized": bool(vectorized),
+        "vectorized": bool(vectorized), "fidelity": fidelity, "engine": engine if fidelity == "dynamic" else None,
         "hyperparams": hp, "train_seconds": seconds, "steps_per_second": learned / seconds if seconds else None,
         "parameters": count_parameters(model),
         "versions": versions(), "machine": f"{platform.machine()}, {os.cpu_count()} cores, torch threads {threads}",
@@ -198,11 +210,18 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
 
 
 def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, files: RunFiles,
-               force: bool) -> tuple[Any, Any]:
+               force: bool, fidelity: str = "kinematic", engine: str = "pybullet") -> tuple[Any, Any]:
     """The training env (``n_envs`` copies, or the native vector env) and the
     evaluation env (one robot, wrapped as the training env is), with reward
-    normalisation for learning only when the yml asks for it."""
+    normalisation for learning only when the yml asks for it; in the dynamic fidelity each copy in a process
+    of its own."""
     n_envs, env_kwargs = hp["n_envs"], dict(hp.get("env_kwargs") or {})
+    vec_env = hp.get("vec_env", "dummy")
+    if fidelity == "dynamic":
+        from paragym.baselines.leaderboard.suite import dynamic_kwargs
+
+        env_kwargs.update(dynamic_kwargs(env_id, engine))
+        vec_env = "subproc"
     if vectorized:
         from stable_baselines3.common.vec_env import VecMonitor
 
@@ -216,7 +235,7 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
         eval_env = VecMonitor(sb3_vec.as_sb3_vecenv(env_id, 1, **env_kwargs))
         eval_env.seed(EVAL_SEED)
     else:
-        env = _make_vec(env_id, n_envs, seed, hp.get("vec_env", "dummy"), env_kwargs)
+        env = _make_vec(env_id, n_envs, seed, vec_env, env_kwargs)
         eval_env = _make_vec(env_id, 1, EVAL_SEED, "dummy", env_kwargs)
     normalize = reward_normalization(hp)
     if normalize is not None:  # scale the rewards for learning only: the policy sees raw observations

@@ -32,7 +32,7 @@ from typing import Any
 
 from paragym import check_env_id
 from paragym.baselines.config import ALGOS, PARAGYM_KEYS, _read_config, check_algo
-from paragym.baselines.run_files import RunFiles, _finished_run, run_files, writable_models_dir
+from paragym.baselines.run_files import RunFiles, _finished_run, fidelity_dir, run_files, writable_models_dir
 
 __all__ = ["Run", "RunOutcome", "plan_runs", "read_sweep", "run_all"]
 
@@ -102,7 +102,8 @@ def plan_runs(seed: int, seeds: int, models_dir: str | Path,
 
 def run_all(env_id: str, algo: str, runs: list[Run], timesteps: int | None = None, threads: int = 1,
             force: bool = False, vectorized: bool = False, n_envs: int | None = None, ray_address: str | None = None,
-            storage: str | None = None, echo: Any = print) -> list[RunOutcome]:
+            storage: str | None = None, echo: Any = print, fidelity: str = "kinematic",
+            engine: str = "pybullet") -> list[RunOutcome]:
     """Train ``runs`` of ``algo`` on ``env_id`` (the arguments as :func:`~paragym.baselines.training.train`'s):
     one after the other here, or as Ray Tune trials on the Ray at ``ray_address`` ("local": a local Ray of this
     machine's cores) with Ray Tune's ``storage`` (module docstring). The runs trained before are skipped first.
@@ -115,15 +116,19 @@ def run_all(env_id: str, algo: str, runs: list[Run], timesteps: int | None = Non
     _check_names(algo, {name for run in runs for name in run.hyperparams})
     outcomes: dict[int, RunOutcome] = {}
     todo = []
+    def files_of(run: Run) -> RunFiles:  # where train() writes the run, here or in a trial's folder
+        return run_files(env_id, algo, run.seed, fidelity_dir(run.models_dir, fidelity, engine))
+
     for i, run in enumerate(runs):
-        files = run_files(env_id, algo, run.seed, run.models_dir)
+        files = files_of(run)
         _, total = _read_config(env_id, algo, timesteps, run.hyperparams, n_envs)
         done = _finished_run(files, algo, total, force)
         if done is not None:
             outcomes[i] = RunOutcome(run, files, done.meta, skipped=True)
         else:
             todo.append(i)
-    settings = {"timesteps": timesteps, "threads": threads, "vectorized": vectorized, "n_envs": n_envs}
+    settings = {"timesteps": timesteps, "threads": threads, "vectorized": vectorized, "n_envs": n_envs,
+                "fidelity": fidelity, "engine": engine}
     if ray_address is None:
         for i in todo:
             res = train(env_id, algo, seed=runs[i].seed, models_dir=runs[i].models_dir, progress_bar=False,
@@ -133,7 +138,7 @@ def run_all(env_id: str, algo: str, runs: list[Run], timesteps: int | None = Non
     elif todo:
         def deliver(j: int, folder: Path) -> None:
             i = todo[j]
-            files = run_files(env_id, algo, runs[i].seed, runs[i].models_dir)
+            files = files_of(runs[i])
             _take(folder, files, force)
             outcomes[i] = RunOutcome(runs[i], files, json.loads(files.meta.read_text()))
             echo(_line(outcomes[i]))

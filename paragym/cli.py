@@ -171,6 +171,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
 
 def _cmd_train(args: argparse.Namespace) -> int:
+    if args.engine != "pybullet" and args.fidelity != "dynamic":
+        raise ValueError("--engine is the dynamic fidelity's: give --fidelity dynamic too")
+    if args.fidelity != "kinematic" and str(args.algo).lower() not in ("ppo", "sac", "td3", "tqc"):
+        raise ValueError(f"--fidelity dynamic trains ppo, sac, td3 or tqc under physics; got {args.algo!r}")
     if args.seeds != 1 or args.sweep or args.ray or args.ray_storage:
         return _train_runs(args)
     if args.algo == "cem":  # a search of linear policies: no PyTorch, no SB3
@@ -219,7 +223,7 @@ def _cmd_train(args: argparse.Namespace) -> int:
     try:
         res = train(args.env_id, args.algo, seed=args.seed, timesteps=args.timesteps, models_dir=args.models,
                     progress_bar=not args.no_progress, threads=args.threads, force=args.force,
-                    vectorized=args.vectorized, n_envs=args.n_envs)
+                    vectorized=args.vectorized, n_envs=args.n_envs, fidelity=args.fidelity, engine=args.engine)
     except KeyboardInterrupt:
         raise KeyboardInterrupt(f"interrupted: the last checkpoint under {args.models} is kept; run the same "
                                 f"command again to resume from it") from None
@@ -255,7 +259,7 @@ def _train_runs(args: argparse.Namespace) -> int:
     print(f"{len(runs)} {args.algo.upper()} runs on {args.env_id}, {where}")
     outcomes = run_all(args.env_id, args.algo, runs, timesteps=args.timesteps, threads=args.threads,
                        force=args.force, vectorized=args.vectorized, n_envs=args.n_envs, ray_address=args.ray,
-                       storage=args.ray_storage)
+                       storage=args.ray_storage, fidelity=args.fidelity, engine=args.engine)
     for out in outcomes:
         if out.skipped:
             print(f"{out.files.model} is already trained for {out.meta.get('timesteps', 0):,} steps (--force "
@@ -448,6 +452,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--vectorized", action="store_true",
                    help="train on the env's native vector env (N robots per numpy call)")
     p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
+    p.add_argument("--fidelity", choices=("kinematic", "dynamic"), default="kinematic",
+                   help="dynamic: train under physics at the leaderboard's settings, one env per process, the runs "
+                        "under --models/dynamic-<engine>/ (default %(default)s)")
+    p.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
+                   help="the dynamic fidelity's engine (default %(default)s)")
     p.add_argument("--seeds", type=int, default=1, metavar="N",
                    help="train seeds --seed .. --seed + N - 1 (default 1), one run each")
     p.add_argument("--sweep", default=None, metavar="FILE.yml",

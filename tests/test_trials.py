@@ -101,3 +101,38 @@ def test_a_sweep_is_its_grid_and_bad_requests_are_refused(tmp_path):
     with pytest.raises(ValueError, match="PPO takes no hyper-parameter learnin_rate"):
         run_all(ORTHO, "ppo", plan_runs(0, 1, tmp_path, [("learnin_rate=0.1", {"learnin_rate": 0.1})]))
     assert not list(tmp_path.rglob("*.zip"))  # refused before any run
+
+
+def test_the_dynamic_fidelity_trains_under_physics_in_its_own_folder(tmp_path):
+    """PPO for one rollout under MuJoCo's dynamics: every training copy and the evaluation env simulate the
+    mechanism in MuJoCo (each copy in a process of its own), the run goes under ``dynamic-mujoco/`` and says so, and
+    a kinematic run of the same seed beside it is another model, not "already trained"."""
+    pytest.importorskip("mujoco")
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    from paragym.baselines.training import train
+
+    seen = []
+
+    class Look(BaseCallback):
+        def _on_training_start(self) -> None:
+            venv = self.training_env
+            seen.append((venv.get_attr("fidelity"), venv.get_attr("physics_time_step")))
+
+        def _on_step(self) -> bool:
+            return True
+
+    easy = "paragym/CaPaManCollisionFree-Easy-v0"
+    res = train(easy, "ppo", seed=0, timesteps=32, models_dir=tmp_path, progress_bar=False, n_envs=2,
+                hyperparams={"n_steps": 16, "batch_size": 16}, callbacks=[Look()], fidelity="dynamic",
+                engine="mujoco")
+    assert seen == [(["dynamic", "dynamic"], [0.001, 0.001])]  # MuJoCo's 1 ms step (PyBullet's scene: 5 ms)
+    assert res.files.model == tmp_path / "dynamic-mujoco" / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip"
+    assert (res.meta["fidelity"], res.meta["engine"]) == ("dynamic", "mujoco")
+    kinematic = train(easy, "ppo", seed=0, timesteps=32, models_dir=tmp_path, progress_bar=False, n_envs=1,
+                      hyperparams={"n_steps": 32, "batch_size": 16})
+    assert not kinematic.skipped
+    assert kinematic.files.model == tmp_path / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip"
+    assert kinematic.meta["fidelity"] == "kinematic"
+    assert main(["train", easy, "--engine", "mujoco", "--models", str(tmp_path)]) == 2  # needs --fidelity dynamic
+    assert main(["train", easy, "--algo", "cem", "--fidelity", "dynamic", "--models", str(tmp_path)]) == 2
