@@ -290,7 +290,8 @@ def _what_trained(path: Path, algo: str) -> str:
 def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str, PolicySpec]:
     """Every policy of ``env_id``: the registered ones, the shipped models and,
     when ``models_dir`` is given, your own models under it: ``paragym
-    train``'s (named ``user-<algo>-seed<N>``) and rl-baselines3-zoo's runs
+    train``'s (named ``user-<algo>-seed<N>``, and ``user-dynamic-<engine>-<algo>-seed<N>`` for those trained in the
+    dynamic fidelity, under its ``dynamic-<engine>/``) and rl-baselines3-zoo's runs
     when it is a zoo log folder (``user-<algo>-zoo<run>``), in table order. A ``models_dir`` that does not
     exist is an error, not an empty list."""
     env_id = check_env_id(env_id)
@@ -303,6 +304,10 @@ def policies_for(env_id: str, models_dir: str | Path | None = None) -> dict[str,
         if folder.resolve() != shipped_models_dir().resolve():
             learned.update(_learned(env_id, folder, "user-", "trained by you"))
             learned.update(_zoo_learned(env_id, folder))
+            for engine in ("pybullet", "mujoco"):  # paragym train --fidelity dynamic's runs (run_files.fidelity_dir)
+                if (folder / f"dynamic-{engine}").is_dir():
+                    learned.update(_learned(env_id, folder / f"dynamic-{engine}", f"user-dynamic-{engine}-",
+                                            f"trained by you under {engine}'s dynamics"))
     specs = {**_built_in(env_id), **_REGISTRY.get(env_id, {}), **learned}
     return dict(sorted(specs.items(), key=lambda kv: (KINDS.index(kv[1].kind), kv[0])))
 

@@ -523,7 +523,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--env", action="append", help="only this env (repeatable)")
     p.add_argument("--policy", action="append", help="only this policy name (repeatable)")
     p.add_argument("--models", default=None,
-                   help="also rank the models you trained in this folder: paragym train's (as user-<algo>-seed<N>) "
+                   help="also rank the models you trained in this folder: paragym train's (as user-<algo>-seed<N>, "
+                        "user-dynamic-<engine>-<algo>-seed<N> for --fidelity dynamic's) "
                         "or rl-baselines3-zoo's log folder (as user-<algo>-zoo<run>); the shipped models always "
                         "take part")
     p.add_argument("--agent", action="append", metavar="[NAME=]FILE.py:FACTORY",

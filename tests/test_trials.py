@@ -134,5 +134,11 @@ def test_the_dynamic_fidelity_trains_under_physics_in_its_own_folder(tmp_path):
     assert not kinematic.skipped
     assert kinematic.files.model == tmp_path / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip"
     assert kinematic.meta["fidelity"] == "kinematic"
+    from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
+
+    names = ["user-ppo-seed0", "user-dynamic-mujoco-ppo-seed0"]  # the leaderboard ranks both, apart
+    run = run_leaderboard(db=tmp_path / "lb.sqlite", suite=EvalSuite("test", (0,), 1), env_ids=[easy], policies=names,
+                          models_dir=tmp_path, out=None, validate=False, progress=False, echo=lambda s: None)
+    assert {s.policy for s in run.summaries[easy]} == set(names)
     assert main(["train", easy, "--engine", "mujoco", "--models", str(tmp_path)]) == 2  # needs --fidelity dynamic
     assert main(["train", easy, "--algo", "cem", "--fidelity", "dynamic", "--models", str(tmp_path)]) == 2
