@@ -53,14 +53,15 @@ def _figures(env: Any, policy: Any, seeds: list[int], keys: set[str], metrics: A
 @dataclass
 class SolveCheck:
     """The targets of ``env_id``'s task (its bench's ``solved``, or ``targets``) checked on ``episodes``
-    validation episodes (kinematic, the env's defaults). The figures of the policies a target compares
-    against are measured once, on the same episodes, and a policy is compared with them episode by episode
-    (:meth:`paragym.baselines.tasks.Target.met`); ``bounds`` holds each target's value or that policy's mean
-    times the factor, for the record."""
+    validation episodes (the env's defaults, or ``env_kwargs``: the dynamic fidelity's, say). The figures of the
+    policies a target compares against are measured once, on the same episodes, and a policy is compared with them
+    episode by episode (:meth:`paragym.baselines.tasks.Target.met`); ``bounds`` holds each target's value or that
+    policy's mean times the factor, for the record."""
 
     env_id: str
     episodes: int = 20
     targets: tuple[Target, ...] = ()
+    env_kwargs: dict[str, Any] = field(default_factory=dict)
     bounds: list[float] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -76,7 +77,7 @@ class SolveCheck:
                              f"and none were given")
         self._metrics = bench.metrics
         self.seeds = [EVAL_SEED + k for k in range(self.episodes)]
-        self.env = gym.make(self.env_id)
+        self.env = gym.make(self.env_id, **self.env_kwargs)
         specs = policies_for(self.env_id)
         self.bounds, self._others = [], []
         for t in self.targets:

@@ -1,16 +1,15 @@
 """Time to solve: wall-clock minutes of PPO from scratch (or SAC, TQC, a linear search) until a task counts as solved.
 
-For each env id (default: the newest version of every task) and each seed,
-``paragym train`` trains PPO from scratch with the env's settings in
-``baselines/hyperparams/ppo.yml`` (as a user would run it, its own
-evaluations and checkpoints included; ``init_from``, a behaviour clone to
-start from, is dropped); ``--algo sac`` or ``tqc`` trains that algorithm with its own yml's settings instead;
-with ``--algo cem``, the cross-entropy search of linear
-policies (:mod:`paragym.baselines.cem`, its default settings) runs instead, its
-mean checked the same way. Every ``--check-every`` seconds of learning, the deterministic policy plays
-``--episodes`` validation episodes and the task's targets are checked (:mod:`paragym.baselines.solve`; the
-targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The checks' own time is left out of
-the clock. A run stops when solved or after ``--budget`` minutes of learning.
+For each env id (default: the newest version of every task) and each seed, ``paragym train`` trains PPO from scratch
+with the env's settings in ``baselines/hyperparams/ppo.yml`` (as a user would run it, its own evaluations and
+checkpoints included; ``init_from``, a behaviour clone to start from, is dropped); ``--algo sac`` or ``tqc`` trains
+that algorithm with its own yml's settings instead; with ``--algo cem``, the cross-entropy search of linear policies
+(:mod:`paragym.baselines.cem`, its default settings) runs instead, its mean checked the same way. ``--fidelity
+dynamic`` trains and checks under physics (``--engine``, the leaderboard's settings: ``paragym train --fidelity
+dynamic``), its runs apart from the kinematic ones. Every ``--check-every`` seconds of learning, the deterministic
+policy plays ``--episodes`` validation episodes and the task's targets are checked (:mod:`paragym.baselines.solve`;
+the targets are the task bench's ``solved``, e.g. CaPaMan: success >= 0.80). The checks' own time is left out of the
+clock. A run stops when solved or after ``--budget`` minutes of learning.
 
 Each run is written to ``OUT/<env name>-seed<N>.json`` (the points, the
 targets and their bounds, what produced it) as soon as it ends, and a run
@@ -43,6 +42,7 @@ from results_file import add_record_option, record  # this folder is on the path
 
 import paragym
 from paragym.baselines.cem import CemSettings, train_cem
+from paragym.baselines.leaderboard.suite import dynamic_kwargs
 from paragym.baselines.solve import SolveCheck, stop_search_when_solved, stop_when_solved
 from paragym.baselines.stats import mean_ci
 from paragym.baselines.tasks import bench_of
@@ -60,7 +60,8 @@ PARAGRAPH = (
 
 def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
     """One training run of ``args.algo`` on ``env_id`` from ``seed``, checked as it learns (module docstring)."""
-    check = SolveCheck(env_id, args.episodes)
+    dynamic = {} if args.fidelity == "kinematic" else dynamic_kwargs(env_id, args.engine)
+    check = SolveCheck(env_id, args.episodes, env_kwargs=dynamic)
     points: list[Any] = []
     t0 = time.perf_counter()
     if args.algo == "cem":  # the linear search: its budget, its checks' time left out
@@ -71,14 +72,16 @@ def run_one(env_id: str, seed: int, args: argparse.Namespace) -> dict[str, Any]:
         stop = stop_when_solved(check, args.check_every, args.budget * 60, points)
         train(env_id, args.algo, seed, timesteps=args.max_timesteps, models_dir=args.out / "models",
               progress_bar=False, threads=args.threads, force=True, callbacks=[stop], vectorized=args.vectorized,
-              hyperparams={"init_from": None} if args.algo == "ppo" else None)
+              hyperparams={"init_from": None} if args.algo == "ppo" else None, fidelity=args.fidelity,
+              engine=args.engine)
     wall = time.perf_counter() - t0
     check.close()
     solved = next((p for p in points if p.solved), None)
     return {
         "env_id": env_id, "seed": seed, "targets": check.describe(), "keys": [t.key for t in check.targets],
         "bounds": list(check.bounds),
-        "algo": args.algo, "vectorized": args.vectorized, "episodes": args.episodes,
+        "algo": args.algo, "vectorized": args.vectorized, "episodes": args.episodes, "fidelity": args.fidelity,
+        "engine": args.engine if args.fidelity == "dynamic" else None,
         "budget_minutes": args.budget, "check_every_seconds": args.check_every,
         "solved": solved is not None,
         "minutes": None if solved is None else solved.seconds / 60,
@@ -98,13 +101,18 @@ def rules(targets: str) -> list[str]:
     return [part.rsplit(" (", 1)[0] for part in targets.split("; ")]
 
 
-def stored_run(path: Path, env_id: str) -> dict[str, Any] | None:
-    """The run stored at ``path`` if it was checked against the targets ``env_id``'s task states today, else None
-    (a run checked under other targets, e.g. a floor beaten on the mean before the paired comparison, is not
-    today's result)."""
+def stored_run(path: Path, env_id: str, fidelity: str = "kinematic") -> dict[str, Any] | None:
+    """The run stored at ``path`` if it was checked against the targets ``env_id``'s task states today, in
+    ``fidelity``, else None (a run checked under other targets, e.g. a floor beaten on the mean before the paired
+    comparison, is not today's result)."""
     result = json.loads(path.read_text())
     today = [t.describe() for t in bench_of(env_id).solved if t.applies(env_id)]
-    return result if rules(result["targets"]) == today else None
+    return result if rules(result["targets"]) == today and result.get("fidelity", "kinematic") == fidelity else None
+
+
+def tag(args: argparse.Namespace) -> str:
+    """What the runs' files and rows add to the env's name: nothing for the kinematic fidelity."""
+    return "" if args.fidelity == "kinematic" else f"-dynamic-{args.engine}"
 
 
 def curve(runs: list[dict[str, Any]], key: str, grid: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -190,6 +198,10 @@ def main() -> None:
     parser.add_argument("--algo", choices=("ppo", "sac", "tqc", "cem"), default="ppo",
                         help="PPO from scratch, SAC or TQC with their yml settings, or cem: the search of linear "
                              "policies, its budget the same minutes")
+    parser.add_argument("--fidelity", choices=("kinematic", "dynamic"), default="kinematic",
+                        help="train and check under physics with 'dynamic' (default %(default)s)")
+    parser.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
+                        help="the dynamic fidelity's engine (default %(default)s)")
     parser.add_argument("--out", type=Path, default=None,
                         help="where the runs go (default results/time_to_solve, and results/time_to_solve_<algo> "
                              "for another algorithm)")
@@ -202,6 +214,10 @@ def main() -> None:
     if args.episodes < 2:
         parser.error(f"--episodes must be at least 2 (a target against another policy compares episode by "
                      f"episode); got {args.episodes}")
+    if args.fidelity == "dynamic" and args.algo == "cem":
+        parser.error("--fidelity dynamic trains ppo, sac or tqc (the linear search runs the kinematic fidelity)")
+    if args.engine != "pybullet" and args.fidelity != "dynamic":
+        parser.error("--engine is the dynamic fidelity's: give --fidelity dynamic too")
     ids = [check_env_id(e) for e in args.env] if args.env else list(newest())
     args.out = args.out or Path("results/time_to_solve" + ("" if args.algo == "ppo" else f"_{args.algo}"))
     args.out.mkdir(parents=True, exist_ok=True)
@@ -209,8 +225,8 @@ def main() -> None:
     missing: list[str] = []
     for env_id in ids:
         for seed in range(args.seeds):
-            path = args.out / f"{row(env_id).name}-seed{seed}.json"
-            result = stored_run(path, env_id) if path.exists() and not args.force else None
+            path = args.out / f"{row(env_id).name}{tag(args)}-seed{seed}.json"
+            result = stored_run(path, env_id, args.fidelity) if path.exists() and not args.force else None
             if result is not None:
                 print(f"{env_id} seed {seed}: taken from {path}")
             elif args.report_only:
@@ -224,12 +240,13 @@ def main() -> None:
             shown = (f"solved in {result['minutes']:.1f} min" if result["solved"] else
                      f"not solved in {result['budget_minutes']:g} min")
             print(f"{env_id} seed {seed}: {shown}, {result['targets']}", flush=True)
-            by_env.setdefault(env_id, []).append(result)
+            by_env.setdefault(env_id + tag(args), []).append(result)
     if not by_env:
         raise SystemExit(f"no runs in {args.out}")
     table = report(by_env, args.budget, args.out)
     first = next(iter(by_env.values()))[0]["produced_by"]
     text = (f"# Time to solve\n\nPPO from scratch with each env's `ppo.yml` settings, {args.seeds} seeds, "
+            f"{args.fidelity} fidelity{f' ({args.engine})' if args.fidelity == 'dynamic' else ''}, "
             f"a budget of {args.budget:g} minutes of learning; checked every {args.check_every:g} s of learning on "
             f"{args.episodes} validation episodes. {first['machine']}, paragym {first['paragym']}, {first['date']}.\n\n"
             f"{table}\n\n![learning curves](time_to_solve.png)\n"
@@ -238,7 +255,9 @@ def main() -> None:
     if args.record:
         lines = [r for r in table.splitlines() if r.startswith("|")]
         cells = [[c.strip() for c in r.strip("|").split("|")] for r in lines]
-        record("time_to_solve", "Time to solve: PPO from scratch until the task counts as solved", PARAGRAPH,
+        title = "Time to solve: PPO from scratch until the task counts as solved" + (
+            "" if args.fidelity == "kinematic" else f", under {args.engine}'s dynamics")
+        record(f"time_to_solve{tag(args).replace('-', '_')}", title, PARAGRAPH,
                cells[0], cells[2:], order=30, folder=args.record, figure="reports/time_to_solve.png")
     print("\n" + table + f"\n\nwrote {args.out / 'time_to_solve.md'} and {args.out / 'time_to_solve.png'}")
 

@@ -139,6 +139,20 @@ def test_time_to_solve_times_sac_with_its_own_settings(tmp_path):
     assert (tmp_path / "models" / "HybridSingularityFree-v2" / "sac_seed0.zip").is_file()
 
 
+def test_time_to_solve_trains_and_checks_under_physics_apart(tmp_path):
+    """``--fidelity dynamic --engine mujoco``: PPO learns and is checked under MuJoCo's dynamics, its run and model
+    written apart from a kinematic run of the same seed, its row named so."""
+    pytest = __import__("pytest")
+    pytest.importorskip("mujoco")
+    out = _run("benchmarks/time_to_solve.py", "--env", "CaPaManCollisionFree-Easy-v0", "--fidelity", "dynamic",
+               "--engine", "mujoco", "--seeds", "1", "--budget", "0.01", "--check-every", "0.3", "--episodes", "2",
+               "--threads", "1", "--out", str(tmp_path))
+    run = json.loads((tmp_path / "CaPaManCollisionFree-Easy-v0-dynamic-mujoco-seed0.json").read_text())
+    assert (run["fidelity"], run["engine"]) == ("dynamic", "mujoco") and run["points"]
+    assert (tmp_path / "models" / "dynamic-mujoco" / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip").is_file()
+    assert "| CaPaManCollisionFree-Easy-v0-dynamic-mujoco |" in out
+
+
 def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
     out = _run("benchmarks/hybrid_levers.py", "--candidates", "4096")
     counts = [int(ln.rsplit(" ", 1)[1].replace(",", "")) for ln in out.splitlines() if ln.startswith("  ")]
