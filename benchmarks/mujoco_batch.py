@@ -22,6 +22,7 @@ import warnings
 
 import gymnasium as gym
 import numpy as np
+from native_speed import anchor_steps_per_second
 from results_file import add_record_option, engine_versions, paragraph, record
 
 import paragym  # noqa: F401  (registers the ids)
@@ -31,25 +32,6 @@ from paragym.sim.mujoco_sim import MuJoCoSettings
 DEFAULT_IDS = ("paragym/CaPaManCollisionFree-Easy-v0", "paragym/HybridSingularityFree-Easy-v2")
 #: the servos' targets swing by this share of their range about the held pose, one cycle per second
 SWING = 0.05
-
-
-def anchor(seconds: float) -> float | None:
-    """PandaReach-v3's steps/s (None without panda-gym)."""
-    try:
-        import panda_gym  # noqa: F401
-    except ImportError:
-        return None
-    env = gym.make("PandaReach-v3")
-    env.reset(seed=0)
-    steps, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        _, _, term, trunc, _ = env.step(env.action_space.sample())
-        steps += 1
-        if term or trunc:
-            env.reset()
-    rate = steps / (time.perf_counter() - t0)
-    env.close()
-    return rate
 
 
 def routes(env_id: str, settings: MuJoCoSettings, n: int, seconds: float) -> tuple[int, list[tuple[str, float]]]:
@@ -115,10 +97,10 @@ def main() -> None:
         parser.error("--num-envs must be positive and --seconds above 0")
     rows = []
     for env_id in args.env or DEFAULT_IDS:
-        before = anchor(args.seconds / 2)
+        before = anchor_steps_per_second(args.seconds / 2)
         measured = [(s, *routes(env_id, s, args.num_envs, args.seconds)) for s in (MuJoCoSettings(),
                                                                                   MuJoCoSettings.fast())]
-        after = anchor(args.seconds / 2)
+        after = anchor_steps_per_second(args.seconds / 2)
         panda = None if before is None else (before + after) / 2
         for settings, k, rates in measured:
             for route, rate in rates:
