@@ -161,7 +161,7 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     instead of one env per copy (also when paragym.yml says ``vec_env:
     native``); ``n_envs`` overrides the yml's number of copies (robots).
     ``fidelity="dynamic"`` trains under physics in ``engine`` ("pybullet" or "mujoco") at the leaderboard's
-    settings (:func:`paragym.baselines.leaderboard.suite.dynamic_kwargs`), one env per copy in processes of
+    settings (:func:`paragym.baselines.tasks.dynamic_kwargs`), one env per copy in processes of
     their own (at most the machine's cores unless ``n_envs`` says), evaluated there too, and writes under
     ``models_dir/dynamic-<engine>/`` (:func:`~paragym.baselines.run_files.fidelity_dir`).
 
@@ -218,7 +218,7 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
     n_envs, env_kwargs = hp["n_envs"], dict(hp.get("env_kwargs") or {})
     vec_env = hp.get("vec_env", "dummy")
     if fidelity == "dynamic":
-        from paragym.baselines.leaderboard.suite import dynamic_kwargs
+        from paragym.baselines.tasks import dynamic_kwargs
 
         env_kwargs.update(dynamic_kwargs(env_id, engine))
         vec_env = "subproc"

@@ -156,7 +156,7 @@ def contact() -> list[list[str]]:
 
 def dynamic_settings(env_id: str, engine: str) -> str:
     """The physics step and iterations the leaderboard's dynamic episodes of ``env_id`` run at in ``engine``."""
-    from paragym.baselines.leaderboard.suite import dynamic_kwargs
+    from paragym.baselines.tasks import dynamic_kwargs
 
     return settings_label(dynamic_kwargs(env_id, engine), engine)
 
@@ -165,9 +165,8 @@ def reference(env_ids: list[str], episodes: int) -> list[list[str]]:
     """The reference's table's rows: each id's reference in each engine (module docstring)."""
     import gymnasium as gym
 
-    from paragym.baselines.leaderboard.suite import dynamic_kwargs
     from paragym.baselines.policies import get_policy
-    from paragym.baselines.tasks import bench_of
+    from paragym.baselines.tasks import bench_of, dynamic_kwargs
     from paragym.validation.episode import validate_episode
 
     def rate(k: int, n: int) -> str:

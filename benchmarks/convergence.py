@@ -34,9 +34,9 @@ from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
 from paragym.baselines.leaderboard.evaluate import run_dynamic
-from paragym.baselines.leaderboard.suite import dynamic_engines, dynamic_kwargs
+from paragym.baselines.leaderboard.suite import dynamic_engines
 from paragym.baselines.policies import get_policy
-from paragym.baselines.tasks import bench_of
+from paragym.baselines.tasks import bench_of, dynamic_kwargs
 from paragym.sim.client import refined
 from paragym.sim.export import SERVO_BANDWIDTH
 

@@ -22,9 +22,8 @@ from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
 from paragym.baselines.leaderboard.evaluate import run_dynamic
-from paragym.baselines.leaderboard.suite import dynamic_kwargs
 from paragym.baselines.policies import get_policy
-from paragym.baselines.tasks import bench_of
+from paragym.baselines.tasks import bench_of, dynamic_kwargs
 
 #: the first reset seed (the leaderboard's dynamic episodes use 200001 onwards)
 FIRST_SEED = 300_001

@@ -42,10 +42,9 @@ from results_file import add_record_option, record  # this folder is on the path
 
 import paragym
 from paragym.baselines.cem import CemSettings, train_cem
-from paragym.baselines.leaderboard.suite import dynamic_kwargs
 from paragym.baselines.solve import SolveCheck, stop_search_when_solved, stop_when_solved
 from paragym.baselines.stats import mean_ci
-from paragym.baselines.tasks import bench_of
+from paragym.baselines.tasks import bench_of, dynamic_kwargs
 from paragym.baselines.training import train
 from paragym.registry import check_env_id, newest, row
 

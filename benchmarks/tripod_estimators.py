@@ -76,8 +76,8 @@ def episode(env_id: str, estimator: str, trust_rate: float | None, seed: int
     """One dynamic episode (``trust_rate``: the env's, None for its default): success, KF PASS, tilt (deg RMS),
     the largest distance error (cm) and the samples on which a distance is more than :data:`FAR` off."""
     from paragym.baselines.leaderboard.evaluate import run_dynamic
-    from paragym.baselines.leaderboard.suite import dynamic_kwargs
     from paragym.baselines.policies import PolicySpec, get_policy
+    from paragym.baselines.tasks import dynamic_kwargs
     from paragym.mechanisms import tripod as mt
 
     if estimator in V0_ESTIMATORS:

@@ -34,8 +34,9 @@ from paragym.baselines.leaderboard.evaluate import evaluate_dynamic, evaluate_ep
 from paragym.baselines.leaderboard.executors import EXECUTORS, die_with_parent
 from paragym.baselines.leaderboard.render import markdown, terminal_table, write_csv
 from paragym.baselines.leaderboard.run import LeaderboardInterrupted, LeaderboardRun, run_leaderboard
-from paragym.baselines.leaderboard.suite import FULL, QUICK, EvalSuite, dynamic_kwargs, dynamic_producer, episode_seed
+from paragym.baselines.leaderboard.suite import FULL, QUICK, EvalSuite, dynamic_producer, episode_seed
 from paragym.baselines.leaderboard.summary import Summary, summarise
+from paragym.baselines.tasks import dynamic_kwargs
 
 __all__ = ["EXECUTORS", "FULL", "QUICK", "EvalSuite", "LeaderboardInterrupted", "LeaderboardRun", "Summary",
            "die_with_parent", "dynamic_kwargs", "dynamic_producer", "episode_seed", "evaluate_dynamic",

@@ -8,10 +8,10 @@ from typing import Any
 import gymnasium as gym
 
 from paragym import registry
-from paragym.baselines.leaderboard.suite import dynamic_kwargs, dynamic_producer, engine_of_job, episode_seed
+from paragym.baselines.leaderboard.suite import dynamic_producer, engine_of_job, episode_seed
 from paragym.baselines.policies import PolicySpec
 from paragym.baselines.store import DynamicRow, EpisodeRow, ValidationRow
-from paragym.baselines.tasks import bench_of, tightest
+from paragym.baselines.tasks import bench_of, dynamic_kwargs, tightest
 from paragym.rollout import run_episode
 
 __all__ = ["evaluate_dynamic", "evaluate_episode", "evaluate_job", "evaluate_validation", "run_dynamic"]

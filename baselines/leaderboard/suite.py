@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass, replace
-from typing import Any
 
 from paragym import registry
 from paragym.baselines.policies import PolicySpec
-from paragym.baselines.tasks import bench_of
+from paragym.baselines.tasks import bench_of, dynamic_kwargs
 
-__all__ = ["FULL", "QUICK", "EvalSuite", "dynamic_engines", "dynamic_kwargs", "dynamic_producer", "episode_seed"]
+__all__ = ["FULL", "QUICK", "EvalSuite", "dynamic_engines", "dynamic_producer", "episode_seed"]
 
 
 @dataclass(frozen=True)
@@ -64,25 +63,6 @@ class EvalSuite:
 
 FULL = EvalSuite("full", (0, 1, 2, 3, 4), 10, (("paper", 0), ("random", 200_001), ("random", 200_002)))
 QUICK = EvalSuite("quick", (0,), 3, (("paper", 0),), dynamic_all=False)
-
-def dynamic_kwargs(env_id: str, engine: str = "pybullet") -> dict[str, Any]:
-    """The env's arguments for the leaderboard's dynamic episodes in ``engine`` ("pybullet" or "mujoco"), the
-    physics settings explicit (they are part of each row's producer, :func:`dynamic_producer`): the task
-    bench's (:attr:`paragym.baselines.tasks.Bench.dynamics`), and MuJoCo's default settings
-    (:class:`paragym.sim.mujoco_sim.MuJoCoSettings`) in MuJoCo. A ValueError for a task without a dynamic
-    fidelity."""
-    settings = bench_of(env_id).dynamics
-    if settings is None:
-        raise ValueError(f"{env_id} has no dynamic fidelity (its task's bench names no dynamics)")
-    kwargs = {"fidelity": "dynamic", "dynamics": settings()}
-    if engine != "pybullet":
-        from paragym.sim.mujoco_sim import ENGINES, MuJoCoSettings
-        from paragym.tasks.base import check_choice
-
-        check_choice("engine", engine, ENGINES)
-        kwargs["engine"] = MuJoCoSettings()
-    return kwargs
-
 
 def dynamic_producer(spec: PolicySpec, engine: str = "pybullet") -> str:
     """What makes a dynamic row: the policy's producer, the physics settings it ran under (None: the task

@@ -10,10 +10,10 @@ from typing import Any
 import numpy as np
 
 from paragym import registry
-from paragym.baselines.leaderboard.suite import EvalSuite, dynamic_kwargs
+from paragym.baselines.leaderboard.suite import EvalSuite
 from paragym.baselines.stats import ahead, half_width, mean_ci, resolvable_drop, separable, wilson
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
-from paragym.baselines.tasks import bench_of
+from paragym.baselines.tasks import bench_of, dynamic_kwargs
 
 __all__ = ["NoiseFloor", "Summary", "dynamic_summary", "mark_separable", "noise_floor", "summarise"]
 

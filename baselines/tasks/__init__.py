@@ -31,8 +31,8 @@ from paragym import registry
 from paragym.baselines.stats import mean_ci
 from paragym.rollout import Episode
 
-__all__ = ["Ablation", "AblationRow", "Bench", "BuiltIn", "Column", "Option", "Target", "bench_of", "init_defaults",
-           "missing", "random_factory", "tightest", "zero_factory"]
+__all__ = ["Ablation", "AblationRow", "Bench", "BuiltIn", "Column", "Option", "Target", "bench_of", "dynamic_kwargs",
+           "init_defaults", "missing", "random_factory", "tightest", "zero_factory"]
 
 #: a policy factory: ``factory(env, seed) -> policy`` (:mod:`paragym.baselines.policies`)
 Factory = Callable[[gym.Env, int], Any]
@@ -261,6 +261,25 @@ def bench_of(env_id: str) -> Bench:
     if not isinstance(found, Bench):
         raise TypeError(f"{module.__name__} must define BENCH, a paragym.baselines.tasks.Bench")
     return found
+
+
+def dynamic_kwargs(env_id: str, engine: str = "pybullet") -> dict[str, Any]:
+    """The env's arguments for the leaderboard's dynamic episodes in ``engine`` ("pybullet" or "mujoco"), and for
+    training under physics, the physics settings explicit (they are part of each row's producer,
+    :func:`paragym.baselines.leaderboard.suite.dynamic_producer`): the task bench's (:attr:`Bench.dynamics`), and
+    MuJoCo's default settings (:class:`paragym.sim.mujoco_sim.MuJoCoSettings`) in MuJoCo. A ValueError for a task
+    without a dynamic fidelity."""
+    settings = bench_of(env_id).dynamics
+    if settings is None:
+        raise ValueError(f"{env_id} has no dynamic fidelity (its task's bench names no dynamics)")
+    kwargs = {"fidelity": "dynamic", "dynamics": settings()}
+    if engine != "pybullet":
+        from paragym.sim.mujoco_sim import ENGINES, MuJoCoSettings
+        from paragym.tasks.base import check_choice
+
+        check_choice("engine", engine, ENGINES)
+        kwargs["engine"] = MuJoCoSettings()
+    return kwargs
 
 
 def missing(bench: Bench, env_id: str) -> list[str]:
