@@ -176,9 +176,9 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
     if not isinstance(seed, int | np.integer) or seed < 0:
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
     folder = fidelity_dir(writable_models_dir(models_dir), fidelity, engine)
-    if fidelity == "dynamic" and n_envs is None:  # one env per process, as many as the cores
-        n_envs = min(int(_read_config(env_id, algo, timesteps, hyperparams, None)[0]["n_envs"]), os.cpu_count() or 1)
     hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
+    if fidelity == "dynamic" and n_envs is None:  # one env per process, as many as the cores
+        hp["n_envs"] = min(hp["n_envs"], os.cpu_count() or 1)
     vectorized = bool(vectorized) or (hp.get("vec_env") == "native" and fidelity == "kinematic")
     if vectorized and fidelity == "dynamic":
         raise ValueError("the native vector envs run the kinematic fidelity only: train the dynamic fidelity "

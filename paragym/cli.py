@@ -173,8 +173,10 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 def _cmd_train(args: argparse.Namespace) -> int:
     if args.engine != "pybullet" and args.fidelity != "dynamic":
         raise ValueError("--engine is the dynamic fidelity's: give --fidelity dynamic too")
-    if args.fidelity != "kinematic" and str(args.algo).lower() not in ("ppo", "sac", "td3", "tqc"):
-        raise ValueError(f"--fidelity dynamic trains ppo, sac, td3 or tqc under physics; got {args.algo!r}")
+    from paragym.baselines.config import ALGOS
+
+    if args.fidelity != "kinematic" and str(args.algo).lower() not in ALGOS:
+        raise ValueError(f"--fidelity dynamic trains {', '.join(ALGOS)} under physics; got {args.algo!r}")
     if args.seeds != 1 or args.sweep or args.ray or args.ray_storage:
         return _train_runs(args)
     if args.algo == "cem":  # a search of linear policies: no PyTorch, no SB3
