@@ -50,6 +50,7 @@ rows span a leg and the plate instead of the whole tree.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
@@ -59,11 +60,13 @@ from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.capaman_scene import capaman_links
 from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
-from paragym.sim.mujoco_sim import simulate_in
+from paragym.sim.description import SceneDescription
+from paragym.sim.mujoco_sim import ramp_together, read_together, simulate_in
 from paragym.sim.obstacles import Box
 from paragym.trajectories import JointTrajectory, RigidMotion
 
-__all__ = ["CONTACT_PUSHES", "CaPaManDynamicScene", "CaPaManDynamics", "ExecutedMotion", "push_into"]
+__all__ = ["CONTACT_PUSHES", "CaPaManDynamicScene", "CaPaManDynamics", "ExecutedMotion", "drive_together",
+           "push_into", "state_together"]
 
 
 @dataclass(frozen=True)
@@ -146,6 +149,9 @@ class CaPaManDynamicScene:
         dynamics: masses, motors and integration settings.
         engine: None: PyBullet's physics; a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`: MuJoCo's, over
             the PyBullet world as built (:mod:`paragym.sim.mujoco_sim`).
+        mirror: with a MuJoCo ``engine``, whether the scene is built in PyBullet (the mirror that answers
+            :meth:`clearance` and draws); without it the scene is data (:mod:`paragym.sim.description`) and
+            MuJoCo alone runs it, PyBullet built only if a distance or a picture is asked for.
     """
 
     ROBOT = "capaman"
@@ -156,14 +162,14 @@ class CaPaManDynamicScene:
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
                  dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05,
-                 engine: Any = None) -> None:
+                 engine: Any = None, mirror: bool = True) -> None:
         self.geometry = g = geometry
         self.clearance_cap = clearance_cap
         self.obstacles: tuple = ()
         self.dynamics = d = dynamics or CaPaManDynamics()
         if d.layout not in ("tree", "split"):
             raise ValueError(f'dynamics.layout must be "tree" or "split"; got {d.layout!r}')
-        self.sim = sim = PyBulletSim(gui=gui)
+        self.sim = sim = PyBulletSim(gui=gui) if mirror or engine is None else SceneDescription(gui=gui)
         links = _dynamic_links(g, d)
         if d.layout == "tree":  # one multibody; the plate floats on three prismatic joints and a spherical one
             sim.add_tree_body(self.ROBOT, links)
@@ -188,7 +194,8 @@ class CaPaManDynamicScene:
         self.float_joints = [at(f"plate_{c}") for c in "xyz"] if d.layout == "tree" else []
         self._motors = motors_of(self.motors)
         self.sim.on_rebuild(self._set_up_physics)
-        self.set_configuration(g.alpha_home)
+        self.reset(g.alpha_home)  # the pose the export writes the servos' gains at
+        self._target = np.asarray(g.alpha_home, float).copy()
         simulate_in(self, engine)
 
     def _set_up_physics(self) -> None:
@@ -279,7 +286,7 @@ class CaPaManDynamicScene:
             return
         if "obstacles" in self.sim.body_names:
             self.sim.remove("obstacles")  # rebuilds the world: pose the mechanism again
-            self.set_configuration(self._target if hasattr(self, "_target") else self.geometry.alpha_home)
+            self.reset(self._target)
         self.obstacles = obstacles
         if obstacles:
             self.sim.add_static_group("obstacles", obstacles)
@@ -327,6 +334,31 @@ class CaPaManDynamicScene:
     def close(self) -> None:
         """Disconnect PyBullet."""
         self.sim.close()
+
+
+def drive_together(scenes: Sequence[CaPaManDynamicScene], targets: np.ndarray, duration: float, pool: Any = None
+                   ) -> None:
+    """:meth:`CaPaManDynamicScene.drive` of each of ``scenes`` (simulated in MuJoCo, one geometry and dynamics)
+    toward its row of ``targets`` (M, 3) (rad) over ``duration`` s, their physics stepped in one batch on
+    ``pool``'s threads (:func:`paragym.sim.mujoco_sim.ramp_together`)."""
+    targets = np.asarray(targets, float)
+    starts = np.array([scene._target for scene in scenes])
+    # the motors' joints turn by -alpha (capaman_links), as in drive()
+    ramp_together([scene.sim for scene in scenes], scenes[0]._motors, -starts, -targets, duration,
+                  scenes[0].dynamics.motor_torque, pool)
+    for scene, target in zip(scenes, targets, strict=True):
+        scene._target = target.copy()
+
+
+def state_together(scenes: Sequence[CaPaManDynamicScene]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The crank angles (M, 3) (rad), tool tips (M, 3) (m) and largest loop gaps (M,) (m) of ``scenes`` (as
+    :func:`drive_together` takes them): :attr:`CaPaManDynamicScene.alpha`, :attr:`~CaPaManDynamicScene.tip` and
+    the loops' gap as MuJoCo measures it (:meth:`~paragym.sim.mujoco_sim.MuJoCoSim.loop_residual`), in one array
+    each."""
+    first = scenes[0]
+    motors, position, quaternion, gap = read_together([scene.sim for scene in scenes], first._motors, *first.plate)
+    tip = position - first.geometry.tool_length * quat_to_matrix(quaternion)[..., :, 2]
+    return -motors, tip, gap
 
 
 #: the contact contract's pushes (``tests/test_rules.py``, ``benchmarks/conformance.py``): boxes the motors drive

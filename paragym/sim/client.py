@@ -23,7 +23,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-import pybullet as pb
 
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
@@ -35,8 +34,26 @@ __all__ = ["LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact
 Motors = Sequence[tuple[str, Sequence[int]]]
 
 _IDENTITY = (0.0, 0.0, 0.0, 1.0)
-_JOINT_TYPES = {"revolute": pb.JOINT_REVOLUTE, "prismatic": pb.JOINT_PRISMATIC,
-                "spherical": pb.JOINT_SPHERICAL, "fixed": pb.JOINT_FIXED}
+
+
+class _PyBullet:
+    """PyBullet, imported at its first use (then this module's ``pb`` is PyBullet itself): a scene simulated
+    in MuJoCo alone (:mod:`paragym.sim.description`) never imports it."""
+
+    def __getattr__(self, name: str) -> Any:
+        import pybullet
+
+        globals()["pb"] = pybullet
+        return getattr(pybullet, name)
+
+
+pb: Any = _PyBullet()
+#: PyBullet's joint types, by :class:`LinkSpec`'s names for them
+_JOINT_TYPES = ("revolute", "prismatic", "spherical", "fixed")
+
+
+def _joint_type(kind: str) -> int:
+    return (pb.JOINT_REVOLUTE, pb.JOINT_PRISMATIC, pb.JOINT_SPHERICAL, pb.JOINT_FIXED)[_JOINT_TYPES.index(kind)]
 
 
 def motors_of(joints: Sequence[tuple[str, int]]) -> list[tuple[str, list[int]]]:
@@ -329,7 +346,7 @@ class PyBulletSim:
             linkInertialFramePositions=[link.shape_offset for link in links],
             linkInertialFrameOrientations=[_IDENTITY] * n,
             linkParentIndices=[0 if link.parent is None else index[link.parent] + 1 for link in links],
-            linkJointTypes=[_JOINT_TYPES[link.joint] for link in links],
+            linkJointTypes=[_joint_type(link.joint) for link in links],
             linkJointAxis=[link.axis for link in links],
             physicsClientId=self._client)
         self._bodies[name] = body

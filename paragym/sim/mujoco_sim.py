@@ -40,8 +40,10 @@ import numpy as np
 
 from paragym.sim import export
 from paragym.sim.client import depth_first, physics_steps
+from paragym.sim.description import SceneDescription
 
-__all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "check_engine", "simulate_in"]
+__all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "RolloutPool", "check_engine", "ramp_together",
+           "read_together", "simulate_in"]
 
 #: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
 ENGINES = ("pybullet", "mujoco")
@@ -137,8 +139,11 @@ class MuJoCoSim:
     def __init__(self, scene: Any, settings: MuJoCoSettings | None = None) -> None:
         self._mj = _import_mujoco()
         self.settings = s = settings or MuJoCoSettings()
-        #: the scene's PyBullet world: its geometry, posed at MuJoCo's state when read
-        self.mirror = mirror = scene.sim
+        #: what the scene was built in, which holds the pose a reset puts: its PyBullet world (the mirror, posed
+        #: at MuJoCo's state when read), or its description as data (:mod:`paragym.sim.description`)
+        self.source = source = scene.sim
+        self._described = isinstance(source, SceneDescription)
+        self._picture: Any = None  # a described scene's PyBullet world, built when a picture or distance is asked
         #: MuJoCo's physics step (s) and the simulated time (s) so far
         self.time_step = float(s.time_step)
         self.elapsed = 0.0
@@ -148,17 +153,46 @@ class MuJoCoSim:
         self.robot_mjcf = export.mjcf(scene, getattr(scene, "ROBOT", "paragym"), time_step=s.time_step,
                                       bandwidth=s.servo_bandwidth, iterations=s.iterations)
         self._trees = [(name, depth_first(links), base_mass) for name, links, base_mass, _ in
-                       export.bodies_of(mirror)[0]]
+                       export.bodies_of(source)[0]]
         self._fixed: Any = None
         self.model: Any = None
         self.data: Any = None
         self._actuators: dict[Any, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
-        self._need_load = True  # the mirror holds the state (a reset): load it before MuJoCo runs
+        self._need_load = True  # the source holds the state (a reset): load it before MuJoCo runs
         self._pushed = False  # a force acts in the next step (:meth:`push`)
         #: contact friction set since the model was written, (body, link) -> coefficient (:meth:`friction`)
         self._friction: dict[tuple[str, int], float] = {}
-        self._mirror_stale = False  # MuJoCo has moved since the mirror was posed
+        self._mirror_stale = False  # MuJoCo has moved since the source was posed
+        #: each :meth:`ramp` (a control period) starts MuJoCo's solver from a zero warm start, as
+        #: :func:`ramp_together` steps a batch of robots; False: the warm start carries on from the last step
+        self.cold_periods = False
+        if self._described and source.gui:
+            self._geometry()  # the GUI's window opens with the scene
         self._ready()
+
+    @property
+    def mirror(self) -> Any:
+        """The PyBullet world at MuJoCo's state: the scene's own, or for a described scene one built from its
+        description (on first use; again when its bodies change)."""
+        return self._geometry()
+
+    def _geometry(self) -> Any:
+        """The PyBullet world posed at MuJoCo's state, which answers distances and draws."""
+        self._pose_mirror()
+        if not self._described:
+            return self.source
+        from paragym.sim.client import PyBulletSim
+
+        picture, description = self._picture, self.source
+        if picture is None or picture.recipes.keys() != description.recipes.keys() or not _same_parts(
+                export.fixed_parts(picture), export.fixed_parts(description)):
+            if picture is not None:
+                picture.close()
+            self._picture = picture = PyBulletSim(gui=description.gui)
+            description.build_in(picture)
+        else:
+            description.pose(picture)
+        return picture
 
     # --- the model and the two states --------------------------------------------------------------
     def _compile(self, fixed: list[tuple[str, Any]]) -> None:
@@ -185,11 +219,11 @@ class MuJoCoSim:
             self._set_friction(name, link, lateral)
 
     def _ready(self) -> None:
-        """Load the mirror's state into MuJoCo if a reset put it there (recompiling for new fixed parts): before
+        """Load the source's state into MuJoCo if a reset put it there (recompiling for new fixed parts): before
         MuJoCo runs."""
         if not self._need_load:
             return
-        mj, mirror = self._mj, self.mirror
+        mj, mirror = self._mj, self.source
         fixed = export.fixed_parts(mirror)
         if self.model is None or not _same_parts(fixed, self._fixed):
             self._compile(fixed)
@@ -217,8 +251,15 @@ class MuJoCoSim:
         mj.mj_step1(model, data)  # the state's kinematics and velocities: what a read sees
         self._need_load, self._mirror_stale = False, False
 
+    def _reads_source(self) -> bool:
+        """Whether a read after a reset is the PyBullet mirror's (which holds the state until MuJoCo runs); a
+        described scene's reads are MuJoCo's, loaded now."""
+        if self._need_load and self._described:
+            self._ready()
+        return self._need_load
+
     def _pose_mirror(self) -> None:
-        """Pose the PyBullet mirror at MuJoCo's joint values (it then answers geometric queries)."""
+        """Pose the source at MuJoCo's joint values (a PyBullet mirror then answers geometric queries)."""
         if not self._mirror_stale or self._need_load:
             return
         qpos, ball = self.data.qpos, self._mj.mjtJoint.mjJNT_BALL
@@ -231,11 +272,11 @@ class MuJoCoSim:
                 indices.append(i)
                 values.append([qpos[adr + 1], qpos[adr + 2], qpos[adr + 3], qpos[adr]] if kind == ball
                               else [qpos[adr]])
-            self.mirror.set_joints(name, indices, values)
+            self.source.set_joints(name, indices, values)
             if base_mass > 0:
                 adr = self._joints[name, -1][2]
                 w, x, y, z = qpos[adr + 3:adr + 7]
-                self.mirror.reset_base(name, qpos[adr:adr + 3], (x, y, z, w))
+                self.source.reset_base(name, qpos[adr:adr + 3], (x, y, z, w))
         self._mirror_stale = False
 
     # --- dynamics --------------------------------------------------------------------------------------
@@ -269,12 +310,42 @@ class MuJoCoSim:
              velocity_gain: float = 0.0) -> None:
         """Move the servos' targets linearly from ``start`` to ``goal`` over ``duration`` s of MuJoCo's steps
         (at least one; ``time_step``, PyBullet's, is ignored), stepping as they go."""
+        ids, inputs = self._ramp_inputs(motors, start[None], goal[None], duration, force)
+        inputs = inputs[0]
+        if self.cold_periods:  # as rollout starts: no warm start, and what the state implies computed afresh
+            self.data.qacc_warmstart[:] = 0.0
+            self._mj.mj_step1(self.model, self.data)
+        ctrl = self.data.ctrl
+        if self.after_step or self._pushed:  # someone watches every step, or a push acts in the first
+            for row in inputs:
+                ctrl[ids] = row
+                self.step()
+            return
+        # nothing between the steps: step() without its bookkeeping, the same calls in the same order
+        model, data, step2, step1, h = self.model, self.data, self._mj.mj_step2, self._mj.mj_step1, self.time_step
+        if len(ids) == len(ctrl) and np.array_equal(ids, np.arange(len(ctrl))):
+            ids = slice(None)
+        for row in inputs:
+            ctrl[ids] = row
+            step2(model, data)
+            step1(model, data)
+            self.elapsed += h
+        self._mirror_stale = True
+
+    def _ramp_inputs(self, motors: Sequence[tuple[str, Sequence[int]]], start: np.ndarray, goal: np.ndarray,
+                     duration: float, force: float) -> tuple[np.ndarray, np.ndarray]:
+        """The actuators of ``motors`` and their inputs at every MuJoCo step of a ramp from ``start`` to ``goal``
+        (M, n) over ``duration`` s, (M, steps, n): the numbers :meth:`drive` takes step by step, to the bit; their
+        force limit set to ``force``."""
+        self._ready()
         h = self.time_step
         steps = physics_steps(duration, h)
         rate = (goal - start) / (steps * h)
-        for i in range(1, steps + 1):
-            self.drive(motors, start + (goal - start) * (i / steps), rate, force)
-            self.step()
+        ids, _, ratio = self._motors(motors)
+        share = (np.arange(1, steps + 1) / steps)[None, :, None]
+        inputs = start[:, None] + (goal - start)[:, None] * share + (ratio * rate)[:, None]
+        self.model.actuator_forcerange[ids] = (-force, force)
+        return ids, inputs
 
     def push(self, name: str, link: int, force: Sequence[float]) -> None:
         """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step
@@ -299,7 +370,7 @@ class MuJoCoSim:
 
     # --- reads ------------------------------------------------------------------------------------------
     def _index(self, name: str, link: str | int) -> int:
-        return self.mirror.link_index(name, link) if isinstance(link, str) else link
+        return self.source.link_index(name, link) if isinstance(link, str) else link
 
     def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and xyzw quaternion of a link's frame (the link by name or index; -1 the base)."""
@@ -308,8 +379,8 @@ class MuJoCoSim:
     def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
         """A link's frame: world position (m), xyzw quaternion and, with ``velocity``, the linear (m/s) and
         angular (rad/s) velocity of the frame's origin, world frame."""
-        if self._need_load:  # a reset: the mirror holds the state, at rest
-            return self.mirror.link_motion(name, link, velocity)
+        if self._reads_source():  # a reset: the mirror holds the state, at rest
+            return self.source.link_motion(name, link, velocity)
         b = self._joints[name, self._index(name, link)][0]
         w, x, y, z = self.data.xquat[b]
         out = (self.data.xpos[b].copy(), np.array([x, y, z, w]))
@@ -321,15 +392,15 @@ class MuJoCoSim:
 
     def motor_positions(self, motors: Sequence[tuple[str, Sequence[int]]]) -> np.ndarray:
         """The positions of the joints of ``motors`` now, in their order (rad or m)."""
-        if self._need_load:
-            return self.mirror.motor_positions(motors)
+        if self._reads_source():
+            return self.source.motor_positions(motors)
         return self.data.qpos[self._motors(motors)[1]].copy()
 
     def joint_positions(self, name: str, joints: Sequence[int]) -> np.ndarray:
         """The positions of 1-dof joints of body ``name`` now (rad or m), as PyBullet's ``joint_positions``:
         driven or passive."""
-        if self._need_load:
-            return self.mirror.joint_positions(name, joints)
+        if self._reads_source():
+            return self.source.joint_positions(name, joints)
         return self.data.qpos[[self._joints[name, j][2] for j in joints]].copy()
 
     def set_time_step(self, time_step: float) -> None:
@@ -346,45 +417,43 @@ class MuJoCoSim:
     def loop_residual(self) -> float:
         """The largest gap (m) between the two points of a loop closure now, in MuJoCo (its ``connect``
         constraints' sites); 0 without loops (after a reset, before a step: the mirror's)."""
-        if self._need_load:
-            return self.mirror.loop_residual()
+        if self._reads_source():
+            return self.source.loop_residual()
         return export.mujoco_loop_gap(self.model, self.data)
 
     def joint_values(self, name: str) -> list[tuple[float, ...]]:
         """Every joint of body ``name`` now, as :meth:`PyBulletSim.joint_values` gives them."""
         self._pose_mirror()
-        return self.mirror.joint_values(name)
+        return self.source.joint_values(name)
 
     def clearance(self, name: str, others: Sequence[str], max_distance: float,
                   links: Sequence[int] | None = None) -> tuple[float, str | None]:
         """:meth:`PyBulletSim.clearance` at MuJoCo's state (the mirror's geometry)."""
-        self._pose_mirror()
-        return self.mirror.clearance(name, others, max_distance, links)
+        return self._geometry().clearance(name, others, max_distance, links)
 
     def render(self, width: int, height: int, target: Sequence[float], distance: float, yaw: float, pitch: float,
                fov: float = 45.0) -> np.ndarray:
         """:meth:`PyBulletSim.render` of the mirror at MuJoCo's state."""
-        self._pose_mirror()
-        return self.mirror.render(width, height, target, distance, yaw, pitch, fov)
+        return self._geometry().render(width, height, target, distance, yaw, pitch, fov)
 
     # --- resets: the mirror is posed, MuJoCo loads it before it runs --------------------------------
     def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion), the mechanism at rest."""
         self._pose_mirror()
-        self.mirror.reset_joint(name, joint, value)
+        self.source.reset_joint(name, joint, value)
         self._need_load = True
 
     def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
                    quaternion: Sequence[float]) -> None:
         """:meth:`PyBulletSim.place_free`, the mechanism at rest."""
         self._pose_mirror()
-        self.mirror.place_free(part, floats, position, quaternion)
+        self.source.place_free(part, floats, position, quaternion)
         self._need_load = True
 
     def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """:meth:`PyBulletSim.reset_base`, the mechanism at rest."""
         self._pose_mirror()
-        self.mirror.reset_base(name, position, quaternion)
+        self.source.reset_base(name, position, quaternion)
         self._need_load = True
 
     def friction(self, name: str, links: Sequence[int], lateral: float) -> None:
@@ -392,7 +461,7 @@ class MuJoCoSim:
         sliding friction: a contact takes the larger of its two geoms', and the ground's is 0,
         :func:`paragym.sim.export.mjcf`) and in the mirror, from the next step on. The ground's and the fixed
         parts' stay as written (0: a contact takes the robot part's)."""
-        self.mirror.friction(name, links, lateral)
+        self.source.friction(name, links, lateral)
         if all(name != tree for tree, _, _ in self._trees):
             return
         for link in links:
@@ -406,35 +475,37 @@ class MuJoCoSim:
     def rebuild(self) -> None:
         """A fresh world, as :meth:`PyBulletSim.rebuild`: the mirror is rebuilt (the scene's set-up runs again,
         through this object) and MuJoCo starts from it at its next step, with nothing of what ran before."""
-        self.mirror.rebuild()
+        self.source.rebuild()
         self._need_load, self._mirror_stale = True, False
 
     # --- the world's bodies: the mirror's (fixed parts reach MuJoCo at the next load) ---------------------
     def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
         self._pose_mirror()
-        self.mirror.add_static(name, shape, rgba)
+        self.source.add_static(name, shape, rgba)
         self._need_load = True
 
     def add_static_group(self, name: str, shapes: Sequence[Any],
                          rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
         self._pose_mirror()
-        self.mirror.add_static_group(name, shapes, rgba)
+        self.source.add_static_group(name, shapes, rgba)
         self._need_load = True
 
     def remove(self, name: str) -> None:
         self._pose_mirror()
-        self.mirror.remove(name)  # a rebuild of the mirror re-runs the scene's set-up, through this object
+        self.source.remove(name)  # a rebuild of the mirror re-runs the scene's set-up, through this object
         self._need_load = True
 
     def __getattr__(self, name: str) -> Any:
         """What the mirror keeps and sets up (names, links, loops, collision filters, the GUI): the mirror's."""
         if name in _MIRRORED:
-            return getattr(self.mirror, name)
+            return getattr(self.source, name)
         raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
 
     def close(self) -> None:
-        """Close the mirror's PyBullet connection and drop the MuJoCo model."""
-        self.mirror.close()
+        """Close the PyBullet world (the mirror, or a described scene's picture) and drop the MuJoCo model."""
+        for world in (self.source, self._picture):
+            if world is not None and hasattr(world, "close"):
+                world.close()
         self.model = self.data = None
 
 
@@ -451,3 +522,104 @@ def _same_parts(a: Any, b: Any) -> bool:
     if a is None or b is None or len(a) != len(b):
         return False
     return all(na == nb and repr(sa) == repr(sb) for (na, sa), (nb, sb) in zip(a, b, strict=True))
+
+
+class RolloutPool:
+    """MuJoCo's ``rollout`` on ``threads`` threads, with the work space (an ``MjData`` per thread) kept from one
+    call to the next while the models keep their size. :meth:`close` ends the threads."""
+
+    def __init__(self, threads: int) -> None:
+        from mujoco import rollout
+
+        self._rollout = rollout.Rollout(nthread=threads)
+        self.threads = threads
+        self._workers: list[Any] = []
+        self._signature: int | None = None
+
+    def workers(self, model: Any) -> list[Any]:
+        """An ``MjData`` per thread for models of ``model``'s size."""
+        if model.signature != self._signature:
+            self._workers = [_import_mujoco().MjData(model) for _ in range(self.threads)]
+            self._signature = model.signature
+        return self._workers
+
+    def rollout(self, *args: Any, **kwargs: Any) -> Any:
+        return self._rollout.rollout(*args, **kwargs)
+
+    def close(self) -> None:
+        self._rollout.close()
+
+
+def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]], starts: np.ndarray,
+                  goals: np.ndarray, duration: float, force: float, pool: Any = None) -> None:
+    """:meth:`MuJoCoSim.ramp` of each of ``sims`` (robots of one world: one mechanism, their models of one size,
+    each with :attr:`~MuJoCoSim.cold_periods`) from ``starts`` to ``goals`` (M, n), in one call of MuJoCo's
+    ``rollout`` on the threads of ``pool`` (a :class:`RolloutPool`; None: the calling thread), which holds no lock
+    while it steps. Each robot's motion is its own ramp's to the bit (each period starts the solver cold, which
+    ``rollout`` does); its frames and velocities are computed after, its motor forces (``actuator_force``) and
+    contacts are not. A robot that is watched step by step
+    (``after_step``) or pushed is ramped alone."""
+    from mujoco import rollout
+
+    mj = _import_mujoco()
+    spec = int(mj.mjtState.mjSTATE_FULLPHYSICS)  # what rollout takes and gives
+    alone = [k for k, sim in enumerate(sims) if sim.after_step or sim._pushed or not sim.cold_periods]
+    for k in alone:
+        sims[k].ramp(motors, starts[k], goals[k], duration, 0.0, force)
+    batch = [sim for k, sim in enumerate(sims) if k not in alone]
+    if not batch:
+        return
+    rows = np.array([k for k in range(len(sims)) if k not in alone])
+    ids, inputs = batch[0]._ramp_inputs(motors, starts[rows], goals[rows], duration, force)
+    models = [sim.model for sim in batch]
+    first = models[0]
+    state = np.empty((len(batch), mj.mj_stateSize(first, spec)))
+    control = np.empty((len(batch), inputs.shape[1], first.nu))
+    for k, sim in enumerate(batch):
+        if k:
+            sim._ready()
+            sim.model.actuator_forcerange[ids] = (-force, force)
+        mj.mj_getState(sim.model, sim.data, state[k], spec)
+        control[k] = sim.data.ctrl
+    control[:, :, ids] = inputs
+    workers = pool.workers(first) if pool is not None else [mj.MjData(first)]
+    runner = pool.rollout if pool is not None else rollout.rollout
+    out = np.empty((len(batch), inputs.shape[1], state.shape[1]))
+    runner(models, workers, state, control, initial_warmstart=np.zeros((len(batch), first.nv)), state=out,
+           sensordata=np.empty((len(batch), inputs.shape[1], first.nsensordata)), nstep=inputs.shape[1],
+           skip_checks=True)
+    h, steps = batch[0].time_step, inputs.shape[1]
+    for k, sim in enumerate(batch):
+        mj.mj_setState(sim.model, sim.data, out[k, -1], spec)
+        sim.data.ctrl[:] = control[k, -1]
+        sim.data.qacc_warmstart[:] = 0.0
+        for stage in (mj.mj_kinematics, mj.mj_comPos, mj.mj_comVel):  # the frames and velocities the reads read
+            stage(sim.model, sim.data)
+        for _ in range(steps):
+            sim.elapsed += h
+        sim._mirror_stale = True
+
+
+def read_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]], body: str, link: int
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """What a batch of robots (as :func:`ramp_together` takes them) reads after a ramp, in one array each: the
+    positions of ``motors`` (M, n) (:meth:`MuJoCoSim.motor_positions`), the frame of ``link`` of ``body``, its
+    position (M, 3) and xyzw quaternion (M, 4) (:meth:`MuJoCoSim.link_frame`), and the largest loop gap
+    (M,) (:meth:`MuJoCoSim.loop_residual`): the same numbers, to the bit."""
+    first = sims[0]
+    for sim in sims:
+        sim._reads_source()
+    adr = first._motors(motors)[1]
+    b = first._joints[body, link][0]
+    datas = [sim.data for sim in sims]
+    positions = np.array([data.qpos for data in datas])[:, adr]
+    frame = np.array([data.xpos[b] for data in datas])
+    quaternion = np.array([data.xquat[b] for data in datas])[:, [1, 2, 3, 0]]
+    model = first.model
+    if model.neq:
+        sites = np.array([data.site_xpos for data in datas])
+        gaps = sites[:, model.eq_obj1id] - sites[:, model.eq_obj2id]
+        gap = np.sqrt((gaps**2).sum(axis=2)).max(axis=1)
+    else:
+        gap = np.zeros(len(sims))
+    return positions, frame, quaternion, gap

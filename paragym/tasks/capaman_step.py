@@ -205,14 +205,15 @@ class CaPaManParams:
         else:  # a rung: the capsule model, or PyBullet's exact distance to the same posts
             collision = ("posts" if fidelity == "kinematic" else "pybullet") if collision is None else collision
             check_choice("collision", collision, ("posts", "pybullet"))
-        if collision in ("grid", "posts") and fidelity != "kinematic":
-            raise ValueError(f"collision={collision!r} needs fidelity='kinematic' (the dynamic scene is PyBullet's)")
+        engine = check_engine(engine, ENGINES, fidelity)
+        if collision in ("grid", "posts") and fidelity != "kinematic" and engine is None:
+            raise ValueError(f"collision={collision!r} in the dynamic fidelity needs engine='mujoco' (PyBullet's "
+                             "dynamic scene measures its clearance with PyBullet: collision='pybullet')")
         control_period = check_number("control_period", control_period, unit=" of seconds")
         scenarios_module.resolve_scenario(scenario)
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),
                             ("clearance_cap", clearance_cap)):
             check_number(name, value)
-        engine = check_engine(engine, ENGINES, fidelity)
         if fidelity == "dynamic":
             check_control_period(control_period, (dynamics or CaPaManDynamics()).time_step, refuse=False)
             if engine is not None:  # a new fidelity: nothing released to keep
@@ -345,8 +346,9 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     old = state.alpha.copy()
     actions = np.ascontiguousarray(actions, np.float64)
     command = state.call(_command, (state.command, actions, params.kernel_args), params, (actions.ndim,))
-    if isinstance(world, DynamicWorld):
-        new = world.move(command[rows])
+    moves = getattr(world, "moves", False)  # the dynamics: the world moves the robots, checked by contact
+    if moves:
+        new = world.move(rows, command[rows])
     else:
         n = params.substeps
         moving = rows
@@ -366,12 +368,12 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     _place(state, world, rows, new)
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
-    if isinstance(world, DynamicWorld) and world.broken:
-        if not state.terminated[0]:
-            state.terminated[0] = True  # a broken mechanism ends the episode as a failure, as a collision does
-            state.terms[0, 5] -= params.collision_penalty
-            state.reward[0] -= params.collision_penalty
-        state.failure[0], state.success[0] = decide(state.reached[0], len(TOUR), state.collision[0], True)
+    for i in rows[world.broken[rows]].tolist() if moves else ():
+        if not state.terminated[i]:
+            state.terminated[i] = True  # a broken mechanism ends the episode as a failure, as a collision does
+            state.terms[i, 5] -= params.collision_penalty
+            state.reward[i] -= params.collision_penalty
+        state.failure[i], state.success[i] = decide(state.reached[i], len(TOUR), state.collision[i], True)
 
 
 def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,

@@ -26,7 +26,15 @@ from paragym.tasks.capaman_step import (
     reset,
     step,
 )
-from paragym.tasks.capaman_worlds import DynamicWorld, GridWorld, NativeWorld, PostWorld, SceneWorld, _clusters
+from paragym.tasks.capaman_worlds import (
+    DynamicWorld,
+    GridWorld,
+    MuJoCoWorld,
+    NativeWorld,
+    PostWorld,
+    SceneWorld,
+    _clusters,
+)
 
 __all__ = ["LADDER_RULES", "RULES", "TASK", "CaPaManTask"]
 
@@ -73,22 +81,31 @@ class CaPaManTask(TaskBase):
 
     def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
         native = "grid" if rules.rung is None else "posts"
-        if kwargs.get("collision", native) != native or kwargs.get("fidelity", "kinematic") != "kinematic":
-            raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r} in kinematic "
-                             "fidelity: use gymnasium's sync/async modes for PyBullet's check or the dynamic fidelity")
+        dynamic = kwargs.get("fidelity", "kinematic") == "dynamic"
+        if kwargs.get("collision", native) != native or (dynamic and kwargs.get("engine", "pybullet") == "pybullet"):
+            raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r}, in the "
+                             "kinematic fidelity or the dynamic one in MuJoCo (engine='mujoco'): use gymnasium's "
+                             "sync/async modes for PyBullet's check or PyBullet's dynamics")
         return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": native})
 
     def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
 
     def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> Any:
-        """The grid (N robots; its checker scene comes when asked), the kinematic PyBullet scene or the
-        dynamics (one robot)."""
+        """The grid or the posts (N robots; the checker scene comes when asked), in the dynamic fidelity under
+        MuJoCo's dynamics (N robots); the kinematic PyBullet scene or PyBullet's dynamics (one robot)."""
         gui, g = render_mode == "human", params.geometry
+        kinematic: GridWorld | PostWorld | None = None
         if params.collision == "grid":
-            return GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
+            kinematic = GridWorld(n, g, params.clearance_cap, draws=render_mode is not None, gui=gui)
         if params.collision == "posts":
-            return PostWorld(n, g, params.clearance_cap, params.max_obstacles, draws=render_mode is not None, gui=gui)
+            kinematic = PostWorld(n, g, params.clearance_cap, params.max_obstacles, draws=render_mode is not None,
+                                  gui=gui)
+        if kinematic is not None:
+            if params.fidelity == "kinematic":
+                return kinematic
+            return MuJoCoWorld(kinematic, params.dynamics, params.engine, params.control_period, n,
+                               params.max_obstacles, gui=gui)
         if params.fidelity == "kinematic":
             return SceneWorld(CaPaManScene(g, gui=gui, clearance_cap=params.clearance_cap,
                                            draws=render_mode is not None))
@@ -128,6 +145,8 @@ class CaPaManTask(TaskBase):
 
     def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
+        if isinstance(world, MuJoCoWorld):  # the robot as MuJoCo has it, drawn in PyBullet
+            return None if gui else world.robots[i].render()
         if isinstance(world, NativeWorld):  # a native world does not pose the scene: render does
             scene = world.checker()
             scene.set_obstacles(state.scenarios[i].obstacles)

@@ -8,8 +8,11 @@
 * :class:`SceneWorld` (one robot): PyBullet's exact signed distance in the
   kinematic scene;
 * :class:`DynamicWorld` (one robot): the closed chain under PyBullet's
-  dynamics; the motors chase the command for a control period and the
-  encoders say where the cranks got.
+  dynamics (or MuJoCo's over the PyBullet scene); the motors chase the command for a control period and the
+  encoders say where the cranks got;
+* :class:`MuJoCoWorld` (N robots): the closed chains under MuJoCo's dynamics, MuJoCo alone, the clearance the
+  task's own kernel's (the grid's or the posts') at the encoders' angles: the native dynamic vector env's world
+  and, for N = 1, the single env's.
 
 The transition (:mod:`paragym.tasks.capaman_step`) asks them; each also holds
 the kinematic scene that generates and checks scenarios.
@@ -17,6 +20,7 @@ the kinematic scene that generates and checks scenarios.
 
 from __future__ import annotations
 
+import os
 from functools import lru_cache
 from typing import Any, Protocol
 
@@ -26,16 +30,18 @@ from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import pose6
 from paragym.sim import capaman_grid
 from paragym.sim.capaman_clearance import DistanceGrids, grid_clearance
-from paragym.sim.capaman_dynamic import CaPaManDynamicScene
+from paragym.sim.capaman_dynamic import CaPaManDynamicScene, drive_together, state_together
 from paragym.sim.capaman_posts import parts_in_reach, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
+from paragym.sim.mujoco_sim import RolloutPool
+from paragym.sim.obstacles import Box
 from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.capaman import CaPaManScenario, posts_of
 
 #: the state and parameters the worlds read are the transition's (paragym.tasks.capaman_step), typed Any
 #: here: the transition imports the worlds, not the other way
-__all__ = ["DynamicWorld", "GridWorld", "NativeWorld", "PostWorld", "SceneWorld", "World"]
+__all__ = ["DynamicWorld", "GridWorld", "MuJoCoWorld", "NativeWorld", "PostWorld", "SceneWorld", "World"]
 
 
 class World(Protocol):
@@ -177,12 +183,15 @@ class DynamicWorld(SceneWorld):
     """One robot under PyBullet's dynamics: the motors chase the command for
     ``control_period`` s; the obstacles are rigid bodies."""
 
+    #: it moves the robots itself (the transition asks :meth:`move` where they got)
+    moves = True
+
     def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
         super().__init__(scene)
         self.control_period = control_period
         self._moved = False
-        #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism)
-        self.broken = False
+        #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism), per robot
+        self.broken = np.zeros(1, bool)
         self._checker: CaPaManScene | None = None
         self._probe: SceneWorld | None = None
 
@@ -210,26 +219,130 @@ class DynamicWorld(SceneWorld):
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """The plate's pose by the closed-form direct kinematics of the motors' targets."""
-        pose = capaman.forward(state.command[:1], params.geometry, validate=False)
-        return pose6(pose.position[0], pose.rotation[0])
+        return _commanded_pose(state, params)
 
     def step_duration(self, state: Any, params: Any) -> float:
         h = self.scene.sim.time_step  # the engine's physics step
         return h * physics_steps(self.control_period, h)
 
-    def move(self, command: np.ndarray) -> np.ndarray:
-        """Where the cranks got (1, 3) chasing ``command`` (1, 3)."""
+    def move(self, rows: np.ndarray, command: np.ndarray) -> np.ndarray:
+        """Where the cranks got (1, 3) chasing ``command`` (1, 3) (``rows``: the one robot, 0)."""
         self.scene.drive(command[0], self.control_period)
         self._moved = True
-        self.broken = self.scene.closure_error() > BROKEN_GAP
+        self.broken[0] = self.scene.closure_error() > BROKEN_GAP
         return self.scene.alpha[None]
 
     def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
         if not self._moved:  # a reset: pose the chain; after a move the dynamics has posed it
-            self.broken = False
+            self.broken[0] = False
             return super().place(rows, alpha)
         self._moved = False
         clearance, near = self.scene.clearance()
         return np.array([clearance]), self.scene.tip[None], [near]
 
 
+
+
+class MuJoCoWorld(NativeWorld):
+    """N robots under MuJoCo's dynamics, with no other engine: each robot a CaPaMan described as data
+    (:class:`~paragym.sim.capaman_dynamic.CaPaManDynamicScene` with ``mirror=False``) in a MuJoCo model of its
+    own, whose fixed parts are its scenario's obstacles (padded to the world's number of slots, so that every
+    model has one size), its motors chasing the command for ``control_period`` s. The robots step together in
+    MuJoCo's ``rollout`` on ``threads`` threads (default: the cores this process may use), no lock held; each
+    control period starts the solver cold, so that a robot's motion is its own whatever else steps
+    (:func:`paragym.sim.mujoco_sim.ramp_together`). The encoders say where the cranks got; the tool tip is MuJoCo's
+    plate's; the clearance is the ``kinematic`` world's (:class:`GridWorld` or :class:`PostWorld`, the same
+    kernel as the kinematic fidelity's, both for the step and v1's look-ahead) at the encoders' angles; a loop
+    open by more than BROKEN_GAP is a broken mechanism. Its obstacles are rigid in MuJoCo as well: contact
+    stops the parts; the kernel's capsules hold the parts, so it calls a collision before MuJoCo's parts touch.
+    """
+
+    moves = True
+
+    def __init__(self, kinematic: GridWorld | PostWorld, dynamics: Any, engine: Any, control_period: float,
+                 n: int, slots: int, gui: bool = False, threads: int | None = None) -> None:
+        super().__init__(kinematic.geometry, kinematic.cap, kinematic.draws, kinematic.gui)
+        self.kinematic = kinematic
+        self.control_period = control_period
+        #: the robots, each a CaPaMan described as data and simulated in MuJoCo
+        self.robots = [CaPaManDynamicScene(kinematic.geometry, dynamics, gui=gui and i == 0,
+                                           clearance_cap=kinematic.cap, engine=engine, mirror=False)
+                       for i in range(n)]
+        for robot in self.robots:
+            robot.sim.cold_periods = True
+        self.slots = slots
+        #: whether the last move left a loop open by more than BROKEN_GAP, per robot
+        self.broken = np.zeros(n, bool)
+        self._moved = np.zeros(n, bool)
+        self._tips = np.zeros((n, 3))  # where the last move left each tool tip
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        threads = min(n, threads or cores)
+        self._pool = RolloutPool(threads) if threads > 1 else None
+
+    def __getstate__(self) -> dict[str, Any]:
+        raise TypeError("a MuJoCo world is not copied: make the env again")
+
+    def checker(self) -> Any:
+        return self.kinematic.checker()
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+        for robot in self.robots:
+            robot.close()
+        self.kinematic.close()
+
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        self.kinematic.set_obstacles(i, scenario)
+        self.robots[i].set_obstacles(tuple(scenario.obstacles) + (_NOWHERE,) * (self.slots - len(scenario.obstacles)))
+
+    def move(self, rows: np.ndarray, command: np.ndarray) -> np.ndarray:
+        """Where the cranks of robots ``rows`` got (M, 3) chasing ``command`` (M, 3) for a control period."""
+        robots = [self.robots[i] for i in rows.tolist()]
+        drive_together(robots, command, self.control_period, self._pool)
+        alpha, self._tips[rows], gap = state_together(robots)
+        self._moved[rows] = True
+        self.broken[rows] = gap > BROKEN_GAP
+        return alpha
+
+    def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
+        """Clearance (the kinematic world's at ``alpha``), tool tip (MuJoCo's) and nearest part of ``rows``; a
+        robot that has not moved since its reset is posed at rest at ``alpha`` first."""
+        tip = np.empty((len(rows), 3))
+        for k, i in enumerate(rows.tolist()):
+            if self._moved[i]:
+                self._moved[i] = False
+                tip[k] = self._tips[i]
+            else:
+                self.broken[i] = False
+                tip[k] = self.robots[i].set_configuration(alpha[k])
+        clearance, _, near = self.kinematic.place(rows, alpha)
+        return clearance, tip, near
+
+    def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        return self.kinematic.clearance(rows, alpha)
+
+    # --- what KF validation reads (paragym.validation.episode), of robot 0 ---
+    def body(self) -> tuple[Any, str, int, np.ndarray, float]:
+        """Paper 000's accelerometer array on the movable plate, judged about H."""
+        robot = self.robots[0]
+        return (robot.sim, *robot.plate, np.zeros(3), robot.sim.time_step)
+
+    def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
+        """The plate's pose by the closed-form direct kinematics of robot 0's motors' targets."""
+        return _commanded_pose(state, params)
+
+    def step_duration(self, state: Any, params: Any) -> float:
+        h = self.robots[0].sim.time_step
+        return h * physics_steps(self.control_period, h)
+
+
+def _commanded_pose(state: Any, params: Any) -> np.ndarray:
+    """Robot 0's plate pose by the closed-form direct kinematics of its motors' targets (KF validation's)."""
+    pose = capaman.forward(state.command[:1], params.geometry, validate=False)
+    return pose6(pose.position[0], pose.rotation[0])
+
+
+#: a fixed part that fills an unused obstacle slot of a robot's model: far below, out of every part's reach
+_NOWHERE = Box((0.0, 0.0, -10.0), (0.01, 0.01, 0.01))
