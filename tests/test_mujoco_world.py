@@ -13,23 +13,28 @@ import pytest
 
 pytest.importorskip("mujoco")
 
+from paragym.sim.mujoco_sim import MuJoCoSettings  # noqa: E402 (MuJoCo is there)
+
 EASY = "paragym/CaPaManCollisionFree-Easy-v0"
 DYNAMIC = {"fidelity": "dynamic", "engine": "mujoco"}
+ALONE = {"fidelity": "dynamic", "engine": MuJoCoSettings(mirror=False)}
 
 
 def _make_vec(env_id: str, n: int, mode: str, **kwargs):
+    """The native vector env takes engine='mujoco' (MuJoCo alone, as it runs); its single envs are MuJoCo alone."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        return gym.make_vec(env_id, num_envs=n, vectorization_mode=mode, **DYNAMIC, **kwargs)
+        return gym.make_vec(env_id, num_envs=n, vectorization_mode=mode,
+                            **(DYNAMIC if mode == "vector_entry_point" else ALONE), **kwargs)
 
 
-@pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {"collision": "posts"}, 110),
-                                                         ("paragym/CaPaManCollisionFree-v1", {"collision": "grid"},
-                                                          110)])
+@pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {}, 110), ("paragym/CaPaManCollisionFree-v1", {}, 110)])
 def test_the_native_dynamic_vector_env_equals_single_mujoco_envs_to_the_bit(env_id, kwargs, steps):
     """N robots stepped together in MuJoCo's rollout on threads give, bit for bit, what N single envs give, one
     robot each, over episodes that end and restart (autoresets)."""
     native, sync = _make_vec(env_id, 2, "vector_entry_point"), _make_vec(env_id, 2, "sync", **kwargs)
+    assert native.unwrapped.params.engine == ALONE["engine"] and native.unwrapped.params.collision == \
+        sync.envs[0].unwrapped.params.collision
     try:
         assert native.unwrapped.world._pool is not None or len(__import__("os").sched_getaffinity(0)) == 1
         obs, _ = native.reset(seed=7)
@@ -81,7 +86,8 @@ import gymnasium as gym
 import numpy as np
 import paragym
 warnings.simplefilter("ignore")
-env = gym.make("paragym/CaPaManCollisionFree-Easy-v0", fidelity="dynamic", engine="mujoco", collision="posts")
+from paragym.sim.mujoco_sim import MuJoCoSettings
+env = gym.make("paragym/CaPaManCollisionFree-Easy-v0", fidelity="dynamic", engine=MuJoCoSettings(mirror=False))
 env.reset(seed=1)
 ends = 0
 for _ in range(60):
@@ -107,10 +113,9 @@ def test_a_described_scene_is_the_scene_built_in_pybullet():
     """The CaPaMan described as data exports the MJCF its PyBullet build exports, character for character, and
     moves as it does in MuJoCo."""
     from paragym.sim.capaman_dynamic import CaPaManDynamicScene
-    from paragym.sim.mujoco_sim import MuJoCoSettings
 
     built = CaPaManDynamicScene(engine=MuJoCoSettings())
-    described = CaPaManDynamicScene(engine=MuJoCoSettings(), mirror=False)
+    described = CaPaManDynamicScene(engine=MuJoCoSettings(mirror=False))
     try:
         assert described.sim.robot_mjcf == built.sim.robot_mjcf
         for scene in (built, described):
@@ -124,8 +129,16 @@ def test_a_described_scene_is_the_scene_built_in_pybullet():
         described.close()
 
 
-def test_the_dynamic_vector_env_refuses_pybullets_dynamics_and_the_kinematic_rule_without_mujoco():
+def test_each_engine_takes_its_own_collision_test_and_says_so():
+    """PyBullet's dynamic scene measures clearance with PyBullet; MuJoCo alone with the task's kernel; the native
+    vector env runs MuJoCo alone; and the repr of the settings of 0.9's MuJoCo fidelity (a result row's record)
+    stays what it was."""
     with pytest.raises(ValueError, match="engine='mujoco'"):
         gym.make_vec(EASY, num_envs=2, vectorization_mode="vector_entry_point", fidelity="dynamic")
-    with pytest.raises(ValueError, match="needs engine='mujoco'"):
-        gym.make(EASY, fidelity="dynamic", collision="posts")
+    for engine, collision in (("pybullet", "posts"), ("mujoco", "posts"), (ALONE["engine"], "pybullet")):
+        with pytest.raises(ValueError, match="collision="):
+            gym.make(EASY, fidelity="dynamic", engine=engine, collision=collision)
+    with pytest.raises(ValueError, match="mirror=False"):
+        gym.make("paragym/MobileTripodOdometry-v0", fidelity="dynamic", engine=ALONE["engine"])
+    assert repr(MuJoCoSettings()) == "MuJoCoSettings(time_step=0.001, servo_bandwidth=None, iterations=None)"
+    assert repr(ALONE["engine"]).endswith(", mirror=False)")

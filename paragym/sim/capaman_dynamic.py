@@ -59,9 +59,8 @@ import numpy as np
 from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.capaman_scene import capaman_links
-from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
-from paragym.sim.description import SceneDescription
-from paragym.sim.mujoco_sim import ramp_together, read_together, simulate_in
+from paragym.sim.client import LinkSpec, motors_of
+from paragym.sim.mujoco_sim import ramp_together, read_together, scene_sim, simulate_in
 from paragym.sim.obstacles import Box
 from paragym.trajectories import JointTrajectory, RigidMotion
 
@@ -148,10 +147,8 @@ class CaPaManDynamicScene:
         geometry: the mechanism's dimensions.
         dynamics: masses, motors and integration settings.
         engine: None: PyBullet's physics; a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`: MuJoCo's, over
-            the PyBullet world as built (:mod:`paragym.sim.mujoco_sim`).
-        mirror: with a MuJoCo ``engine``, whether the scene is built in PyBullet (the mirror that answers
-            :meth:`clearance` and draws); without it the scene is data (:mod:`paragym.sim.description`) and
-            MuJoCo alone runs it, PyBullet built only if a distance or a picture is asked for.
+            the PyBullet world as built, or with ``mirror=False`` over the scene described as data (MuJoCo
+            alone; PyBullet built only if a distance or a picture is asked for) (:mod:`paragym.sim.mujoco_sim`).
     """
 
     ROBOT = "capaman"
@@ -162,14 +159,14 @@ class CaPaManDynamicScene:
 
     def __init__(self, geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY,
                  dynamics: CaPaManDynamics | None = None, gui: bool = False, clearance_cap: float = 0.05,
-                 engine: Any = None, mirror: bool = True) -> None:
+                 engine: Any = None) -> None:
         self.geometry = g = geometry
         self.clearance_cap = clearance_cap
         self.obstacles: tuple = ()
         self.dynamics = d = dynamics or CaPaManDynamics()
         if d.layout not in ("tree", "split"):
             raise ValueError(f'dynamics.layout must be "tree" or "split"; got {d.layout!r}')
-        self.sim = sim = PyBulletSim(gui=gui) if mirror or engine is None else SceneDescription(gui=gui)
+        self.sim = sim = scene_sim(gui, engine)
         links = _dynamic_links(g, d)
         if d.layout == "tree":  # one multibody; the plate floats on three prismatic joints and a spherical one
             sim.add_tree_body(self.ROBOT, links)

@@ -43,7 +43,7 @@ from paragym.sim.client import depth_first, physics_steps
 from paragym.sim.description import SceneDescription
 
 __all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "RolloutPool", "check_engine", "ramp_together",
-           "read_together", "simulate_in"]
+           "read_together", "scene_sim", "simulate_in", "vector_engine"]
 
 #: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
 ENGINES = ("pybullet", "mujoco")
@@ -64,11 +64,24 @@ class MuJoCoSettings:
         servo_bandwidth: the servos' bandwidth times the step (:func:`paragym.sim.export.servo_gains`); None:
             the scene's ``EXPORT_SERVO_BANDWIDTH`` or :data:`paragym.sim.export.SERVO_BANDWIDTH`.
         iterations: the constraint solver's iterations; None: the scene's dynamics' ``solver_iterations``.
+        mirror: the scene is built in PyBullet, which answers clearance and draws (module docstring); False:
+            MuJoCo alone, the scene described as data (:mod:`paragym.sim.description`) and PyBullet built only
+            for a picture; its robots step in batches (:func:`ramp_together`), so each control period starts the
+            solver from a zero warm start (:attr:`MuJoCoSim.cold_periods`). What the native dynamic vector envs
+            run, N robots at once; tasks that have such a world take it.
     """
 
     time_step: float = 1e-3
     servo_bandwidth: float | None = None
     iterations: int | None = None
+    mirror: bool = True
+
+    def __repr__(self) -> str:
+        """The fields, ``mirror`` only where False: settings made before it existed print as they did (a result
+        row records its engine so)."""
+        shown = (f"time_step={self.time_step!r}, servo_bandwidth={self.servo_bandwidth!r}, "
+                 f"iterations={self.iterations!r}")
+        return f"MuJoCoSettings({shown}{'' if self.mirror else ', mirror=False'})"
 
     @classmethod
     def fast(cls) -> MuJoCoSettings:
@@ -92,13 +105,16 @@ class MuJoCoSettings:
                              f"from 2 on); got {self.servo_bandwidth!r}")
         if self.iterations is not None and not (isinstance(self.iterations, int) and self.iterations > 0):
             raise ValueError(f"MuJoCoSettings.iterations must be a positive int; got {self.iterations!r}")
+        if not isinstance(self.mirror, bool):
+            raise ValueError(f"MuJoCoSettings.mirror must be True or False; got {self.mirror!r}")
 
 
-def check_engine(engine: Any, engines: tuple[str, ...], fidelity: str) -> MuJoCoSettings | None:
+def check_engine(engine: Any, engines: tuple[str, ...], fidelity: str, alone: bool = False
+                 ) -> MuJoCoSettings | None:
     """The ``engine`` argument of an env whose task runs the dynamic fidelity in ``engines``: "pybullet"
     (None), "mujoco" or a :class:`MuJoCoSettings` (the MuJoCo settings). A ValueError naming it for an engine the
-    task does not run, or for MuJoCo outside the dynamic fidelity; an ImportError saying how to install MuJoCo
-    where it is missing."""
+    task does not run, for MuJoCo outside the dynamic fidelity, or for MuJoCo alone (``mirror=False``) where the
+    task has no such world (``alone``); an ImportError saying how to install MuJoCo where it is missing."""
     if isinstance(engine, MuJoCoSettings):
         settings: MuJoCoSettings | None = engine
     elif isinstance(engine, str) and engine in ENGINES:
@@ -112,13 +128,38 @@ def check_engine(engine: Any, engines: tuple[str, ...], fidelity: str) -> MuJoCo
     if fidelity != "dynamic":
         raise ValueError(f"engine='mujoco' is a dynamic fidelity: make the env with fidelity='dynamic' (got "
                          f"fidelity={fidelity!r})")
+    if not settings.mirror and not alone:
+        raise ValueError("engine=MuJoCoSettings(mirror=False): this task's MuJoCo fidelity runs over its PyBullet "
+                         "scene only (mirror=True)")
     _import_mujoco()
     return settings
 
 
+def vector_engine(engine: Any) -> Any:
+    """The ``engine`` argument of a native vector env in the dynamic fidelity: MuJoCo alone (``"mujoco"`` or a
+    :class:`MuJoCoSettings`, made ``mirror=False``). A ValueError for PyBullet's, which steps one robot at a
+    time; anything else is left for the task's check to refuse."""
+    if isinstance(engine, str) and engine == "pybullet":
+        raise ValueError("a native vector env runs the dynamic fidelity in MuJoCo alone: engine='mujoco' (use "
+                         "gymnasium's sync/async modes for PyBullet's dynamics)")
+    if isinstance(engine, str) and engine == "mujoco":
+        engine = MuJoCoSettings()
+    return replace(engine, mirror=False) if isinstance(engine, MuJoCoSettings) else engine
+
+
+def scene_sim(gui: bool, settings: MuJoCoSettings | None) -> Any:
+    """What a dynamic scene builds in: a PyBullet world, or for MuJoCo alone (``settings.mirror`` False) a
+    :class:`~paragym.sim.description.SceneDescription`."""
+    if settings is not None and not settings.mirror:
+        return SceneDescription(gui=gui)
+    from paragym.sim.client import PyBulletSim
+
+    return PyBulletSim(gui=gui)
+
+
 def simulate_in(scene: Any, settings: MuJoCoSettings | None) -> None:
     """Give the built dynamic ``scene`` its engine: PyBullet's as built (``settings`` None), else MuJoCo's with
-    ``settings`` (``scene.sim`` becomes a :class:`MuJoCoSim` over the PyBullet world)."""
+    ``settings`` (``scene.sim`` becomes a :class:`MuJoCoSim` over what it was built in, :func:`scene_sim`)."""
     if settings is not None:
         scene.sim = MuJoCoSim(scene, settings)
 
@@ -164,8 +205,9 @@ class MuJoCoSim:
         self._friction: dict[tuple[str, int], float] = {}
         self._mirror_stale = False  # MuJoCo has moved since the source was posed
         #: each :meth:`ramp` (a control period) starts MuJoCo's solver from a zero warm start, as
-        #: :func:`ramp_together` steps a batch of robots; False: the warm start carries on from the last step
-        self.cold_periods = False
+        #: :func:`ramp_together` steps a batch of robots (MuJoCo alone, :attr:`MuJoCoSettings.mirror` False);
+        #: else the warm start carries on from the last step
+        self.cold_periods = not s.mirror
         if self._described and source.gui:
             self._geometry()  # the GUI's window opens with the scene
         self._ready()

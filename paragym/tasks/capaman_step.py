@@ -199,16 +199,16 @@ class CaPaManParams:
             raise ValueError("time_penalty is a v1 argument: use paragym/CaPaManCollisionFree-v1")
         time_penalty = check_number("time_penalty", time_penalty, strict=False)
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
-        if rules.rung is None:
-            collision = "pybullet" if collision is None else collision
-            check_choice("collision", collision, ("pybullet", "grid"))
-        else:  # a rung: the capsule model, or PyBullet's exact distance to the same posts
-            collision = ("posts" if fidelity == "kinematic" else "pybullet") if collision is None else collision
-            check_choice("collision", collision, ("posts", "pybullet"))
-        engine = check_engine(engine, ENGINES, fidelity)
-        if collision in ("grid", "posts") and fidelity != "kinematic" and engine is None:
-            raise ValueError(f"collision={collision!r} in the dynamic fidelity needs engine='mujoco' (PyBullet's "
-                             "dynamic scene measures its clearance with PyBullet: collision='pybullet')")
+        engine = check_engine(engine, ENGINES, fidelity, alone=True)
+        alone = engine is not None and not engine.mirror  # MuJoCo alone: the clearance is the task's kernel's
+        native = "grid" if rules.rung is None else "posts"  # a rung: the capsule model of its posts
+        if collision is None:
+            collision = native if fidelity == "kinematic" and rules.rung is not None or alone else "pybullet"
+        check_choice("collision", collision, ("pybullet", native))
+        if fidelity == "dynamic" and alone != (collision == native):
+            raise ValueError(f"collision={collision!r}: in the dynamic fidelity, PyBullet's scene measures the "
+                             f"clearance (collision='pybullet'), and MuJoCo alone (engine=MuJoCoSettings(mirror="
+                             f"False)) the task's kernel (collision={native!r})")
         control_period = check_number("control_period", control_period, unit=" of seconds")
         scenarios_module.resolve_scenario(scenario)
         for name, value in (("max_joint_step", max_joint_step), ("reach_tolerance", reach_tolerance),

@@ -11,6 +11,7 @@ import numpy as np
 
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
+from paragym.sim.mujoco_sim import vector_engine
 from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.capaman import CaPaManScenario
@@ -81,11 +82,11 @@ class CaPaManTask(TaskBase):
 
     def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
         native = "grid" if rules.rung is None else "posts"
-        dynamic = kwargs.get("fidelity", "kinematic") == "dynamic"
-        if kwargs.get("collision", native) != native or (dynamic and kwargs.get("engine", "pybullet") == "pybullet"):
-            raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r}, in the "
-                             "kinematic fidelity or the dynamic one in MuJoCo (engine='mujoco'): use gymnasium's "
-                             "sync/async modes for PyBullet's check or PyBullet's dynamics")
+        if kwargs.get("collision", native) != native:
+            raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r}: use "
+                             "gymnasium's sync/async modes for PyBullet's check")
+        if kwargs.get("fidelity", "kinematic") == "dynamic":
+            kwargs = {**kwargs, "engine": vector_engine(kwargs.get("engine", "pybullet"))}
         return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": native})
 
     def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
@@ -104,6 +105,7 @@ class CaPaManTask(TaskBase):
         if kinematic is not None:
             if params.fidelity == "kinematic":
                 return kinematic
+            # MuJoCo alone: the kernel's collision test in the dynamic fidelity needs it (CaPaManParams)
             return MuJoCoWorld(kinematic, params.dynamics, params.engine, params.control_period, n,
                                params.max_obstacles, gui=gui)
         if params.fidelity == "kinematic":

@@ -245,8 +245,8 @@ class DynamicWorld(SceneWorld):
 
 class MuJoCoWorld(NativeWorld):
     """N robots under MuJoCo's dynamics, with no other engine: each robot a CaPaMan described as data
-    (:class:`~paragym.sim.capaman_dynamic.CaPaManDynamicScene` with ``mirror=False``) in a MuJoCo model of its
-    own, whose fixed parts are its scenario's obstacles (padded to the world's number of slots, so that every
+    (:class:`~paragym.sim.capaman_dynamic.CaPaManDynamicScene` with ``engine.mirror`` False) in a MuJoCo model
+    of its own, whose fixed parts are its scenario's obstacles (padded to the world's number of slots, so that every
     model has one size), its motors chasing the command for ``control_period`` s. The robots step together in
     MuJoCo's ``rollout`` on ``threads`` threads (default: the cores this process may use), no lock held; each
     control period starts the solver cold, so that a robot's motion is its own whatever else steps
@@ -266,10 +266,8 @@ class MuJoCoWorld(NativeWorld):
         self.control_period = control_period
         #: the robots, each a CaPaMan described as data and simulated in MuJoCo
         self.robots = [CaPaManDynamicScene(kinematic.geometry, dynamics, gui=gui and i == 0,
-                                           clearance_cap=kinematic.cap, engine=engine, mirror=False)
+                                           clearance_cap=kinematic.cap, engine=engine)
                        for i in range(n)]
-        for robot in self.robots:
-            robot.sim.cold_periods = True
         self.slots = slots
         #: whether the last move left a loop open by more than BROKEN_GAP, per robot
         self.broken = np.zeros(n, bool)
