@@ -177,12 +177,15 @@ def train(env_id: str, algo: str, seed: int = 0, timesteps: int | None = None, m
         raise ValueError(f"seed must be a non-negative integer; got {seed!r}")
     folder = fidelity_dir(writable_models_dir(models_dir), fidelity, engine)
     hp, total = _read_config(env_id, algo, timesteps, hyperparams, n_envs)
-    if fidelity == "dynamic" and n_envs is None:  # one env per process, as many as the cores
+    # MuJoCo's dynamics on a native vector env (MuJoCo alone, every robot stepped at once), else one env per process
+    native_dynamic = fidelity == "dynamic" and engine == "mujoco" and "dynamic" in registry.row(
+        env_id).vector_fidelities
+    if fidelity == "dynamic" and n_envs is None and not native_dynamic:  # one env per process, as many as cores
         hp["n_envs"] = min(hp["n_envs"], os.cpu_count() or 1)
-    vectorized = bool(vectorized) or (hp.get("vec_env") == "native" and fidelity == "kinematic")
-    if vectorized and fidelity == "dynamic":
-        raise ValueError("the native vector envs run the kinematic fidelity only: train the dynamic fidelity "
-                         "without --vectorized (one env per process)")
+    vectorized = bool(vectorized) or (hp.get("vec_env") == "native" and fidelity == "kinematic") or native_dynamic
+    if vectorized and fidelity == "dynamic" and not native_dynamic:
+        raise ValueError(f"{env_id} has no native vector env in the dynamic fidelity of {engine}: train it without "
+                         "--vectorized (one env per process)")
     files = run_files(env_id, algo, seed, folder)
     done = _finished_run(files, algo, total, force)
     if done is not None:
@@ -213,8 +216,8 @@ def _make_envs(env_id: str, hp: dict[str, Any], seed: int, vectorized: bool, fil
                force: bool, fidelity: str = "kinematic", engine: str = "pybullet") -> tuple[Any, Any]:
     """The training env (``n_envs`` copies, or the native vector env) and the
     evaluation env (one robot, wrapped as the training env is), with reward
-    normalisation for learning only when the yml asks for it; in the dynamic fidelity each copy in a process
-    of its own."""
+    normalisation for learning only when the yml asks for it; in the dynamic fidelity the native vector env
+    (MuJoCo alone) where ``vectorized``, else each copy in a process of its own."""
     n_envs, env_kwargs = hp["n_envs"], dict(hp.get("env_kwargs") or {})
     vec_env = hp.get("vec_env", "dummy")
     if fidelity == "dynamic":

@@ -84,6 +84,17 @@ class EnvRow:
         return tuple(getattr(importlib.import_module(module), cls).task.engines)
 
     @property
+    def vector_fidelities(self) -> tuple[str, ...]:
+        """The fidelities of the id's native vector env (its task's ``vector_fidelities``; the dynamic one in
+        MuJoCo alone); empty without a native vector env."""
+        if self.vector_entry_point is None:
+            return ()
+        import importlib
+
+        module, cls = self.entry_point.split(":")
+        return tuple(getattr(importlib.import_module(module), cls).task.vector_fidelities)
+
+    @property
     def name(self) -> str:
         """The id without ``paragym/`` (file and folder names use it)."""
         return self.id.split("/", 1)[1]

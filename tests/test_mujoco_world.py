@@ -28,13 +28,13 @@ def _make_vec(env_id: str, n: int, mode: str, **kwargs):
                             **(DYNAMIC if mode == "vector_entry_point" else ALONE), **kwargs)
 
 
-@pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {}, 110), ("paragym/CaPaManCollisionFree-v1", {}, 110)])
+@pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {}, 110), ("paragym/CaPaManCollisionFree-v1", {}, 110),
+                                                         ("paragym/HybridSingularityFree-Easy-v2", {}, 150)])
 def test_the_native_dynamic_vector_env_equals_single_mujoco_envs_to_the_bit(env_id, kwargs, steps):
     """N robots stepped together in MuJoCo's rollout on threads give, bit for bit, what N single envs give, one
     robot each, over episodes that end and restart (autoresets)."""
     native, sync = _make_vec(env_id, 2, "vector_entry_point"), _make_vec(env_id, 2, "sync", **kwargs)
-    assert native.unwrapped.params.engine == ALONE["engine"] and native.unwrapped.params.collision == \
-        sync.envs[0].unwrapped.params.collision
+    assert native.unwrapped.params == sync.envs[0].unwrapped.params  # one task, MuJoCo alone
     try:
         assert native.unwrapped.world._pool is not None or len(__import__("os").sched_getaffinity(0)) == 1
         obs, _ = native.reset(seed=7)
@@ -76,8 +76,8 @@ def test_a_robot_watched_step_by_step_moves_as_one_stepped_in_the_batch():
 
 
 def test_the_mujoco_world_runs_with_pybullet_absent():
-    """``import paragym`` and the MuJoCo world, single and vector, with PyBullet not importable: any call into
-    PyBullet on the way fails the run."""
+    """``import paragym`` and the MuJoCo worlds (the CaPaMan's single and vector, the hybrid's vector), with
+    PyBullet not importable: any call into PyBullet on the way fails the run."""
     script = """
 import sys
 sys.modules["pybullet"] = None  # importing PyBullet raises ImportError
@@ -99,8 +99,13 @@ venv = gym.make_vec("paragym/CaPaManCollisionFree-Easy-v0", num_envs=3, vectoriz
 venv.reset(seed=2)
 for _ in range(60):
     venv.step(venv.action_space.sample())
-env.close()
-venv.close()
+hybrid = gym.make_vec("paragym/HybridSingularityFree-Easy-v2", num_envs=2, vectorization_mode="vector_entry_point",
+                      fidelity="dynamic", engine="mujoco")
+hybrid.reset(seed=3)
+for _ in range(30):
+    hybrid.step(hybrid.action_space.sample())
+for made in (env, venv, hybrid):
+    made.close()
 assert "pybullet" not in sys.modules or sys.modules["pybullet"] is None
 print("ran without PyBullet")
 """

@@ -104,20 +104,23 @@ def test_a_sweep_is_its_grid_and_bad_requests_are_refused(tmp_path):
 
 
 def test_the_dynamic_fidelity_trains_under_physics_in_its_own_folder(tmp_path):
-    """PPO for one rollout under MuJoCo's dynamics: every training copy and the evaluation env simulate the
-    mechanism in MuJoCo (each copy in a process of its own), the run goes under ``dynamic-mujoco/`` and says so, and
-    a kinematic run of the same seed beside it is another model, not "already trained"."""
+    """PPO for one rollout under MuJoCo's dynamics: the training robots and the evaluation env's simulate the
+    mechanism in MuJoCo alone (the native dynamic vector env, every robot stepped at once), the run goes under
+    ``dynamic-mujoco/`` and says so, and a kinematic run of the same seed beside it is another model, not
+    "already trained"."""
     pytest.importorskip("mujoco")
     from stable_baselines3.common.callbacks import BaseCallback
 
     from paragym.baselines.training import train
+    from paragym.sim.mujoco_sim import MuJoCoSettings
 
     seen = []
 
     class Look(BaseCallback):
         def _on_training_start(self) -> None:
-            venv = self.training_env
-            seen.append((venv.get_attr("fidelity"), venv.get_attr("physics_time_step")))
+            params = self.training_env.get_attr("params")[0]
+            seen.append((params.fidelity, params.engine, type(self.training_env.get_attr("world")[0]).__name__,
+                         self.training_env.num_envs))
 
         def _on_step(self) -> bool:
             return True
@@ -126,7 +129,7 @@ def test_the_dynamic_fidelity_trains_under_physics_in_its_own_folder(tmp_path):
     res = train(easy, "ppo", seed=0, timesteps=32, models_dir=tmp_path, progress_bar=False, n_envs=2,
                 hyperparams={"n_steps": 16, "batch_size": 16}, callbacks=[Look()], fidelity="dynamic",
                 engine="mujoco")
-    assert seen == [(["dynamic", "dynamic"], [0.001, 0.001])]  # MuJoCo's 1 ms step (PyBullet's scene: 5 ms)
+    assert seen == [("dynamic", MuJoCoSettings(mirror=False), "MuJoCoWorld", 2)]  # MuJoCo's 1 ms step
     assert res.files.model == tmp_path / "dynamic-mujoco" / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip"
     assert (res.meta["fidelity"], res.meta["engine"]) == ("dynamic", "mujoco")
     kinematic = train(easy, "ppo", seed=0, timesteps=32, models_dir=tmp_path, progress_bar=False, n_envs=1,

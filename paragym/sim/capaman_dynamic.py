@@ -353,8 +353,8 @@ def state_together(scenes: Sequence[CaPaManDynamicScene]) -> tuple[np.ndarray, n
     the loops' gap as MuJoCo measures it (:meth:`~paragym.sim.mujoco_sim.MuJoCoSim.loop_residual`), in one array
     each."""
     first = scenes[0]
-    motors, position, quaternion, gap = read_together([scene.sim for scene in scenes], first._motors, *first.plate)
-    tip = position - first.geometry.tool_length * quat_to_matrix(quaternion)[..., :, 2]
+    motors, position, quaternion, gap = read_together([scene.sim for scene in scenes], first._motors, [first.plate])
+    tip = position[:, 0] - first.geometry.tool_length * quat_to_matrix(quaternion[:, 0])[..., :, 2]
     return -motors, tip, gap
 
 

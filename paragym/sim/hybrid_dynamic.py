@@ -43,6 +43,7 @@ measured by ``benchmarks/env_speed.py``; the figures are in CHANGELOG.md.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any, ClassVar
 
@@ -51,10 +52,10 @@ from scipy.interpolate import PchipInterpolator
 
 from paragym.mechanisms import hybrid
 from paragym.mechanisms.geometry import PartShape, matrix_to_quat, quat_to_matrix
-from paragym.sim.client import LinkSpec, PyBulletSim, motors_of
-from paragym.sim.mujoco_sim import simulate_in
+from paragym.sim.client import LinkSpec, motors_of
+from paragym.sim.mujoco_sim import ramp_together, read_together, scene_sim, simulate_in
 
-__all__ = ["HybridDynamics", "HybridDynamicScene", "HybridRun"]
+__all__ = ["HybridDynamicScene", "HybridDynamics", "HybridRun", "drive_together", "state_together"]
 
 _ID = (0.0, 0.0, 0.0, 1.0)
 
@@ -125,7 +126,8 @@ class HybridDynamicScene:
     the dynamics' ``layout``: every joint is addressed as (body name, link
     index), so that both layouts share the code below. ``engine``: None for
     PyBullet's physics, a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings` for
-    MuJoCo's over the PyBullet world as built (:mod:`paragym.sim.mujoco_sim`)."""
+    MuJoCo's over the PyBullet world as built, or over the scene described as data with ``mirror=False``
+    (:mod:`paragym.sim.mujoco_sim`)."""
 
     ROBOT = "hybrid"
     #: the exported MJCF's servo bandwidth times its step (:func:`paragym.sim.export.servo_gains`), which the
@@ -140,7 +142,7 @@ class HybridDynamicScene:
         self.dynamics = d = dynamics or HybridDynamics()
         if d.layout not in ("tree", "split"):
             raise ValueError(f'dynamics.layout must be "tree" or "split"; got {d.layout!r}')
-        self.sim = sim = PyBulletSim(gui=gui)
+        self.sim = sim = scene_sim(gui, engine)
         sim.set_physics(d.gravity, d.time_step, d.solver_iterations, d.erp)
         home = hybrid.solve(np.zeros(6), 0.5, g)
         t_a, t_t = home.t_a[0], home.t_t[0]
@@ -322,3 +324,28 @@ class HybridDynamicScene:
     def close(self) -> None:
         """Disconnect PyBullet."""
         self.sim.close()
+
+
+def drive_together(scenes: Sequence[HybridDynamicScene], strokes: np.ndarray, duration: float, pool: Any = None
+                   ) -> None:
+    """:meth:`HybridDynamicScene.drive` of each of ``scenes`` (in MuJoCo alone, one geometry and dynamics) to its
+    row of ``strokes`` (M, 9) (m) over ``duration`` s, their physics stepped in one batch on ``pool``'s threads
+    (:func:`paragym.sim.mujoco_sim.ramp_together`)."""
+    strokes = np.asarray(strokes, float)
+    first = scenes[0]
+    ramp_together([scene.sim for scene in scenes], first.motors, np.array([scene._target for scene in scenes]),
+                  strokes, duration, first.dynamics.motor_force, pool)
+    for scene, target in zip(scenes, strokes, strict=True):
+        scene._target = target.copy()
+
+
+def state_together(scenes: Sequence[HybridDynamicScene]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:meth:`HybridDynamicScene.measure` of each of ``scenes`` (as :func:`drive_together` takes them), T_A and
+    T_E (M, 4, 4) and the strokes (M, 9), and the largest ball-joint gap (M,) (m) as MuJoCo's loop closures
+    have it (:meth:`~paragym.sim.mujoco_sim.MuJoCoSim.loop_residual`), in one array each."""
+    first = scenes[0]
+    strokes, position, quaternion, gap = read_together([scene.sim for scene in scenes], first.motors,
+                                                       [first.a_platform, first.e_platform])
+    t = np.zeros((len(scenes), 2, 4, 4))
+    t[..., :3, :3], t[..., :3, 3], t[..., 3, 3] = quat_to_matrix(quaternion), position, 1.0
+    return t[:, 0], t[:, 1], strokes, gap

@@ -32,6 +32,7 @@ steps. Lengths in m, angles in rad, forces in N or N m.
 
 from __future__ import annotations
 
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
@@ -43,7 +44,7 @@ from paragym.sim.client import depth_first, physics_steps
 from paragym.sim.description import SceneDescription
 
 __all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "RolloutPool", "check_engine", "ramp_together",
-           "read_together", "scene_sim", "simulate_in", "vector_engine"]
+           "read_together", "rollout_pool", "scene_sim", "simulate_in", "vector_engine"]
 
 #: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
 ENGINES = ("pybullet", "mujoco")
@@ -592,6 +593,14 @@ class RolloutPool:
         self._rollout.close()
 
 
+def rollout_pool(robots: int) -> RolloutPool | None:
+    """A :class:`RolloutPool` for a world of ``robots``: a thread per core this process may use (at most one per
+    robot); None where that is one thread (the caller's)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    threads = min(robots, cores)
+    return RolloutPool(threads) if threads > 1 else None
+
+
 def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]], starts: np.ndarray,
                   goals: np.ndarray, duration: float, force: float, pool: Any = None) -> None:
     """:meth:`MuJoCoSim.ramp` of each of ``sims`` (robots of one world: one mechanism, their models of one size,
@@ -642,21 +651,21 @@ def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequenc
         sim._mirror_stale = True
 
 
-def read_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]], body: str, link: int
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def read_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]],
+                  frames: Sequence[tuple[str, int]]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """What a batch of robots (as :func:`ramp_together` takes them) reads after a ramp, in one array each: the
-    positions of ``motors`` (M, n) (:meth:`MuJoCoSim.motor_positions`), the frame of ``link`` of ``body``, its
-    position (M, 3) and xyzw quaternion (M, 4) (:meth:`MuJoCoSim.link_frame`), and the largest loop gap
-    (M,) (:meth:`MuJoCoSim.loop_residual`): the same numbers, to the bit."""
+    positions of ``motors`` (M, n) (:meth:`MuJoCoSim.motor_positions`), the frames of the links ``frames``
+    ((body, link) each), their positions (M, F, 3) and xyzw quaternions (M, F, 4) (:meth:`MuJoCoSim.link_frame`),
+    and the largest loop gap (M,) (:meth:`MuJoCoSim.loop_residual`): the same numbers, to the bit."""
     first = sims[0]
     for sim in sims:
         sim._reads_source()
     adr = first._motors(motors)[1]
-    b = first._joints[body, link][0]
+    b = [first._joints[body, link][0] for body, link in frames]
     datas = [sim.data for sim in sims]
     positions = np.array([data.qpos for data in datas])[:, adr]
-    frame = np.array([data.xpos[b] for data in datas])
-    quaternion = np.array([data.xquat[b] for data in datas])[:, [1, 2, 3, 0]]
+    frame = np.array([data.xpos for data in datas])[:, b]
+    quaternion = np.array([data.xquat for data in datas])[:, b][..., [1, 2, 3, 0]]
     model = first.model
     if model.neq:
         sites = np.array([data.site_xpos for data in datas])

@@ -21,6 +21,7 @@ from typing import Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkab
 import numpy as np
 
 from paragym.registry import RUNG_NAMES
+from paragym.sim.mujoco_sim import vector_engine
 
 __all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
            "check_choice", "check_control_period", "check_instance", "check_number", "knob_table", "refuse_unknown",
@@ -223,7 +224,10 @@ class TaskBase:
     sensor_layout: dict[str, float] = {}
 
     def vector_params(self, rules: Any, kwargs: dict[str, Any]) -> Any:
-        """The single env's parameters, refused (ValueError) in a fidelity the native vector env does not run."""
+        """The single env's parameters, refused (ValueError) in a fidelity the native vector env does not run; its
+        dynamic fidelity is MuJoCo alone (:func:`paragym.sim.mujoco_sim.vector_engine`)."""
+        if kwargs.get("fidelity", "kinematic") == "dynamic" and "dynamic" in self.vector_fidelities:
+            kwargs = {**kwargs, "engine": vector_engine(kwargs.get("engine", "pybullet"))}
         params = self.Params.from_kwargs(rules, **kwargs)
         if params.fidelity not in self.vector_fidelities:
             raise ValueError(f"the native {self.name} vector env is {' or '.join(self.vector_fidelities)}: use "
@@ -235,12 +239,12 @@ class TaskBase:
 
     @staticmethod
     def drawn(cache: dict[str, Any], world: Any, gui: bool, build: Callable[[], Any],
-              pose: Callable[[Any], None]) -> np.ndarray | None:
+              pose: Callable[[Any], None], i: int = 0) -> np.ndarray | None:
         """A render of a task whose dynamic world draws itself and whose kinematic model is drawn by a scene of
-        its own: the world's scene (nothing in the GUI, which shows the simulation as it runs), else the scene
-        kept in ``cache`` (built by ``build()`` on first use), posed by ``pose(scene)``."""
+        its own: the world's scene of robot ``i`` (nothing in the GUI, which shows the simulation as it runs),
+        else the scene kept in ``cache`` (built by ``build()`` on first use), posed by ``pose(scene)``."""
         if world is not None:
-            return None if gui else world.scene.render()
+            return None if gui else getattr(world, "scenes", [world.scene])[i].render()
         if "scene" not in cache:
             cache["scene"] = build()
         pose(cache["scene"])

@@ -11,7 +11,6 @@ import numpy as np
 
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
-from paragym.sim.mujoco_sim import vector_engine
 from paragym.tasks import capaman as scenarios_module
 from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
 from paragym.tasks.capaman import CaPaManScenario
@@ -52,6 +51,7 @@ class CaPaManTask(TaskBase):
     State = CaPaManState
     #: KF validation (dynamic fidelity): paper 000's accelerometer array on the movable plate about H
     engines = ENGINES
+    vector_fidelities = ("kinematic", "dynamic")
     sensor_layout: dict[str, float] = {}
 
     def paper_scenario(self) -> CaPaManScenario:
@@ -85,9 +85,7 @@ class CaPaManTask(TaskBase):
         if kwargs.get("collision", native) != native:
             raise ValueError(f"the native CaPaMan vector env checks collisions with collision={native!r}: use "
                              "gymnasium's sync/async modes for PyBullet's check")
-        if kwargs.get("fidelity", "kinematic") == "dynamic":
-            kwargs = {**kwargs, "engine": vector_engine(kwargs.get("engine", "pybullet"))}
-        return CaPaManParams.from_kwargs(rules, **{**kwargs, "collision": native})
+        return super().vector_params(rules, {**kwargs, "collision": native})
 
     def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))

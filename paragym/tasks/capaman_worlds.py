@@ -20,7 +20,6 @@ the kinematic scene that generates and checks scenarios.
 
 from __future__ import annotations
 
-import os
 from functools import lru_cache
 from typing import Any, Protocol
 
@@ -34,7 +33,7 @@ from paragym.sim.capaman_dynamic import CaPaManDynamicScene, drive_together, sta
 from paragym.sim.capaman_posts import parts_in_reach, post_clearance
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
-from paragym.sim.mujoco_sim import RolloutPool
+from paragym.sim.mujoco_sim import rollout_pool
 from paragym.sim.obstacles import Box
 from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.capaman import CaPaManScenario, posts_of
@@ -248,7 +247,7 @@ class MuJoCoWorld(NativeWorld):
     (:class:`~paragym.sim.capaman_dynamic.CaPaManDynamicScene` with ``engine.mirror`` False) in a MuJoCo model
     of its own, whose fixed parts are its scenario's obstacles (padded to the world's number of slots, so that every
     model has one size), its motors chasing the command for ``control_period`` s. The robots step together in
-    MuJoCo's ``rollout`` on ``threads`` threads (default: the cores this process may use), no lock held; each
+    MuJoCo's ``rollout`` on a thread per core this process may use, no lock held; each
     control period starts the solver cold, so that a robot's motion is its own whatever else steps
     (:func:`paragym.sim.mujoco_sim.ramp_together`). The encoders say where the cranks got; the tool tip is MuJoCo's
     plate's; the clearance is the ``kinematic`` world's (:class:`GridWorld` or :class:`PostWorld`, the same
@@ -260,7 +259,7 @@ class MuJoCoWorld(NativeWorld):
     moves = True
 
     def __init__(self, kinematic: GridWorld | PostWorld, dynamics: Any, engine: Any, control_period: float,
-                 n: int, slots: int, gui: bool = False, threads: int | None = None) -> None:
+                 n: int, slots: int, gui: bool = False) -> None:
         super().__init__(kinematic.geometry, kinematic.cap, kinematic.draws, kinematic.gui)
         self.kinematic = kinematic
         self.control_period = control_period
@@ -273,9 +272,7 @@ class MuJoCoWorld(NativeWorld):
         self.broken = np.zeros(n, bool)
         self._moved = np.zeros(n, bool)
         self._tips = np.zeros((n, 3))  # where the last move left each tool tip
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-        threads = min(n, threads or cores)
-        self._pool = RolloutPool(threads) if threads > 1 else None
+        self._pool = rollout_pool(n)
 
     def __getstate__(self) -> dict[str, Any]:
         raise TypeError("a MuJoCo world is not copied: make the env again")
@@ -297,6 +294,8 @@ class MuJoCoWorld(NativeWorld):
 
     def move(self, rows: np.ndarray, command: np.ndarray) -> np.ndarray:
         """Where the cranks of robots ``rows`` got (M, 3) chasing ``command`` (M, 3) for a control period."""
+        if not rows.size:
+            return np.empty((0, 3))
         robots = [self.robots[i] for i in rows.tolist()]
         drive_together(robots, command, self.control_period, self._pool)
         alpha, self._tips[rows], gap = state_together(robots)

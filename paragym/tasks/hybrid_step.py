@@ -202,7 +202,7 @@ class HybridParams:
             dynamics = dynamics or HybridDynamics.fast()
             check_control_period(control_period, dynamics.time_step, refuse=rules.strict_dynamics,
                                  later="paragym/HybridSingularityFree-v2")
-        engine = check_engine(engine, ENGINES, fidelity)
+        engine = check_engine(engine, ENGINES, fidelity, alone=True)
         if engine is not None:  # a new fidelity: nothing released to keep
             check_control_period(control_period, engine.time_step, refuse=True)
         return cls(float(max_delta_step), float(j_bar), float(w_offset), float(w_delta), float(w_singular),
@@ -296,21 +296,23 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     ``split_only``, inside the Box (the env clips), and solve them. ``world``: the dynamics
     of one robot (dynamic fidelity): the step's commanded pose is solved for
     its strokes, the simulated actuators chase them, and the robot is then
-    evaluated where the simulation put it (:class:`DynamicWorld`)."""
+    evaluated where the simulation put it (:class:`DynamicWorld`; N robots in MuJoCo alone)."""
     if params.rules.split_only:  # the split's rate alone: E stays on its path (offset 0)
         actions = np.concatenate([actions, np.zeros((len(actions), 3))], axis=1)
     if world is None:
         _advance(state, params, actions, active, True, _ALL)
         return
     _advance(state, params, actions, active, True, _COMMAND)
-    world.move(state)
-    if state.reason[0] == 0:  # the first reason the episode fails: the dynamics' before the kernel's
-        state.reason[0] = _BROKEN if world.broken else 0 if world.tracked[0] else _TRACKING
+    rows = np.flatnonzero(active)
+    world.move(state, rows)
+    for i in rows[state.reason[rows] == 0].tolist():  # the first reason an episode fails: the dynamics' first
+        state.reason[i] = _BROKEN if world.broken[i] else 0 if world.tracked[i] else _TRACKING
     _advance(state, params, actions, active, True, _EVALUATE)
-    state.all_free &= world.tracked
-    if world.broken:  # a broken mechanism ends the episode as a failure
-        state.all_free[0], state.terminated[0] = False, True
-    state.success[0] = decide(state.terminated[0], state.all_free[0])
+    state.all_free[rows] &= world.tracked[rows]
+    broken = rows[world.broken[rows]]  # a broken mechanism ends the episode as a failure
+    state.all_free[broken], state.terminated[broken] = False, True
+    for i in rows.tolist():
+        state.success[i] = decide(state.terminated[i], state.all_free[i])
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only

@@ -25,7 +25,7 @@ from paragym.tasks.hybrid_step import (
     reset,
     step,
 )
-from paragym.tasks.hybrid_worlds import DynamicWorld
+from paragym.tasks.hybrid_worlds import DynamicWorld, MuJoCoWorld
 
 __all__ = ["LADDER_RULES", "RULES", "SPLIT_LADDER_RULES", "SPLIT_LADDER_RULES_V2", "TASK", "HybridTask"]
 
@@ -43,6 +43,7 @@ class HybridTask(TaskBase):
     State = HybridState
     #: KF validation (dynamic fidelity): the paper's array scaled to platform E
     engines = ENGINES
+    vector_fidelities = ("kinematic", "dynamic")
     sensor_layout: dict[str, float] = {"r": 0.06, "depth": 0.03}
 
     def paper_scenario(self) -> HybridScenario:
@@ -63,20 +64,25 @@ class HybridTask(TaskBase):
         return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (1 if params.rules.split_only else 4,)))
 
     def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+        """None in the kinematic fidelity (the kernels are the world); the dynamics of one robot (PyBullet's, or
+        MuJoCo's over the PyBullet scene), or of N in MuJoCo alone (``engine.mirror`` False)."""
         if params.fidelity != "dynamic":
             return None
         from paragym.sim.hybrid_dynamic import HybridDynamicScene
 
-        scene = HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human", engine=params.engine)
+        scenes = [HybridDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human" and i == 0,
+                                     engine=params.engine) for i in range(n)]
         strict = params.rules.strict_dynamics
-        return DynamicWorld(scene, params.control_period, params.track_tolerance,
-                            params.track_angle_tolerance if strict else None, BROKEN_GAP if strict else None)
+        alone = params.engine is not None and not params.engine.mirror
+        return (MuJoCoWorld if alone else DynamicWorld)(
+            scenes, params.control_period, params.track_tolerance, params.track_angle_tolerance if strict else None,
+            BROKEN_GAP if strict else None)
 
     def reset(self, state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario],
               rngs: list[np.random.Generator], world: Any) -> None:
         reset(state, params, rows, scenarios)
         if world is not None:
-            world.reset(state)
+            world.reset(state, rows)
 
     #: the transition itself (:func:`paragym.tasks.hybrid_step.step`: the contract's signature)
     step = staticmethod(step)
@@ -96,8 +102,8 @@ class HybridTask(TaskBase):
     def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
         return {"u": float(state.u[state.k[i]]), "offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
                 "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
-                "tracking_error": 0.0 if world is None else world.tracking_error,
-                "orientation_error": 0.0 if world is None else world.orientation_error}
+                "tracking_error": 0.0 if world is None else float(world.tracking_error[i]),
+                "orientation_error": 0.0 if world is None else float(world.orientation_error[i])}
 
     def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
                gui: bool) -> np.ndarray | None:
@@ -107,7 +113,7 @@ class HybridTask(TaskBase):
             solved = hybrid.solve(state.pose[i:i + 1], state.delta[i], params.geometry, validate=False)
             scene.set_state(solved.t_a[0], solved.t_e[0])
 
-        return self.drawn(cache, world, gui, lambda: HybridScene(params.geometry, gui=gui), pose)
+        return self.drawn(cache, world, gui, lambda: HybridScene(params.geometry, gui=gui), pose, i)
 
 
 #: the hybrid task (paper 002)

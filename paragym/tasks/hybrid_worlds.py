@@ -1,6 +1,7 @@
 """The hybrid's worlds (paper 002): where its robot moves besides the kinematic model.
 
-:class:`DynamicWorld` is one robot under PyBullet's dynamics; the transition
+:class:`DynamicWorld` is the robots under PyBullet's dynamics (one in a single env), :class:`MuJoCoWorld` N
+robots under MuJoCo's alone (the native dynamic vector env's, and its N = 1 case); the transition
 (:mod:`paragym.tasks.hybrid_step`) commands it and evaluates the robot where
 it got. Episode validation reads the validated body from it.
 """
@@ -14,14 +15,17 @@ import numpy as np
 from paragym.mechanisms import hybrid
 from paragym.mechanisms.geometry import euler_matrix, matrix_euler, pose6
 from paragym.sim.client import physics_steps
+from paragym.sim.hybrid_dynamic import drive_together, state_together
+from paragym.sim.mujoco_sim import rollout_pool
 
 #: the state and parameters the worlds read are the transition's (paragym.tasks.hybrid_step), typed Any
 #: here: the transition imports the worlds, not the other way
-__all__ = ["DynamicWorld"]
+__all__ = ["DynamicWorld", "MuJoCoWorld"]
 
 
 class DynamicWorld:
-    """One robot under PyBullet's dynamics (:class:`paragym.sim.hybrid_dynamic.HybridDynamicScene`).
+    """Robots under PyBullet's dynamics (:class:`paragym.sim.hybrid_dynamic.HybridDynamicScene`, one per robot;
+    a single env has one), or MuJoCo's over the PyBullet scene.
 
     A step drives the nine actuators from their last targets to the strokes
     of the commanded pose, linearly over ``control_period`` s of simulated
@@ -36,53 +40,78 @@ class DynamicWorld:
     ``angle_tolerance`` (rad; v2), E's orientation more than that from the
     commanded one: that step is not free (in kinematic fidelity both errors
     are 0, so the definition is the same). ``broken_gap`` (m; v2): a ball
-    joint open by more than that is a broken mechanism (``broken``)."""
+    joint open by more than that is a broken mechanism (``broken``). Each
+    of these is an array over the robots."""
 
-    def __init__(self, scene: Any, control_period: float, track_tolerance: float,
+    def __init__(self, scenes: list[Any], control_period: float, track_tolerance: float,
                  angle_tolerance: float | None = None, broken_gap: float | None = None) -> None:
-        self.scene, self.control_period, self.track_tolerance = scene, control_period, track_tolerance
+        self.scenes, self.control_period, self.track_tolerance = scenes, control_period, track_tolerance
         self.angle_tolerance, self.broken_gap = angle_tolerance, broken_gap
-        self.tracked = np.ones(1, bool)
-        self.tracking_error = 0.0
-        #: E's orientation error (rad): the angle of the rotation from its commanded to its simulated attitude
-        self.orientation_error = 0.0
-        self.broken = False
-        #: the last step's commanded displacement of E from home (6,): the pose the actuators were driven to
-        self.command = np.zeros(6)
+        n = len(scenes)
+        self.tracked = np.ones(n, bool)
+        #: E's position error (m) and orientation error (rad: the angle of the rotation from its commanded to its
+        #: simulated attitude) after the last step, per robot
+        self.tracking_error, self.orientation_error = np.zeros(n), np.zeros(n)
+        self.broken = np.zeros(n, bool)
+        #: the last step's commanded displacement of E from home (N, 6): the pose the actuators were driven to
+        self.command = np.zeros((n, 6))
         self._work = np.empty((5, 6, 6))
 
-    def reset(self, state: Any) -> None:
-        """Put the simulated robot at the state's (solved) start pose, at rest."""
-        self.scene.reset(state.pose[0], float(state.delta[0]))
-        self.tracked[0], self.tracking_error, self.orientation_error, self.broken = True, 0.0, 0.0, False
-        self.command = state.pose[0].copy()
+    @property
+    def scene(self) -> Any:
+        """Robot 0's scene (what KF validation judges, and draws)."""
+        return self.scenes[0]
 
-    def move(self, state: Any) -> None:
-        """Drive to the commanded strokes (``state.lengths``) and measure."""
-        g = self.scene.geometry
-        self.command = state.pose[0].copy()
-        self.scene.drive(state.lengths[0], self.control_period)
-        t_a, t_e, strokes = self.scene.measure()
-        t_t = np.linalg.solve(t_a, t_e)
-        consts = hybrid.kernel_consts(g)
-        state.mu_h[0], state.mu_t[0] = hybrid.k_measure(
-            np.ascontiguousarray(t_a[:3, :3]), np.ascontiguousarray(t_a[:3, 3]), np.ascontiguousarray(t_t[:3, :3]),
-            np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True, np.empty(9), self._work)
-        state.lengths[0] = strokes
-        state.pose[0, :3] = t_e[:3, 3] - consts[6][:3]
-        state.pose[0, 3:] = matrix_euler(t_e[:3, :3])
-        state.offset[0] = state.pose[0, :3] - state.nominal[0, state.k[0], :3]
-        self.tracking_error = float(np.linalg.norm(state.pose[0, :3] - self.command[:3]))
-        turn = euler_matrix(*self.command[3:]).T @ t_e[:3, :3]
-        self.orientation_error = float(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0)))
-        self.tracked[0] = self.tracking_error <= self.track_tolerance and (
-            self.angle_tolerance is None or self.orientation_error <= self.angle_tolerance)
-        self.broken = self.broken_gap is not None and self.scene.closure_error() > self.broken_gap
+    def reset(self, state: Any, rows: np.ndarray) -> None:
+        """Put the simulated robots ``rows`` at their state's (solved) start pose, at rest."""
+        for i in rows.tolist():
+            self.scenes[i].reset(state.pose[i], float(state.delta[i]))
+        self.tracked[rows], self.tracking_error[rows], self.orientation_error[rows] = True, 0.0, 0.0
+        self.broken[rows] = False
+        self.command[rows] = state.pose[rows]
+
+    def _drive(self, strokes: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Drive robots ``rows`` to ``strokes`` (M, 9), one after the other; T_A, T_E (M, 4, 4), the strokes
+        (M, 9) and the largest ball-joint gap (M,) (m; 0 where no gap breaks the mechanism) where they got."""
+        out: list[list[Any]] = [[], [], [], []]
+        for i, target in zip(rows.tolist(), strokes, strict=True):
+            scene = self.scenes[i]
+            scene.drive(target, self.control_period)
+            for part, value in zip(out, (*scene.measure(), scene.closure_error() if self.broken_gap else 0.0),
+                                   strict=True):
+                part.append(value)
+        return tuple(np.array(part) for part in out)
+
+    def move(self, state: Any, rows: np.ndarray) -> None:
+        """Drive robots ``rows`` to their commanded strokes (``state.lengths``) and measure."""
+        if not rows.size:
+            return
+        consts = hybrid.kernel_consts(self.scene.geometry)
+        self.command[rows] = state.pose[rows]
+        t_as, t_es, strokes, gaps = self._drive(state.lengths[rows], rows)
+        for k, i in enumerate(rows.tolist()):
+            t_a, t_e = t_as[k], t_es[k]
+            t_t = np.linalg.solve(t_a, t_e)
+            state.mu_h[i], state.mu_t[i] = hybrid.k_measure(
+                np.ascontiguousarray(t_a[:3, :3]), np.ascontiguousarray(t_a[:3, 3]),
+                np.ascontiguousarray(t_t[:3, :3]), np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True,
+                np.empty(9), self._work)
+            state.lengths[i] = strokes[k]
+            state.pose[i, :3] = t_e[:3, 3] - consts[6][:3]
+            state.pose[i, 3:] = matrix_euler(t_e[:3, :3])
+            state.offset[i] = state.pose[i, :3] - state.nominal[i, state.k[i], :3]
+            self.tracking_error[i] = float(np.linalg.norm(state.pose[i, :3] - self.command[i, :3]))
+            turn = euler_matrix(*self.command[i, 3:]).T @ t_e[:3, :3]
+            self.orientation_error[i] = float(np.arccos(np.clip((np.trace(turn) - 1) / 2, -1.0, 1.0)))
+            self.tracked[i] = self.tracking_error[i] <= self.track_tolerance and (
+                self.angle_tolerance is None or self.orientation_error[i] <= self.angle_tolerance)
+            self.broken[i] = self.broken_gap is not None and gaps[k] > self.broken_gap
 
     def close(self) -> None:
-        self.scene.close()
+        for scene in self.scenes:
+            scene.close()
 
-    # --- what KF validation reads (paragym.validation.episode) ---
+    # --- what KF validation reads (paragym.validation.episode), of robot 0 ---
     def body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """Platform E, judged at its centre."""
         scene = self.scene
@@ -90,7 +119,7 @@ class DynamicWorld:
 
     def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
         """E's pose of the step: the nominal path plus the action's offset."""
-        t_e = hybrid.pose_matrix(hybrid.home_pose(params.geometry) + self.command)[0]
+        t_e = hybrid.pose_matrix(hybrid.home_pose(params.geometry) + self.command[0])[0]
         return pose6(t_e[:3, 3], t_e[:3, :3])
 
     def step_duration(self, state: Any, params: Any) -> float:
@@ -98,3 +127,29 @@ class DynamicWorld:
         return h * physics_steps(self.control_period, h)
 
 
+class MuJoCoWorld(DynamicWorld):
+    """N robots under MuJoCo's dynamics, MuJoCo alone (``engine.mirror`` False: each scene described as data,
+    no PyBullet): their actuators driven together in MuJoCo's ``rollout`` on threads (one per core this process
+    may use), each control period from a cold solver start
+    (:func:`paragym.sim.hybrid_dynamic.drive_together`); measured as :class:`DynamicWorld` measures, a ball
+    joint's gap as MuJoCo's loop closures have it. The native dynamic vector env's world, and for N = 1 the
+    single env's."""
+
+    def __init__(self, scenes: list[Any], control_period: float, track_tolerance: float,
+                 angle_tolerance: float | None = None, broken_gap: float | None = None) -> None:
+        super().__init__(scenes, control_period, track_tolerance, angle_tolerance, broken_gap)
+        self._pool = rollout_pool(len(scenes))
+
+    def __getstate__(self) -> dict[str, Any]:
+        raise TypeError("a MuJoCo world is not copied: make the env again")
+
+    def _drive(self, strokes: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
+        scenes = [self.scenes[i] for i in rows.tolist()]
+        drive_together(scenes, strokes, self.control_period, self._pool)
+        return state_together(scenes)
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.close()
+            self._pool = None
+        super().close()
