@@ -257,8 +257,10 @@ def main() -> None:
         title = "Time to solve: PPO from scratch until the task counts as solved" + (
             "" if args.fidelity == "kinematic" else f", under {args.engine}'s dynamics")
         paragraph = PARAGRAPH if args.fidelity == "kinematic" else (
-            f"PPO trained from scratch under {args.engine}'s dynamics (the leaderboard's physics settings, one env "
-            f"per process, the checks under the same physics), {args.seeds} seed{'s' * (args.seeds > 1)} per task, "
+            f"PPO trained from scratch under {args.engine}'s dynamics (the leaderboard's physics settings; the "
+            f"robots of the task's native dynamic vector env where it has one, MuJoCo alone, all stepped at once, "
+            f"else one env per process; the checks under the leaderboard's physics), "
+            f"{args.seeds} seed{'s' * (args.seeds > 1)} per task, "
             f"and the wall-clock minutes of learning on 2 cores until the task counts as solved, checked every "
             f"{args.check_every:g} s of learning on {args.episodes} validation episodes; the yml's settings are the "
             f"kinematic fidelity's.")

@@ -57,12 +57,13 @@ def check_options(options: Any, known: tuple[str, ...] = ("scenario",)) -> dict[
 
 
 def check_copyable(env: Any) -> None:
-    """A TypeError if ``env``'s world holds a PyBullet client: a copy would share it (two envs stepping one
-    simulation, and the original disconnected when the copy is collected)."""
+    """A TypeError if ``env``'s world holds a simulation (``live``: a PyBullet client, or MuJoCo's robots and the
+    threads that step them): a copy would share it (two envs stepping one simulation, and the original
+    disconnected when the copy is collected)."""
     world = env.__dict__.get("world")
     if world is not None and getattr(world, "live", True):
         raise TypeError(f"{type(env).__name__} with fidelity={env.params.fidelity!r} cannot be copied or pickled: "
-                        "its PyBullet client cannot be; make a new env with the same arguments and reset it with "
+                        "its simulation cannot be; make a new env with the same arguments and reset it with "
                         "the same seed")
 
 

@@ -110,7 +110,14 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
     ``engine``: the dynamic fidelity's physics, "pybullet" (default) or
     "mujoco" (or a :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`): the same
     model, obstacles, rules and checks in MuJoCo (the ``mujoco`` extra; the
-    conformance page compares the engines).
+    conformance page compares the engines), with PyBullet's scene measuring
+    the clearance. ``engine=MuJoCoSettings(mirror=False)``: MuJoCo alone, the
+    clearance the kinematic fidelity's kernel at the encoders' angles
+    (``collision`` "posts" on a rung, "grid" otherwise), each control period
+    from a cold solver start; the native vector env runs it for N robots at
+    once (``gym.make_vec(ID, N, vectorization_mode="vector_entry_point",
+    fidelity="dynamic", engine="mujoco")``), and this env is its N = 1 case,
+    bit for bit.
 
     ## Version History
     * v0: initial release (kinematic and dynamic fidelity). Since paragym 0.2.0
@@ -133,7 +140,8 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
     * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
-      MuJoCo (issue 41); PyBullet's, the default, runs as before.
+      MuJoCo (issue 41); PyBullet's, the default, runs as before. MuJoCo alone
+      (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
     """
 
     task, rules = TASK, RULES[0]

@@ -105,7 +105,12 @@ class HybridSingularityFreeEnv(ParagymEnv):
     fidelity's physics, "pybullet" (default) or "mujoco" (or a
     :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`): the same model, rules
     and checks in MuJoCo (the ``mujoco`` extra; the conformance page
-    compares the engines).
+    compares the engines). ``engine=MuJoCoSettings(mirror=False)``: MuJoCo
+    alone (no PyBullet scene; a ball joint's gap as MuJoCo's loop closures
+    have it), each control period from a cold solver start; the native
+    vector env runs it for N robots at once (``gym.make_vec(ID, N,
+    vectorization_mode="vector_entry_point", fidelity="dynamic",
+    engine="mujoco")``), and this env is its N = 1 case, bit for bit.
 
     ## Version History
     * v0: initial release (kinematic fidelity).
@@ -127,7 +132,8 @@ class HybridSingularityFreeEnv(ParagymEnv):
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
     * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
-      MuJoCo (issue 41); PyBullet's, the default, runs as before.
+      MuJoCo (issue 41); PyBullet's, the default, runs as before. MuJoCo alone
+      (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
     """
 
     task, rules = TASK, RULES[0]

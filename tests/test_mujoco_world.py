@@ -147,3 +147,16 @@ def test_each_engine_takes_its_own_collision_test_and_says_so():
         gym.make("paragym/MobileTripodOdometry-v0", fidelity="dynamic", engine=ALONE["engine"])
     assert repr(MuJoCoSettings()) == "MuJoCoSettings(time_step=0.001, servo_bandwidth=None, iterations=None)"
     assert repr(ALONE["engine"]).endswith(", mirror=False)")
+
+
+def test_a_mujoco_world_is_not_copied():
+    """Its robots' MuJoCo states and the threads that step them are its own: a copy is refused, as a PyBullet
+    client's is."""
+    import copy
+
+    venv = _make_vec(EASY, 2, "vector_entry_point")
+    try:
+        with pytest.raises(TypeError, match="cannot be copied"):
+            copy.deepcopy(venv)
+    finally:
+        venv.close()

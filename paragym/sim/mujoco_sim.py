@@ -17,6 +17,15 @@ loop closures as ``connect`` constraints, motors as force-limited position servo
   scenario's obstacles) recompile the model with the robot as it was first written, so that the servos' gains
   do not depend on the pose at a reset.
 
+**MuJoCo alone** (``MuJoCoSettings(mirror=False)``): the scene is built on a
+:class:`~paragym.sim.description.SceneDescription` instead of PyBullet, which the export writes and a reset
+poses; reads after a reset load it into MuJoCo first, and PyBullet is built from the description only for a
+picture or a distance. Such robots step in batches: :func:`ramp_together` runs one control period of many
+robots, each in a model of its own, in one call of MuJoCo's ``rollout`` on a :class:`RolloutPool`'s threads
+with no lock held, and :func:`read_together` reads what the task reads of them in one array each. ``rollout``
+starts each call from a zero warm start, so a robot here starts every control period so too
+(:attr:`MuJoCoSim.cold_periods`), alone or in a batch: the same bits either way.
+
 The motors: MuJoCo's position servo pushes kp (u - q) - kv q_dot within its force range; :meth:`MuJoCoSim.drive`
 sets u = target + (kv / kp) * rate, which makes that kp (target - q) + kv (rate - q_dot), the PD law of
 PyBullet's motors with its target rate. The gains are the export's (critically damped at
@@ -32,13 +41,13 @@ steps. Lengths in m, angles in rad, forces in N or N m.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
+from paragym.kernels import thread_count
 from paragym.sim import export
 from paragym.sim.client import depth_first, physics_steps
 from paragym.sim.description import SceneDescription
@@ -594,10 +603,10 @@ class RolloutPool:
 
 
 def rollout_pool(robots: int) -> RolloutPool | None:
-    """A :class:`RolloutPool` for a world of ``robots``: a thread per core this process may use (at most one per
-    robot); None where that is one thread (the caller's)."""
-    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    threads = min(robots, cores)
+    """A :class:`RolloutPool` for a world of ``robots``: as many threads as the kernels take
+    (:func:`paragym.kernels.thread_count`: ``PARAGYM_THREADS``, else a thread per core this process may use), at
+    most one per robot; None where that is one thread (the caller's)."""
+    threads = min(robots, thread_count())
     return RolloutPool(threads) if threads > 1 else None
 
 

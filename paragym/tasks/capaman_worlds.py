@@ -257,6 +257,8 @@ class MuJoCoWorld(NativeWorld):
     """
 
     moves = True
+    #: it holds a simulation (each robot's MuJoCo state and the threads that step them): not copied
+    live = True
 
     def __init__(self, kinematic: GridWorld | PostWorld, dynamics: Any, engine: Any, control_period: float,
                  n: int, slots: int, gui: bool = False) -> None:
@@ -273,9 +275,6 @@ class MuJoCoWorld(NativeWorld):
         self._moved = np.zeros(n, bool)
         self._tips = np.zeros((n, 3))  # where the last move left each tool tip
         self._pool = rollout_pool(n)
-
-    def __getstate__(self) -> dict[str, Any]:
-        raise TypeError("a MuJoCo world is not copied: make the env again")
 
     def checker(self) -> Any:
         return self.kinematic.checker()

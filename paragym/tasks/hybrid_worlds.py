@@ -140,9 +140,6 @@ class MuJoCoWorld(DynamicWorld):
         super().__init__(scenes, control_period, track_tolerance, angle_tolerance, broken_gap)
         self._pool = rollout_pool(len(scenes))
 
-    def __getstate__(self) -> dict[str, Any]:
-        raise TypeError("a MuJoCo world is not copied: make the env again")
-
     def _drive(self, strokes: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, ...]:
         scenes = [self.scenes[i] for i in rows.tolist()]
         drive_together(scenes, strokes, self.control_period, self._pool)
