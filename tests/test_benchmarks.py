@@ -87,6 +87,16 @@ def test_native_speed_steps_a_rung_for_its_episodes_with_its_shipped_linear_poli
     assert "CaPaManCollisionFree-Easy-v0 " in out
 
 
+def test_native_speed_times_the_dynamic_fidelity_in_mujoco_and_its_physics_share(tmp_path):
+    __import__("pytest").importorskip("mujoco")
+    out = _run("benchmarks/native_speed.py", "--env", "CaPaManCollisionFree-Easy-v0", "--fidelity", "dynamic",
+               "--engine", "mujoco", "--num-envs", "4", "--seconds", "0.3", "--record", str(tmp_path))
+    (row,) = _recorded(tmp_path, "native_speed_random_dynamic_mujoco")["rows"]
+    share, ratio = float(row[5].rstrip(" %")), float(row[6])
+    assert 0 < share <= 100 and abs(ratio - 100 / share) < 0.05 * ratio  # the env's step over MuJoCo's own stepping
+    assert "CaPaManCollisionFree-Easy-v0 " in out
+
+
 def test_learner_speed_prints_each_learner_beside_sb3(tmp_path):
     out = _run("benchmarks/learner_speed.py", "--env", "Orthoglide2PRRKappa-v1", "--robots", "4", "--timesteps", "512",
                "--record", str(tmp_path))
@@ -151,6 +161,15 @@ def test_time_to_solve_trains_and_checks_under_physics_apart(tmp_path):
     assert (run["fidelity"], run["engine"]) == ("dynamic", "mujoco") and run["points"]
     assert (tmp_path / "models" / "dynamic-mujoco" / "CaPaManCollisionFree-Easy-v0" / "ppo_seed0.zip").is_file()
     assert "| CaPaManCollisionFree-Easy-v0-dynamic-mujoco |" in out
+    # the transfer table: that run, trained under MuJoCo's dynamics, played in every fidelity
+    _run("benchmarks/transfer.py", "--env", "CaPaManCollisionFree-Easy-v0", "--models", str(tmp_path / "models"),
+         "--policy", "user-dynamic-mujoco-ppo-seed0", "--policy", "ppo-seed0", "--episodes", "1", "--record",
+         str(tmp_path))
+    table = _recorded(tmp_path, "transfer_CaPaManCollisionFree_Easy_v0")
+    assert table["columns"][2:] == ["success, kinematic", "success, dynamic (pybullet)", "success, dynamic (mujoco)"]
+    assert [row[:2] for row in table["rows"]] == [["user-dynamic-mujoco-ppo-seed0", "dynamic (mujoco)"],
+                                                   ["ppo-seed0", "kinematic"]]
+    assert all(cell.split(" ")[0] in ("0/1", "1/1") for row in table["rows"] for cell in row[2:])
 
 
 def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
