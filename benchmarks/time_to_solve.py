@@ -134,6 +134,20 @@ def curve(runs: list[dict[str, Any]], key: str, grid: np.ndarray) -> tuple[np.nd
     return np.array(mean), np.array(low), np.array(high)
 
 
+def how_far(runs: list[dict[str, Any]]) -> str:
+    """How far the unsolved runs got, per seed: the steps learned and the first target's figure at the last check
+    (and its range over the checks); "-" where every run solved."""
+    shown = []
+    for r in runs:
+        if r["minutes"] is not None or not r["points"]:
+            continue
+        key, last = r["keys"][0], r["points"][-1]
+        seen = [p["figures"][key] for p in r["points"]]
+        shown.append(f"seed {r['seed']}: {last['timesteps']:,} steps, {key} {last['figures'][key]:.2f} at the "
+                     f"last check ({min(seen):.2f}-{max(seen):.2f} over the checks)")
+    return "; ".join(shown) or "-"
+
+
 def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) -> str:
     """The table as markdown, and the curves' picture."""
     import matplotlib
@@ -142,7 +156,7 @@ def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) ->
     import matplotlib.pyplot as plt
 
     lines = ["| environment | targets | seeds solved | minutes to solve, per seed | mean [95% CI] "
-             "| steps to solve, mean |", "|---|---|---|---|---|---|"]
+             "| steps to solve, mean | unsolved runs at the budget's end |", "|---|---|---|---|---|---|---|"]
     fig, axes = plt.subplots(1, len(by_env), figsize=(4.2 * len(by_env), 3.4), squeeze=False)
     for ax, (env_id, runs) in zip(axes[0], by_env.items(), strict=True):
         minutes = [r["minutes"] for r in runs]
@@ -157,7 +171,7 @@ def report(by_env: dict[str, list[dict[str, Any]]], budget: float, out: Path) ->
             mean = f"{solved[0]:.1f} (one seed)" if solved else "not solved"
         steps = [r["timesteps"] for r in runs if r["timesteps"] is not None]
         lines.append(f"| {env_id.split('/')[-1]} | {runs[0]['targets']} | {len(solved)} of {len(runs)} | {per_seed} | "
-                     f"{mean} | {f'{np.mean(steps):,.0f}' if steps else '-'} |")
+                     f"{mean} | {f'{np.mean(steps):,.0f}' if steps else '-'} | {how_far(runs)} |")
         if not any(r["points"] for r in runs):
             continue
         key = runs[0]["keys"][0]  # the first target's figure

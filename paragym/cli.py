@@ -455,8 +455,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="train on the env's native vector env (N robots per numpy call)")
     p.add_argument("--n-envs", type=int, default=None, help="copies (robots) to train on (default: the yml's)")
     p.add_argument("--fidelity", choices=("kinematic", "dynamic"), default="kinematic",
-                   help="dynamic: train under physics at the leaderboard's settings, one env per process, the runs "
-                        "under --models/dynamic-<engine>/ (default %(default)s)")
+                   help="dynamic: train under physics at the leaderboard's settings (in MuJoCo on the native dynamic "
+                        "vector env where the task has one, else one env per process), the runs under "
+                        "--models/dynamic-<engine>/ (default %(default)s)")
     p.add_argument("--engine", choices=("pybullet", "mujoco"), default="pybullet",
                    help="the dynamic fidelity's engine (default %(default)s)")
     p.add_argument("--seeds", type=int, default=1, metavar="N",
