@@ -90,6 +90,12 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     and checks in MuJoCo (the ``mujoco`` extra; its servos correct an error
     at 100 /s as PyBullet's motors do, and the sliders ride their guides
     without touching them; the conformance page compares the engines).
+    ``engine=MuJoCoSettings(mirror=False)``: MuJoCo alone (no PyBullet
+    scene; the gap at C as MuJoCo's loop closure has it), each path step
+    from a cold solver start; the native vector env runs it for N robots at
+    once (``gym.make_vec(ID, N, vectorization_mode="vector_entry_point",
+    fidelity="dynamic", engine="mujoco")``), and this env is its N = 1 case,
+    bit for bit.
 
     ## Version History
     * v0: initial release (kinematic fidelity).
@@ -110,7 +116,8 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
       reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
     * paragym 0.10, every version and rung: ``engine="mujoco"`` runs the dynamic fidelity in MuJoCo
-      (issue 52); PyBullet's, the default, runs as before.
+      (issue 52); PyBullet's, the default, runs as before. MuJoCo alone
+      (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
     """
 
     task, rules = TASK, RULES[0]

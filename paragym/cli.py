@@ -425,9 +425,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "has one (the CaPaMan, the hybrid), else the reference policy's episode")
     p.add_argument("--models", default=None, help="folder of your own models (for --policy user-...)")
     p.add_argument("--engine", default="pybullet", choices=("pybullet", "mujoco"),
-                   help="the dynamic fidelity's physics engine (MuJoCo: the CaPaMan's and the hybrid's ids, with "
-                        "the mujoco extra); in MuJoCo the policy's episode is validated (the reference's without "
-                        "--policy)")
+                   help="the dynamic fidelity's physics engine (MuJoCo: with the mujoco extra); in MuJoCo the "
+                        "policy's episode is validated (the reference's without --policy)")
     p.add_argument("--out", default="runs/validate", help="folder for the pictures and the JSON report")
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("export", help="write an env's mechanism as a model file: MJCF (MuJoCo) with its loop "

@@ -156,10 +156,11 @@ def test_split_presets_pass_the_checker_and_repeat_their_seed(env_id):
 
 
 @pytest.mark.parametrize(("env_id", "says"), [("paragym/HybridSingularityFree-v1", "MuJoCo alone: engine='mujoco'"),
-                                              ("paragym/Orthoglide2PRRKappa-v0", "kinematic"),
+                                              ("paragym/Orthoglide2PRRKappa-v0", "MuJoCo alone: engine='mujoco'"),
                                               ("paragym/MobileTripodOdometry-v1", "kinematic")])
 def test_native_vector_envs_refuse_a_dynamic_fidelity_they_do_not_run(env_id, says):
-    """PyBullet's dynamics steps one robot at a time: no native vector env runs it (the hybrid's runs MuJoCo's)."""
+    """PyBullet's dynamics steps one robot at a time: no native vector env runs it (the hybrid's and the 2PRR's
+    run MuJoCo's; the tripod's runs the kinematic fidelity only)."""
     with pytest.raises(ValueError, match=says):
         gym.make_vec(env_id, 2, vectorization_mode="vector_entry_point", fidelity="dynamic")
 

@@ -29,7 +29,8 @@ def _make_vec(env_id: str, n: int, mode: str, **kwargs):
 
 
 @pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {}, 110), ("paragym/CaPaManCollisionFree-v1", {}, 110),
-                                                         ("paragym/HybridSingularityFree-Easy-v2", {}, 150)])
+                                                         ("paragym/HybridSingularityFree-Easy-v2", {}, 150),
+                                                         ("paragym/Orthoglide2PRRKappa-v1", {}, 120)])
 def test_the_native_dynamic_vector_env_equals_single_mujoco_envs_to_the_bit(env_id, kwargs, steps):
     """N robots stepped together in MuJoCo's rollout on threads give, bit for bit, what N single envs give, one
     robot each, over episodes that end and restart (autoresets)."""
@@ -76,8 +77,8 @@ def test_a_robot_watched_step_by_step_moves_as_one_stepped_in_the_batch():
 
 
 def test_the_mujoco_world_runs_with_pybullet_absent():
-    """``import paragym`` and the MuJoCo worlds (the CaPaMan's single and vector, the hybrid's vector), with
-    PyBullet not importable: any call into PyBullet on the way fails the run."""
+    """``import paragym`` and the MuJoCo worlds (the CaPaMan's single and vector, the hybrid's and the 2PRR's
+    vector), with PyBullet not importable: any call into PyBullet on the way fails the run."""
     script = """
 import sys
 sys.modules["pybullet"] = None  # importing PyBullet raises ImportError
@@ -104,7 +105,12 @@ hybrid = gym.make_vec("paragym/HybridSingularityFree-Easy-v2", num_envs=2, vecto
 hybrid.reset(seed=3)
 for _ in range(30):
     hybrid.step(hybrid.action_space.sample())
-for made in (env, venv, hybrid):
+orthoglide = gym.make_vec("paragym/Orthoglide2PRRKappa-v1", num_envs=2, vectorization_mode="vector_entry_point",
+                          fidelity="dynamic", engine="mujoco")
+orthoglide.reset(seed=4)
+for _ in range(30):
+    orthoglide.step(orthoglide.action_space.sample())
+for made in (env, venv, hybrid, orthoglide):
     made.close()
 assert "pybullet" not in sys.modules or sys.modules["pybullet"] is None
 print("ran without PyBullet")

@@ -30,6 +30,7 @@ lower, beneath them, as a machine's table passes under the gantry.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -37,11 +38,11 @@ import numpy as np
 
 from paragym.mechanisms import orthoglide as og
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
-from paragym.sim.client import LinkSpec, PyBulletSim, exact_time_step
-from paragym.sim.mujoco_sim import simulate_in
+from paragym.sim.client import LinkSpec, exact_time_step
+from paragym.sim.mujoco_sim import ramp_together, read_together, scene_sim, simulate_in
 from paragym.sim.obstacles import Box
 
-__all__ = ["OrthoglideDynamicScene", "OrthoglideDynamics"]
+__all__ = ["OrthoglideDynamicScene", "OrthoglideDynamics", "drive_together", "state_together"]
 
 
 @dataclass(frozen=True)
@@ -96,7 +97,7 @@ class OrthoglideDynamicScene:
                  table_below_guides: bool = False, engine: Any = None) -> None:
         self.geometry = g = geometry
         self.dynamics = d = dynamics or OrthoglideDynamics()
-        self.sim = PyBulletSim(gui=gui)
+        self.sim = scene_sim(gui, engine)
         dx, dy = g.direction
         half = g.link / 2
         bar = PartShape("link", "box", (half, 0.012, 0.008))
@@ -165,12 +166,17 @@ class OrthoglideDynamicScene:
         physics steps, or, with ``exact``, exactly (the physics step then
         shortened to divide it, the motors' bandwidth kept)."""
         d, rho = self.dynamics, np.asarray(rho, float)
-        step = exact_time_step(duration, self.base_step) if exact else self.base_step
-        if step != self.sim.time_step:
-            self.sim.set_time_step(step)
+        step = self._step_for(duration, exact)
         self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, step, d.motor_force,
                       d.bandwidth * step, d.velocity_gain)
         self._target = rho.copy()
+
+    def _step_for(self, duration: float, exact: bool) -> float:
+        """The physics step of a drive over ``duration`` s (:meth:`drive`), set in the engine."""
+        step = exact_time_step(duration, self.base_step) if exact else self.base_step
+        if step != self.sim.time_step:
+            self.sim.set_time_step(step)
+        return step
 
     @property
     def rho(self) -> np.ndarray:
@@ -198,3 +204,30 @@ class OrthoglideDynamicScene:
     def close(self) -> None:
         """Disconnect PyBullet."""
         self.sim.close()
+
+
+def drive_together(scenes: Sequence[OrthoglideDynamicScene], rho: np.ndarray, durations: np.ndarray, exact: bool,
+                   pool: Any = None) -> None:
+    """:meth:`OrthoglideDynamicScene.drive` of each of ``scenes`` (in MuJoCo alone, one geometry and dynamics) to
+    its row of ``rho`` (M, 3) (m) over its ``durations`` (M,) (s), the robots whose drives take the same physics
+    steps stepped in one batch on ``pool``'s threads (:func:`paragym.sim.mujoco_sim.ramp_together`)."""
+    rho = np.asarray(rho, float)
+    groups: dict[tuple[float, float], list[int]] = {}
+    for k, (scene, duration) in enumerate(zip(scenes, durations, strict=True)):
+        groups.setdefault((float(duration), scene._step_for(float(duration), exact)), []).append(k)
+    first = scenes[0]
+    for (duration, _), members in groups.items():
+        group = [scenes[k] for k in members]
+        ramp_together([scene.sim for scene in group], [(first.ROBOT, first.motors)],
+                      np.array([scene._target for scene in group]), rho[members], duration,
+                      first.dynamics.motor_force, pool)
+    for scene, target in zip(scenes, rho, strict=True):
+        scene._target = target.copy()
+
+
+def state_together(scenes: Sequence[OrthoglideDynamicScene]) -> tuple[np.ndarray, np.ndarray]:
+    """The encoders (M, 3) (m) of ``scenes`` (as :func:`drive_together` takes them) and the gap (M,) (m) at the
+    pin C as MuJoCo's loop closure has it (:meth:`~paragym.sim.mujoco_sim.MuJoCoSim.loop_residual`)."""
+    first = scenes[0]
+    rho, _, _, gap = read_together([scene.sim for scene in scenes], [(first.ROBOT, first.motors)], [])
+    return rho, gap

@@ -137,7 +137,7 @@ class OrthoglideParams:
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
 
         refuse_unknown(unknown, (), "Orthoglide2PRRKappa")
-        engine = check_engine(engine, ENGINES, fidelity)
+        engine = check_engine(engine, ENGINES, fidelity, alone=True)
         if not rules.tracking and track_tolerance is not None:
             raise ValueError("track_tolerance is an argument of paragym/Orthoglide2PRRKappa-v1 and later, not of v0")
         track_tolerance = check_number("track_tolerance", 0.005 if track_tolerance is None else track_tolerance,
@@ -367,22 +367,26 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
          world: DynamicWorld | None = None) -> None:
     """Move the ``active`` robots (N,) one path point on with ``actions``
     (N, 1) or (N, 3), inside the Box (the env clips), and evaluate them.
-    ``world``: the dynamics of one robot (dynamic fidelity): the step's
+    ``world``: the dynamics of the robots (dynamic fidelity): the step's
     joints are the motors' command, and the robot is evaluated where the
     simulation put it (:class:`DynamicWorld`)."""
     if world is None:
         _advance(state, params, actions, active, True, _ALL)
         return
-    h = float(state.dt[0, state.k[0]]) if state.k[0] < state.last[0] else 0.0
-    state.rho[0] = world.command  # the controller integrates its own command; the encoders feed the motors
+    rows = np.flatnonzero(active)
+    k = state.k[rows]
+    durations = np.where(k < state.last[rows], state.dt[rows, np.minimum(k, state.dt.shape[1] - 1)], 0.0)
+    state.rho[rows] = world.command[rows]  # the controller integrates its own command; the encoders feed the motors
     _advance(state, params, actions, active, True, _COMMAND)
-    world.move(state, h)
+    world.move(state, rows, durations)
     _advance(state, params, actions, active, True, _EVALUATE)
-    if params.version >= 1 and world.scene.closure_error() > BROKEN_GAP and not state.failed[0]:
-        state.failed[0], state.reason[0], state.terminated[0] = True, _BROKEN, True
-        state.terms[0] = (0.0, 0.0, -(params.limit_penalty + params.left_penalty * (state.last[0] - state.k[0])))
-        state.reward[0] = state.terms[0, 2]
-        state.success[0] = decide(state.k[0], state.last[0], True, np.inf, np.inf)
+    for i in rows[world.gap[rows] > BROKEN_GAP].tolist() if params.version >= 1 else ():
+        if state.failed[i]:
+            continue
+        state.failed[i], state.reason[i], state.terminated[i] = True, _BROKEN, True
+        state.terms[i] = (0.0, 0.0, -(params.limit_penalty + params.left_penalty * (state.last[i] - state.k[i])))
+        state.reward[i] = state.terms[i, 2]
+        state.success[i] = decide(state.k[i], state.last[i], True, np.inf, np.inf)
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only

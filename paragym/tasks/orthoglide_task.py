@@ -25,7 +25,7 @@ from paragym.tasks.orthoglide_step import (
     reset,
     step,
 )
-from paragym.tasks.orthoglide_worlds import DynamicWorld
+from paragym.tasks.orthoglide_worlds import DynamicWorld, MuJoCoWorld
 
 __all__ = ["LADDER_RULES", "LADDER_RULES_V1", "RULES", "TASK", "OrthoglideTask"]
 
@@ -44,6 +44,7 @@ class OrthoglideTask(TaskBase):
     #: KF validation (dynamic fidelity): the tool holder at C on link AC, the array in the table's plane, 3 cm
     #: below
     engines = ENGINES
+    vector_fidelities = ("kinematic", "dynamic")
     sensor_layout: dict[str, float] = {"r": 0.05, "depth": 0.03}
 
     def paper_scenario(self) -> OrthoglideScenario:
@@ -71,15 +72,17 @@ class OrthoglideTask(TaskBase):
             return None
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
 
-        scene = OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human",
-                                       table_below_guides=params.rules.table_below_guides, engine=params.engine)
-        return DynamicWorld(scene, exact_time=params.rules.exact_time)
+        scenes = [OrthoglideDynamicScene(params.geometry, params.dynamics, gui=render_mode == "human" and i == 0,
+                                         table_below_guides=params.rules.table_below_guides, engine=params.engine)
+                  for i in range(n)]
+        alone = params.engine is not None and not params.engine.mirror  # MuJoCo alone: N robots at once
+        return (MuJoCoWorld if alone else DynamicWorld)(scenes, exact_time=params.rules.exact_time)
 
     def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
               scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: Any) -> None:
         reset(state, params, rows, scenarios)
         if world is not None:
-            world.reset(state)
+            world.reset(state, rows)
 
     #: the transition itself (:func:`paragym.tasks.orthoglide_step.step`: the contract's signature)
     step = staticmethod(step)
@@ -105,7 +108,7 @@ class OrthoglideTask(TaskBase):
         from paragym.sim.orthoglide_scene import OrthoglideScene
 
         return self.drawn(cache, world, gui, lambda: OrthoglideScene(params.geometry, gui=gui),
-                          lambda scene: scene.set_state(state.rho[i].copy(), state.scenarios[i].points))
+                          lambda scene: scene.set_state(state.rho[i].copy(), state.scenarios[i].points), i)
 
 
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
