@@ -27,7 +27,7 @@ import numpy as np
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
 
-__all__ = ["LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
+__all__ = ["LinkBook", "LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
            "physics_steps", "refined"]
 
 #: motors on one or more bodies: (body name, its joint indices) in order; their targets are concatenated in that order
@@ -137,7 +137,59 @@ def depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
     return out
 
 
-class PyBulletSim:
+class LinkBook:
+    """The bookkeeping a scene's bodies share whatever holds them (:class:`PyBulletSim`, or a
+    :class:`~paragym.sim.description.SceneDescription`): each tree body's links by name and index
+    (``_links``, ``_link_names``), how each body was built (``_recipe``: (build, arguments)), and the free
+    parts placed through the holder's ``reset_base`` and ``reset_joint``."""
+
+    _links: dict[str, dict[str, int]]
+    _link_names: dict[str, dict[int, str]]
+    _recipe: dict[str, tuple[Any, tuple]]
+
+    def link_name(self, name: str, index: int) -> str | None:
+        """The name of link ``index`` of body ``name`` (None: the base, -1)."""
+        return self._link_names[name].get(index)
+
+    def link_index(self, name: str, link: str) -> int:
+        """The index of ``link`` in body ``name`` (PyBullet's, depth-first)."""
+        return self._links[name][link]
+
+    def locate(self, link: str) -> tuple[str, int]:
+        """The body holding the link named ``link``, and the link's index in it."""
+        for name, links in self._links.items():
+            if link in links:
+                return name, links[link]
+        raise ValueError(f"no link named {link!r}")
+
+    def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
+        """A point given in a link's centre-of-mass frame, in its link frame (the two differ by the link's
+        ``shape_offset``, their axes aligned): a base's two frames are one."""
+        _, args = self._recipe[name]
+        offset = next((spec.shape_offset for spec in args[1] if spec.name == self._link_names[name].get(link)),
+                      (0.0, 0.0, 0.0))
+        return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
+
+    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+        raise NotImplementedError
+
+    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+        raise NotImplementedError
+
+    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
+                   quaternion: Sequence[float]) -> None:
+        """Put a free rigid part at ``position`` (m), turned by the xyzw ``quaternion``, at rest: ``part`` is
+        (body, link), either a free body's base (link -1, ``floats`` empty) or a link on a spherical joint
+        at the end of the three prismatic joints ``floats`` (x, y, z; each (body, joint)) of a tree."""
+        if part[1] < 0:
+            self.reset_base(part[0], position, quaternion)
+            return
+        for joint, value in zip(floats, position, strict=True):
+            self.reset_joint(*joint, float(value))
+        self.reset_joint(*part, quaternion)
+
+
+class PyBulletSim(LinkBook):
     """One PyBullet connection; bodies by name.
 
     Args:
@@ -360,24 +412,9 @@ class PyBulletSim:
             self._draw(True)
         pb.resetJointStatesMultiDof(self._bodies[name], joints, values, physicsClientId=self._client)
 
-    def link_name(self, name: str, index: int) -> str | None:
-        """The name of link ``index`` of body ``name`` (None: the base, -1)."""
-        return self._link_names[name].get(index)
-
     def body(self, name: str) -> int:
         """PyBullet id of body ``name`` now (it changes when the world is rebuilt)."""
         return self._bodies[name]
-
-    def link_index(self, name: str, link: str) -> int:
-        """PyBullet link index of ``link`` in body ``name``."""
-        return self._links[name][link]
-
-    def locate(self, link: str) -> tuple[str, int]:
-        """The body holding the link named ``link``, and the link's index in it."""
-        for name, links in self._links.items():
-            if link in links:
-                return name, links[link]
-        raise ValueError(f"no link named {link!r}")
 
     def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and xyzw quaternion of a link's frame (the link by name or index)."""
@@ -457,14 +494,6 @@ class PyBulletSim:
                 ends.append(pos + quat_to_matrix(xyzw) @ np.asarray(point))
             gaps.append(float(np.linalg.norm(ends[0] - ends[1])))
         return max(gaps)
-
-    def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
-        """A point given in a link's centre-of-mass frame, in its link frame (the two differ by the link's
-        ``shape_offset``, their axes aligned): a base's two frames are one."""
-        _, args = self._recipe[name]
-        offset = next((spec.shape_offset for spec in args[1] if spec.name == self._link_names[name].get(link)),
-                      (0.0, 0.0, 0.0))
-        return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
 
     def no_collision(self, name: str) -> None:
         """No part of body ``name`` collides with anything (a mechanism alone in its scene, whose parts
@@ -564,18 +593,6 @@ class PyBulletSim:
         c = self._client
         return np.array([s[3] for name, joints in motors
                          for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
-
-    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
-                   quaternion: Sequence[float]) -> None:
-        """Put a free rigid part at ``position`` (m), turned by the xyzw ``quaternion``, at rest: ``part`` is
-        (body, link), either a free body's base (link -1, ``floats`` empty) or a link on a spherical joint
-        at the end of the three prismatic joints ``floats`` (x, y, z; each (body, joint)) of a tree."""
-        if part[1] < 0:
-            self.reset_base(part[0], position, quaternion)
-            return
-        for joint, value in zip(floats, position, strict=True):
-            self.reset_joint(*joint, float(value))
-        self.reset_joint(*part, quaternion)
 
     def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``, at rest."""

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from paragym.sim.client import LinkSpec, depth_first
+from paragym.sim.client import LinkBook, LinkSpec, depth_first
 
 __all__ = ["SceneDescription"]
 
@@ -29,7 +29,7 @@ __all__ = ["SceneDescription"]
 DEFAULT_FRICTION = 0.5
 
 
-class SceneDescription:
+class SceneDescription(LinkBook):
     """A scene's bodies, loops, stops and joint values as data (module docstring).
 
     Args:
@@ -41,8 +41,9 @@ class SceneDescription:
 
     def __init__(self, gui: bool = False) -> None:
         self.gui = gui
-        self._recipe: dict[str, tuple[str, tuple]] = {}
+        self._recipe: dict[str, tuple[Any, tuple]] = {}
         self._links: dict[str, dict[str, int]] = {}
+        self._link_names: dict[str, dict[int, str]] = {}
         self._kinds: dict[str, list[str]] = {}
         #: the loop closures, as :attr:`PyBulletSim.loops <paragym.sim.client.PyBulletSim.loops>`
         self.loops: dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]] = {}
@@ -67,6 +68,7 @@ class SceneDescription:
         ordered = depth_first(links)
         self._add("add_tree_body", name, (name, links, base_mass, base_shape, base_rgba))
         self._links[name] = {link.name: i for i, link in enumerate(ordered)}
+        self._link_names[name] = {i: link.name for i, link in enumerate(ordered)}
         self._kinds[name] = [link.joint for link in ordered]
         self._values[name] = [_ZERO[kind] for kind in self._kinds[name]]
         if base_mass > 0:
@@ -100,7 +102,7 @@ class SceneDescription:
         if name not in self._recipe:
             raise ValueError(f"no body named {name!r}; bodies: {', '.join(self._recipe)}")
         del self._recipe[name]
-        for table in (self._links, self._kinds, self._values, self._bases):
+        for table in (self._links, self._link_names, self._kinds, self._values, self._bases):
             table.pop(name, None)
         self.loops = {key: points for key, points in self.loops.items() if name not in (key[0], key[2])}
         self.stops = {key: stop for key, stop in self.stops.items() if key[0] != name}
@@ -134,13 +136,6 @@ class SceneDescription:
         key = (name, self.link_name(name, link_a), other, self.link_name(other, link_b))
         self.loops[key] = (self._in_link_frame(name, link_a, pivot_a), self._in_link_frame(other, link_b, pivot_b))
 
-    def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
-        """A point in a link's centre-of-mass frame, in its link frame (they differ by its ``shape_offset``)."""
-        link_name = self.link_name(name, link)
-        offset = next((spec.shape_offset for spec in self._recipe[name][1][1] if spec.name == link_name),
-                      (0.0, 0.0, 0.0))
-        return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
-
     def joint_stops(self, name: str, joints: Sequence[int], lower: float, upper: float) -> None:
         for joint in joints:
             self.stops[name, self.link_name(name, joint)] = (float(lower), float(upper))
@@ -163,20 +158,6 @@ class SceneDescription:
     def body_names(self) -> tuple[str, ...]:
         return tuple(self._recipe)
 
-    def link_name(self, name: str, index: int) -> str | None:
-        """The name of link ``index`` of body ``name`` (None: the base, -1)."""
-        return next((link for link, i in self._links.get(name, {}).items() if i == index), None)
-
-    def link_index(self, name: str, link: str) -> int:
-        return self._links[name][link]
-
-    def locate(self, link: str) -> tuple[str, int]:
-        """The body holding the link named ``link``, and its index there."""
-        for name, links in self._links.items():
-            if link in links:
-                return name, links[link]
-        raise ValueError(f"no link named {link!r}")
-
     # --- the pose ---------------------------------------------------------------------------------------
     def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint)."""
@@ -192,16 +173,6 @@ class SceneDescription:
     def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
         """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``."""
         self._bases[name] = (np.array(position, float), np.array(quaternion, float))
-
-    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
-                   quaternion: Sequence[float]) -> None:
-        """As :meth:`PyBulletSim.place_free <paragym.sim.client.PyBulletSim.place_free>`."""
-        if part[1] < 0:
-            self.reset_base(part[0], position, quaternion)
-            return
-        for joint, value in zip(floats, position, strict=True):
-            self.reset_joint(*joint, float(value))
-        self.reset_joint(*part, quaternion)
 
     def joint_values(self, name: str) -> list[tuple[float, ...]]:
         """Every joint of body ``name`` as posed, in depth-first order: ``(q,)``, an xyzw quaternion or ``()``."""
