@@ -4,8 +4,9 @@ For one env id, every learned policy the leaderboard would rank there (the shipp
 the runs ``paragym train`` wrote under DIR, those trained under physics among them) plays the same validation
 episodes (reset seeds 10000 + k, deterministic actions) in the kinematic fidelity and under each engine's dynamics
 at the leaderboard's physics settings (``paragym.baselines.tasks.dynamic_kwargs``). Each row says where the policy
-was trained (its run's JSON: the fidelity and engine) and its success in each fidelity, k of n with a Wilson 95 %
-interval: trained without physics and evaluated under it, and the reverse.
+was trained (its run's JSON: the fidelity and engine), the first digits of its model file's SHA-256 (what the
+leaderboard keys it by), and its success in each fidelity, k of n with a Wilson 95 % interval: trained without
+physics and evaluated under it, and the reverse.
 
     python benchmarks/transfer.py --env CaPaManCollisionFree-Easy-v0 --models results/time_to_solve/models \\
         --episodes 50 [--policy NAME ...] [--record]
@@ -67,7 +68,7 @@ def main() -> None:
         success = (Target("success", +1, 0.0),)  # what each episode's success is, measured as the task's bench does
         checks = {column: SolveCheck(env_id, args.episodes, success, kwargs) for column, kwargs in columns.items()}
         for name, spec in specs.items():
-            row = [name, trained_in(spec)]
+            row = [name, trained_in(spec), str(spec.params["model_sha256"])[:12]]
             for check in checks.values():
                 _, figures = check.check(spec.factory(check.env, 0))
                 k = round(figures["success"] * args.episodes)
@@ -80,7 +81,8 @@ def main() -> None:
     if args.record:
         record(f"transfer_{registry.row(env_id).name.replace('-', '_')}",
                f"Transfer between fidelities on {registry.row(env_id).name}", paragraph(__doc__, 1),
-               ["policy", "trained in", *(f"success, {column}" for column in columns)], rows, folder=args.record)
+               ["policy", "trained in", "model (SHA-256)", *(f"success, {column}" for column in columns)], rows,
+               folder=args.record)
 
 
 if __name__ == "__main__":

@@ -166,10 +166,10 @@ def test_time_to_solve_trains_and_checks_under_physics_apart(tmp_path):
          "--policy", "user-dynamic-mujoco-ppo-seed0", "--policy", "ppo-seed0", "--episodes", "1", "--record",
          str(tmp_path))
     table = _recorded(tmp_path, "transfer_CaPaManCollisionFree_Easy_v0")
-    assert table["columns"][2:] == ["success, kinematic", "success, dynamic (pybullet)", "success, dynamic (mujoco)"]
+    assert table["columns"][3:] == ["success, kinematic", "success, dynamic (pybullet)", "success, dynamic (mujoco)"]
     assert [row[:2] for row in table["rows"]] == [["user-dynamic-mujoco-ppo-seed0", "dynamic (mujoco)"],
                                                    ["ppo-seed0", "kinematic"]]
-    assert all(cell.split(" ")[0] in ("0/1", "1/1") for row in table["rows"] for cell in row[2:])
+    assert all(len(row[2]) == 12 and cell.split(" ")[0] in ("0/1", "1/1") for row in table["rows"] for cell in row[3:])
 
 
 def test_hybrid_levers_counts_the_pairs_each_reading_of_the_offset_leaves():
