@@ -577,7 +577,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt as exc:  # one line, no traceback: what was kept and how to go on
         print(f"\nparagym: {exc}" if str(exc) else "\nparagym: interrupted", file=sys.stderr)
         return 130
-    except (ValueError, TypeError) as exc:  # bad input: say it plainly, no traceback
+    except (ValueError, TypeError, FileExistsError) as exc:  # bad input (a file of yours named): plainly, no traceback
         print(f"paragym: error: {exc}", file=sys.stderr)
         return 2
     except (RuntimeError, OSError) as exc:  # a planner that found no path, a GUI without display, a full disk

@@ -169,3 +169,15 @@ def test_a_tasks_own_option_is_its_benchs_and_refused_elsewhere(tmp_path, capsys
     with pytest.raises(SystemExit):
         main(["envs", "--dt", "1"])
     assert "unrecognized arguments: --dt 1" in capsys.readouterr().err
+
+
+def test_bad_input_is_one_line_with_no_engine_banner():
+    """PyBullet prints a build banner on stdout when it is imported: it is imported at its first use, so a
+    command refused before any scene is built says its one line and nothing else."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "paragym.cli", "export", "Nope-v0"], capture_output=True,
+                          text=True, timeout=120)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.startswith("paragym: error: unknown env id 'Nope-v0'") and done.stderr.count("\n") == 1

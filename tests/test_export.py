@@ -113,7 +113,11 @@ def test_export_cli_writes_checks_and_refuses_to_overwrite(tmp_path, capsys):
     assert "loops closed within" in said
     before = (tmp_path / "orthoglide.urdf").read_text()
     (tmp_path / "orthoglide.urdf").write_text("mine")
-    assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out)]) != 0
+    capsys.readouterr()
+    # an --out that names a file of yours is bad input, as the CLI guide says of it: exit 2, one line
+    assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("paragym: error: ") and "--overwrite" in err and err.count("\n") == 1
     assert (tmp_path / "orthoglide.urdf").read_text() == "mine"  # a user's file is not overwritten unasked
     assert main(["export", "Orthoglide2PRRKappa-v2", "--format", "urdf", "--out", str(out), "--overwrite"]) == 0
     assert (tmp_path / "orthoglide.urdf").read_text() == before
