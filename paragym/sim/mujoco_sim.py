@@ -623,13 +623,13 @@ def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequenc
 
     mj = _import_mujoco()
     spec = int(mj.mjtState.mjSTATE_FULLPHYSICS)  # what rollout takes and gives
-    alone = [k for k, sim in enumerate(sims) if sim.after_step or sim._pushed or not sim.cold_periods]
-    for k in alone:
+    alone = np.array([bool(sim.after_step or sim._pushed or not sim.cold_periods) for sim in sims])
+    for k in np.flatnonzero(alone):
         sims[k].ramp(motors, starts[k], goals[k], duration, 0.0, force)
-    batch = [sim for k, sim in enumerate(sims) if k not in alone]
-    if not batch:
+    rows = np.flatnonzero(~alone)
+    if not rows.size:
         return
-    rows = np.array([k for k in range(len(sims)) if k not in alone])
+    batch = [sims[k] for k in rows]
     ids, inputs = batch[0]._ramp_inputs(motors, starts[rows], goals[rows], duration, force)
     models = [sim.model for sim in batch]
     first = models[0]
