@@ -4,11 +4,12 @@ A task separates methods when its floors fail, the paper's method succeeds and l
 For each newest id and each rung (or ``--env``) and each of its named scenarios, every floor (zero, random and
 the task's naive controller), the reference and the shipped learned agents of training seed 0 play ``--episodes``
 episodes (the leaderboard's reset seeds, 100000 + k), and the table gives each success rate with Wilson's
-95 % interval against issue 40's bounds: zero and random at most 0.10, a naive floor at most 0.30 and its
+95 % interval against the headroom bounds: zero and random at most 0.10, a naive floor at most 0.30 and its
 interval below the reference's, the reference at least 0.90 (the learned agents have none), and each family's
-verdict by the ladder's rule (:func:`paragym.docpages.rung_verdict`): hard only where the reference's interval
-lies above that of every other method played, floors and learned agents alike (PPO, BC, linear CEM). A family that
-misses a bound is one a difficulty ladder has to redesign. The figure shows every rate with its interval.
+verdict by the ladder's rule (:func:`paragym.baselines.leaderboard.summary.rung_verdict`): hard only where
+the reference's interval lies above that of every other method played, floors and learned agents alike (PPO,
+BC, linear CEM). A family that misses a bound is one a difficulty ladder has to redesign. The figure shows every
+rate with its interval.
 
     python benchmarks/headroom.py [--env ID ...] [--episodes 50] [--figure PNG] [--record]
 """
@@ -25,14 +26,14 @@ from results_file import RESULTS, add_record_option, paragraph, record
 import paragym  # noqa: F401
 from paragym import registry
 from paragym.baselines.leaderboard.suite import episode_seed
+from paragym.baselines.leaderboard.summary import rung_verdict
 from paragym.baselines.policies import policies_for
 from paragym.baselines.stats import ahead, wilson
 from paragym.baselines.tasks import bench_of
-from paragym.docpages import rung_verdict
 from paragym.planners.base import PlanningError
 from paragym.rollout import run_episode
 
-#: issue 40's bounds on every rung: (kind of row, highest or lowest success, which side)
+#: the headroom bounds on every rung: (kind of row, highest or lowest success, which side)
 BOUNDS = {"zero": (0.10, "at most"), "random": (0.10, "at most"), "naive": (0.30, "at most"),
           "reference": (0.90, "at least")}
 

@@ -4,7 +4,7 @@
 title, its one paragraph, the command that printed it, the date, the machine
 (:func:`paragym.machine.describe`), the commit (with ``+dirty`` when the tree
 had changes) and the rows. ``python docs/build.py`` makes ``docs/speed.md``
-from these files (:func:`paragym.docpages.speed_page`); nobody types a figure
+from these files (``docs/pages.py``); nobody types a figure
 into the page.
 """
 

@@ -1,7 +1,7 @@
 """Build paragym's documentation site: ``python docs/build.py`` (needs the ``docs`` extra).
 
 Writes the generated pages (one per env id, the speed and conformance pages from the benchmarks' result files,
-and the ladders' page and figure from the committed leaderboard, :mod:`paragym.docpages`), then runs Sphinx in
+and the ladders' page and figure from the committed leaderboard, ``docs/pages.py``), then runs Sphinx in
 strict mode (a warning is an error) into ``docs/_build/html``. ``--no-images`` keeps the
 rendered frames as they are; ``--check`` only builds.
 """
@@ -23,7 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default=str(DOCS / "_build" / "html"), help="where the HTML goes")
     args = parser.parse_args(argv)
     if not args.check:
-        from paragym.docpages import conformance_page, ladder_figure, ladders_page, speed_page, write_pages
+        from pages import conformance_page, ladder_figure, ladders_page, speed_page, write_pages
 
         board = DOCS.parent / "leaderboard" / "leaderboard.csv"
         write_pages(DOCS / "envs", images=not args.no_images, board=board)

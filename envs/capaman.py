@@ -138,9 +138,9 @@ class CaPaManCollisionFreeEnv(ParagymEnv):
       ``control_period`` that the physics step does not divide warns.
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
-      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+      reward's terms in the info; every episode runs as before.
     * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
-      MuJoCo (issue 41); PyBullet's, the default, runs as before. MuJoCo alone
+      MuJoCo; PyBullet's, the default, runs as before. MuJoCo alone
       (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
     """
 
@@ -151,17 +151,6 @@ class CaPaManCollisionFreeV1Env(CaPaManCollisionFreeEnv):
     """``paragym/CaPaManCollisionFree-v1``: v0's mechanism, scenarios, motion,
     collision test and episode end, with an observation, a reward and a reach
     tolerance under which learning beats standing still.
-
-    ## Why v1
-    In v0, PPO on 4 M steps never completed a tour (0 % on 30 scenarios)
-    and every shipped agent scored below standing still (return 0): a
-    one-line controller that steers the cranks straight to the target
-    succeeds on about half the scenarios but collides on the other half
-    (-5), so its median return is below 0 and learning is pulled toward
-    timidity. The clearance was one number, with no direction in joint
-    space to move away from an obstacle, and the reach tolerance (1 deg of
-    joint-space norm, half an action's step) is hard to meet with a
-    stochastic policy. The ablation behind v1 is in ``baselines/ABLATION.md``.
 
     ## Observation Space
     ``Box(-1, 1, (41,), float32)``:
@@ -224,13 +213,6 @@ class CaPaManCollisionFreeV1VectorEnv(CaPaManCollisionFreeVectorEnv):
 class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
     """``paragym/CaPaManCollisionFree-Easy-v0``: rung 0 of the CaPaMan's difficulty ladder: v1's tour among
     posts, one of which stands on a leg's straight line.
-
-    ## Why a ladder
-    On v1's random scenes at most three obstacles stand where they fall, and fewer than half of the tours need
-    a detour: steering the cranks straight at the target succeeds in 45-80 % of episodes, above every shipped
-    learner (issue 40). Each leg of a rung's tour that carries a post cannot be gone straight, and the
-    scenes are drawn by one compiled kernel in tens of microseconds, so that resets do not dominate a native
-    env's step.
 
     ## Description
     Each scene is drawn by :func:`paragym.tasks.capaman.ladder_scenarios` from the rung's knobs

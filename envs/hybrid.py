@@ -130,9 +130,9 @@ class HybridSingularityFreeEnv(ParagymEnv):
       that the physics step does not divide warns.
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
-      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+      reward's terms in the info; every episode runs as before.
     * paragym 0.10, every version: the ``engine`` argument; "mujoco" runs the dynamic fidelity in
-      MuJoCo (issue 41); PyBullet's, the default, runs as before. MuJoCo alone
+      MuJoCo; PyBullet's, the default, runs as before. MuJoCo alone
       (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
     """
 
@@ -144,24 +144,17 @@ class HybridSingularityFreeV1Env(HybridSingularityFreeEnv):
     action, reward and success, with an observation that shows where the
     path ends.
 
-    ## Why v1
-    In v0 the observation holds the nominal pose now and one step ahead, not
-    P1 (which it implies only through a division by the path's near-zero
-    increments at its ends). Learned agents reached 90-93 % and failed
-    mostly the same scenarios: those where P1's legs are within their
-    limits only for a split far from 0.5 (0.6-0.84 and above), which the
-    reference (paper 002's serial optimisation of Delta) moves to over the
-    last 20-30 % of the path, and which a policy must start moving toward
-    before P1 comes into its one-step view (Delta moves at most
-    ``max_delta_step`` a step). With P1 and its stroke excess in view, the
-    best of three PPO seeds reached 96 % (v0: 92 %); over the seeds the gain
-    is within their spread (``baselines/ABLATION.md``).
-
     ## Observation Space
     ``Box(-10, 10, (48,), float32)``:
 
     ==========  ==========================================================
-    0-27        v0's observation
+    0           u, the path parameter (0 to 1)
+    1-6         the nominal pose of E at this step (x, y, z / 0.1 m, roll, pitch, yaw / 0.5 rad)
+    7-12        the nominal pose at the next step, scaled the same
+    13          Delta, the split between the stages (0 to 1)
+    14-22       the nine strokes, mapped so that L_min -> -1 and L_max -> +1
+    23-24       the singularity measures of the hexapod and the tripod (1 at home, singular below 0.2)
+    25-27       the current offset of E from the nominal path / j_bar
     28-33       P1 (x, y, z / 0.1 m, angles / 0.5 rad)
     34-42       P1's nine strokes solved at the current Delta (L_min -> -1, L_max -> +1)
     43-44       P1's two singularity measures at the current Delta
@@ -192,14 +185,6 @@ class HybridSingularityFreeV2Env(HybridSingularityFreeV1Env):
     """``paragym/HybridSingularityFree-v2``: v1's task, with a dynamic
     fidelity whose tracking covers E's orientation and whose mechanism can
     break.
-
-    ## Why v2
-    In v1's dynamic fidelity a step was free when E's position was within
-    5 mm of its command, whatever its orientation: E could turn 1.5 deg off
-    its commanded attitude in a free step. A ball joint could open without
-    ending anything. Both change episodes v1 could run, so they make v2;
-    in kinematic fidelity v2 is v1, bit for bit (v1's shipped models are
-    v2's).
 
     ## Episode End
     As v1 (u = 1; ``is_success`` when every step was free), and in dynamic
@@ -257,13 +242,6 @@ class HybridSingularityFreeV2VectorEnv(HybridSingularityFreeVectorEnv):
 class HybridSingularityFreeEasyEnv(HybridSingularityFreeV2Env):
     """``paragym/HybridSingularityFree-Easy-v0``: rung 0 of the hybrid's difficulty ladder: v2's task on paths
     that break a leg limit in their middle at the starting split.
-
-    ## Why a ladder
-    On v2's random pairs the floors succeed too often to separate methods: the nominal path at the starting
-    split (the zero action) succeeds in 40 % of them, and stepping the split toward the end pose's lower stroke
-    excess (the greedy floor) in 82 %, above PPO (issue 40). On the ladder both end poses are within the limits
-    at the starting split 0.5 and the nominal path there breaks a limit between them, so the split must move
-    away and back (or E detour) before the end, where the observation's end-pose excess says nothing.
 
     ## Description
     Each pair of poses is drawn by :func:`paragym.tasks.hybrid.ladder_scenarios` from the rung's knob
@@ -449,20 +427,6 @@ class HybridSingularityFreeHardV1VectorEnv(HybridSingularityFreeVectorEnv):
 class HybridSingularityFreeEasyV2Env(HybridSingularityFreeEasyV1Env):
     """``paragym/HybridSingularityFree-Easy-v2``: rung 0 of the hybrid's ladder v2: the ladder v1's easy rung on
     pairs whose certificate keeps every stroke 1 mm inside its limits.
-
-    ## Why v2
-    On the ladder v1 the certificate's schedule may touch a limit: where no schedule keeps 1 mm inside them, the
-    reference plans at the limits, and under physics a force-limited actuator chasing a stroke planned there
-    can overshoot it (leg-limit poses). Over 30 dynamic episodes the reference succeeded on 19, 13 and 9 of the
-    ladder v1's easy, medium and hard rungs in MuJoCo (19 of 30 on the easy rung in PyBullet), and every failure
-    of the easy rung's checked was a pair without a 1 mm schedule. That verdict is not converged: of three such
-    failures at the leaderboard's 5 ms step, two pass at 2.5 ms and one still fails (8 leg-limit poses; 9 at
-    twice the solver iterations). The ladder v2 draws those pairs again, and its reference's verdicts hold at
-    half the step and at twice the iterations (four hard-rung drives). The constant rates and the lookahead rule
-    must still fail at the limits themselves; on 30 fresh drives of the medium and hard rungs the stroke rule
-    succeeds on 20 and 15, the lookahead rule with 20 samples of sight on 23 and 18, and a linear policy from
-    four minutes of CEM on 20 and 20, more than on the ladder v1: these rungs keep the reference clear of the
-    limits, and that slack helps the cheap rules too.
 
     ## Description
     As the ladder v1's easy rung (``paragym/HybridSingularityFree-Easy-v1``), with the rungs' knobs:

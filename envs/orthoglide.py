@@ -114,10 +114,10 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
     * v1 (paragym 0.8.0): :class:`Orthoglide2PRRKappaV1Env` closes them.
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
-      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
-    * paragym 0.10, every version and rung: ``engine="mujoco"`` runs the dynamic fidelity in MuJoCo
-      (issue 52); PyBullet's, the default, runs as before. MuJoCo alone
-      (``MuJoCoSettings(mirror=False)``) and the native dynamic vector env.
+      reward's terms in the info; every episode runs as before.
+    * paragym 0.10, every version and rung: ``engine="mujoco"`` runs the dynamic fidelity in MuJoCo;
+      PyBullet's, the default, runs as before. MuJoCo alone (``MuJoCoSettings(mirror=False)``) and the
+      native dynamic vector env.
     """
 
     task, rules = TASK, RULES[0]
@@ -126,14 +126,6 @@ class Orthoglide2PRRKappaEnv(ParagymEnv):
 class Orthoglide2PRRKappaV1Env(Orthoglide2PRRKappaEnv):
     """``paragym/Orthoglide2PRRKappa-v1``: v0's mechanism, paths, spaces and
     reward, with success that requires the tracking the task asks for.
-
-    ## Why v1
-    In v0's joint-velocity mode success checked the joint limits and the
-    singularity only: the zero action, which leaves the tool where it
-    starts, "succeeded" on every path with a tracking error of 0.73 m. The
-    two fidelities also took kappa at different points in that mode, and
-    the dynamic fidelity rounded each path step to whole physics steps (a
-    path of 1.25 s was simulated over 5 s).
 
     ## Episode End
     As v0, and a step whose tool is more than ``track_tolerance`` (5 mm)
@@ -144,10 +136,21 @@ class Orthoglide2PRRKappaV1Env(Orthoglide2PRRKappaEnv):
     failure too. ``info["failure"]`` names the reason ("joint limit",
     "working mode", "singular", "tracking", "broken"; None while none).
 
-    ## Rewards, Observation Space
-    As v0, with kappa (eq 8) and the null vector n taken where the joints
-    put the tool, in every mode and fidelity (in kinematic null-space mode
-    that is the path point).
+    ## Rewards
+    As v0, with kappa (eq 8) taken where the joints put the tool, in every mode and fidelity (in kinematic
+    null-space mode that is the path point).
+
+    ## Observation Space
+    ``Box(-10, 10, (11,), float32)``, each component clipped to +-10; kappa and n are taken where the joints
+    put the tool, in every mode and fidelity (in kinematic null-space mode that is the path point):
+
+    ==========  ==========================================================
+    0-2         rho (the table and the two sliders), normalised to [-1, 1] over their limits
+    3-4         the path point of this step (table frame, m)
+    5-6         the path point of the next step (table frame, m)
+    7           log kappa at the joints (10 from kappa = 2.2e4 on, and where J is singular)
+    8-10        n, the null vector of J at the joints (zeros where J is singular)
+    ==========  ==========================================================
 
     ## Arguments
     As v0, plus ``track_tolerance`` (m). In dynamic fidelity each path step
@@ -168,14 +171,6 @@ class Orthoglide2PRRKappaV1Env(Orthoglide2PRRKappaEnv):
 class Orthoglide2PRRKappaV2Env(Orthoglide2PRRKappaV1Env):
     """``paragym/Orthoglide2PRRKappa-v2``: v1's task; in dynamic fidelity the table runs beneath the sliders'
     guides.
-
-    ## Why v2
-    In v1's dynamic fidelity the table (a 1.1 m plate) runs at the height of the sliders' guides. On a path
-    that carries it to the x guide's end it strikes the guide and stops there (a contact of about 424 N), the
-    tool leaves the path and the episode fails on tracking, whatever the policy: on reset seed 200009 of the
-    random paths the paper's gradient, rate-limited, tracked to 0.4 mm until the table met the guide at step
-    732, then failed at step 741 (5.3 mm). v2's table runs 2 cm lower, beneath the guides
-    (:class:`~paragym.sim.orthoglide_dynamic.OrthoglideDynamicScene`'s ``table_below_guides``).
 
     ## Description, Action Space, Observation Space, Rewards, Starting State, Episode End, Arguments
     As v1. The kinematic fidelity is v1's, bit for bit.
@@ -217,12 +212,6 @@ class Orthoglide2PRRKappaV2VectorEnv(Orthoglide2PRRKappaVectorEnv):
 class Orthoglide2PRRKappaEasyEnv(Orthoglide2PRRKappaV1Env):
     """``paragym/Orthoglide2PRRKappa-Easy-v0``: rung 0 of the Orthoglide's difficulty ladder: v1's task, where
     success asks for a mean kappa that the least-norm motion never reaches.
-
-    ## Why a ladder
-    v1 asks only that the path be tracked without a failure, which doing nothing does: zero and random succeed
-    on every path, and no fixed bound on kappa can tell them from the paper's gradient (its mean kappa over the
-    path, 1.08 at the median, lies within the zero action's spread, 1.11-1.31, issue 40). On the ladder the
-    bound is the path's own: a share of the way from 1 to the least-norm motion's mean kappa on that path.
 
     ## Description
     Each path is drawn by :func:`paragym.tasks.orthoglide.ladder_scenarios` from the rung's knobs
@@ -286,14 +275,6 @@ class Orthoglide2PRRKappaHardEnv(Orthoglide2PRRKappaEasyEnv):
     """``paragym/Orthoglide2PRRKappa-Hard-v0``: rung 2 of the Orthoglide's difficulty ladder: faster laps under
     the tightest bound on the mean kappa, with the policy driving the three joints itself.
 
-    ## Why the joints
-    On the null-space rungs the env keeps the tool on the path and the policy chooses one number, the table's
-    rate along n: PPO from scratch matched the paper's gradient there within a minute on every rung (issue
-    40). Here the policy commands the joint rates, as paper 003's eq 5 does in full
-    (``rho_dot = J^+ t_dot + z n``): it must track the path within the tolerance and lower kappa at once. The
-    paper's gradient plays it through :class:`paragym.planners.nullspace_gradient.JointRates` (eq 5 over the
-    path step, the sliders by inverse kinematics at the next point, from the measured joints).
-
     ## Description, Starting State
     As v0 of the easy rung (``paragym/Orthoglide2PRRKappa-Easy-v0``), with rung 2's knobs (its page's table).
 
@@ -302,9 +283,15 @@ class Orthoglide2PRRKappaHardEnv(Orthoglide2PRRKappaEasyEnv):
     to the Box. The rung fixes ``action_mode="joint_velocity"``; another raises ``ValueError``.
 
     ## Observation Space
-    ``Box(-10, 10, (13,), float32)``, each component clipped to +-10: v1's eleven, then
+    ``Box(-10, 10, (13,), float32)``, each component clipped to +-10: v1's eleven (kappa and n where the joints
+    put the tool), then the offset:
 
     ==========  ==========================================================
+    0-2         rho (the table and the two sliders), normalised to [-1, 1] over their limits
+    3-4         the path point of this step (table frame, m)
+    5-6         the path point of the next step (table frame, m)
+    7           log kappa (10 from kappa = 2.2e4 on, and where J is singular)
+    8-10        n, the null vector of J (zeros where J is singular)
     11-12       the tool's offset from this step's path point (x, y, table frame, cm)
     ==========  ==========================================================
 

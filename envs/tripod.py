@@ -105,7 +105,7 @@ class MobileTripodOdometryEnv(ParagymEnv):
       tripod ends the episode as a failure.
     * paragym 0.10, every version: one lifecycle (a step after termination, before reset or after
       ``close`` is refused; unknown reset options too; no copy shares a PyBullet client) and the
-      reward's terms in the info (CHANGELOG, issue 39); every episode runs as before.
+      reward's terms in the info; every episode runs as before.
     """
 
     task, rules = TASK, RULES[0]
@@ -115,17 +115,6 @@ class MobileTripodOdometryV1Env(MobileTripodOdometryEnv):
     """``paragym/MobileTripodOdometry-v1``: v0's drives, success and end, with
     an action, an observation and a reward under which learning beats
     odometry.
-
-    ## Why v1
-    In v0 the action is a correction added to the estimate, so every
-    correction stays in it for the rest of the drive: exploration noise and
-    any bias of a learned policy integrate, and in the directions the
-    encoders cannot see (a rigid shift or turn of all three units) nothing
-    pulls them back. v0's best learned agent ended 58.9 cm off, against
-    12.1 cm for odometry alone and 3.0 cm for the paper's correction. The
-    observation also gave absolute world coordinates, leaving the policy to
-    compute the inter-unit distances itself. The ablation behind v1 is in
-    ``baselines/ABLATION.md``.
 
     ## Action Space
     ``Box(-1, 1, (3,))``: for each unit u, the fraction ``clip(a_u, 0, 1)``
@@ -179,14 +168,6 @@ class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
     """``paragym/MobileTripodOdometry-v2``: v1's task, in which a folded
     mechanism ends the episode as a failure.
 
-    ## Why v2
-    Some drives fold the tripod: a leg reaches the horizontal (true eta <= 0)
-    and the plate comes down. In v0 and v1 both fidelities carried on as if
-    nothing happened (7 % of random drives fold in kinematic fidelity, 14 of
-    200 seeds; the dynamic fidelity folds on others, since its units slip
-    and bump differently). Ending those episodes changes what v1 did, so it
-    is v2.
-
     ## Episode End
     As v1, and when a leg reaches the horizontal: the episode ends there,
     ``is_success`` is False and ``info["failure"]`` is "folded" (in v0 and v1
@@ -227,13 +208,6 @@ class MobileTripodOdometryV2Env(MobileTripodOdometryV1Env):
 class MobileTripodOdometryV3Env(MobileTripodOdometryV2Env):
     """``paragym/MobileTripodOdometry-v3``: v2's task, its dynamic fidelity at converged physics by default, each
     unit starting on its wheels.
-
-    ## Why v3
-    v2's dynamic default (a 5 ms step, 30 solver iterations) is not converged: PyBullet's solver lets the drive
-    units creep sideways while their wheels' friction is far below its limit, and the reference's success
-    follows the setting rather than the method (v2's page). And v2 stands each unit's level chassis at the
-    ground under its joint, so on a bump's flank its uphill wheel starts inside the terrain: PyBullet pushes it
-    out, MuJoCo launches the unit. Changing a released id's physics changes what it does, so these are v3.
 
     ## Dynamic Fidelity
     The default is ``TripodDynamics.converged()``: the same 5 ms step with 100 solver iterations, at which a
@@ -291,14 +265,6 @@ class MobileTripodOdometryV3VectorEnv(MobileTripodOdometryVectorEnv):
 class MobileTripodOdometryEasyEnv(MobileTripodOdometryV2Env):
     """``paragym/MobileTripodOdometry-Easy-v0``: rung 0 of the tripod's difficulty ladder: v2's task on drives
     where odometry alone always fails.
-
-    ## Why a ladder
-    On v2's drives the floors succeed too often to separate methods: odometry alone (the zero action) ends
-    within 5 cm on every ``push``, ``random_slip`` and ``rough_terrain`` drive, and one constant action
-    succeeds in 45 % of ``random`` drives, as often as the best learned agent (issue 40). On the ladder every
-    drive has two or more pushes of 15-50 cm on units drawn at random, so that odometry ends far outside 5 cm
-    and no constant trust corrects them all, on ground whose bumps and slip hide them in the encoders' noise
-    more on every rung.
 
     ## Description
     Each drive is drawn by :func:`paragym.tasks.tripod.ladder_scenario` from the rung's knobs

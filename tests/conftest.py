@@ -1,6 +1,12 @@
 """Fixtures shared by several test modules."""
 
+import sys
+from pathlib import Path
+
 import pytest
+
+# the docs site's generator (docs/pages.py) is not part of the package: the tests of the pages import it from there
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "docs"))
 
 from paragym.planners import RrtGaPlanner
 from paragym.tasks.capaman import paper_scenario

@@ -13,11 +13,12 @@ TESTS = Path(__file__).resolve().parent
 SCRIPT = r"""
 import contextlib, io, json, sys
 sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[1] + "/../docs")
 out = sys.argv[2]
 import point_task  # registers paragym/PointReach-v0
 from paragym.cli import main
 from paragym.baselines.tasks import bench_of, missing
-from paragym.docpages import env_page, index_page
+from pages import env_page, index_page
 
 def run(*argv):
     buf, err = io.StringIO(), io.StringIO()

@@ -1,6 +1,6 @@
-"""The documentation site (issue 27, items 6-7): every generated page is current, every snippet runs.
+"""The documentation site: every generated page is current, complete on its own, and every snippet runs.
 
-The env pages are generated (``python docs/build.py``, :mod:`paragym.docpages`) and committed, so that
+The env pages are generated (``python docs/build.py``, ``docs/pages.py``) and committed, so that
 the site builds from a clean clone and a reviewer sees them in the diff; a page that is not what the
 generator writes now fails here. Every ```python block of the README and the docs runs, each on its
 own (a snippet that needs another's names fails), in a scratch folder; the leaderboard's full suite is
@@ -14,9 +14,9 @@ import warnings
 from pathlib import Path
 
 import pytest
+from pages import env_page, index_page
 
 from paragym import registry
-from paragym.docpages import env_page, index_page
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -44,11 +44,42 @@ def test_each_env_page_is_what_the_generator_writes(row):
     assert (DOCS / "envs" / "images" / f"{row.name}.png").is_file()
 
 
+def _page_section(page: str, name: str) -> str:
+    return page.split(f"\n## {name}\n", 1)[1].split("\n## ", 1)[0]
+
+
+@pytest.mark.parametrize("row", registry.ROWS, ids=lambda r: r.name)
+def test_each_env_page_writes_out_its_action_and_observation_tables(row):
+    """A reader of one page learns what an action does and what each observation entry is, without chasing the
+    versions it extends: each section holds the Box and the table itself, in its own words and at most one
+    other id's, and the
+    observation table's rows cover the observation's entries, 0 to its last."""
+    page = env_page(row.id)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        import gymnasium as gym
+
+        env = gym.make(row.id)
+        size = env.observation_space.shape[0]
+        env.close()
+    for name in ("Action Space", "Observation Space"):
+        text = _page_section(page, name)
+        assert "Box(" in text, (row.id, name)
+        assert text.count("```{eval-rst}") <= 2, f"{row.id}'s {name} sends the reader along a chain of versions"
+    table = _page_section(page, "Observation Space")
+    indices = re.findall(r"^(\d+)(?:-(\d+))?\s", table, re.M)
+    assert indices and indices[0][0] == "0", f"{row.id}'s observation table is not written out"
+    if re.search(r"^\d+ \+ \d+ K|^\d+ to ", table, re.M):  # a table in the number of posts K: no numbers to add
+        return
+    covered = sorted(i for lo, hi in indices for i in range(int(lo), int(hi or lo) + 1))
+    assert covered == list(range(size)), f"{row.id}'s observation table covers {covered}, the space has {size}"
+
+
 def test_the_speed_page_is_made_from_the_benchmarks_result_files():
     """docs/speed.md is generated (no figure typed in): each table is a result file saying what produced it."""
     import json
 
-    from paragym.docpages import conformance_page, speed_page
+    from pages import conformance_page, speed_page
 
     results = ROOT / "benchmarks" / "results"
     assert (DOCS / "speed.md").read_text() == speed_page(results), "docs/speed.md is stale: run python docs/build.py"
@@ -117,7 +148,7 @@ def test_no_source_of_the_site_is_ignored_by_git():
 
 
 def test_the_ladders_page_is_made_from_the_committed_leaderboard():
-    from paragym.docpages import ladders_page
+    from pages import ladders_page
 
     board = ROOT / "leaderboard" / "leaderboard.csv"
     assert (DOCS / "ladders.md").read_text() == ladders_page(board), \
@@ -130,8 +161,9 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     counted; a method a rung lacks shows a dash."""
     import csv
 
+    from pages import ladder_table
+
     from paragym import registry
-    from paragym.docpages import ladder_table
 
     easy, medium, hard = (r.id for r in registry.ladders("hybrid")[0])
     fields = ["env", "rank", "policy", "kind", "success_rate", "success_ci_low", "success_ci_high",
@@ -170,7 +202,7 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     assert len(table) == 14  # the v2 id's row is no rung
     newest = ladder_table(path, newest=True).splitlines()  # the README's: each task's newest ladder alone
     assert newest == table[:2] + table[11:]
-    from paragym.docpages import env_page  # and each rung's page says its verdict, a version's page none
+    from pages import env_page  # and each rung's page says its verdict, a version's page none
 
     assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)
     assert "| verdict | hard (" in env_page(hard, board=path)

@@ -9,13 +9,13 @@ from dataclasses import replace
 import gymnasium as gym
 import numpy as np
 import pytest
+from pages import status
 
 import paragym
 from paragym import registry
 from paragym.baselines.policies import get_policy
 from paragym.baselines.simple import ConstantPolicy
 from paragym.baselines.tasks.hybrid import Lookahead
-from paragym.docpages import status
 from paragym.mechanisms import hybrid
 from paragym.planners.polynomial_detour import PolynomialDetourPlanner
 from paragym.rollout import run_episode

@@ -8,6 +8,7 @@ import math
 import gymnasium as gym
 import numpy as np
 import pytest
+from pages import status
 
 import paragym  # noqa: F401
 from paragym import registry
@@ -15,7 +16,6 @@ from paragym.baselines.policies import get_policy, policies_for
 from paragym.baselines.simple import best_constant
 from paragym.baselines.solve import SolveCheck
 from paragym.baselines.tasks import tripod as tripod_bench
-from paragym.docpages import status
 from paragym.planners.encoder_correction import EncoderTrustPolicy
 from paragym.rollout import run_episode
 from paragym.tasks.tripod import LADDER, TripodScenario, ladder_scenario, validate_scenario

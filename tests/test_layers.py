@@ -23,7 +23,7 @@ LAYERS = [
     ("paragym.envs", "paragym.planners", "paragym.validation"),
     ("paragym.plots", "paragym.models"),
     ("paragym.baselines",),
-    ("paragym.cli", "paragym.docpages"),
+    ("paragym.cli",),
 ]
 EXTERNAL = {  # third-party imports a layer must not make
     "paragym.mechanisms": ("pybullet", "gymnasium"),

@@ -24,26 +24,27 @@ def test_ci_runs_the_readme_test_command():
 
 def test_the_readme_is_a_front_page_with_a_true_env_table():
     """At most about 250 lines; its env table is the registry's, status column included (generated)."""
-    from paragym.docpages import readme_env_table
+    from pages import readme_env_table
 
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 250
-    assert readme_env_table() in text, "README's env table is stale: paste paragym.docpages.readme_env_table()"
+    assert readme_env_table() in text, "README's env table is stale: paste docs/pages.py's readme_env_table()"
 
 
 def test_the_readme_leaderboard_is_the_committed_run_with_its_intervals():
     """The headline table is generated from the committed leaderboard/leaderboard.csv, which the committed
     LEADERBOARD.md was written with: the same run, of this version, with no path of the machine that ran it."""
+    from pages import readme_leaderboard_table
+
     import paragym
-    from paragym.docpages import readme_leaderboard_table
 
     text = (ROOT / "README.md").read_text()
     assert readme_leaderboard_table(ROOT / "leaderboard" / "leaderboard.csv") in text, \
-        "README's leaderboard is stale: paste paragym.docpages.readme_leaderboard_table('leaderboard/leaderboard.csv')"
-    from paragym.docpages import ladder_table
+        "README's leaderboard is stale: paste docs/pages.py's readme_leaderboard_table('leaderboard/leaderboard.csv')"
+    from pages import ladder_table
 
     assert ladder_table(ROOT / "leaderboard" / "leaderboard.csv", newest=True) in text, \
-        "README's ladder table is stale: paste paragym.docpages.ladder_table('leaderboard/leaderboard.csv', " \
+        "README's ladder table is stale: paste docs/pages.py's ladder_table('leaderboard/leaderboard.csv', " \
         "newest=True)"
     board = (ROOT / "LEADERBOARD.md").read_text()
     assert f"package version {paragym.__version__}; full suite" in board

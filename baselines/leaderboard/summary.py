@@ -15,7 +15,7 @@ from paragym.baselines.stats import ahead, half_width, mean_ci, resolvable_drop,
 from paragym.baselines.store import DynamicRow, EpisodeRow, ResultStore
 from paragym.baselines.tasks import bench_of, dynamic_kwargs
 
-__all__ = ["NoiseFloor", "Summary", "dynamic_summary", "mark_separable", "noise_floor", "summarise"]
+__all__ = ["NoiseFloor", "Summary", "dynamic_summary", "mark_separable", "noise_floor", "rung_verdict", "summarise"]
 
 
 @dataclass
@@ -171,3 +171,17 @@ def dynamic_summary(rows: list[DynamicRow], suite: EvalSuite) -> dict[str, Any] 
             "kf": None if paper is None else {"passed": paper.kf_passed, **paper.kf},
             "settings": settings}
 
+
+def rung_verdict(methods: dict[str, dict[str, dict[str, str]]], env_id: str) -> str:
+    """Whether a rung is hard. ``methods``: one task's rows of the rungs, method -> rung id -> its
+    ``leaderboard.csv`` row (a method is a row's role: "reference", a floor's name, a learning algorithm's).
+    "hard" when the reference's 95 % interval lies above every other ranked method's, floors and learners
+    alike; else "sanity:" and the methods whose interval reaches the reference's (a rung that a cheap method
+    or a learner solves as well measures nothing beyond that); "-" where the reference has no row."""
+    ref = methods.get("reference", {}).get(env_id)
+    if ref is None:
+        return "-"
+    low = float(ref["success_ci_low"])
+    close = [m for m, rows in methods.items()
+             if m != "reference" and env_id in rows and float(rows[env_id]["success_ci_high"]) >= low]
+    return "hard" if not close else "sanity: " + ", ".join(close)

@@ -21,9 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from paragym import registry
+from paragym.baselines.leaderboard.summary import rung_verdict
 
 __all__ = ["CONFORMANCE", "SECTIONS", "conformance_page", "env_class", "env_page", "index_page", "ladder_figure",
-           "ladder_table", "ladders_page", "readme_env_table", "readme_leaderboard_table", "render_frame",
+           "ladder_table", "ladders_page", "lineage", "readme_env_table", "readme_leaderboard_table", "render_frame",
            "sections", "speed_page", "status", "write_pages"]
 
 #: the sections of an env page, in order (Gymnasium's env pages use the same)
@@ -62,16 +63,28 @@ def _parent_id(cls: type) -> str | None:
     return None
 
 
+#: a section's text that only points at the version it extends ("As v1.", "As v0 of the easy rung (``id``), with
+#: rung 2's knobs."): the page shows the text pointed at instead
+_POINTER = re.compile(r"As (v\d+|the [^(.]*?)( of (this|the easy) rung)?( \(``[^`]+``\))?(, with rung \d's knobs?)?\.")
+
+
 def _section(env_id: str, name: str) -> list[tuple[str, str]]:
     """The text of section ``name`` for ``env_id``: (the id that says it, text), the id's own first; an
-    own text that begins "As v..." (or none) is followed by the section of the version it extends."""
+    own text that begins "As ..." (or none) is followed by the section of the version it extends, until a
+    text that stands on its own. Texts that only point on (:data:`_POINTER`) are left out."""
     cls = env_class(env_id)
     _, own = sections(cls)
     parent = _parent_id(cls)
     out = [(env_id, own[name])] if name in own else []
-    if parent is not None and (not out or out[0][1].startswith("As v")):
+    if parent is not None and (not out or out[0][1].startswith("As ")):
         out += _section(parent, name)
-    return out
+    return [(source, text) for source, text in out if not _POINTER.fullmatch(text)]
+
+
+def lineage(env_id: str) -> list[str]:
+    """The ids ``env_id`` extends, the oldest first, then ``env_id``: its line of history."""
+    parent = _parent_id(env_class(env_id))
+    return ([] if parent is None else lineage(parent)) + [env_id]
 
 
 def status(env_id: str) -> str:
@@ -85,6 +98,15 @@ def status(env_id: str) -> str:
         return f"rung {row.rung} of {rungs} (0 the easiest) of the ladder v{row.version}; {fidelities}"
     newest = registry.rows_of(row.task)[-1].id
     return f"{'latest' if newest == env_id else f'superseded by `{newest}`'}; {fidelities}"
+
+
+#: the hand-written page of why each version and ladder was made, its sections labelled ``why-<name>-<what>``
+VERSIONS_PAGE = Path(__file__).resolve().parent / "versions.md"
+
+
+def _why_labels(name: str) -> list[str]:
+    """The labels of :data:`VERSIONS_PAGE`'s sections on the id named ``name`` (its name without "paragym/")."""
+    return re.findall(rf"^\((why-{re.escape(name.lower())}-[a-z0-9-]+)\)=$", VERSIONS_PAGE.read_text(), flags=re.M)
 
 
 def _rst(text: str) -> list[str]:
@@ -116,8 +138,10 @@ def env_page(env_id: str, image: str | None = None, board: str | Path | None = N
         action_space, observation_space = _space(env.action_space), _space(env.observation_space)
         env.close()
     lines = [f"# {row.name}", "", *_rst(summary), ""]
+    case = "the paper's case" if row.rung is None else "a scene of the rung"
+    paper_case = f"; the paper's case: `{row.paper_scenario}`" if row.rung is None else " (drawn from the rung's knobs)"
     if image is not None:
-        lines += [f"```{{image}} {image}", f":alt: {row.name}, the paper's case after reset(seed=0)",
+        lines += [f"```{{image}} {image}", f":alt: {row.name}, {case} after reset(seed=0)",
                   ":width: 420px", "```", ""]
     make, vector = f'`gym.make("{row.id}")`', "Gymnasium's `sync` and `async` modes"
     if row.vector_entry_point:
@@ -132,22 +156,20 @@ def env_page(env_id: str, image: str | None = None, board: str | Path | None = N
               f"| action space | `{action_space}` |",
               f"| observation space | `{observation_space}` |",
               f"| episode length | at most {row.max_episode_steps} steps (`TimeLimit`) |",
-              f"| scenarios | {', '.join(f'`{s}`' for s in row.scenario_names)}; "
-              f"the paper's case: `{row.paper_scenario}` |",
+              f"| scenarios | {', '.join(f'`{s}`' for s in row.scenario_names)}{paper_case} |",
+              f"| lineage | {' -> '.join(f'`{registry.row(i).name}`' for i in lineage(env_id))} |",
               f"| task | `{row.task}` ({row.summary}) |",
               f"| reference | `{bench.reference}` (`paragym demo {row.name}`) |",
+              *[f"| why it was made | {{ref}}`{label}` |" for label in _why_labels(row.name)],
               ""]
-    why = [k for k in own if k.startswith("Why v")]
-    for name in why:
-        lines += [f"## {name}", "", *_rst(own[name]), ""]
     for name in SECTIONS:
         texts = _section(env_id, name)
         if not texts:
             continue
         lines += [f"## {name}", ""]
-        for i, (source, text) in enumerate(texts):
-            if i:
-                lines += [f"*{name} of `{source}`:*", ""]
+        for source, text in texts:
+            if source != env_id:
+                lines += [f"*As `{source}` says it:*", ""]
             lines += [*_rst(text), ""]
     lines += ["## On the leaderboard", "",
               f"Ranked by success rate, then {bench.label(bench.primary[0])} "
@@ -269,20 +291,6 @@ def _ladder_rows(csv_path: str | Path) -> dict[str, dict[str, dict[str, dict[str
             if method is not None:
                 out.setdefault(rung.task, {}).setdefault(method, {}).setdefault(rung.id, row)
     return out
-
-
-def rung_verdict(methods: dict[str, dict[str, dict[str, str]]], env_id: str) -> str:
-    """Whether a rung is hard (``methods``: one task's :func:`_ladder_rows`): "hard" when the reference's
-    95 % interval lies above every other ranked method's, floors and learners alike; else "sanity:" and the
-    methods whose interval reaches the reference's (a rung that a cheap method or a learner solves as well
-    measures nothing beyond that); "-" where the reference has no row."""
-    ref = methods.get("reference", {}).get(env_id)
-    if ref is None:
-        return "-"
-    low = float(ref["success_ci_low"])
-    close = [m for m, rows in methods.items()
-             if m != "reference" and env_id in rows and float(rows[env_id]["success_ci_high"]) >= low]
-    return "hard" if not close else "sanity: " + ", ".join(close)
 
 
 def _ladders_found(found: dict[str, dict[str, dict[str, dict[str, str]]]], newest: bool = False
