@@ -14,7 +14,7 @@ same whichever way the model came.
 The forward pass is one compiled kernel (:func:`k_forward`) in a fixed
 order, not BLAS: OpenBLAS picks its kernels per CPU, and its float32
 products of the same weights differ in the last bits between CPUs, which
-an episode then carries into its returns (issue 38). Each dot product is
+an episode then carries into its returns. Each dot product is
 summed in float64 in index order (a product of two float32 is exact in
 float64), the bias added, and the sum rounded to float32, as the layer's
 float32 output; tanh is :func:`k_tanh`, written here in plain arithmetic,

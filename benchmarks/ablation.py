@@ -1,4 +1,4 @@
-"""The ablation behind the v1 envs (issue 17): each row a design change, trained and measured the same way.
+"""The ablation behind the v1 envs: each row a design change, trained and measured the same way.
 
     python benchmarks/ablation.py --task tripod --out runs/ablation [--rows 0 3]
     python benchmarks/ablation.py --task capaman --out runs/ablation

@@ -7,7 +7,7 @@ loads), one library at a time and all together, and compares every figure
 with the file's (:func:`paragym.baselines.leaderboard.results.compare`). The
 episodes: ``--per-policy`` of every producer in the file (every policy of
 every env id) and ``--dynamic`` dynamic-fidelity ones, drawn with ``--seed``,
-and the episode issue 38 was reported on. Also times the two parts made
+and the episode first reported to differ between CPUs. Also times the two parts made
 CPU-independent against what they replaced, measured in the same run: the
 learned actor's kernel against numpy's BLAS products, and the hybrid's
 Jacobi eigenvalues against LAPACK's ``eigvalsh``.
@@ -228,8 +228,8 @@ def write_report(path: Path, args: argparse.Namespace, table: list, reported: li
     lines += ["", "The simulated CPUs: " + "; ".join(f"`{k}`: " + (", ".join(f"{a}={b}" for a, b in v.items())
                                                                   if v else "this machine as it is")
                                                    for k, v in machine.SIMULATED.items()) + ".", "",
-              f"The episode issue 38 was reported on, {REPORTED[0].split('/')[1]} {REPORTED[1]} seed {REPORTED[2]} "
-              f"episode {REPORTED[3]}: its return as each simulated CPU computes it.", "",
+              f"The episode first reported to differ between CPUs, {REPORTED[0].split('/')[1]} {REPORTED[1]} "
+              f"seed {REPORTED[2]} episode {REPORTED[3]}: its return as each simulated CPU computes it.", "",
               "| simulated CPU | return | against the file |", "|---|---|---|"]
     lines += [f"| `{cpu}` | {ret!r} | {dev:.1e} |" for cpu, ret, dev in reported]
     from paragym import registry

@@ -1,5 +1,5 @@
 """Which levers of the hybrid's action clear a path that breaks a leg limit midway: the design measurement
-behind its ladder (issue 51).
+behind its ladder.
 
 Pairs of poses are drawn from the hybrid's box (v2's and the rungs': the
 generator's first filters) until ``--candidates``; kept are those whose ends

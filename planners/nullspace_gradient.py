@@ -138,8 +138,8 @@ class GradientPolicy:
     change: each path step the action moves at most ``max_accel * h / max_null_rate`` from the last one (h: the
     path's time step, s), from rest at the start. Near its optimum kappa has a kink (two singular values of J
     cross), so the plain rule's sign flips between -1 and +1 from one step to the next; a kinematic model
-    follows, motors do not (issue 41: under PyBullet's dynamics the plain rule fails on tracking in most
-    episodes, and the KF check with it). The limit is the actuators' acceleration, which paper 003 leaves out.
+    follows, motors do not (under PyBullet's dynamics the plain rule fails on tracking, and the KF check with
+    it: docs/guides/dynamics.md). The limit is the actuators' acceleration, which paper 003 leaves out.
     """
 
     def __init__(self, gain: float = 5.0, geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY,

@@ -285,7 +285,7 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
                         "duration_s": traj.duration}
 
 
-#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task capaman``), its rows in the order they were tried
+#: the ablation behind v1 (``benchmarks/ablation.py --task capaman``), its rows in the order they were tried
 ABLATION = Ablation(
     rows=(
         AblationRow("v0 (absolute obs, no look-ahead, v0 reward), PPO", "paragym/CaPaManCollisionFree-v0", {}, {},

@@ -244,7 +244,7 @@ def validated_plan(seed: int) -> tuple[bool, dict[str, Any]]:
                                "position_error_m": val.position_error}
 
 
-#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task hybrid``), its rows in the order they were tried
+#: the ablation behind v1 (``benchmarks/ablation.py --task hybrid``), its rows in the order they were tried
 ABLATION = Ablation(
     rows=(
         AblationRow("v0, the shipped PPO setup", "paragym/HybridSingularityFree-v0", {}, {}, 2_000_000),

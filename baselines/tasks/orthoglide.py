@@ -112,7 +112,7 @@ def hill_climb_params() -> dict[str, Any]:
 
 
 #: the table's acceleration along n (m/s^2) that the reference ``gradient-c-limited`` allows itself: the change
-#: of 0.05 of ``max_null_rate`` per 10 ms path step that kept the dynamic tracking error under 1 mm (issue 41)
+#: of 0.05 of ``max_null_rate`` per 10 ms path step
 MAX_ACCEL = 2.5
 
 

@@ -141,7 +141,7 @@ def plan(env: gym.Env, args: argparse.Namespace, out: Path, stem: str) -> int:
     return 0
 
 
-#: the ablation behind v1 (issue 17; ``benchmarks/ablation.py --task tripod``), its rows in the order they were tried
+#: the ablation behind v1 (``benchmarks/ablation.py --task tripod``), its rows in the order they were tried
 ABLATION = Ablation(
     rows=(
         AblationRow("v0 (accumulated corrections, world-frame obs), PPO", "paragym/MobileTripodOdometry-v0", {},

@@ -44,7 +44,7 @@ loops them over N, and the env's step calls the same loop, so one robot and
 the smallest eigenvalues of M^T M, found by cyclic Jacobi rotations
 (:func:`paragym.mechanisms.geometry.k_jacobi_lanes`) rather than LAPACK: OpenBLAS, under LAPACK, picks
 its kernels per CPU, and its eigenvalues differed in the last bits between
-CPUs (issue 38); the rotations use +, *, / and sqrt only, the same bits
+CPUs; the rotations use +, *, / and sqrt only, the same bits
 everywhere.
 """
 

@@ -211,7 +211,7 @@ class TripodDynamicScene:
         for i in range(3):
             sim.reset_joint(self.ROBOT, self.legs[i], float(eta[i]))
             # the chassis level and facing its true heading, in the leg's frame
-            # numpy's own loops, not BLAS, whose per-CPU kernels round a 3x3 product differently (issue 38)
+            # numpy's own loops, not BLAS, whose per-CPU kernels round a 3x3 product differently
             leg = np.einsum("ij,jk,kl->il", rotation, quat_to_matrix(np.array(self._leg_frames[i])),
                             _rot_y(float(eta[i])))
             yaw = heading + float(heading_error[i])

@@ -239,8 +239,7 @@ class CaPaManRung:
 
 
 #: the CaPaMan's difficulty ladder, easiest first: posts on one, two and all three legs' straight lines, with
-#: one, two and one posts of clutter, wider and closer together up the ladder (a second post of clutter on the
-#: hard rung made 7.5 % of its scenes unsolvable and cost 1.6 ms a draw)
+#: one, two and one posts of clutter, wider and closer together up the ladder
 LADDER = (CaPaManRung(1, 1, (0.005, 0.008), 40 * DEG, 0.025), CaPaManRung(2, 2, (0.010, 0.014), 40 * DEG, 0.02),
           CaPaManRung(3, 1, (0.010, 0.014), 50 * DEG, 0.016))
 #: the most obstacles any scenario of the ladder has
