@@ -315,6 +315,7 @@ def _cmd_leaderboard(args: argparse.Namespace) -> int:
     before = signal.signal(signal.SIGTERM, stop), signal.signal(signal.SIGINT, stop)
     try:
         suite = QUICK if args.quick else FULL
+        args.db = args.db if args.db is not None else str(Path(args.out) / "paragym.sqlite")
         run = run_leaderboard(db=args.db, suite=suite if args.episodes is None else suite.with_episodes(args.episodes),
                               env_ids=args.env,
                               policies=args.policy, models_dir=args.models,
@@ -515,7 +516,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episodes", type=int, default=None, metavar="N",
                    help="episodes per evaluation seed (full suite: 10 x 5 seeds; quick: 3 x 1): more give a finer "
                         "noise floor, the smallest difference from #1 a table can tell apart")
-    p.add_argument("--db", default="results/paragym.sqlite", help="SQLite results file (default %(default)s)")
+    p.add_argument("--db", default=None, help="SQLite results file (default: paragym.sqlite in --out)")
     p.add_argument("--resume-from", default=None, metavar="RESULTS.json.gz",
                    help="first put a results file's episodes into --db (the committed leaderboard/results.json.gz: "
                         "a fresh checkout runs only what it lacks); its digest is checked, and a row is reused only "
@@ -540,11 +541,38 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--no-validation", action="store_true", help="skip the KF validation of the reference plans")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.set_defaults(func=_cmd_leaderboard)
+    for command in sub.choices.values():  # each value's name in the usage and the help, where not set above
+        for action in command._actions:
+            if action.metavar is None and action.choices is None and action.dest in METAVARS:
+                action.metavar = "FILE|DIR/" if (command.prog, action.dest) == ("paragym export", "out") \
+                    else METAVARS[action.dest]
     return parser
+
+
+#: the name of each option's value in the usage and the help
+METAVARS = {"env_id": "ENV_ID", "results": "RESULTS_FILE", "scenario": "NAME", "seed": "N", "out": "DIR",
+            "models": "DIR", "policy": "NAME", "frame_every": "N", "timesteps": "T", "threads": "N", "n_envs": "N",
+            "budget": "S", "generations": "G", "episodes": "N", "dataset_id": "ID", "db": "FILE", "sample": "N|all",
+            "dynamic": "N", "markdown": "FILE", "env": "ID", "workers": "N", "ray_address": "ADDR", "algo": "ALGO"}
 
 
 #: the commands that take a task's own options (:attr:`paragym.baselines.tasks.Bench.options`)
 TASK_OPTIONS = ("plan", "validate")
+
+
+def synopsis(width: int = 116) -> str:
+    """Every command's usage, one after another, as argparse writes it at ``width`` characters (without
+    ``-h``): the CLI guide's synopsis, so that the guide lists every command and option the parser takes."""
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    lines = []
+    for name, command in commands.items():
+        formatter = argparse.HelpFormatter(f"paragym {name}", width=width)
+        actions = [a for a in command._actions if not isinstance(a, argparse._HelpAction)]
+        formatter.add_usage(None, actions, [], prefix="")
+        usage = formatter.format_help().rstrip("\n")
+        lines.append(usage + (" [the task's own options]" if name in TASK_OPTIONS else ""))
+    return "\n".join(lines)
 
 
 def _task_options(parser: argparse.ArgumentParser, args: argparse.Namespace, extra: list[str]) -> None:

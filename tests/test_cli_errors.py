@@ -181,3 +181,11 @@ def test_bad_input_is_one_line_with_no_engine_banner():
                           text=True, timeout=120)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.startswith("paragym: error: unknown env id 'Nope-v0'") and done.stderr.count("\n") == 1
+
+
+def test_the_leaderboards_database_goes_in_its_out_folder(tmp_path, capsys, monkeypatch):
+    """Without --db the database is written in --out, never in ./results of wherever the command was run."""
+    monkeypatch.chdir(tmp_path)
+    assert _run(capsys, *QUICK, "--out", "elsewhere")[0] == 0
+    assert (tmp_path / "elsewhere" / "paragym.sqlite").is_file()
+    assert not (tmp_path / "results").exists()

@@ -207,3 +207,12 @@ def test_the_ladder_table_puts_each_method_under_its_rung(tmp_path):
     assert "| verdict | sanity: PPO (the committed leaderboard" in env_page(easy, board=path)
     assert "| verdict | hard (" in env_page(hard, board=path)
     assert "| verdict |" not in env_page("paragym/HybridSingularityFree-v2", board=path)
+
+
+def test_the_cli_guide_lists_every_command_and_option_the_parser_takes():
+    """docs/guides/cli.md's synopsis is the parser's own usage of every command (:func:`paragym.cli.synopsis`): a
+    command or an option added to the parser and not to the guide fails here."""
+    from paragym.cli import synopsis
+
+    guide = (DOCS / "guides" / "cli.md").read_text()
+    assert f"```\n{synopsis()}\n```" in guide, "the CLI guide's synopsis is stale: paste paragym.cli.synopsis()"
