@@ -417,3 +417,29 @@ def test_a_long_title_stays_inside_the_720_px_picture(tmp_path):
     assert pixels.shape[1] == 720
     assert title[:, :4].min() > 200 and title[:, -4:].min() > 200  # nothing drawn at either edge
     assert title.min() < 100  # the title is there
+
+
+def test_the_metric_panel_has_no_interval_below_0_and_no_baseline_it_does_not_name(tmp_path, monkeypatch):
+    """An error in cm cannot be negative: its interval's whisker stops at 0 and the axis says so. Values close
+    together far from 0 (kappa near 1) are dots on an axis that says it does not start at 0, not bars from an
+    unlabelled baseline."""
+    from types import SimpleNamespace
+
+    import paragym.plots as plots
+
+    figures = []
+    monkeypatch.setattr(plots, "_save", lambda fig, path, *a, **k: figures.append(fig) or path)
+
+    def rows(values, half):
+        return [SimpleNamespace(policy=f"p{i}", kind="learned", success_rate=0.5, success_ci=(0.3, 0.7),
+                                return_mean=-1.0, return_ci=(-2.0, 0.0), metrics={"m": v},
+                                primary_ci=(v - half, v + half)) for i, v in enumerate(values)]
+
+    plots.plot_leaderboard(rows([1.0, 5.0], 3.0), "m", "final error (cm)", tmp_path / "a.png")
+    ax = figures[-1].axes[2]
+    low = min(seg[:, 0].min() for c in ax.containers if hasattr(c, "has_xerr") for seg in c.lines[2][0].get_segments())
+    assert low >= 0.0 and "cut at 0" in ax.get_xlabel()
+    plots.plot_leaderboard(rows([1.05, 1.06, 1.4], 0.01), "m", "mean kappa", tmp_path / "b.png")
+    ax = figures[-1].axes[2]
+    assert not ax.patches and "does not start at 0" in ax.get_xlabel()
+    assert ax.get_xlim()[0] > 0.5

@@ -118,14 +118,22 @@ def plot_imitation_curve(algo: str, curve: dict[str, list[float]], path: str | P
     return _save(fig, path, title, dpi=90)
 
 
+def cut_at_zero(values: np.ndarray, err: np.ndarray) -> tuple[np.ndarray, bool]:
+    """Whiskers (2 x n: below, above each of ``values``) whose lower ends stop at 0, and whether any was cut: a
+    Student's t interval of a quantity that cannot be negative (an error in cm, kappa) may reach below 0."""
+    cut = err[0] > values
+    return np.vstack([np.where(cut, values, err[0]), err[1]]), bool(cut.any())
+
+
 def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str | Path, title: str = "",
                      higher_is_better: bool = False) -> Path:
     """One env's leaderboard as three bar panels, in rank order: success
     rate and mean return with their 95 % intervals (``success_ci``,
     ``return_ci`` of each summary), and the env's primary metric
-    (which way is better written on its axis; its axis starts near the
-    smallest value, not at 0, when the values differ by little). Bar
-    colours are the policy kinds, in a legend."""
+    (which way is better written on its axis; drawn as dots on an axis that
+    starts near the smallest value, and says so, when the values differ by
+    little; its intervals cut at 0 when no value is negative). Colours are
+    the policy kinds, in a legend."""
     from matplotlib.patches import Patch
 
     names = [s.policy for s in summaries]
@@ -149,11 +157,17 @@ def plot_leaderboard(summaries: Sequence[Any], key: str, label: str, path: str |
                                                                 for s in summaries])))
     fig, axes = plt.subplots(1, len(panels), figsize=(4 * len(panels), 0.45 * len(names) + 2.0), sharey=True)
     for i, (ax, (name, values, err)) in enumerate(zip(axes, panels, strict=True)):
-        base = 0.0
         finite = values[np.isfinite(values)]
+        if i == 2 and len(finite) and finite.min() >= 0:  # a metric that cannot be negative: no interval below 0
+            err, cut = cut_at_zero(values, err)
+            name += ", cut at 0" if cut else ""
         if i == 2 and len(finite) and finite.min() > 0 and np.ptp(finite) < 0.5 * finite.max():
-            base = finite.min() - 0.1 * max(np.ptp(finite), 0.02 * finite.min())  # show the differences
-        ax.barh(y, values - base, left=base, xerr=err, color=col, capsize=2)
+            # values close together, far from 0: dots on an axis that starts near the smallest, which says so
+            for k in range(len(y)):
+                ax.errorbar(values[k], y[k], xerr=err[:, k:k + 1], fmt="o", color=col[k], capsize=2)
+            name += "\n(dots: the axis does not start at 0)"
+        else:
+            ax.barh(y, values, xerr=err, color=col, capsize=2)
         ax.set_xlabel(name)
         ax.grid(axis="x", alpha=0.3)
     axes[0].set_yticks(y, names)
