@@ -28,8 +28,10 @@ ROOT = Path(__file__).resolve().parent.parent
 #: the speed page's paragraph above this script's table (``--record``)
 PARAGRAPH = (
     "The README's first command in a fresh clone of the committed tree, in a new venv, part by part: the install "
-    "and the first run of the quick leaderboard, which compiles the kernels. pip's cache is whatever the machine "
-    "has; the machine's load moves these times."
+    "and the first run of the quick leaderboard, which compiles the kernels. Two things move these times, and "
+    "each row says how they stood: pip's cache (the packages the install downloaded, against those it took from "
+    "the cache; a first install downloads about 400 MB) and the machine's load (the highest one-minute load "
+    "average seen, against the cores; a load above the cores slows every part in proportion)."
 )
 
 
@@ -48,23 +50,29 @@ def main() -> None:
         clone = Path(tmp) / "paragym"
         subprocess.run(["git", "clone", "-q", str(ROOT), str(clone)], check=True)
         env = {k: v for k, v in os.environ.items() if k not in ("VIRTUAL_ENV", "PYTHONPATH", "NUMBA_CACHE_DIR")}
-        times = []
+        times, loads, fetched = [], [os.getloadavg()[0]], {"downloaded": 0, "from the cache": 0}
         for part in parts:
             t0 = time.perf_counter()
             res = subprocess.run(["bash", "-c", part], cwd=clone, env=env, capture_output=True, text=True)
             times.append(time.perf_counter() - t0)
+            loads.append(os.getloadavg()[0])
+            fetched["downloaded"] += len(re.findall(r"^\s*Downloading ", res.stdout, re.M))
+            fetched["from the cache"] += len(re.findall(r"^\s*Using cached ", res.stdout, re.M))
             print(f"{times[-1]:7.1f} s  exit {res.returncode}  {part}", flush=True)
             if res.returncode != 0:
                 sys.exit(f"the README's main job failed at {part!r}:\n{res.stderr[-2000:]}")
         written = (clone / "results" / "LEADERBOARD.md").is_file()
     if not written:
         sys.exit("the main job wrote no results/LEADERBOARD.md")
-    row = [f"{times[0]:.1f}", f"{times[1]:.1f}", f"{times[2]:.1f}", f"{sum(times):.1f}"]
-    print(f"install {times[0] + times[1]:.1f} s, first run {times[2]:.1f} s, in all {sum(times):.1f} s")
+    pip = f"{fetched['downloaded']} downloaded, {fetched['from the cache']} from the cache"
+    load = f"{max(loads):.1f} on {os.cpu_count()} cores"
+    row = [f"{times[0]:.1f}", f"{times[1]:.1f}", f"{times[2]:.1f}", f"{sum(times):.1f}", pip, load]
+    print(f"install {times[0] + times[1]:.1f} s, first run {times[2]:.1f} s, in all {sum(times):.1f} s; "
+          f"pip: {pip}; highest load {load}")
     if args.record:
         record("main_job", "The main job from a fresh clone", PARAGRAPH,
-               ["make the venv (s)", "install (s)", "first `leaderboard --quick` (s)", "in all (s)"], [row],
-               order=5, folder=args.record)
+               ["make the venv (s)", "install (s)", "first `leaderboard --quick` (s)", "in all (s)", "pip's packages",
+                "highest load"], [row], order=5, folder=args.record)
 
 
 if __name__ == "__main__":
