@@ -189,8 +189,10 @@ class JointRates:
         tool = og.forward(rho[None], self.geometry)[0]
         j, _, n = og.jacobian_at(rho[:1], tool[:1], tool[1:], self.geometry)
         h = float(task.t[k + 1] - task.t[k])
-        target = og.k_null_space_step(rho[0], *j.reshape(6), n[0, 0], *task.velocities[k],
-                                      null * self.max_null_rate, h, *task.points[k + 1], self.p)
+        jt = tuple(float(x) for x in j.reshape(6))
+        target = og.k_null_space_step(rho[0], jt, n[0, 0], tuple(float(x) for x in task.velocities[k]),
+                                      null * self.max_null_rate, h, tuple(float(x) for x in task.points[k + 1]),
+                                      self.p)
         rates = (np.array(target) - rho) / (h * self.max_joint_rate)
         return np.clip(np.nan_to_num(rates), -1.0, 1.0).astype(np.float32)
 

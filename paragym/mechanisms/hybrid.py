@@ -301,10 +301,10 @@ def k_measure(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, measures, len
 
 
 @njit(cache=True, error_model="numpy")
-def _solve_all(p, delta, base, plat, top, axes, tri_base, pinv_t, home, sc, measures, lengths, mu_h, mu_t,
-               ra_out, pa_out, rt_out, pt_out):
-    """:func:`k_solve` for every pose p[i] at split delta[i]; the stages'
+def _solve_all(p, delta, consts, measures, lengths, mu_h, mu_t, ra_out, pa_out, rt_out, pt_out):
+    """:func:`k_solve` for every pose p[i] at split delta[i] (``consts``: :func:`kernel_consts`); the stages'
     rotations and origins into the ``*_out`` arrays when they have N rows."""
+    base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     work = np.empty((5, 6, 6))
     keep = ra_out.shape[0] == p.shape[0]
     for i in range(p.shape[0]):
@@ -360,7 +360,7 @@ def kernel_consts(g: HybridGeometry) -> tuple[np.ndarray, ...]:
         a.setflags(write=False)
     mu_h, mu_t = np.empty(1), np.empty(1)
     none = np.empty((0, 3, 3))
-    _solve_all(np.zeros((1, 6)), np.full(1, 0.5), *arrays, raw, True, np.empty((1, 9)), mu_h, mu_t,
+    _solve_all(np.zeros((1, 6)), np.full(1, 0.5), (*arrays, raw), True, np.empty((1, 9)), mu_h, mu_t,
                none, none[:, 0], none, none[:, 0])  # home: p = 0, any split
     sc = np.array([*raw[:3], mu_h[0], mu_t[0]])
     sc.setflags(write=False)
@@ -381,7 +381,7 @@ def _run(p: np.ndarray, delta: np.ndarray, g: HybridGeometry, measures: bool, ke
     lengths, mu_h, mu_t = np.empty((n, 9)), np.empty(n), np.empty(n)
     m = n if keep else 0
     ra, pa, rt, pt = np.empty((m, 3, 3)), np.empty((m, 3)), np.empty((m, 3, 3)), np.empty((m, 3))
-    _solve_all(p, d, *kernel_consts(g), measures, lengths, mu_h, mu_t, ra, pa, rt, pt)
+    _solve_all(p, d, kernel_consts(g), measures, lengths, mu_h, mu_t, ra, pa, rt, pt)
     return lengths, mu_h, mu_t, ra, pa, rt, pt
 
 

@@ -187,13 +187,15 @@ def k_least_norm(j0: float, j1: float, j2: float, j3: float, j4: float, j5: floa
 
 
 @njit(cache=True, error_model="numpy")
-def k_null_space_step(rho1: float, j0: float, j1: float, j2: float, j3: float, j4: float, j5: float, n0: float,
-                      tx: float, ty: float, z: float, h: float, px: float, py: float, p: np.ndarray
-                      ) -> tuple[float, float, float]:
-    """One step of eq 5 over ``h`` s: the table integrated along ``rho_dot_1 = (J^+ t_dot)_1 + z n_1`` (J's rows
-    j0-j5 and n's first entry n0 where the step starts, t_dot = (tx, ty) m/s, z the null-space rate in m/s),
-    the sliders then by the inverse kinematics at the next path point (px, py): the joints (m) that track the
-    path exactly (NaN where the point is out of reach)."""
+def k_null_space_step(rho1: float, j: tuple[float, ...], n0: float, t: tuple[float, float], z: float, h: float,
+                      point: tuple[float, float], p: np.ndarray) -> tuple[float, float, float]:
+    """One step of eq 5 over ``h`` s: the table integrated along ``rho_dot_1 = (J^+ t_dot)_1 + z n_1`` (J's six
+    entries ``j`` and n's first entry n0 where the step starts, t_dot = ``t`` (tx, ty) m/s, z the null-space
+    rate in m/s), the sliders then by the inverse kinematics at the next path point ``point`` (px, py): the
+    joints (m) that track the path exactly (NaN where the point is out of reach)."""
+    j0, j1, j2, j3, j4, j5 = j
+    tx, ty = t
+    px, py = point
     t0, _, _ = k_least_norm(j0, j1, j2, j3, j4, j5, tx, ty)
     r1 = rho1 + h * (t0 + z * n0)
     r2, r3, _ = k_inverse(r1, px, py, p)

@@ -187,12 +187,13 @@ def _gap(frame: np.ndarray, middle: np.ndarray, box: np.ndarray) -> np.float32:
 
 
 @njit(cache=True)
-def _clearance_one(trig, position, quat, g, c0_, c1_, c2_, qc, qs, leg, crank, tool_half, origin, shape, slot, values,
-                   lo, hi, part_radii, first, bounds, group_middles, group_radii, middles, radii, local, inv, cap,
-                   n_parts):
+def _clearance_one(trig, position, quat, g, grid):
     """The smallest key value * parts + part of one configuration against grid ``g`` (the docstring of
     :func:`grid_clearance`); ``trig``, ``position``, ``quat`` and the part table (``c0_`` to ``tool_half``)
-    place its parts (:func:`paragym.mechanisms.capaman.k_part_frames`)."""
+    place its parts (:func:`paragym.mechanisms.capaman.k_part_frames`). ``grid``: the part table, the grids
+    and the cluster points' blocks, as :func:`grid_clearance` gathers them."""
+    c0_, c1_, c2_, qc, qs, leg, crank, tool_half, origin, shape, slot, values, lo, hi, part_radii, first, bounds, \
+        group_middles, group_radii, middles, radii, local, inv, cap, n_parts = grid
     centres, quats, rot = np.empty((n_parts, 3)), np.empty((n_parts, 4)), np.empty((n_parts, 3, 3))
     capaman.k_part_frames(trig, position, quat, c0_, c1_, c2_, qc, qs, leg, crank, tool_half, centres, quats)
     for p in range(n_parts):
@@ -248,7 +249,7 @@ def _clearance_serial(trig, position, quat, rows, grid):
     """:func:`_clearance_one` of every configuration, one after the other (``grid``: its other arguments)."""
     best = np.empty(trig.shape[0], np.int64)
     for i in range(trig.shape[0]):
-        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], *grid)
+        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], grid)
     return best
 
 
@@ -257,7 +258,7 @@ def _clearance_parallel(trig, position, quat, rows, grid):
     """:func:`_clearance_serial` on numba's threads (consecutive configurations on one thread)."""
     best = np.empty(trig.shape[0], np.int64)
     for i in prange(trig.shape[0]):
-        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], *grid)
+        best[i] = _clearance_one(trig[i], position[i], quat[i], rows[i], grid)
     return best
 
 

@@ -146,13 +146,13 @@ def segment_distance(p0, p1, q0, q1):
 
 
 @njit(cache=True, error_model="numpy")
-def k_post_clearance(a1, a2, a3, f, posts, count, reach, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
-                     cap, tip):
+def k_post_clearance(a1, a2, a3, f, posts, count, reach, model, cap, tip):
     """The clearance (m, capped at ``cap``) of one configuration from ``count`` posts (K, 5: x, y, z_low, z_high,
     radius) and the part (an index of :func:`part_capsules`, -1 when every part is farther than the cap)
     nearest them; the tool tip is written into ``tip`` (3,). ``f``: :func:`capaman.k_forward` of the
-    configuration; ``c0`` to ``tool_half``: :func:`capaman.part_table`; ``radius``, ``half``:
-    :func:`part_capsules`. A part whose ``reach`` (16,) is False (:func:`parts_in_reach`) is not placed."""
+    configuration; ``model``: :func:`kernel_constants` of the geometry. A part whose ``reach`` (16,) is False
+    (:func:`parts_in_reach`) is not placed."""
+    _, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half = model
     tip[0], tip[1], tip[2] = f[8], f[9], f[10]
     n_parts = radius.shape[0]
     best, part = cap, -1
@@ -201,43 +201,35 @@ def k_post_clearance(a1, a2, a3, f, posts, count, reach, c0, c1, c2, qc, qs, leg
 
 
 @njit(cache=True, error_model="numpy", inline="always")
-def _one(i, alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
-         cap, out, part, tip):
+def _one(i, alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip):
     """Configuration ``i`` of :func:`post_clearance`: its pose from ``poses`` when they are given (a row of
     :func:`k_forward`'s numbers, the flag as 1.0), else :func:`k_forward`."""
     if poses.shape[0]:
         r = poses[i]
         f = (r[0], r[1], r[2], r[3], r[4], r[5], r[6], r[7], r[8], r[9], r[10], r[11] > 0.5)
     else:
-        f = capaman.k_forward(alpha[i, 0], alpha[i, 1], alpha[i, 2], consts)
+        f = capaman.k_forward(alpha[i, 0], alpha[i, 1], alpha[i, 2], model[0])
     out[i], part[i] = k_post_clearance(alpha[i, 0], alpha[i, 1], alpha[i, 2], f, posts[rows[i]], counts[rows[i]],
-                                       reach[rows[i]], c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap,
-                                       tip[i])
+                                       reach[rows[i]], model, cap, tip[i])
 
 
 @njit(cache=True, error_model="numpy")
-def _serial(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
-            cap, out, part, tip):
+def _serial(alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip):
     for i in range(alpha.shape[0]):
-        _one(i, alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
-             half, cap, out, part, tip)
+        _one(i, alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _share(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
-           cap, out, part, tip):
+def _share(alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip):
     """:func:`_serial` with the GIL released: one thread's share of a batch (a single env's call keeps the GIL,
     whose release and return cost it a microsecond)."""
-    _serial(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
-            half, cap, out, part, tip)
+    _serial(alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip)
 
 
 @njit(cache=True, error_model="numpy", parallel=True)
-def _parallel(alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
-              half, cap, out, part, tip):
+def _parallel(alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip):
     for i in prange(alpha.shape[0]):
-        _one(i, alpha, poses, rows, posts, counts, reach, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius,
-             half, cap, out, part, tip)
+        _one(i, alpha, poses, rows, posts, counts, reach, model, cap, out, part, tip)
 
 
 @njit(cache=True, error_model="numpy")
@@ -262,9 +254,8 @@ _NO_POSES = np.empty((0, 12))
 
 @lru_cache(maxsize=8)
 def kernel_constants(geometry: capaman.CaPaManGeometry) -> tuple[np.ndarray, ...]:
-    """What :func:`k_post_clearance`'s callers pass of the geometry, in its order, gathered once:
-    :func:`capaman.kernel_consts`, :func:`capaman.part_table` and :func:`part_capsules`' radii and half
-    lengths."""
+    """The geometry as :func:`k_post_clearance` takes it (its ``model``), gathered once: :func:`capaman.kernel_consts`,
+    :func:`capaman.part_table` and :func:`part_capsules`' radii and half lengths, in that order."""
     return (capaman.kernel_consts(geometry), *capaman.part_table(geometry), *part_capsules(geometry)[:2])
 
 
@@ -285,15 +276,15 @@ def post_clearance(alpha: np.ndarray, posts: np.ndarray, counts: np.ndarray, row
     if reach is None:
         reach = parts_in_reach(posts, counts, geometry, cap)
     poses = _NO_POSES if poses is None else poses
-    consts = kernel_constants(geometry)
+    model = kernel_constants(geometry)
     parts = None if m >= PARALLEL_FROM else shares(m)
     if parts is None:
         kernel = _parallel if m >= PARALLEL_FROM else _serial
-        kernel(al, poses, rows, posts, counts, reach, *consts, float(cap), out, part, tip)
+        kernel(al, poses, rows, posts, counts, reach, model, float(cap), out, part, tip)
         return out, part, tip
     # a native env's batch: shared among worker threads that wait without spinning (paragym.kernels.shares)
-    calls = [(al[lo:hi], poses[lo:hi] if len(poses) else poses, rows[lo:hi], posts, counts, reach, *consts,
-              float(cap), out[lo:hi], part[lo:hi], tip[lo:hi]) for lo, hi in parts]
+    calls = [(al[lo:hi], poses[lo:hi] if len(poses) else poses, rows[lo:hi], posts, counts, reach, model, float(cap),
+              out[lo:hi], part[lo:hi], tip[lo:hi]) for lo, hi in parts]
     concurrently(_share, calls)
     return out, part, tip
 

@@ -268,9 +268,7 @@ def knob_table(indent: str = "") -> str:
 
 
 @njit(cache=True, error_model="numpy")
-def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min, alpha_max,
-                   min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp, tips,
-                   posts):
+def _ladder_kernel(u, knobs, model, cap, tp, tips, posts):
     """The first attempt (a row of ``u``, uniforms in [0, 1)) that makes a scenario of the rung; writes its T.P.s
     ``tp`` (3, 3) rad, their tool tips ``tips`` (3, 3) m and its posts ``posts`` (K, 5) and returns its index,
     or -1. An attempt draws three T.P.s inside the joint range less ``edge``, at least ``spread`` apart; orders
@@ -278,7 +276,11 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
     along the leg's straight line, moved by at most a third of its radius; then ``clutter`` posts anywhere
     within :data:`CLUTTER_RADIUS`. A post is tried up to :data:`_TRIES` times until it is ``gap`` from the
     posts before it or overlaps them (one obstacle then, with no slit), leaves every T.P.
-    ``min_clearance`` and, on a blocked leg, collides there; the attempt fails when one is not placed."""
+    ``min_clearance`` and, on a blocked leg, collides there; the attempt fails when one is not placed.
+    ``knobs``: the rung's, :func:`_ladder_args`; ``model``: the geometry's
+    :func:`~paragym.sim.capaman_posts.kernel_constants`."""
+    blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min, alpha_max, min_clearance = knobs
+    consts, radius = model[0], model[9]
     legs = ((0, 1), (1, 2), (2, 0))
     tip = np.empty(3)
     every = np.ones(radius.shape[0], np.bool_)  # every part placed
@@ -328,11 +330,11 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
                 for i in range(3):
                     if placed:
                         d, _ = k_post_clearance(tp[i, 0], tp[i, 1], tp[i, 2], poses[i], posts[b:b + 1], 1, every,
-                                                c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tip)
+                                                model, cap, tip)
                         placed = d >= min_clearance
                 if placed and b < blocked:
-                    d, _ = k_post_clearance(mids[b, 0], mids[b, 1], mids[b, 2], f, posts[b:b + 1], 1, every, c0,
-                                            c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tip)
+                    d, _ = k_post_clearance(mids[b, 0], mids[b, 1], mids[b, 2], f, posts[b:b + 1], 1, every, model,
+                                            cap, tip)
                     placed = d < 0.0
                 if placed:
                     break
@@ -348,17 +350,13 @@ def _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top
 
 
 @njit(cache=True, error_model="numpy")
-def _ladder_draw(rng, max_blocks, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
-                 alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half, cap, tp,
-                 tips, posts):
+def _ladder_draw(rng, max_blocks, knobs, model, cap, tp, tips, posts):
     """One generator's scenario of the rung: blocks of :data:`_BLOCK` attempts of uniforms drawn from ``rng`` (a
     ``numpy.random.Generator``; numba draws numpy's own stream from it, and the generator moves on as in
     Python) until :func:`_ladder_kernel` makes one of them a scenario, at most ``max_blocks``; whether it did."""
     for _ in range(max_blocks):
         u = rng.random((_BLOCK, _ATTEMPT))
-        if _ladder_kernel(u, blocked, clutter, r_low, r_high, spread, gap, top_low, top_high, edge, alpha_min,
-                          alpha_max, min_clearance, consts, c0, c1, c2, qc, qs, leg, crank, tool_half, radius, half,
-                          cap, tp, tips, posts) >= 0:
+        if _ladder_kernel(u, knobs, model, cap, tp, tips, posts) >= 0:
             return True
     return False
 
@@ -369,11 +367,15 @@ _DRAWS: dict[tuple[Any, ...], Any] = {}
 
 @lru_cache(maxsize=16)
 def _ladder_args(rung: CaPaManRung, geometry: capaman.CaPaManGeometry) -> tuple[Any, ...]:
-    """The knobs and constants :func:`_ladder_draw` takes after ``max_blocks``, made once per rung and geometry."""
+    """What :func:`_ladder_draw` takes after ``max_blocks``, made once per rung and geometry: the rung's knobs
+    (the number of blocked legs and of clutter posts, the posts' radii, the T.P.s' spread, the posts' gap, their
+    tops' range, the joint range's edge and bounds, the T.P.s' clearance), the geometry's
+    :func:`~paragym.sim.capaman_posts.kernel_constants` and the clearance cap."""
     g = geometry
     top_high = min(POST_TOP[1], post_ceiling(g))
-    return (rung.blocked_legs, rung.clutter, *rung.radius, rung.spread, rung.gap, POST_TOP[0], top_high, LADDER_EDGE,
-            g.alpha_min, g.alpha_max, LADDER_CLEARANCE, *kernel_constants(g), 0.05)
+    knobs = (rung.blocked_legs, rung.clutter, *rung.radius, rung.spread, rung.gap, POST_TOP[0], top_high, LADDER_EDGE,
+             g.alpha_min, g.alpha_max, LADDER_CLEARANCE)
+    return knobs, kernel_constants(g), 0.05
 
 
 def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,

@@ -448,8 +448,9 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
                 kk = k[i]
                 k[i] += 1
                 rho[i, 0], rho[i, 1], rho[i, 2] = og.k_null_space_step(
-                    rho[i, 0], j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5], n[i, 0], path[i, kk, 2],
-                    path[i, kk, 3], actions[i, 0] * max_null_rate, h, path[i, k[i], 0], path[i, k[i], 1], p)
+                    rho[i, 0], (j[i, 0], j[i, 1], j[i, 2], j[i, 3], j[i, 4], j[i, 5]), n[i, 0],
+                    (path[i, kk, 2], path[i, kk, 3]), actions[i, 0] * max_null_rate, h,
+                    (path[i, k[i], 0], path[i, k[i], 1]), p)
         if stage == 1:
             continue
         px, py = path[i, k[i], 0], path[i, k[i], 1]

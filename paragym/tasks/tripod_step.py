@@ -192,12 +192,12 @@ class TripodState(KernelArrays):
     of their last step."""
 
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
-    KERNEL_FIELDS = ("estimate", "eta", "last_eta", "smoothed", "unit_error", "plate_error", "terminated", "obs",
+    KERNEL_FIELDS = ("estimate", "eta_read", "last_eta", "smoothed", "unit_error", "plate_error", "terminated", "obs",
                      "reward", "terms", "folded", "success", "failure")
 
     drive: DriveState
     estimate: np.ndarray
-    eta: np.ndarray
+    eta_read: np.ndarray
     last_eta: np.ndarray
     smoothed: np.ndarray
     unit_error: np.ndarray
@@ -218,7 +218,7 @@ class TripodState(KernelArrays):
     def empty(cls, n: int, params: TripodParams) -> TripodState:
         """N robots, before their first reset."""
         obs_size = params.obs_size
-        return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta=np.zeros((n, 3)),
+        return cls(drive=DriveState.empty(n), estimate=np.zeros((n, 3, 3)), eta_read=np.zeros((n, 3)),
                    last_eta=np.zeros((n, 3)), smoothed=np.zeros((n, 3)), unit_error=np.zeros(n),
                    plate_error=np.zeros(n), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
                    reward=np.zeros(n), folded=np.zeros(n, bool), terms=np.zeros((n, len(REWARD_TERMS))),
@@ -243,7 +243,7 @@ def reset(state: TripodState, params: TripodParams, rows: np.ndarray, scenarios:
     state.smoothed[rows] = np.nan  # v1: the first reading starts the average
     state.folded[rows] = False
     _advance(state, params, np.zeros((len(state.estimate), params.action_size)), mask, False)
-    state.last_eta[rows] = state.eta[rows]
+    state.last_eta[rows] = state.eta_read[rows]
 
 
 def step(state: TripodState, params: TripodParams, actions: np.ndarray, active: np.ndarray,

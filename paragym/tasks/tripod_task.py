@@ -91,7 +91,7 @@ class TripodTask(TaskBase):
     def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
         s, d = state, state.drive
         info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
-                "eta": s.eta[i].copy(), "detected_fault": detected_fault(state, params, i)}
+                "eta": s.eta_read[i].copy(), "detected_fault": detected_fault(state, params, i)}
         if params.version == 1:  # the smoothed encoder distances that v1's correction steers to
             info["encoder_distances"] = s.smoothed[i].copy()
         return info
@@ -115,13 +115,13 @@ def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[in
     s = state
     if s.drive.k[i] == 0:
         return None
-    target = mt.distances(mt.plate_frame_units(s.eta[i], params.geometry))[0]
+    target = mt.distances(mt.plate_frame_units(s.eta_read[i], params.geometry))[0]
     diff = np.abs(mt.distances(s.estimate[i])[0] - target)
     order = np.argsort(diff, kind="stable")
     if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
         return None
     k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
-    return k, "inward (bump or push)" if s.eta[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
+    return k, "inward (bump or push)" if s.eta_read[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
 
 
 #: the mobile tripod task (paper 004)
