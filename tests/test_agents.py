@@ -144,6 +144,7 @@ def test_agent_file_is_checked_before_it_runs(tmp_path: Path) -> None:
         stale(None, 0)
 
 
+@pytest.mark.slow
 def test_the_guide_ranks_and_verifies_its_agent_file(tmp_path: Path) -> None:
     """docs/guides/own-agent.md: its agent file and its two commands, as a reader would run them."""
     import re

@@ -5,6 +5,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -124,6 +124,7 @@ def test_demo_and_plan_work_on_every_registered_id(row, tmp_path, capsys):
 
 
 @pytest.mark.parametrize("task", sorted({r.task for r in registry.ROWS}))
+@pytest.mark.slow
 def test_validate_runs_a_policy_episode_of_each_task(task, tmp_path, capsys):
     """``validate`` dispatches the same way for every id of a task (through its bench): the newest id of each."""
     row = registry.rows_of(task)[-1]

@@ -6,6 +6,8 @@ import subprocess
 import sys
 import textwrap
 
+import pytest
+
 # compiles, in a numba cache of its own (cold), the kernels that once copied arrays into slices, and prints every
 # function numba compiled on the way
 _SCRIPT = textwrap.dedent("""
@@ -33,6 +35,7 @@ _SCRIPT = textwrap.dedent("""
 """)
 
 
+@pytest.mark.slow
 def test_the_kernels_compile_no_shape_checked_slice_copy(tmp_path):
     """An array copied into a slice (``out[:] = e``) makes numba compile a shape check whose error message
     formats tuples: about 4 s of compile per kernel, once per array rank. The kernels copy by element."""

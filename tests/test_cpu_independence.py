@@ -14,6 +14,8 @@ import pytest
 
 from paragym import machine
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 #: the learned actors of two shipped models, one per kind of network (Tanh actor-critic; ReLU and squashed SAC),
 #: on 300 observations drawn in their spaces: the hash of the actions
 ACTORS = """
@@ -61,6 +63,7 @@ TRIPOD = """
 import hashlib, numpy as np, gymnasium as gym
 import paragym
 from paragym.mechanisms import tripod as mt
+
 rng = np.random.default_rng(0)
 local = rng.normal(size=(1000, 3, 3))
 rot, shift = mt.plate_fit(local, rng.uniform(0.5, 1.0, (1000, 3)))

@@ -182,6 +182,7 @@ def _orthoglide_paper(fidelity: str, scenario="paper", **kwargs) -> tuple[list[d
     return infos, total
 
 
+@pytest.mark.slow
 def test_orthoglide_dynamic_tracks_the_slow_circle_and_lags_on_a_fast_one():
     from paragym.sim.orthoglide_dynamic import OrthoglideDynamics
     from paragym.tasks.orthoglide import circle_task
@@ -308,6 +309,7 @@ def _tripod_drive(scenario, fidelity: str, **kwargs) -> list[dict]:
     return infos
 
 
+@pytest.mark.slow
 def test_tripod_dynamic_drive_agrees_with_the_kinematic_one_and_its_settings_with_fine_ones():
     """The paper's initial-heading drive: the misaligned unit drifts sideways as the kinematic model says."""
     from paragym.sim.tripod_dynamic import TripodDynamics
@@ -505,6 +507,7 @@ class _TrueEstimate:
 
 @pytest.mark.parametrize("engine", ["pybullet", pytest.param("mujoco", marks=pytest.mark.skipif(
     importlib.util.find_spec("mujoco") is None, reason="MuJoCo is not installed (the mujoco extra)"))])
+@pytest.mark.slow
 def test_the_tripod_kf_check_passes_the_true_plate_and_fails_odometry(engine):
     """What the KF check judges on the tripod: the plate fitted to the policy's estimated units against the real
     plate. At the converged setting, in either engine, it passes an estimate that is the truth (a step late) and
@@ -528,6 +531,7 @@ def test_the_tripod_kf_check_passes_the_true_plate_and_fails_odometry(engine):
     assert not verdicts["odometry"].passed and verdicts["odometry"].position_error > 0.03
 
 
+@pytest.mark.slow
 def test_the_tripod_kf_check_judges_the_plates_attitude_not_its_place():
     """The accelerometers are inclinometers: eq 12's gravity is removed at the commanded attitude, so a plate
     fitted to estimated units that tilts it by theta leaves g theta in the horizontal accelerations (0.17

@@ -27,6 +27,7 @@ def test_every_paragym_id_is_registered():
 
 
 @pytest.mark.parametrize("env_id", PARAGYM_IDS)
+@pytest.mark.slow
 def test_check_env_passes_with_warnings_as_errors(env_id):
     with warnings.catch_warnings():
         warnings.simplefilter("error")

@@ -49,6 +49,7 @@ def test_greedy_split_steps_toward_the_lower_end_excess():
         np.testing.assert_array_equal(policy.act(obs, {}), [step, 0, 0, 0])
 
 
+@pytest.mark.slow
 def test_the_best_constant_is_what_its_search_finds():
     """The shipped constant is re-derived, not typed: the search over {0, 0.5, 1}^3 on reset seeds 0-29."""
     action, wins, _ = best_constant("paragym/MobileTripodOdometry-v2")

@@ -166,6 +166,7 @@ def test_planner_succeeds_where_doing_nothing_fails():
     assert not run_episode(paper, ZeroPolicy(paper.action_space), seed=0).success
 
 
+@pytest.mark.slow
 def test_dynamic_model_follows_the_plan_and_the_validation_judges_it():
     from paragym.sim.hybrid_dynamic import HybridDynamics
     from paragym.validation.hybrid import validate_hybrid
@@ -278,6 +279,7 @@ def test_random_scenarios_in_a_batch_equal_one_at_a_time():
     assert together == alone
 
 
+@pytest.mark.slow
 def test_the_solver_kernel_compiles_once_for_every_caller():
     """A fresh process: the geometry's constants, one pose, a batch and a fixed split reach the kernel as one
     signature (a read-only constant in one call and a writable one in another had compiled it three times,

@@ -131,6 +131,7 @@ def test_the_rungs_rank_their_floors_and_the_reference():
         env.close()
 
 
+@pytest.mark.slow
 def test_the_easy_rungs_best_constant_is_what_its_search_finds():
     action, wins, _ = best_constant(TRIPOD_RUNGS[0])
     assert action == tripod_bench.BEST_CONSTANT[TRIPOD_RUNGS[0]] and wins == 7
@@ -186,6 +187,7 @@ def test_the_hybrid_rungs_rank_their_best_constant_which_solves_them():
 
 
 @pytest.mark.parametrize("env_id", HYBRID_RUNGS)
+@pytest.mark.slow
 def test_a_hybrid_rung_separates_its_floors_from_the_papers_method(env_id):
     from paragym.planners.base import PlanningError
 
@@ -227,6 +229,7 @@ def test_the_orthoglide_ladder_v1_is_the_ladder_v0_in_the_kinematic_fidelity():
 
 
 @pytest.mark.parametrize("env_id", ORTHOGLIDE_RUNGS)
+@pytest.mark.slow
 def test_an_orthoglide_rung_bounds_the_mean_kappa_by_the_least_norm_motions(env_id):
     """The bound is the rung's share of the least-norm excess on the same path: the zero action (that motion)
     never meets it, the paper's gradient does."""

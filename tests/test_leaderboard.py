@@ -63,6 +63,7 @@ def test_an_interrupted_run_resumes_to_the_same_table_without_duplicates(tmp_pat
     assert third.new_episodes == 0 and hyperparams_table(third) == hyperparams_table(clean)
 
 
+@pytest.mark.slow
 def test_the_process_pool_and_ray_give_the_same_rows_as_the_local_executor(tmp_path):
     kw = {**SMALL, "suite": EvalSuite("test", (0,), 1), "models_dir": tmp_path}
     run_leaderboard(db=tmp_path / "local.sqlite", **kw)
@@ -199,6 +200,7 @@ def _committed() -> dict:
 
 
 @pytest.mark.parametrize("env_id", KINEMATIC_IDS)
+@pytest.mark.slow
 def test_each_reference_plays_the_committed_episodes_and_beats_the_floors(references, env_id):
     """One id per kinematic fidelity (tests/env_ids.py): the reference's and the floors' first 10 episodes of the
     committed leaderboard, played again here, end as committed (success and length exactly, the return to the
@@ -269,6 +271,7 @@ SHIPPED = {"paragym/CaPaManCollisionFree-v1": [f"{a}-seed{k}" for a in ("bc", "p
            **{r.id: ["cem-seed0", "ppo-seed0", "sac-seed0"] for r in registry.ladders("hybrid")[1]}}
 
 
+@pytest.mark.slow
 def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(learned):
     """Behaviour, not today's ranking: every shipped model runs its episodes to a finite
     return, and where learning works the best of them beats random and zero actions (a model
@@ -287,6 +290,7 @@ def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(l
             assert best > rows["zero"].return_mean and best > rows["random"].return_mean, env_id
 
 
+@pytest.mark.slow
 def test_every_policy_gets_dynamic_episodes_and_its_own_kf_verdict(tmp_path):
     """The dynamic columns: each policy's episodes in dynamic fidelity, with the KF verdict on what it executed;
     stored once, resumed, and written to the tables and the CSV."""

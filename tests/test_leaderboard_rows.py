@@ -16,6 +16,8 @@ import json
 import sys
 from pathlib import Path
 
+import pytest
+
 from paragym.baselines.leaderboard import EvalSuite, run_leaderboard
 from paragym.baselines.leaderboard.results import TOLERANCE, compare
 from paragym.baselines.store import ResultStore
@@ -42,6 +44,7 @@ def rows(folder: Path) -> list[dict]:
     return sorted(out, key=lambda r: (r["env"], r["policy"], r["seed"], r["episode"]))
 
 
+@pytest.mark.slow
 def test_the_rows_are_the_recorded_ones(tmp_path):
     want = json.loads(FILE.read_text())
     got = rows(tmp_path)

@@ -98,6 +98,7 @@ def test_every_shipped_model_loads_without_unpickling_and_acts_as_sb3_does():
                                       theirs.predict(obs, deterministic=True)[0])
 
 
+@pytest.mark.slow
 def test_the_shipped_models_are_found_by_name_from_any_directory_and_a_local_models_folder_changes_nothing(tmp_path):
     (tmp_path / "models" / "HybridSingularityFree-v0").mkdir(parents=True)
     (tmp_path / "models" / "HybridSingularityFree-v0" / "ppo_seed0.zip").write_bytes(b"not this one")

@@ -182,6 +182,7 @@ def test_paragym_validate_runs_in_mujoco(tmp_path, capsys, monkeypatch):
     assert "--engine mujoco" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_the_leaderboard_runs_the_dynamic_episodes_in_both_engines(tmp_path):
     """A run on an id whose task runs MuJoCo gives each policy its dynamic episodes in both engines, kept apart:
     a MuJoCo column beside PyBullet's in the table and the CSV, the engine in the results file, and
@@ -222,6 +223,7 @@ def test_the_leaderboard_runs_the_dynamic_episodes_in_both_engines(tmp_path):
 
 @pytest.mark.parametrize("env_id, within", [("paragym/CaPaManCollisionFree-v1", 2e-3),
                                              ("paragym/HybridSingularityFree-v2", 1.5)])
+@pytest.mark.slow
 def test_the_hand_statics_is_what_both_engines_hold(env_id, within):
     """Virtual work on the tree and its loops (paragym.sim.statics) gives the motors' holding forces that each
     engine's motors find after holding the pose for 0.5 s: the CaPaMan's to 2e-3 N m (0.78 N m the largest),
@@ -266,6 +268,7 @@ def test_a_refined_setting_is_the_same_model_on_a_finer_step():
     assert d.layout == "split" and d.velocity_gain == CaPaManDynamics.split().velocity_gain
 
 
+@pytest.mark.slow
 def test_a_loaded_tripod_unit_stands_still_in_mujoco():
     """Static friction holds in MuJoCo too: a drive unit loaded sideways by 100 N for 2 s with its wheels held
     stays within 0.1 mm, at either preset and at a quarter of the step with four times the iterations. The

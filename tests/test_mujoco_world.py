@@ -31,6 +31,7 @@ def _make_vec(env_id: str, n: int, mode: str, **kwargs):
 @pytest.mark.parametrize(("env_id", "kwargs", "steps"), [(EASY, {}, 110), ("paragym/CaPaManCollisionFree-v1", {}, 110),
                                                          ("paragym/HybridSingularityFree-Easy-v2", {}, 150),
                                                          ("paragym/Orthoglide2PRRKappa-v1", {}, 120)])
+@pytest.mark.slow
 def test_the_native_dynamic_vector_env_equals_single_mujoco_envs_to_the_bit(env_id, kwargs, steps):
     """N robots stepped together in MuJoCo's rollout on threads give, bit for bit, what N single envs give, one
     robot each, over episodes that end and restart (autoresets)."""

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 ROOT = Path(__file__).resolve().parents[1]
 
 

@@ -20,6 +20,8 @@ import pytest
 
 from paragym import registry
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 #: the newest id of every task, in dynamic fidelity (an older id warns that it is out of date, which the
 #: checker's warnings-as-errors would count against it)
 CASES = [(registry.rows_of(task)[-1].id, "dynamic") for task in sorted({r.task for r in registry.ROWS})]
@@ -98,6 +100,7 @@ def test_rgb_array_draws_the_simulated_state_not_the_command():
 _DRAWING = """
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box
+
 sim = PyBulletSim(gui=True)
 seen = [sim._drawing]
 sim.add_static("box", Box((0.0, 0.0, 0.1), (0.05, 0.05, 0.05)))

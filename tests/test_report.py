@@ -54,6 +54,7 @@ def test_scores_are_normalised_between_the_floor_and_the_reference(tmp_path: Pat
     np.testing.assert_allclose(scores["ppo"][:, 0], [0.5, 0.0])
 
 
+@pytest.mark.slow
 def test_report_writes_curves_of_the_shipped_models(tmp_path: Path):
     page = write_report(tmp_path / "rep", None)
     text = page.read_text()

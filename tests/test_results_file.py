@@ -47,6 +47,7 @@ def _run_verify(path: Path, *extra: str) -> subprocess.CompletedProcess:
                           text=True, timeout=300)
 
 
+@pytest.mark.slow
 def test_the_results_file_describes_its_run(written: Path) -> None:
     data = read_results(written)
     assert data["written_by"]["paragym"] and data["written_by"]["packages"]["gymnasium"]
@@ -148,6 +149,7 @@ def test_a_file_that_is_not_a_results_file_gets_one_line(tmp_path: Path, content
 
 
 @pytest.mark.parametrize("cpu", ["host", "older-x86-64"])
+@pytest.mark.slow
 def test_the_committed_results_file_reproduces_on_another_cpu(cpu: str) -> None:
     """A sample of the committed leaderboard's episodes, re-run in a new process as this machine computes and
     as an older x86-64 would (another BLAS kernel, numba's generic target, numpy without its SIMD loops, libm

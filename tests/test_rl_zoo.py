@@ -11,6 +11,8 @@ from pathlib import Path
 
 import pytest
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 # not imported here: importing rl_zoo3 replaces Gymnasium's TimeLimit process-wide (rl_zoo3.gym_patches),
 # which would change how the released envs truncate for every later test of this process
 if importlib.util.find_spec("rl_zoo3") is None:
@@ -32,6 +34,7 @@ CASES = [  # (algo, env id, overrides that keep it to a few hundred steps)
 _DRIVER = """
 import json, sys
 import rl_zoo3.train
+
 for argv in json.loads(sys.argv[1]):
     sys.argv = ["rl_zoo3.train", *argv]
     rl_zoo3.train.train()

@@ -320,6 +320,7 @@ def _straight_to_goal(env, rng):
 
 
 @pytest.mark.parametrize(("env_id", "fidelity", "dynamics"), list(_worlds(HARD_IDS)))
+@pytest.mark.slow
 def test_trivial_policies_never_succeed_on_the_hard_scenario(env_id, fidelity, dynamics):
     """Zeros, both corners of the Box and uniform random actions (and for the CaPaMan the straight line to
     the goal) never succeed on the scenario where the task rules it out, in every fidelity and preset."""

@@ -192,6 +192,7 @@ def _clearance_at_every_point(alpha, grids, clusters, rows):
     return np.array(value), np.array(part)
 
 
+@pytest.mark.slow
 def test_grid_clearance_skips_only_blocks_that_cannot_matter(scene):
     """The batched clearance (blocks skipped when their sphere misses a robot's
     cells below the cap) equals a lookup of every cluster point, for robots

@@ -3,6 +3,7 @@
 import gymnasium as gym
 import numpy as np
 import psutil
+import pytest
 
 import paragym  # noqa: F401
 from paragym.sim.client import PyBulletSim
@@ -47,6 +48,7 @@ def test_a_rebuilt_world_answers_as_before_in_both_fidelities():
         env.close()
 
 
+@pytest.mark.slow
 def test_the_native_vector_env_resets_without_growing():
     venv = gym.make_vec("paragym/CaPaManCollisionFree-v0", num_envs=8, vectorization_mode="vector_entry_point")
     # Warm-up: RSS climbs about 4 MiB over the first ~1,200 robot resets (allocators and

@@ -127,6 +127,7 @@ def _success_everywhere(broken: str, jit: bool) -> dict[str, list[bool]]:
     return outcome
 
 
+@pytest.mark.slow
 def test_success_is_decided_in_one_place():
     """Break the Orthoglide's ``evaluate`` in its one place: the single env, the vector env and the
     leaderboard's episode all report the broken success."""
@@ -231,6 +232,7 @@ def test_details_and_numbers_name_different_things(env_id, fidelity):
 
 
 @pytest.mark.parametrize("env_id, fidelity", CASES)
+@pytest.mark.slow
 def test_a_copy_is_independent_or_refused(env_id, fidelity):
     env = _make(env_id, fidelity)
     env.reset(seed=3)

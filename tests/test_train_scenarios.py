@@ -18,6 +18,7 @@ def _key(scenario) -> str:
 
 
 @pytest.mark.parametrize("env_id", KINEMATIC_IDS)  # one id per kinematic fidelity (tests/env_ids.py)
+@pytest.mark.slow
 def test_k_levels_are_the_scenarios_of_seeds_0_to_k_minus_1(env_id):
     plain = gym.make(env_id)
     levels = {_key(plain.reset(seed=level)[1]["scenario"]) for level in range(3)}

@@ -121,6 +121,7 @@ def test_bad_names_and_corrupt_files_are_clear_errors(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("env_id", sorted(__import__("paragym").ENVIRONMENTS))
+@pytest.mark.slow
 def test_vectorized_training_runs_for_every_env_with_its_yml(tmp_path, env_id, recwarn):
     """--vectorized with the yml's own settings (reward normalisation among them) evaluates,
     counts its steps truthfully and draws a curve, for every env id (issue 15, item 5)."""

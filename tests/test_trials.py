@@ -10,6 +10,8 @@ import pytest
 from paragym.baselines.trials import plan_runs, read_sweep, run_all
 from paragym.cli import main
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 ORTHO = "paragym/Orthoglide2PRRKappa-v0"
 #: a run of a second: one PPO rollout of 64 steps on one robot
 TINY = ["--algo", "ppo", "--timesteps", "64", "--n-envs", "1", "--no-progress"]

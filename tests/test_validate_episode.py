@@ -56,6 +56,7 @@ def test_the_reference_episode_passes_and_weak_motors_fail(env_id, scenario, ref
     assert weak.position_error > 0.02
 
 
+@pytest.mark.slow
 def test_the_tripod_estimate_is_validated_against_the_plate():
     good = _validated("paragym/MobileTripodOdometry-v1", "push", "encoder-correction")
     assert good.passed, good.report.table()

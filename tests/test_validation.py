@@ -102,6 +102,7 @@ def test_fast_execution_differs_from_the_plan_physically(plan, scene):
     assert 1e-4 < lag < np.radians(2)  # not a copy of the plan, not lost either
 
 
+@pytest.mark.slow
 def test_verdict_passes_a_good_execution_and_fails_bad_ones(plan, scene):
     traj = plan.trajectory(0.09)
     good = validate_capaman(traj, scene=scene)

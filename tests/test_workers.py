@@ -12,6 +12,8 @@ import pytest
 
 from paragym.baselines.store import ResultStore
 
+pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+
 LONG = ["-m", "paragym.cli", "leaderboard", "--env", "CaPaManCollisionFree-v0", "--policy", "rrt-ga",
         "--policy", "grid-dijkstra", "--no-validation", "--no-progress"]
 
