@@ -18,7 +18,7 @@ from paragym import machine as _machine
 from paragym import registry as _registry
 from paragym.registry import ROWS, EnvRow, check_env_id
 
-__version__ = "0.9.0"
+__version__ = "0.10.0"
 
 
 def __getattr__(name: str) -> Any:
