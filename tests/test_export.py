@@ -9,7 +9,9 @@ import pytest
 
 import paragym  # noqa: F401
 from paragym import registry
+from paragym.envs import export as envs_export
 from paragym.sim import export
+from paragym.sim.recipes import GROUND
 
 mujoco = pytest.importorskip("mujoco")
 
@@ -20,7 +22,7 @@ NEWEST = list(registry.newest())
 def env(request):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        env = export.dynamic_env(request.param)
+        env = envs_export.dynamic_env(request.param)
     yield env
     env.close()
 
@@ -36,7 +38,7 @@ def test_the_files_close_the_loops_where_the_kinematics_does(env):
     the exported models' link frames are the simulated tree's and every loop closes, to 1e-9 m, in MuJoCo."""
     for seed in (1, 2, 3):
         env.reset(seed=seed)
-        scene = export.scene_of(env)
+        scene = envs_export.scene_of(env)
         for fmt, gaps in _both(scene).items():
             assert gaps["frame_m"] < 1e-9 and gaps["frame_rad"] < 1e-9, (fmt, seed, gaps)
             assert gaps["loop_m"] < 1e-9, (fmt, seed, gaps)
@@ -47,7 +49,7 @@ def test_the_open_tree_matches_at_random_joint_values(env):
     """Any joint values, the loops left open: the frames still agree (the tree's geometry alone), while the loop
     gap shows the loops open where the mechanism has any."""
     env.reset(seed=0)
-    scene = export.scene_of(env)
+    scene = envs_export.scene_of(env)
     body, links = export.tree_of(scene)
     rng = np.random.default_rng(7)
     for index, link in enumerate(links):
@@ -64,7 +66,7 @@ def test_the_open_tree_matches_at_random_joint_values(env):
 def test_a_misplaced_pivot_is_seen(env):
     """The check is not blind: one loop's pivot moved by 1 mm in the MJCF shows as a 1 mm gap."""
     env.reset(seed=0)
-    scene = export.scene_of(env)
+    scene = envs_export.scene_of(env)
     if not scene.sim.loops:
         pytest.skip("no loop closure in this mechanism (the tripod's loops close through the ground)")
     text = export.mjcf(scene)
@@ -78,7 +80,7 @@ def test_the_urdf_loads_in_pybullet_with_every_joint(env, tmp_path):
     import pybullet as pb
 
     env.reset(seed=0)
-    scene = export.scene_of(env)
+    scene = envs_export.scene_of(env)
     text, sidecar = export.urdf(scene)
     path = tmp_path / "m.urdf"
     path.write_text(text)
@@ -95,7 +97,7 @@ def test_the_urdf_loads_in_pybullet_with_every_joint(env, tmp_path):
 
 def test_the_mjcf_motors_carry_the_scene_s_force_limits(env):
     env.reset(seed=0)
-    scene = export.scene_of(env)
+    scene = envs_export.scene_of(env)
     model = mujoco.MjModel.from_xml_string(export.mjcf(scene))
     limits = sorted(limit for _, _, limit in scene.motor_limits())
     assert model.nu == len(limits)
@@ -209,7 +211,7 @@ def test_an_exported_mjcf_simulates_on_its_own(env_id, tmp_path):
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        (path,), gaps = export.write(env_id, "mjcf", tmp_path)  # a folder: the file is named after the env
+        (path,), gaps = envs_export.write(env_id, "mjcf", tmp_path)  # a folder: the file is named after the env
     assert path == tmp_path / (env_id.split("/")[1] + ".xml")
     assert max(gaps.values()) < 1e-9, gaps
     got = json.loads(subprocess.run([sys.executable, "-c", STANDALONE, str(path)], capture_output=True, text=True,
@@ -224,7 +226,7 @@ def test_the_urdf_sidecar_s_home_closes_the_loops(env):
     """The URDF's sidecar names a pose for every joint (``home``) at which its loops close: posed from the
     sidecar alone, in MuJoCo's URDF importer, each closure's two points meet within 1e-9 m."""
     env.reset(seed=0)
-    scene = export.scene_of(env)
+    scene = envs_export.scene_of(env)
     text, sidecar = export.urdf(scene)
     keep = '<mujoco><compiler fusestatic="false" discardvisual="true"/></mujoco>'
     model = mujoco.MjModel.from_xml_string(text.replace(">", ">" + keep, 1))
@@ -242,5 +244,5 @@ def test_the_urdf_sidecar_s_home_closes_the_loops(env):
 
     for loop in sidecar["loops"]:
         assert np.linalg.norm(point(loop["link_a"], loop["point_a"]) - point(loop["link_b"], loop["point_b"])) < 1e-9
-    grounds = [name for name, (build, _) in scene.sim.recipes.items() if build in ("add_plane", "add_heightfield")]
+    grounds = [name for name, recipe in scene.sim.recipes.items() if isinstance(recipe, GROUND)]
     assert len(sidecar["missing"]) == len(grounds)  # what URDF cannot hold is named (the tripod's ground)

@@ -26,6 +26,7 @@ import numpy as np
 
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
+from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, VisualBody
 
 __all__ = ["LinkBook", "LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
            "physics_steps", "refined"]
@@ -140,12 +141,12 @@ def depth_first(links: Sequence[LinkSpec]) -> list[LinkSpec]:
 class LinkBook:
     """The bookkeeping a scene's bodies share whatever holds them (:class:`PyBulletSim`, or a
     :class:`~paragym.sim.description.SceneDescription`): each tree body's links by name and index
-    (``_links``, ``_link_names``), how each body was built (``_recipe``: (build, arguments)), and the free
-    parts placed through the holder's ``reset_base`` and ``reset_joint``."""
+    (``_links``, ``_link_names``), how each body was built (``_recipe``: its :mod:`~paragym.sim.recipes`
+    record), and the free parts placed through the holder's ``reset_base`` and ``reset_joint``."""
 
     _links: dict[str, dict[str, int]]
     _link_names: dict[str, dict[int, str]]
-    _recipe: dict[str, tuple[Any, tuple]]
+    _recipe: dict[str, Recipe]
 
     def link_name(self, name: str, index: int) -> str | None:
         """The name of link ``index`` of body ``name`` (None: the base, -1)."""
@@ -165,8 +166,9 @@ class LinkBook:
     def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
         """A point given in a link's centre-of-mass frame, in its link frame (the two differ by the link's
         ``shape_offset``, their axes aligned): a base's two frames are one."""
-        _, args = self._recipe[name]
-        offset = next((spec.shape_offset for spec in args[1] if spec.name == self._link_names[name].get(link)),
+        tree = self._recipe[name]
+        links = tree.links if isinstance(tree, TreeBody) else ()
+        offset = next((spec.shape_offset for spec in links if spec.name == self._link_names[name].get(link)),
                       (0.0, 0.0, 0.0))
         return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
 
@@ -211,7 +213,7 @@ class PyBulletSim(LinkBook):
         self.draws = draws or gui
         self._bodies: dict[str, int] = {}
         #: how each body was built (method, arguments), in order: replayed when the world is rebuilt
-        self._recipe: dict[str, tuple[Any, tuple]] = {}
+        self._recipe: dict[str, Recipe] = {}
         #: set-up that lives outside the bodies (gravity, constraints, filters), run again after a rebuild
         self._setup: list[Any] = []
         self._removed = 0
@@ -222,6 +224,9 @@ class PyBulletSim(LinkBook):
         self.loops: dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]] = {}
         #: the joints' hard stops (:meth:`joint_stops`), by (body, link name): (lower, upper) (rad or m)
         self.stops: dict[tuple[str, str | None], tuple[float, float]] = {}
+        #: each servo's force limit (N or N m) and PyBullet's gains, (body, joint) -> (force, position gain, velocity
+        #: gain), as :meth:`servos` set them
+        self.servo_settings: dict[tuple[str, int], tuple[float, float, float]] = {}
         #: functions called after every physics step (:meth:`step`), e.g. to record a body's motion
         self.after_step: list[Any] = []
         #: the physics step (s) and the simulated time (s) so far
@@ -298,7 +303,7 @@ class PyBulletSim(LinkBook):
         """Add a fixed body (an obstacle or a base plate) named ``name``."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_static, (name, shape, rgba))
+        self._recipe[name] = StaticBody(name, shape, rgba)
         col, vis = self._shape(shape, rgba)
         self._bodies[name] = pb.createMultiBody(0.0, col, vis, basePosition=list(shape.center),
                                                 physicsClientId=self._client)
@@ -309,7 +314,7 @@ class PyBulletSim(LinkBook):
         ``getClosestPoints`` call then answers for all of them."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_static_group, (name, shapes, rgba))
+        self._recipe[name] = StaticGroup(name, shapes, rgba)
         cols, vis = zip(*(self._shape(o, rgba) for o in shapes), strict=True)
         n = len(shapes)
         self._bodies[name] = pb.createMultiBody(
@@ -326,7 +331,7 @@ class PyBulletSim(LinkBook):
         mass), at ``position`` (m) turned by the xyzw ``quaternion``."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_visual, (name, shape, rgba, position, quaternion))
+        self._recipe[name] = VisualBody(name, shape, rgba, position, quaternion)
         self._bodies[name] = pb.createMultiBody(0.0, -1, self._shape(shape, rgba)[1], basePosition=list(position),
                                                 baseOrientation=list(quaternion), physicsClientId=self._client)
 
@@ -336,7 +341,7 @@ class PyBulletSim(LinkBook):
         x; m) on a grid of ``cell`` (m), its centre at ``position``."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_heightfield, (name, heights, cell, position, rgba))
+        self._recipe[name] = Heightfield(name, heights, cell, position, rgba)
         c = self._client
         ny, nx = heights.shape
         shape = pb.createCollisionShape(pb.GEOM_HEIGHTFIELD, meshScale=[cell, cell, 1.0],
@@ -350,7 +355,7 @@ class PyBulletSim(LinkBook):
         """Add flat ground named ``name``: the plane z = 0 (cheaper to collide with than a flat heightfield)."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_plane, (name, rgba))
+        self._recipe[name] = Plane(name, rgba)
         c = self._client
         shape = pb.createCollisionShape(pb.GEOM_PLANE, physicsClientId=c)
         visual = pb.createVisualShape(pb.GEOM_BOX, halfExtents=[14.0, 5.0, 0.001], rgbaColor=list(rgba),
@@ -376,7 +381,7 @@ class PyBulletSim(LinkBook):
         :meth:`reset_base`."""
         self._draw(False)
         self._check_new(name)
-        self._recipe[name] = (self.add_tree_body, (name, links, base_mass, base_shape, base_rgba))
+        self._recipe[name] = TreeBody(name, links, base_mass, base_shape, base_rgba)
         base_col, base_vis = (-1, -1) if base_shape is None else self._shape(base_shape, base_rgba)
         links = depth_first(links)  # PyBullet stores links in this order whatever order it is given
         index = {link.name: i for i, link in enumerate(links)}
@@ -534,32 +539,35 @@ class PyBulletSim(LinkBook):
         else:
             pb.resetJointStateMultiDof(body, joint, list(value), [0.0, 0.0, 0.0], physicsClientId=c)
 
-    def drive(self, motors: Motors, targets: Sequence[float], rates: Sequence[float],
-              force: float, position_gain: float, velocity_gain: float) -> None:
-        """Force-limited PD motors on the joints of ``motors``: chase
-        ``targets`` at ``rates`` (each motor at most ``force``, N or N m), from
-        the next step on."""
+    def servos(self, motors: Motors, force: float, position_gain: float, velocity_gain: float) -> None:
+        """The position servos on the joints of ``motors`` from now on: each at most ``force`` (N or N m), with
+        PyBullet's normalised gains (:attr:`servo_settings`); :meth:`drive` and :meth:`ramp` command them."""
+        for name, joints in motors:
+            for joint in joints:
+                self.servo_settings[name, joint] = (force, position_gain, velocity_gain)
+
+    def drive(self, motors: Motors, targets: Sequence[float], rates: Sequence[float]) -> None:
+        """The servos of ``motors`` (:meth:`servos`) chase ``targets`` at ``rates`` from the next step on."""
         start, c = 0, self._client
         targets, rates = [float(v) for v in targets], [float(v) for v in rates]  # one conversion, not per body
         for name, joints in motors:
             n = len(joints)
+            force, position_gain, velocity_gain = zip(*(self.servo_settings[name, j] for j in joints), strict=True)
             pb.setJointMotorControlArray(self._bodies[name], joints, pb.POSITION_CONTROL,
                                          targetPositions=targets[start:start + n],
-                                         targetVelocities=rates[start:start + n], forces=[force] * n,
-                                         positionGains=[position_gain] * n, velocityGains=[velocity_gain] * n,
+                                         targetVelocities=rates[start:start + n], forces=list(force),
+                                         positionGains=list(position_gain), velocityGains=list(velocity_gain),
                                          physicsClientId=c)
             start += n
 
-    def ramp(self, motors: Motors, start: np.ndarray, goal: np.ndarray, duration: float,
-             time_step: float, force: float, position_gain: float, velocity_gain: float) -> None:
-        """Move the targets of the position-controlled ``motors`` linearly
-        from ``start`` to ``goal`` over ``duration`` s (at least one physics
-        step of ``time_step`` s), stepping the physics as they go; the motors
-        chase the moving targets (and their constant rate) under ``force``."""
-        steps = physics_steps(duration, time_step)
-        rate = (goal - start) / (steps * time_step)
+    def ramp(self, motors: Motors, start: np.ndarray, goal: np.ndarray, duration: float) -> None:
+        """Move the targets of the servos of ``motors`` linearly from ``start`` to ``goal`` over ``duration`` s (at
+        least one physics step), stepping the physics as they go; the servos chase the moving targets (and their
+        constant rate)."""
+        steps = physics_steps(duration, self.time_step)
+        rate = (goal - start) / (steps * self.time_step)
         for i in range(1, steps + 1):
-            self.drive(motors, start + (goal - start) * (i / steps), rate, force, position_gain, velocity_gain)
+            self.drive(motors, start + (goal - start) * (i / steps), rate)
             self.step()
 
     def set_time_step(self, time_step: float) -> None:
@@ -653,8 +661,8 @@ class PyBulletSim(LinkBook):
         self.loops.clear()
         self.stops.clear()
         self._removed = 0
-        for build, args in recipe:
-            build(*args)
+        for built in recipe:
+            built.build_in(self)
         for setup in self._setup:
             setup()
 
@@ -663,10 +671,9 @@ class PyBulletSim(LinkBook):
             raise ValueError(f"a body named {name!r} exists already")
 
     @property
-    def recipes(self) -> dict[str, tuple[str, tuple]]:
-        """How each body now in the scene was built, in order: name -> (the ``add_*`` method's name, its
-        arguments after ``self``)."""
-        return {name: (build.__name__, args) for name, (build, args) in self._recipe.items()}
+    def recipes(self) -> dict[str, Recipe]:
+        """How each body now in the scene was built, in order: name -> its record (:mod:`paragym.sim.recipes`)."""
+        return dict(self._recipe)
 
     def joint_values(self, name: str) -> list[tuple[float, ...]]:
         """Every joint of body ``name`` now, in PyBullet's order (:meth:`add_tree_body`'s depth-first one):

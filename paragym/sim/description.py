@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from paragym.sim.client import LinkBook, LinkSpec, depth_first
+from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, VisualBody
 
 __all__ = ["SceneDescription"]
 
@@ -41,7 +42,7 @@ class SceneDescription(LinkBook):
 
     def __init__(self, gui: bool = False) -> None:
         self.gui = gui
-        self._recipe: dict[str, tuple[Any, tuple]] = {}
+        self._recipe: dict[str, Recipe] = {}
         self._links: dict[str, dict[str, int]] = {}
         self._link_names: dict[str, dict[int, str]] = {}
         self._kinds: dict[str, list[str]] = {}
@@ -49,6 +50,8 @@ class SceneDescription(LinkBook):
         self.loops: dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]] = {}
         #: the joints' hard stops, as :attr:`PyBulletSim.stops <paragym.sim.client.PyBulletSim.stops>`
         self.stops: dict[tuple[str, str | None], tuple[float, float]] = {}
+        #: the servos, as :attr:`PyBulletSim.servo_settings <paragym.sim.client.PyBulletSim.servo_settings>`
+        self.servo_settings: dict[tuple[str, int], tuple[float, float, float]] = {}
         self._friction: dict[tuple[str, int], float] = {}
         self._values: dict[str, list[tuple[float, ...]]] = {}
         self._bases: dict[str, tuple[np.ndarray, np.ndarray]] = {}
@@ -56,17 +59,17 @@ class SceneDescription(LinkBook):
         self.physics: tuple[float, float, int, float | None] | None = None
 
     # --- building ----------------------------------------------------------------------------------------
-    def _add(self, build: str, name: str, args: tuple) -> None:
-        if name in self._recipe:
-            raise ValueError(f"a body named {name!r} exists already")
-        self._recipe[name] = (build, args)
+    def _add(self, recipe: Recipe) -> None:
+        if recipe.name in self._recipe:
+            raise ValueError(f"a body named {recipe.name!r} exists already")
+        self._recipe[recipe.name] = recipe
 
     def add_tree_body(self, name: str, links: Sequence[LinkSpec], base_mass: float = 0.0,
                       base_shape: Any = None, base_rgba: Sequence[float] = (0.5, 0.5, 0.5, 1.0)) -> None:
         """A tree of ``links`` (as :meth:`PyBulletSim.add_tree_body <paragym.sim.client.PyBulletSim.add_tree_body>`),
         every joint at zero, a free base (``base_mass`` > 0) at the origin."""
         ordered = depth_first(links)
-        self._add("add_tree_body", name, (name, links, base_mass, base_shape, base_rgba))
+        self._add(TreeBody(name, links, base_mass, base_shape, base_rgba))
         self._links[name] = {link.name: i for i, link in enumerate(ordered)}
         self._link_names[name] = {i: link.name for i, link in enumerate(ordered)}
         self._kinds[name] = [link.joint for link in ordered]
@@ -76,26 +79,26 @@ class SceneDescription(LinkBook):
 
     def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
         """A fixed part named ``name``."""
-        self._add("add_static", name, (name, shape, rgba))
+        self._add(StaticBody(name, shape, rgba))
 
     def add_static_group(self, name: str, shapes: Sequence[Any], rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)
                          ) -> None:
         """Fixed parts (obstacles) as one body named ``name``."""
-        self._add("add_static_group", name, (name, shapes, rgba))
+        self._add(StaticGroup(name, shapes, rgba))
 
     def add_visual(self, name: str, shape: Any, rgba: Sequence[float], position: Sequence[float] = (0.0, 0.0, 0.0),
                    quaternion: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> None:
         """A part that is only drawn."""
-        self._add("add_visual", name, (name, shape, rgba, position, quaternion))
+        self._add(VisualBody(name, shape, rgba, position, quaternion))
 
     def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Sequence[float],
                         rgba: Sequence[float]) -> None:
         """Ground named ``name`` on a grid of ``heights`` (m)."""
-        self._add("add_heightfield", name, (name, heights, cell, position, rgba))
+        self._add(Heightfield(name, heights, cell, position, rgba))
 
     def add_plane(self, name: str, rgba: Sequence[float]) -> None:
         """Flat ground named ``name``: the plane z = 0."""
-        self._add("add_plane", name, (name, rgba))
+        self._add(Plane(name, rgba))
 
     def remove(self, name: str) -> None:
         """Remove the body ``name`` (and the loops and stops that name it)."""
@@ -118,6 +121,12 @@ class SceneDescription(LinkBook):
     def set_physics(self, gravity: float, time_step: float, solver_iterations: int, erp: float | None = None
                     ) -> None:
         self.physics = (gravity, time_step, solver_iterations, erp)
+
+    def servos(self, motors: Sequence[tuple[str, Sequence[int]]], force: float, position_gain: float,
+               velocity_gain: float) -> None:
+        for name, joints in motors:
+            for joint in joints:
+                self.servo_settings[name, joint] = (force, position_gain, velocity_gain)
 
     def no_self_collision(self, *names: str) -> None:
         """The parts of one mechanism never collide with each other (every export writes them so)."""
@@ -150,8 +159,8 @@ class SceneDescription(LinkBook):
 
     # --- bookkeeping ---------------------------------------------------------------------------------------
     @property
-    def recipes(self) -> dict[str, tuple[str, tuple]]:
-        """How each body was built, in order: name -> (the ``add_*`` method's name, its arguments)."""
+    def recipes(self) -> dict[str, Recipe]:
+        """How each body was built, in order: name -> its record (:mod:`paragym.sim.recipes`)."""
         return dict(self._recipe)
 
     @property
@@ -189,8 +198,8 @@ class SceneDescription(LinkBook):
     def build_in(self, sim: Any) -> None:
         """Build these bodies in ``sim`` (a :class:`~paragym.sim.client.PyBulletSim`) and pose them: the
         scene's picture, without its physics' set-up."""
-        for build, args in self._recipe.values():
-            getattr(sim, build)(*args)
+        for recipe in self._recipe.values():
+            recipe.build_in(sim)
         self.pose(sim)
 
     def pose(self, sim: Any) -> None:

@@ -38,10 +38,8 @@ Lengths in m, angles in rad, masses in kg, force limits in N (slides) or N m (hi
 
 from __future__ import annotations
 
-import json
 import math
 import xml.etree.ElementTree as ET
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -50,11 +48,11 @@ from scipy.spatial.transform import Rotation
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.client import LinkSpec, depth_first
 from paragym.sim.obstacles import Box, Capsule, Cylinder
+from paragym.sim.recipes import GROUND, Plane, StaticBody, StaticGroup, TreeBody
 
-__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_MAX_STEP", "bodies_of", "check_mjcf", "check_urdf", "dynamic_env",
-           "fixed_parts", "loop_solref", "mjcf", "model_name", "mujoco_loop_gap", "mujoco_motor_positions",
-           "mujoco_pose", "mujoco_time_step", "scene_of", "servo_gains", "tree_frames", "tree_of", "urdf",
-           "with_fixed_parts", "write"]
+__all__ = ["FORMATS", "LOOP_SOLIMP", "MUJOCO_STEP", "bodies_of", "check_mjcf", "check_urdf", "fixed_parts",
+           "loop_solref", "mjcf", "model_name", "mujoco_loop_gap", "mujoco_motor_positions", "mujoco_pose",
+           "mujoco_time_step", "servo_gains", "tree_frames", "tree_of", "urdf", "with_fixed_parts"]
 
 #: the formats :func:`write` writes, and each one's file suffix
 FORMATS = {"mjcf": ".xml", "urdf": ".urdf"}
@@ -65,16 +63,18 @@ LOOP_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 SERVO_BANDWIDTH = 0.5
 
 
-#: the longest physics step (s) of an exported MJCF: a scene's, or shorter
-MUJOCO_MAX_STEP = 1e-3
+#: MuJoCo's physics step (s): the default of :class:`~paragym.sim.mujoco_sim.MuJoCoSettings`, and an exported
+#: MJCF's where the scene's is longer (the longest a setting may take is
+#: :data:`paragym.sim.mujoco_sim.MAX_STEP`)
+MUJOCO_STEP = 1e-3
 
 
 def mujoco_time_step(time_step: float) -> float:
-    """The exported MJCF's physics step (s): the scene's, at most :data:`MUJOCO_MAX_STEP`. MuJoCo's position
+    """The exported MJCF's physics step (s): the scene's, at most :data:`MUJOCO_STEP`. MuJoCo's position
     servos are springs integrated step by step, where PyBullet's motors are velocity constraints solved in the
     step: holding a 4 kg platform on 0.2 kg legs, the hybrid's servos at its 5 ms step are either too soft to
     hold it or unstable; at 1 ms they hold it (``benchmarks/conformance.py``)."""
-    return min(time_step, MUJOCO_MAX_STEP)
+    return min(time_step, MUJOCO_STEP)
 
 
 def loop_solref(time_step: float) -> tuple[float, float]:
@@ -132,39 +132,18 @@ def _wxyz(xyzw: Any) -> tuple[float, ...]:
     return (w, x, y, z)
 
 
-def dynamic_env(env_id: str) -> Any:
-    """``env_id`` in dynamic fidelity with its default dynamics, after ``reset(seed=0)``; its scene is
-    :func:`scene_of` it. The caller closes it."""
-    import gymnasium as gym
-
-    import paragym  # noqa: F401 (registers the ids)
-
-    env = gym.make(env_id, fidelity="dynamic")
-    env.reset(seed=0)
-    return env
-
-
-def scene_of(env: Any) -> Any:
-    """The PyBullet scene of an env in dynamic fidelity (``env.unwrapped.world.scene``)."""
-    world = getattr(env.unwrapped, "world", None)
-    if world is None or not hasattr(world, "scene"):
-        raise ValueError(f"{env.unwrapped.spec.id if env.unwrapped.spec else env} has no dynamic scene: make it "
-                         'with fidelity="dynamic"')
-    return world.scene
-
-
 def bodies_of(sim: Any) -> tuple[list[tuple[str, list[LinkSpec], float, PartShape | None]], list[tuple[str, Any]]]:
     """The tree bodies (name, links, base mass, base shape) and fixed parts (name, shape) of the PyBullet ``sim``,
     in the order they were built; ground (a plane or a heightfield: the scenario's terrain) and drawn-only bodies
     are left out."""
     trees, fixed = [], []
-    for name, (build, args) in sim.recipes.items():
-        if build == "add_tree_body":
-            trees.append((name, list(args[1]), float(args[2]), args[3]))
-        elif build == "add_static":
-            fixed.append((name, args[1]))
-        elif build == "add_static_group":
-            fixed += [(f"{name}_{k}", shape) for k, shape in enumerate(args[1])]
+    for name, recipe in sim.recipes.items():
+        if isinstance(recipe, TreeBody):
+            trees.append((name, list(recipe.links), float(recipe.base_mass), recipe.base_shape))
+        elif isinstance(recipe, StaticBody):
+            fixed.append((name, recipe.shape))
+        elif isinstance(recipe, StaticGroup):
+            fixed += [(f"{name}_{k}", shape) for k, shape in enumerate(recipe.shapes)]
     return trees, fixed
 
 
@@ -350,15 +329,15 @@ def _ground(root: ET.Element, world: ET.Element, sim: Any, time_step: float) -> 
     stiff as the loops at the physics step ``time_step`` (s), its impedance the contact's (a ``solmix`` that
     outweighs the robot part's MuJoCo default, which, averaged in, let a loaded wheel slide on a sideways load
     well below its friction limit). True where there was ground."""
-    grounds = [args for build, args in sim.recipes.values() if build in ("add_plane", "add_heightfield")]
-    for args in grounds:
-        attrs = {"name": args[0], "contype": "1", "conaffinity": "2", "friction": "0 0 0",
+    grounds = [r for r in sim.recipes.values() if isinstance(r, GROUND)]
+    for ground in grounds:
+        attrs = {"name": ground.name, "contype": "1", "conaffinity": "2", "friction": "0 0 0",
                  "solref": _num(loop_solref(time_step)), "solimp": _num(LOOP_SOLIMP), "solmix": "1000000",
-                 "rgba": _num(args[-1])}
-        if len(args) == 2:  # a plane: z = 0, without bounds
+                 "rgba": _num(ground.rgba)}
+        if isinstance(ground, Plane):  # z = 0, without bounds
             attrs.update(type="plane", size="0 0 1")
         else:
-            heights, cell, centre = np.asarray(args[1], float), float(args[2]), args[3]
+            heights, cell, centre = np.asarray(ground.heights, float), float(ground.cell), ground.position
             ny, nx = heights.shape
             low, span = float(heights.min()), float(heights.max() - heights.min())
             assets = root.find("asset")
@@ -367,10 +346,10 @@ def _ground(root: ET.Element, world: ET.Element, sim: Any, time_step: float) -> 
                 root.insert(list(root).index(world), assets)
             # MuJoCo scales the elevations to [0, 1], times size[2], above the geom's z; its first row is at +y
             # (paragym's at -y); to a nanometre, as MuJoCo keeps float32
-            ET.SubElement(assets, "hfield", name=args[0], nrow=str(ny), ncol=str(nx),
+            ET.SubElement(assets, "hfield", name=ground.name, nrow=str(ny), ncol=str(nx),
                           size=_num([(nx - 1) * cell / 2, (ny - 1) * cell / 2, max(span, 1e-9), 0.1]),
                           elevation=_num(np.round(heights[::-1] - low, 9).ravel()))
-            attrs.update(type="hfield", hfield=args[0], pos=_num([centre[0], centre[1], low]))
+            attrs.update(type="hfield", hfield=ground.name, pos=_num([centre[0], centre[1], low]))
         ET.SubElement(world, "geom", attrs)
     return bool(grounds)
 
@@ -527,8 +506,8 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
         "actuators": [{"joint": f"{link}_joint", "force_limit": limit} for link, limit in motors.items()],
         "joints": joints,
         "home": home,
-        "missing": [f"{build[4:]} {name!r}: URDF has no ground; the MJCF export carries it"
-                    for name, (build, _) in scene.sim.recipes.items() if build in ("add_plane", "add_heightfield")],
+        "missing": [f"{type(r).__name__.lower()} {name!r}: URDF has no ground; the MJCF export carries it"
+                    for name, r in scene.sim.recipes.items() if isinstance(r, GROUND)],
         "note": "URDF has no ball joint: a spherical joint is three continuous joints about z, y and x through two "
                 f"links of {AXIS_LINK_MASS:g} kg; each loop closes by a ball joint between point_a on link_a "
                 "and point_b on link_b, each in its link's frame; home gives every joint's value (rad or m) at "
@@ -536,47 +515,6 @@ def urdf(scene: Any, model: str = "paragym") -> tuple[str, dict[str, Any]]:
     }
     ET.indent(root)
     return ET.tostring(root, encoding="unicode") + "\n", sidecar
-
-
-def write(env_id: str, fmt: str, out: str | Path,
-          overwrite: bool = False) -> tuple[list[Path], dict[str, float] | None]:
-    """Write ``env_id``'s mechanism as ``fmt`` ("mjcf" or "urdf") at its pose after ``reset(seed=0)`` to ``out``:
-    a file (its suffix is the format's, added when missing) or a folder (an existing one, or a path ending in a
-    separator), where the file is named after the env. The MJCF stands on its own (:func:`mjcf`'s ``home``); the
-    URDF's sidecar, beside it, holds the same pose. An existing file is refused unless ``overwrite``. Returns the
-    paths written and, where ``mujoco`` is installed, the files checked against the scene (:func:`check_mjcf`,
-    :func:`check_urdf`; None without ``mujoco``)."""
-    import importlib.util
-    import os
-
-    if fmt not in FORMATS:
-        raise ValueError(f"format must be one of {', '.join(FORMATS)}; got {fmt!r}")
-    path = Path(out)
-    if path.is_dir() or str(out).endswith((os.sep, "/")):
-        path = path / (env_id.split("/")[-1] + FORMATS[fmt])
-    elif path.suffix != FORMATS[fmt]:
-        path = path.with_name(path.name + FORMATS[fmt])
-    paths = [path] + ([path.with_name(path.name + ".loops.json")] if fmt == "urdf" else [])
-    existing = [str(p) for p in paths if p.exists()]
-    if existing and not overwrite:
-        raise FileExistsError(f"{', '.join(existing)} exists already: choose another --out, or pass --overwrite")
-    env = dynamic_env(env_id)
-    try:
-        scene, model = scene_of(env), env_id.split("/")[-1]
-        checks = importlib.util.find_spec("mujoco") is not None
-        if fmt == "mjcf":
-            text = mjcf(scene, model, home=True)
-            texts, gaps = [text], check_mjcf(scene, text) if checks else None
-        else:
-            text, sidecar = urdf(scene, model)
-            texts, gaps = [text, json.dumps(sidecar, indent=1) + "\n"], check_urdf(scene, text, sidecar) if checks \
-                else None
-    finally:
-        env.close()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    for p, text in zip(paths, texts, strict=True):
-        p.write_text(text)
-    return paths, gaps
 
 
 # --- checks -------------------------------------------------------------------------------------------------------
