@@ -43,6 +43,7 @@ from results_file import add_record_option, engine_versions, paragraph, record
 
 from paragym import registry
 from paragym.baselines.stats import wilson
+from paragym.envs import export as envs_export
 from paragym.sim import export
 from paragym.sim.client import motors_of
 from paragym.sim.statics import holding_forces
@@ -105,10 +106,10 @@ def holding(env_ids: list[str], seconds: float, seed: int) -> list[list[str]]:
     for env_id in env_ids:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            env = export.dynamic_env(env_id)
+            env = envs_export.dynamic_env(env_id)
         try:
             env.reset(seed=seed)
-            scene = export.scene_of(env)
+            scene = envs_export.scene_of(env)
             if not scene.sim.loops or not hasattr(scene, "hold"):
                 print(f"{env_id}: no loop closure to hold (its loops close through the ground)")
                 continue

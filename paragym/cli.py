@@ -118,7 +118,7 @@ def _cmd_validate(args: argparse.Namespace) -> int:
 
 
 def _cmd_export(args: argparse.Namespace) -> int:
-    from paragym.sim.export import write
+    from paragym.envs.export import write
 
     env_id = paragym.check_env_id(args.env_id)
     if bench_of(env_id).dynamics is None:

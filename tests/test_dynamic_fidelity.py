@@ -425,7 +425,7 @@ def test_a_dynamic_step_says_how_far_its_loops_are_open(env_id):
     construction)."""
     import gymnasium as gym
 
-    from paragym.sim.export import scene_of
+    from paragym.envs.export import scene_of
 
     env = gym.make(env_id, fidelity="dynamic")
     try:
@@ -449,9 +449,9 @@ def test_a_dynamic_step_says_how_far_its_loops_are_open(env_id):
 def _creep(dynamics, force: float = 100.0, seconds: float = 2.0, engine: object = "pybullet") -> float:
     """How far (m) a loaded drive unit slides along its axle in ``seconds`` with its wheels held, pushed that way
     by ``force`` (N) on top of the legs' thrust, once the robot has settled for 0.5 s (in ``engine``)."""
+    from paragym.envs.export import scene_of
     from paragym.mechanisms.geometry import quat_to_matrix
     from paragym.sim.client import physics_steps
-    from paragym.sim.export import scene_of
 
     env = gym.make("paragym/MobileTripodOdometry-v2", fidelity="dynamic", scenario="initial_heading",
                    dynamics=dynamics, engine=engine)

@@ -27,6 +27,7 @@ LAYERS = [
 ]
 EXTERNAL = {  # third-party imports a layer must not make
     "paragym.mechanisms": ("pybullet", "gymnasium"),
+    "paragym.sim": ("gymnasium",),
     "paragym.tasks": ("gymnasium",),
 }
 

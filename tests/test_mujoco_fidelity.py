@@ -229,14 +229,14 @@ def test_the_hand_statics_is_what_both_engines_hold(env_id, within):
     engine's motors find after holding the pose for 0.5 s: the CaPaMan's to 2e-3 N m (0.78 N m the largest),
     the hybrid's to 1.5 N (39 N the largest; its platforms sag a little under PyBullet's motors). With gravity
     halved the statics halves, so it is not the engines' numbers read back."""
-    from paragym.sim import export
+    from paragym.envs import export as envs_export
     from paragym.sim.client import motors_of
     from paragym.sim.statics import holding_forces
 
     for engine in (None, MuJoCoSettings()):
-        env = export.dynamic_env(env_id)
+        env = envs_export.dynamic_env(env_id)
         try:
-            scene = export.scene_of(env)
+            scene = envs_export.scene_of(env)
             statics = holding_forces(scene)
             halved = holding_forces(scene, gravity=scene.dynamics.gravity / 2)
             assert np.allclose(halved, statics / 2, rtol=1e-6, atol=1e-9)
