@@ -200,6 +200,7 @@ class CaPaManDynamicScene:
         closures (run again whenever the world is rebuilt)."""
         g, d, sim = self.geometry, self.dynamics, self.sim
         sim.set_physics(d.gravity, d.time_step, d.solver_iterations, d.erp)
+        sim.servos(self._motors, d.motor_torque, d.position_gain, d.velocity_gain)
         sim.no_self_collision(*self.bodies)  # the parts of one mechanism do not collide with each other
         for body, joint in self.motors + self.cranks_b if d.joint_stops else ():  # these joints turn by -alpha
             sim.joint_stops(body, [joint], -g.alpha_max - d.stop_margin, -g.alpha_min + d.stop_margin)
@@ -264,8 +265,7 @@ class CaPaManDynamicScene:
         closure = 0.0
         for i in range(n):  # the physics is sequential: one step after the other
             if i:
-                sim.drive(self._motors, -target[i], -target_rate[i], d.motor_torque, d.position_gain,
-                          d.velocity_gain)
+                sim.drive(self._motors, -target[i], -target_rate[i])
                 sim.step()
             pos[i], orn[i], vel[i], omega[i] = sim.link_motion(*self.plate, velocity=True)
             alpha[i] = self.alpha
@@ -297,11 +297,10 @@ class CaPaManDynamicScene:
     def drive(self, target: np.ndarray, duration: float) -> np.ndarray:
         """Move the motors' targets linearly from the last target to ``target``
         (rad) over ``duration`` s of simulated time; returns the tool tip."""
-        d, target = self.dynamics, np.asarray(target, float)
+        target = np.asarray(target, float)
         # the motors' joints turn by -alpha (capaman_links): the ramp of -alpha is the negated ramp of alpha, bit
         # for bit
-        self.sim.ramp(self._motors, -self._target, -target, duration, d.time_step, d.motor_torque,
-                      d.position_gain, d.velocity_gain)
+        self.sim.ramp(self._motors, -self._target, -target, duration)
         self._target = target.copy()
         return self.tip
 
@@ -341,8 +340,7 @@ def drive_together(scenes: Sequence[CaPaManDynamicScene], targets: np.ndarray, d
     targets = np.asarray(targets, float)
     starts = np.array([scene._target for scene in scenes])
     # the motors' joints turn by -alpha (capaman_links), as in drive()
-    ramp_together([scene.sim for scene in scenes], scenes[0]._motors, -starts, -targets, duration,
-                  scenes[0].dynamics.motor_torque, pool)
+    ramp_together([scene.sim for scene in scenes], scenes[0]._motors, -starts, -targets, duration, pool)
     for scene, target in zip(scenes, targets, strict=True):
         scene._target = target.copy()
 

@@ -205,6 +205,7 @@ class HybridDynamicScene:
         self.actuators = [at(f"h{i}_p") for i in range(6)] + [at(f"t{j}_p") for j in range(3)]
         #: the nine actuators as motors (body, joints), in the order of the strokes
         self.motors = motors_of(self.actuators)
+        sim.servos(self.motors, d.motor_force, d.position_gain, d.velocity_gain)
         for body, link in self._a_float + self._e_float + self.hex_u + self.hex_v + self.tri_r:
             sim.passive(body, [link])
         for body, link in (self.a_platform, self.e_platform):
@@ -260,9 +261,8 @@ class HybridDynamicScene:
         """Move the nine actuators' targets linearly from the last target to
         ``strokes`` (9,) (m) over ``duration`` s of simulated time, the motors
         chasing them under their force limit."""
-        d, strokes = self.dynamics, np.asarray(strokes, float)
-        self.sim.ramp(self.motors, self._target, strokes, duration, d.time_step, d.motor_force,
-                      d.position_gain, d.velocity_gain)
+        strokes = np.asarray(strokes, float)
+        self.sim.ramp(self.motors, self._target, strokes, duration)
         self._target = strokes.copy()
 
     def measure(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -311,7 +311,7 @@ class HybridDynamicScene:
         closure = 0.0
         for i in range(n):  # the physics is sequential
             if i:
-                sim.drive(self.motors, target[i], target_rate[i], d.motor_force, d.position_gain, d.velocity_gain)
+                sim.drive(self.motors, target[i], target_rate[i])
                 sim.step()
             pos[i], orn[i], vel[i], omega[i] = sim.link_motion(*self.e_platform, velocity=True)
             a_pos[i] = sim.link_frame(*self.a_platform)[0]
@@ -334,7 +334,7 @@ def drive_together(scenes: Sequence[HybridDynamicScene], strokes: np.ndarray, du
     strokes = np.asarray(strokes, float)
     first = scenes[0]
     ramp_together([scene.sim for scene in scenes], first.motors, np.array([scene._target for scene in scenes]),
-                  strokes, duration, first.dynamics.motor_force, pool)
+                  strokes, duration, pool)
     for scene, target in zip(scenes, strokes, strict=True):
         scene._target = target.copy()
 

@@ -30,7 +30,7 @@ The motors: MuJoCo's position servo pushes kp (u - q) - kv q_dot within its forc
 sets u = target + (kv / kp) * rate, which makes that kp (target - q) + kv (rate - q_dot), the PD law of
 PyBullet's motors with its target rate. The gains are the export's (critically damped at
 ``servo_bandwidth`` / h for what each servo moves, :func:`paragym.sim.export.servo_gains`), not PyBullet's
-normalised ones; the force limit is the scene's, per call as in PyBullet.
+normalised ones; the force limit is the scene's (:meth:`MuJoCoSim.servos`).
 
 The settings (:class:`MuJoCoSettings`) are the engine's own: its physics step (1 ms by default: MuJoCo's
 servos are springs integrated step by step, and at the PyBullet scenes' 5 ms they cannot hold the hybrid's
@@ -51,14 +51,15 @@ from paragym.kernels import thread_count
 from paragym.sim import export
 from paragym.sim.client import depth_first, physics_steps
 from paragym.sim.description import SceneDescription
+from paragym.sim.recipes import Recipe
 
 __all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "RolloutPool", "check_engine", "ramp_together",
            "read_together", "rollout_pool", "scene_sim", "simulate_in", "vector_engine"]
 
 #: the engines of the dynamic fidelity, by the name the ``engine`` argument takes
 ENGINES = ("pybullet", "mujoco")
-#: the longest MuJoCo step (s) the fidelity takes: with the reference's 8 episodes per task, a 2 ms step gave the
-#: verdicts of a 1 ms one (success and KF), a 5 ms one failed all 8 of the hybrid's and 2 of the CaPaMan's KF checks
+#: the longest MuJoCo step (s) the fidelity takes: the reference's verdicts there are those of the default step
+#: (:data:`paragym.sim.export.MUJOCO_STEP`; the conformance page)
 MAX_STEP = 2e-3
 
 
@@ -66,8 +67,8 @@ MAX_STEP = 2e-3
 class MuJoCoSettings:
     """The MuJoCo dynamic fidelity's own settings (SI).
 
-    Presets: the default (a 1 ms step, the export's) and :meth:`fast` (2 ms: the longest step, :data:`MAX_STEP`,
-    at which the reference's verdicts stay those of 1 ms; its loops open about four times as far, under 0.04 mm).
+    Presets: the default (a 1 ms step, :data:`paragym.sim.export.MUJOCO_STEP`) and :meth:`fast` (2 ms: the
+    longest step, :data:`MAX_STEP`, at which the reference's verdicts stay those of 1 ms).
 
     Attributes:
         time_step: MuJoCo's physics step (s), at most :data:`MAX_STEP`.
@@ -81,7 +82,7 @@ class MuJoCoSettings:
             run, N robots at once; tasks that have such a world take it.
     """
 
-    time_step: float = 1e-3
+    time_step: float = export.MUJOCO_STEP
     servo_bandwidth: float | None = None
     iterations: int | None = None
     mirror: bool = True
@@ -348,21 +349,37 @@ class MuJoCoSim:
             self._actuators[key] = (ids_arr, adr, ratio)
         return self._actuators[key]
 
-    def drive(self, motors: Sequence[tuple[str, Sequence[int]]], targets: Sequence[float], rates: Sequence[float],
-              force: float, position_gain: float = 0.0, velocity_gain: float = 0.0) -> None:
-        """The servos of ``motors`` chase ``targets`` at ``rates`` (each at most ``force``, N or N m) from the
-        next step on; PyBullet's normalised gains are not MuJoCo's and are ignored (module docstring)."""
+    def servos(self, motors: Sequence[tuple[str, Sequence[int]]], force: float, position_gain: float,
+               velocity_gain: float) -> None:
+        """The servos of ``motors`` from now on, written into the source (:attr:`servo_settings`): MuJoCo's take
+        their force limit (N or N m); their gains are the settings' (``servo_bandwidth``, module docstring), the
+        PyBullet gains the source's, which its mirror and its description keep."""
+        self.source.servos(motors, force, position_gain, velocity_gain)
+
+    @property
+    def servo_settings(self) -> dict[tuple[str, int], tuple[float, float, float]]:
+        """The servos as set (:meth:`servos`), the source's."""
+        return self.source.servo_settings
+
+    def _force(self, motors: Sequence[tuple[str, Sequence[int]]]) -> float:
+        """The force limit of the servos of ``motors``, which were set together (:meth:`servos`)."""
+        name, joints = motors[0]
+        return self.source.servo_settings[name, joints[0]][0]
+
+    def drive(self, motors: Sequence[tuple[str, Sequence[int]]], targets: Sequence[float],
+              rates: Sequence[float]) -> None:
+        """The servos of ``motors`` (:meth:`servos`) chase ``targets`` at ``rates`` from the next step on."""
         self._ready()
         ids, _, ratio = self._motors(motors)
         self.data.ctrl[ids] = np.asarray(targets, float) + ratio * np.asarray(rates, float)
+        force = self._force(motors)
         self.model.actuator_forcerange[ids] = (-force, force)
 
     def ramp(self, motors: Sequence[tuple[str, Sequence[int]]], start: np.ndarray, goal: np.ndarray,
-             duration: float, time_step: float, force: float, position_gain: float = 0.0,
-             velocity_gain: float = 0.0) -> None:
+             duration: float) -> None:
         """Move the servos' targets linearly from ``start`` to ``goal`` over ``duration`` s of MuJoCo's steps
-        (at least one; ``time_step``, PyBullet's, is ignored), stepping as they go."""
-        ids, inputs = self._ramp_inputs(motors, start[None], goal[None], duration, force)
+        (at least one), stepping as they go."""
+        ids, inputs = self._ramp_inputs(motors, start[None], goal[None], duration, self._force(motors))
         inputs = inputs[0]
         if self.cold_periods:  # as rollout starts: no warm start, and what the state implies computed afresh
             self.data.qacc_warmstart[:] = 0.0
@@ -547,11 +564,64 @@ class MuJoCoSim:
         self.source.remove(name)  # a rebuild of the mirror re-runs the scene's set-up, through this object
         self._need_load = True
 
-    def __getattr__(self, name: str) -> Any:
-        """What the mirror keeps and sets up (names, links, loops, collision filters, the GUI): the mirror's."""
-        if name in _MIRRORED:
-            return getattr(self.source, name)
-        raise AttributeError(f"{type(self).__name__} has no attribute {name!r}")
+    # --- the scene's bookkeeping and set-up: the source's (its PyBullet world or its description), which a
+    # --- rebuild runs again; what the MJCF holds of it was written when the model was ----------------------
+    @property
+    def loops(self) -> dict[tuple[str, str | None, str, str | None], tuple[tuple[float, ...], tuple[float, ...]]]:
+        """The loop closures, as :attr:`PyBulletSim.loops <paragym.sim.client.PyBulletSim.loops>`."""
+        return self.source.loops
+
+    @property
+    def stops(self) -> dict[tuple[str, str | None], tuple[float, float]]:
+        """The joints' hard stops, as :attr:`PyBulletSim.stops <paragym.sim.client.PyBulletSim.stops>`."""
+        return self.source.stops
+
+    @property
+    def recipes(self) -> dict[str, Recipe]:
+        """How each body was built (:mod:`paragym.sim.recipes`)."""
+        return self.source.recipes
+
+    @property
+    def body_names(self) -> tuple[str, ...]:
+        return self.source.body_names
+
+    @property
+    def gui(self) -> bool:
+        return bool(self.source.gui)
+
+    def link_name(self, name: str, index: int) -> str | None:
+        return self.source.link_name(name, index)
+
+    def link_index(self, name: str, link: str) -> int:
+        return self.source.link_index(name, link)
+
+    def locate(self, link: str) -> tuple[str, int]:
+        return self.source.locate(link)
+
+    def set_physics(self, gravity: float, time_step: float, solver_iterations: int, erp: float | None = None) -> None:
+        self.source.set_physics(gravity, time_step, solver_iterations, erp)
+
+    def no_self_collision(self, *names: str) -> None:
+        self.source.no_self_collision(*names)
+
+    def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
+        self.source.passive(name, joints, spherical)
+
+    def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int, pivot_b: Sequence[float],
+                   other: str | None = None) -> None:
+        self.source.ball_joint(name, link_a, pivot_a, link_b, pivot_b, other)
+
+    def no_collision(self, name: str) -> None:
+        self.source.no_collision(name)
+
+    def joint_stops(self, name: str, joints: Sequence[int], lower: float, upper: float) -> None:
+        self.source.joint_stops(name, joints, lower, upper)
+
+    def on_rebuild(self, setup: Any) -> None:
+        self.source.on_rebuild(setup)
+
+    def contact_friction(self, name: str, link: int) -> float:
+        return self.source.contact_friction(name, link)
 
     def close(self) -> None:
         """Close the PyBullet world (the mirror, or a described scene's picture) and drop the MuJoCo model."""
@@ -559,14 +629,6 @@ class MuJoCoSim:
             if world is not None and hasattr(world, "close"):
                 world.close()
         self.model = self.data = None
-
-
-#: the mirror's names :class:`MuJoCoSim` answers with: bookkeeping, and the scene's set-up (run again by the
-#: mirror's rebuild; what the MJCF holds of it was written when the model was)
-_MIRRORED = frozenset({
-    "loops", "stops", "recipes", "body_names", "link_name", "link_index", "locate", "body", "connected", "gui",
-    "draws", "set_physics", "no_self_collision", "passive", "ball_joint", "no_collision", "joint_stops",
-    "on_rebuild", "contact_friction"})
 
 
 def _same_parts(a: Any, b: Any) -> bool:
@@ -611,7 +673,7 @@ def rollout_pool(robots: int) -> RolloutPool | None:
 
 
 def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequence[int]]], starts: np.ndarray,
-                  goals: np.ndarray, duration: float, force: float, pool: Any = None) -> None:
+                  goals: np.ndarray, duration: float, pool: Any = None) -> None:
     """:meth:`MuJoCoSim.ramp` of each of ``sims`` (robots of one world: one mechanism, their models of one size,
     each with :attr:`~MuJoCoSim.cold_periods`) from ``starts`` to ``goals`` (M, n), in one call of MuJoCo's
     ``rollout`` on the threads of ``pool`` (a :class:`RolloutPool`; None: the calling thread), which holds no lock
@@ -625,11 +687,12 @@ def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequenc
     spec = int(mj.mjtState.mjSTATE_FULLPHYSICS)  # what rollout takes and gives
     alone = np.array([bool(sim.after_step or sim._pushed or not sim.cold_periods) for sim in sims])
     for k in np.flatnonzero(alone):
-        sims[k].ramp(motors, starts[k], goals[k], duration, 0.0, force)
+        sims[k].ramp(motors, starts[k], goals[k], duration)
     rows = np.flatnonzero(~alone)
     if not rows.size:
         return
     batch = [sims[k] for k in rows]
+    force = batch[0]._force(motors)  # a world's robots: one mechanism, one servo force
     ids, inputs = batch[0]._ramp_inputs(motors, starts[rows], goals[rows], duration, force)
     models = [sim.model for sim in batch]
     first = models[0]

@@ -165,10 +165,9 @@ class OrthoglideDynamicScene:
         ``rho`` (m) over ``duration`` s of simulated time: rounded to whole
         physics steps, or, with ``exact``, exactly (the physics step then
         shortened to divide it, the motors' bandwidth kept)."""
-        d, rho = self.dynamics, np.asarray(rho, float)
-        step = self._step_for(duration, exact)
-        self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration, step, d.motor_force,
-                      d.bandwidth * step, d.velocity_gain)
+        rho = np.asarray(rho, float)
+        self._step_for(duration, exact)  # the physics step and the servos for it
+        self.sim.ramp([(self.ROBOT, self.motors)], self._target, rho, duration)
         self._target = rho.copy()
 
     def _step_for(self, duration: float, exact: bool) -> float:
@@ -176,6 +175,8 @@ class OrthoglideDynamicScene:
         step = exact_time_step(duration, self.base_step) if exact else self.base_step
         if step != self.sim.time_step:
             self.sim.set_time_step(step)
+        d = self.dynamics  # the servos' bandwidth kept at any step
+        self.sim.servos([(self.ROBOT, self.motors)], d.motor_force, d.bandwidth * step, d.velocity_gain)
         return step
 
     @property
@@ -219,8 +220,7 @@ def drive_together(scenes: Sequence[OrthoglideDynamicScene], rho: np.ndarray, du
     for (duration, _), members in groups.items():
         group = [scenes[k] for k in members]
         ramp_together([scene.sim for scene in group], [(first.ROBOT, first.motors)],
-                      np.array([scene._target for scene in group]), rho[members], duration,
-                      first.dynamics.motor_force, pool)
+                      np.array([scene._target for scene in group]), rho[members], duration, pool)
     for scene, target in zip(scenes, rho, strict=True):
         scene._target = target.copy()
 

@@ -166,6 +166,9 @@ class TripodDynamicScene:
         simulate_in(self, engine)  # MuJoCo's physics where ``engine`` is its settings (None: PyBullet's)
         #: the engine's physics step (s): the dynamics' in PyBullet, the settings' in MuJoCo
         self.base_step = self.sim.time_step
+        # the wheels' servos follow their angle references (a velocity motor alone creeps)
+        self.sim.servos([(self.ROBOT, [w for pair in self.wheels for w in pair])], d.wheel_torque,
+                        d.wheel_bandwidth * self.base_step, 1.0)
 
     def _set_up_physics(self) -> None:
         """Gravity, the engine's settings, friction, the passive joints (run again when the world is rebuilt)."""
@@ -260,7 +263,6 @@ class TripodDynamicScene:
         sides = np.repeat(turn, 2) * np.tile([-1.0, 1.0], 3)  # left wheels slower, right faster to turn left
         h = self.base_step
         steps = physics_steps(duration, h)
-        gain = d.wheel_bandwidth * h
         wheels = [w for pair in self.wheels for w in pair]
         motors = [(self.ROBOT, wheels)]
         target = self._wheel_target.ravel()
@@ -270,7 +272,7 @@ class TripodDynamicScene:
                 max(speed, self._speed - step_speed)
             rates = (self._speed + sides) / d.wheel_radius
             target += rates * h
-            sim.drive(motors, target, rates, d.wheel_torque, gain, 1.0)
+            sim.drive(motors, target, rates)
             if push is not None and s < push_steps:
                 sim.push(self.ROBOT, self.chassis[push[0]], push[1])
             sim.step()
