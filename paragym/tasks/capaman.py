@@ -109,17 +109,17 @@ def paper_scenario(geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY)
 
 
 def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstacles: int = MAX_OBSTACLES,
-                      rung: int | None = None) -> None:
+                      rung: CaPaManRung | None = None) -> None:
     """Raise ``ValueError`` if the scenario is malformed (more than ``max_obstacles``), a task point is out
     of range, or the manipulator collides at a task configuration
-    (PyBullet's exact check). On rung ``rung`` of :data:`LADDER` (its own number of posts then), also unless
+    (PyBullet's exact check). On a rung of :data:`LADDER` (its own number of posts then), also unless
     every obstacle is a :class:`~paragym.sim.obstacles.Capsule` whose top is the clearance cap below the
     plate's floor (:func:`~paragym.sim.capaman_posts.post_ceiling`) and every T.C. is free in the capsule model.
     Leaves the scene's obstacles set."""
     base.resolve_scenario(scenario, (), CaPaManScenario)
     if rung is not None:
         posts = posts_of(scenario.obstacles)
-        max_obstacles = LADDER[rung].max_obstacles
+        max_obstacles = rung.max_obstacles
     if not 1 <= len(scenario.obstacles) <= max_obstacles:
         raise ValueError(f"a scenario has 1 to {max_obstacles} obstacles; got {len(scenario.obstacles)}")
     alpha = capaman.check_joint_angles(scenario.alpha, scene.geometry, name="scenario.task_points")

@@ -65,7 +65,7 @@ from paragym.tasks.base import (
     refuse_unknown,
     renamed,
 )
-from paragym.tasks.capaman import LADDER, MAX_OBSTACLES, TOUR, CaPaManScenario
+from paragym.tasks.capaman import LADDER, MAX_OBSTACLES, TOUR, CaPaManRung, CaPaManScenario
 from paragym.tasks.capaman_worlds import DynamicWorld, NativeWorld, SceneWorld, World
 from paragym.units import DEG
 
@@ -123,7 +123,7 @@ class CaPaManRules:
         goal_relative: v1's observation (goal-relative, with the clearance's look-ahead, :data:`OBS_SIZE_V1`)
             and ``time_penalty`` an argument; else v0's observation, and no time penalty.
         reach_tolerance, collision_penalty, time_penalty: the defaults of those arguments.
-        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.capaman.LADDER`): its scenarios
+        rung: a rung of the difficulty ladder (one of :data:`paragym.tasks.capaman.LADDER`): its scenarios
             ("random"), its posts' slots in the observation and the capsule model's collision test
             (``collision="posts"``); None for the released versions.
     """
@@ -133,12 +133,12 @@ class CaPaManRules:
     reach_tolerance: float
     collision_penalty: float
     time_penalty: float
-    rung: int | None = None
+    rung: CaPaManRung | None = None
 
     @property
     def max_obstacles(self) -> int:
         """The obstacles' slots of the observation."""
-        return MAX_OBSTACLES if self.rung is None else LADDER[self.rung].max_obstacles
+        return MAX_OBSTACLES if self.rung is None else self.rung.max_obstacles
 
 
 #: the engines of the dynamic fidelity (the env's ``engine`` argument): both of :mod:`paragym.sim.mujoco_sim`
@@ -149,7 +149,7 @@ RULES = {0: CaPaManRules(0, goal_relative=False, reach_tolerance=1 * DEG, collis
 #: the rules of the ladder's rungs, CaPaManCollisionFree-Easy, -Medium and -Hard (v0 each): v1's observation,
 #: reward and reach tolerance, on the rung's scenarios, with the capsule model's collision test
 LADDER_RULES = {k: CaPaManRules(0, goal_relative=True, reach_tolerance=3 * DEG, collision_penalty=4.0,
-                                time_penalty=0.01, rung=k) for k in range(len(LADDER))}
+                                time_penalty=0.01, rung=rung) for k, rung in enumerate(LADDER)}
 
 
 @dataclass(frozen=True)

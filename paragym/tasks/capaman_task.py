@@ -72,7 +72,7 @@ class CaPaManTask(TaskBase):
         if params.rules.rung is None:
             return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
         if scenarios_module.resolve_scenario(choice) == "random":
-            return scenarios_module.ladder_scenarios(rngs, scenarios_module.LADDER[params.rules.rung],
+            return scenarios_module.ladder_scenarios(rngs, params.rules.rung,
                                                      params.geometry)
         if choice == "paper":
             raise ValueError("a rung's scenarios are its own: scenario 'random' or a CaPaManScenario of capsule "

@@ -282,15 +282,15 @@ def resolve_scenario(choice: Any, geometry: og.OrthoglideGeometry = og.DEFAULT_G
 
 
 def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
-                   geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, rung: int | None = None
+                   geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY, rung: OrthoglideRung | None = None
                    ) -> list[OrthoglideScenario]:
     """One episode's path per generator (single env, vector env and CLI
     alike): the paper's circle, random paths drawn from the generators, or
-    the custom path once :func:`resolve_scenario` accepts it. On a rung of the ladder (``rung``, an index of
+    the custom path once :func:`resolve_scenario` accepts it. On a rung of the ladder (``rung``, one of
     :data:`LADDER`) "random" is the rung's path (:func:`ladder_scenarios`)."""
     choice = resolve_scenario(choice, geometry)
     if choice == "random" and rung is not None:
-        return ladder_scenarios(rngs, LADDER[rung], geometry)
+        return ladder_scenarios(rngs, rung, geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)
     return [paper_scenario() if choice == "paper" else choice] * len(rngs)

@@ -75,7 +75,7 @@ class OrthoglideRules:
             mode, and a step beyond ``track_tolerance`` fails, as does a broken mechanism (dynamic fidelity).
         exact_time: the dynamic fidelity simulates each path step over exactly its duration (else rounded to
             whole physics steps, with a warning).
-        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.orthoglide.LADDER`): its paths
+        rung: a rung of the difficulty ladder (one of :data:`paragym.tasks.orthoglide.LADDER`): its paths
             are the "random" scenario, and success asks for a mean kappa at most the rung's share of the way
             from 1 to the least-norm motion's (:func:`kappa_bounds`); None: a version of the task, whose success
             asks for no kappa.
@@ -87,7 +87,7 @@ class OrthoglideRules:
     version: int
     tracking: bool
     exact_time: bool
-    rung: int | None = None
+    rung: scenarios_module.OrthoglideRung | None = None
     table_below_guides: bool = False
 
 
@@ -98,10 +98,11 @@ RULES = {0: OrthoglideRules(0, tracking=False, exact_time=False), 1: OrthoglideR
          2: OrthoglideRules(2, tracking=True, exact_time=True, table_below_guides=True)}
 #: the rules of the ladder's rungs, Orthoglide2PRRKappa-Easy, -Medium and -Hard (v0 each): v1's, on the rung's
 #: paths and with its bound on the mean kappa (released before v2: their table runs at the guides' height)
-LADDER_RULES = {k: OrthoglideRules(0, tracking=True, exact_time=True, rung=k) for k in range(3)}
+LADDER_RULES = {k: OrthoglideRules(0, tracking=True, exact_time=True, rung=rung)
+                for k, rung in enumerate(scenarios_module.LADDER)}
 #: the rules of the ladder v1's rungs (-Easy-v1 ...): the ladder v0's, with v2's table beneath the guides
-LADDER_RULES_V1 = {k: OrthoglideRules(1, tracking=True, exact_time=True, rung=k, table_below_guides=True)
-                   for k in range(3)}
+LADDER_RULES_V1 = {k: OrthoglideRules(1, tracking=True, exact_time=True, rung=rung, table_below_guides=True)
+                   for k, rung in enumerate(scenarios_module.LADDER)}
 
 
 @dataclass(frozen=True)
@@ -144,7 +145,7 @@ class OrthoglideParams:
                                        unit=" of metres")
         check_choice("fidelity", fidelity, ("kinematic", "dynamic"))
         check_instance("dynamics", dynamics, OrthoglideDynamics)
-        fixed = None if rules.rung is None else scenarios_module.LADDER[rules.rung].actions
+        fixed = None if rules.rung is None else rules.rung.actions
         if action_mode is None:
             action_mode = fixed or "null_space"
         check_choice("action_mode", action_mode, ("null_space", "joint_velocity"))
@@ -186,7 +187,7 @@ class OrthoglideParams:
     def left_penalty(self) -> float:
         """What a failure costs per path point left, beyond ``limit_penalty``: the rung's
         (:attr:`paragym.tasks.orthoglide.OrthoglideRung.left_penalty`), 0 off the ladder."""
-        return 0.0 if self.rules.rung is None else scenarios_module.LADDER[self.rules.rung].left_penalty
+        return 0.0 if self.rules.rung is None else self.rules.rung.left_penalty
 
 
 class KernelParams(NamedTuple):
@@ -359,7 +360,7 @@ def kappa_bounds(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) 
     """A rung's highest mean kappa of a success on each of ``scenarios``: the rung's ``share`` of the way from 1
     (an isotropic mechanism) to the least-norm motion's mean kappa (:func:`least_norm_kappa`), so that the zero
     action never meets it and a table placed well does."""
-    share = scenarios_module.LADDER[params.rules.rung].share
+    share = params.rules.rung.share
     return 1.0 + share * (least_norm_kappa(params, scenarios) - 1.0)
 
 

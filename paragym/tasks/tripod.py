@@ -218,13 +218,14 @@ def resolve_scenario(choice: Any) -> str | TripodScenario:
     return base.resolve_scenario(choice, SCENARIOS, TripodScenario, validate_scenario)
 
 
-def draw_scenarios(choice: Any, rngs: list[np.random.Generator], rung: int | None = None) -> list[TripodScenario]:
+def draw_scenarios(choice: Any, rngs: list[np.random.Generator], rung: TripodRung | None = None
+                   ) -> list[TripodScenario]:
     """One episode's drive per generator (single env, vector env and CLI alike): a named or
     random one drawn from each generator, or the custom one once checked. On a rung of the ladder
-    (``rung``, an index of :data:`LADDER`) "random" is the rung's drive (:func:`ladder_scenario`)."""
+    (``rung``, one of :data:`LADDER`) "random" is the rung's drive (:func:`ladder_scenario`)."""
     choice = resolve_scenario(choice)
     if choice == "random" and rung is not None:
-        return [ladder_scenario(rng, LADDER[rung]) for rng in rngs]
+        return [ladder_scenario(rng, rung) for rng in rngs]
     return [drive_scenario(choice, rng) if isinstance(choice, str) else choice for rng in rngs]
 
 

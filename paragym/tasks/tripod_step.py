@@ -88,7 +88,7 @@ class TripodRules:
         fold_ends: a folded mechanism (a leg at or past horizontal, true eta <= 0) ends the episode as a
             failure, and in dynamic fidelity a physics step that does not divide the sample is refused (else
             simulated rounded, with a warning).
-        rung: a rung of the difficulty ladder (an index of :data:`paragym.tasks.tripod.LADDER`): its drives are
+        rung: a rung of the difficulty ladder (one of :data:`paragym.tasks.tripod.LADDER`): its drives are
             the "random" scenario, and in dynamic fidelity the push's force is calibrated to its distance
             (:data:`paragym.tasks.tripod_worlds.PUSH_CALIBRATION`); None: a version of the task.
         converged: the dynamic fidelity's default physics is :meth:`TripodDynamics.converged` (friction that holds
@@ -100,7 +100,7 @@ class TripodRules:
     version: int
     trust_action: bool
     fold_ends: bool
-    rung: int | None = None
+    rung: scenarios_module.TripodRung | None = None
     converged: bool = False
 
 
@@ -111,9 +111,11 @@ RULES = {0: TripodRules(0, trust_action=False, fold_ends=False), 1: TripodRules(
          2: TripodRules(2, trust_action=True, fold_ends=True),
          3: TripodRules(3, trust_action=True, fold_ends=True, converged=True)}
 #: the rules of the ladder's rungs, MobileTripodOdometry-Easy, -Medium and -Hard (v0 each): v2's, on the rung's drives
-LADDER_RULES = {k: TripodRules(0, trust_action=True, fold_ends=True, rung=k) for k in range(3)}
+LADDER_RULES = {k: TripodRules(0, trust_action=True, fold_ends=True, rung=rung)
+                for k, rung in enumerate(scenarios_module.LADDER)}
 #: the rules of the ladder v1's rungs (-Easy-v1 ...): the ladder v0's, at v3's converged physics
-LADDER_RULES_V1 = {k: TripodRules(1, trust_action=True, fold_ends=True, rung=k, converged=True) for k in range(3)}
+LADDER_RULES_V1 = {k: TripodRules(1, trust_action=True, fold_ends=True, rung=rung, converged=True)
+                   for k, rung in enumerate(scenarios_module.LADDER)}
 
 
 @dataclass(frozen=True)
