@@ -259,7 +259,7 @@ class CaPaManState(KernelArrays):
     #: the arrays the kernels take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("tp", "tc", "code", "alpha", "tip", "reached", "path_length", "step_length", "progress",
                      "just_reached", "clearance", "terminated", "obs", "reward", "lookahead", "terms", "collision",
-                     "failure", "success", "target_index")
+                     "failure", "success", "target_index", "broken")
 
     tp: np.ndarray
     tc: np.ndarray
@@ -286,6 +286,9 @@ class CaPaManState(KernelArrays):
     failure: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
     collision: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     target_index: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64), repr=False, compare=False)
+    #: what the world measured of each robot's last move before the transition decided: a loop open by more than
+    #: its world's ``BROKEN_GAP`` (the dynamics; False in the kinematic fidelity)
+    broken: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
 
 
     @classmethod
@@ -298,7 +301,7 @@ class CaPaManState(KernelArrays):
                    terminated=z(n, bool), obs=z((n, obs_size), np.float32), reward=z(n),
                    terms=z((n, len(REWARD_TERMS))), near=[None] * n,
                    scenarios=[None] * n, success=z(n, bool), failure=z(n, np.int64), collision=z(n, bool),
-                   target_index=z(n, np.int64))
+                   target_index=z(n, np.int64), broken=z(n, bool))
 
     @property
     def target(self) -> np.ndarray:
@@ -329,7 +332,7 @@ def reset(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenario
     state.command[rows] = state.alpha[rows]
     state.reached[rows] = 0
     state.path_length[rows], state.step_length[rows], state.progress[rows] = 0.0, 0.0, 0.0
-    state.just_reached[rows] = False
+    state.just_reached[rows], state.broken[rows] = False, False
     _place(state, world, rows, state.alpha[rows])
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     mask = np.zeros(len(state.alpha), bool)
@@ -366,14 +369,9 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     else:
         state.command[rows], state.alpha[rows] = command[rows], new
     _place(state, world, rows, new)
+    state.broken[rows] = world.broken[rows] if moves else False  # what the world measured, before the decision
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
-    for i in rows[world.broken[rows]].tolist() if moves else ():
-        if not state.terminated[i]:
-            state.terminated[i] = True  # a broken mechanism ends the episode as a failure, as a collision does
-            state.terms[i, 5] -= params.collision_penalty
-            state.reward[i] -= params.collision_penalty
-        state.failure[i], state.success[i] = decide(state.reached[i], len(TOUR), state.collision[i], True)
 
 
 def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: np.ndarray,
@@ -421,7 +419,7 @@ def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: n
 def decide(reached: int, n_tour: int, collision: bool, broken: bool) -> tuple[int, bool]:
     """A robot's failure (1: a collision, 2: a broken mechanism, 0: none) and whether it has succeeded: the tour
     T.C.1 -> 2 -> 3 -> 1 complete (``reached >= n_tour``) with no failure. The one place the task decides
-    success: the transition calls it for every robot it evaluates (and for a dynamic robot's broken loop), and
+    success: the transition's kernel calls it for every robot it evaluates, with what the world measured, and
     :meth:`~paragym.tasks.capaman_task.CaPaManTask.evaluate` reports what it decided."""
     failure = 1 if collision else 2 if broken else 0
     return failure, reached >= n_tour and failure == 0
@@ -440,10 +438,11 @@ def _command(command, actions, p):
 @njit(cache=True, error_model="numpy")
 def _finish_kernel(arrays, old, rows, move, p, tour):
     """After the world has placed the robots of ``rows``: the step's length and
-    progress toward the target, reaching, the reward, the end and the observation.
-    ``arrays``: the state's, in ``KERNEL_FIELDS``' order; ``p``: :class:`KernelArgs`."""
+    progress toward the target, reaching, the reward, the end and the observation; a move that broke the
+    mechanism (``broken``, the world's measurement) ends the episode as a failure and costs what a collision
+    does. ``arrays``: the state's, in ``KERNEL_FIELDS``' order; ``p``: :class:`KernelArgs`."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead, terms, collision_, failure, success, target_index = arrays
+        obs, reward, lookahead, terms, collision_, failure, success, target_index, broken = arrays
     n_tour = len(tour)
     mid, half = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2
     for i in range(alpha.shape[0]):
@@ -467,11 +466,13 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
         terms[i, 2] = -p.time_penalty if move else 0.0
         terms[i, 3] = -p.beta if clearance[i] < p.delta else 0.0
         terms[i, 4] = p.reach_bonus if just_reached[i] else 0.0
-        terms[i, 5] = -p.collision_penalty if collision else 0.0
+        came_apart = move and broken[i]
+        # a broken mechanism costs a collision's penalty where the episode had not ended already
+        terms[i, 5] = -p.collision_penalty if collision or (came_apart and reached[i] < n_tour) else 0.0
         reward[i] = terms[i, 0] + terms[i, 1] + terms[i, 2] + terms[i, 3] + terms[i, 4] + terms[i, 5]
-        terminated[i] = collision or reached[i] >= n_tour
+        terminated[i] = collision or reached[i] >= n_tour or came_apart
         collision_[i], target_index[i] = collision, tour[min(reached[i], n_tour - 1)]
-        failure[i], success[i] = decide(reached[i], n_tour, collision, False)
+        failure[i], success[i] = decide(reached[i], n_tour, collision, came_apart)
         # observation: cranks, tip, target T.P. and T.C., obstacles, clearance, progress
         t = tour[min(reached[i], n_tour - 1)]
         for c in range(3):
@@ -489,7 +490,7 @@ def _finish_kernel(arrays, old, rows, move, p, tour):
 def _observe_v1(arrays, rows, p, tour):
     """v1's observation of the robots of ``rows`` (:data:`OBS_SIZE_V1`)."""
     tp, tc, code, alpha, tip, reached, path_length, step_length, progress, just_reached, clearance, terminated, \
-        obs, reward, lookahead, terms, collision_, failure, success, target_index = arrays
+        obs, reward, lookahead, terms, collision_, failure, success, target_index, broken = arrays
     n_tour = len(tour)
     mid, half, cap = (p.alpha_max + p.alpha_min) / 2, (p.alpha_max - p.alpha_min) / 2, p.clearance_cap
     m = code.shape[1] // 8
