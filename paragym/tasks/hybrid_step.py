@@ -233,7 +233,7 @@ class HybridState(KernelArrays):
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("u", "nominal", "k", "delta", "d_delta", "offset", "all_free", "pose", "lengths", "mu_h",
                      "mu_t", "within", "free", "terminated", "obs", "reward", "phi", "reason", "terms",
-                     "success")
+                     "success", "tracked", "broken")
 
     u: np.ndarray
     nominal: np.ndarray
@@ -259,6 +259,10 @@ class HybridState(KernelArrays):
     #: what :meth:`~paragym.tasks.base.Task.evaluate` decided of each robot (its buffers, rewritten each call)
     success: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
     evaluation: Any = field(default=None, repr=False, compare=False)
+    #: what the simulation measured of each robot's last move, written before the transition decides (dynamic
+    #: fidelity, :class:`~paragym.tasks.hybrid_worlds.DynamicWorld`): E tracked its command, the mechanism whole
+    tracked: np.ndarray = field(default_factory=lambda: np.ones(0, bool), repr=False, compare=False)
+    broken: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
 
 
     @classmethod
@@ -272,7 +276,7 @@ class HybridState(KernelArrays):
                    free=np.zeros(n, bool), terminated=np.zeros(n, bool), obs=np.zeros((n, obs_size), np.float32),
                    reward=np.zeros(n), phi=np.zeros(n), reason=np.zeros(n, np.int64),
                    terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
-                   success=np.zeros(n, bool))
+                   success=np.zeros(n, bool), tracked=np.ones(n, bool), broken=np.zeros(n, bool))
 
 
 def reset(state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario]) -> None:
@@ -305,14 +309,8 @@ def step(state: HybridState, params: HybridParams, actions: np.ndarray, active: 
     _advance(state, params, actions, active, True, _COMMAND)
     rows = np.flatnonzero(active)
     world.move(state, rows)
-    for i in rows[state.reason[rows] == 0].tolist():  # the first reason an episode fails: the dynamics' first
-        state.reason[i] = _BROKEN if world.broken[i] else 0 if world.tracked[i] else _TRACKING
+    state.tracked[rows], state.broken[rows] = world.tracked[rows], world.broken[rows]  # measured, then decided
     _advance(state, params, actions, active, True, _EVALUATE)
-    state.all_free[rows] &= world.tracked[rows]
-    broken = rows[world.broken[rows]]  # a broken mechanism ends the episode as a failure
-    state.all_free[broken], state.terminated[broken] = False, True
-    for i in rows.tolist():
-        state.success[i] = decide(state.terminated[i], state.all_free[i])
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -344,7 +342,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
     2 the evaluation only, of the pose, strokes, measures and offset a
     simulation wrote into the state (dynamic fidelity: :class:`DynamicWorld`)."""
     u, nominal, k, delta, d_delta, offset, all_free, pose, lengths, mu_h, mu_t, within, free, terminated, obs, \
-        reward, phi, reason, terms, success = arrays
+        reward, phi, reason, terms, success, tracked, broken = arrays
     base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
     work = np.empty((7, 6, 6))
@@ -382,9 +380,14 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         within[i] = out == 0
         free[i] = within[i] and mu_h[i] >= w.singularity_threshold and mu_t[i] >= w.singularity_threshold
         all_free[i] = all_free[i] and free[i]
+        if stage == 2:  # what the simulation measured: E off its command, or the mechanism broken
+            if reason[i] == 0:  # the first reason the episode fails: the dynamics' first
+                reason[i] = _BROKEN if broken[i] else 0 if tracked[i] else _TRACKING
+            all_free[i] = all_free[i] and tracked[i] and not broken[i]
         if move and reason[i] == 0:  # the first reason the episode fails (a dynamic one was noted before)
             reason[i] = _LIMIT if not within[i] else 0 if free[i] else _SINGULAR
-        terminated[i] = k[i] >= last
+        at_end = k[i] >= last
+        terminated[i] = at_end or (stage == 2 and broken[i])  # a broken mechanism ends the episode as a failure
         success[i] = decide(terminated[i], all_free[i])
         thr = 2 * w.singularity_threshold
         close = max(0.0, thr - mu_h[i]) / thr + max(0.0, thr - mu_t[i]) / thr
@@ -410,7 +413,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
                 mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
                                                     pinv_t, home, sc, True, end_lengths, work)
             excess = _excess(end_lengths, w)
-            new_phi = 0.0 if terminated[i] else -excess
+            new_phi = 0.0 if at_end else -excess
             if move:
                 terms[i, 4] = w.w_end * (new_phi - phi[i])
                 reward[i] += terms[i, 4]

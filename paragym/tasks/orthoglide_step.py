@@ -221,7 +221,7 @@ class OrthoglideState(KernelArrays):
 
     #: the arrays the kernel take, in their order (:class:`paragym.kernels.KernelArrays`)
     KERNEL_FIELDS = ("rho", "k", "last", "path", "dt", "j", "n", "kappa", "err", "failed", "reason", "terminated",
-                     "obs", "reward", "terms", "success", "kappa_sum", "mean_kappa", "bound")
+                     "obs", "reward", "terms", "success", "kappa_sum", "mean_kappa", "bound", "broken")
 
     rho: np.ndarray
     k: np.ndarray
@@ -247,6 +247,9 @@ class OrthoglideState(KernelArrays):
     mean_kappa: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
     #: the highest mean kappa of a success (N,): inf but on a rung of the ladder (:func:`kappa_bounds`)
     bound: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, compare=False)
+    #: what the simulation measured of each robot's last move, written before the transition decides: a loop open
+    #: by more than :data:`BROKEN_GAP` (dynamic fidelity)
+    broken: np.ndarray = field(default_factory=lambda: np.zeros(0, bool), repr=False, compare=False)
 
     @classmethod
     def empty(cls, n: int, params: Any = None, points: int = 2) -> OrthoglideState:
@@ -259,7 +262,7 @@ class OrthoglideState(KernelArrays):
                    reward=np.zeros(n),
                    terms=np.zeros((n, len(REWARD_TERMS))), scenarios=[None] * n,
                    success=np.zeros(n, bool), kappa_sum=np.zeros(n), mean_kappa=np.zeros(n),
-                   bound=np.full(n, np.inf))
+                   bound=np.full(n, np.inf), broken=np.zeros(n, bool))
 
     def _room(self, points: int) -> None:
         """Grow the path arrays to hold ``points`` points."""
@@ -380,14 +383,8 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
     state.rho[rows] = world.command[rows]  # the controller integrates its own command; the encoders feed the motors
     _advance(state, params, actions, active, True, _COMMAND)
     world.move(state, rows, durations)
+    state.broken[rows] = world.gap[rows] > BROKEN_GAP  # what the simulation measured, before the decision
     _advance(state, params, actions, active, True, _EVALUATE)
-    for i in rows[world.gap[rows] > BROKEN_GAP].tolist() if params.version >= 1 else ():
-        if state.failed[i]:
-            continue
-        state.failed[i], state.reason[i], state.terminated[i] = True, _BROKEN, True
-        state.terms[i] = (0.0, 0.0, -(params.limit_penalty + params.left_penalty * (state.last[i] - state.k[i])))
-        state.reward[i] = state.terms[i, 2]
-        state.success[i] = decide(state.k[i], state.last[i], True, np.inf, np.inf)
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
@@ -433,7 +430,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
     rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success, kappa_sum, \
-        mean_kappa, bound = arrays
+        mean_kappa, bound, broken = arrays
     p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, left_penalty, version, \
         track_tolerance = params
     for i in range(len(k)):
@@ -485,6 +482,8 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
             failed[i] = True
             if reason[i] == 0:
                 reason[i] = _TRACKING
+        if stage == 2 and version >= 1 and broken[i] and not failed[i]:  # the mechanism came apart
+            failed[i], reason[i] = True, _BROKEN
         terminated[i] = failed[i] or k[i] >= last[i]
         kappa_sum[i] += kappa[i]
         mean_kappa[i] = kappa_sum[i] / (k[i] + 1)
