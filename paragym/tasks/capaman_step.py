@@ -66,7 +66,7 @@ from paragym.tasks.base import (
     renamed,
 )
 from paragym.tasks.capaman import LADDER, MAX_OBSTACLES, TOUR, CaPaManRung, CaPaManScenario
-from paragym.tasks.capaman_worlds import DynamicWorld, NativeWorld, SceneWorld, World
+from paragym.tasks.capaman_worlds import World
 from paragym.units import DEG
 
 __all__ = ["FAILURES", "LADDER_RULES", "LOOKAHEAD", "REWARD_TERMS", "OBS_SIZE", "OBS_SIZE_V1", "RULES", "SWEEP_STEP",
@@ -349,7 +349,7 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     old = state.alpha.copy()
     actions = np.ascontiguousarray(actions, np.float64)
     command = state.call(_command, (state.command, actions, params.kernel_args), params, (actions.ndim,))
-    moves = getattr(world, "moves", False)  # the dynamics: the world moves the robots, checked by contact
+    moves = world.moves  # the dynamics: the world moves the robots, checked by contact
     if moves:
         new = world.move(rows, command[rows])
     else:
@@ -391,13 +391,8 @@ def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: 
     probes = np.repeat(state.alpha[near][:, None], 3, axis=1)  # (M, 3, 3): crank k moved in probes[:, k]
     for k in range(3):
         probes[:, k, k] = np.minimum(probes[:, k, k] + LOOKAHEAD, g.alpha_max)
-    if isinstance(world, NativeWorld):  # N robots' worlds answer every probe in one call, a robot's one after another
-        ahead = world.clearance(np.repeat(near, 3), probes.reshape(-1, 3)).reshape(-1, 3)
-    else:
-        ahead = np.stack([world.place(near, probes[:, k])[0] for k in range(3)], axis=1)
+    ahead = world.ahead(near, probes, state.alpha[near], pose_back)
     state.lookahead[near] = np.minimum(ahead, params.clearance_cap) - state.clearance[near, None]
-    if pose_back and isinstance(world, SceneWorld) and not isinstance(world, DynamicWorld):
-        world.place(near, state.alpha[near])
 
 
 def _place(state: CaPaManState, world: World, rows: np.ndarray, alpha: np.ndarray) -> None:

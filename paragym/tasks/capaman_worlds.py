@@ -35,6 +35,7 @@ from paragym.sim.capaman_scene import CaPaManScene
 from paragym.sim.client import physics_steps
 from paragym.sim.mujoco_sim import rollout_pool
 from paragym.sim.obstacles import Box
+from paragym.tasks import base
 from paragym.tasks.base import BROKEN_GAP
 from paragym.tasks.capaman import CaPaManScenario, posts_of
 
@@ -43,13 +44,22 @@ from paragym.tasks.capaman import CaPaManScenario, posts_of
 __all__ = ["DynamicWorld", "GridWorld", "MuJoCoWorld", "NativeWorld", "PostWorld", "SceneWorld", "World"]
 
 
-class World(Protocol):
-    """Where the parts are and how far they are from the obstacles."""
+class World(base.World, Protocol):
+    """The CaPaMan's world (:class:`paragym.tasks.base.World`): where the parts are and how far they are from the
+    obstacles."""
+
+    #: whether it moves the robots itself (the dynamics), writing what it measured (:attr:`broken`)
+    moves: bool
 
     def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None: ...
 
     def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
         """Clearance (M,), tool tip (M, 3) and nearest part of robots ``rows`` at crank angles ``alpha`` (M, 3)."""
+        ...
+
+    def ahead(self, rows: np.ndarray, probes: np.ndarray, alpha: np.ndarray, pose_back: bool) -> np.ndarray:
+        """v1's look-ahead: the clearance (M, 3) of robots ``rows`` at ``probes`` (M, 3, 3), crank k moved in
+        ``probes[:, k]``; a drawn scene posed back at ``alpha`` (M, 3) after, when ``pose_back``."""
         ...
 
 
@@ -65,6 +75,7 @@ class NativeWorld:
 
     #: it holds no simulation: a copy builds its own checker scene when it needs one
     live = False
+    moves = False
 
     def __init__(self, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False, gui: bool = False
                  ) -> None:
@@ -89,6 +100,10 @@ class NativeWorld:
     def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
         """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
         raise NotImplementedError
+
+    def ahead(self, rows: np.ndarray, probes: np.ndarray, alpha: np.ndarray, pose_back: bool) -> np.ndarray:
+        """Every probe in one call (:meth:`clearance`); nothing is posed."""
+        return self.clearance(np.repeat(rows, 3), probes.reshape(-1, 3)).reshape(-1, 3)
 
 
 class GridWorld(NativeWorld):
@@ -154,6 +169,7 @@ class SceneWorld:
     """One robot in the kinematic PyBullet scene: its exact signed distance."""
 
     live = True
+    moves = False
 
     def __init__(self, scene: CaPaManScene) -> None:
         self.scene = scene
@@ -177,6 +193,13 @@ class SceneWorld:
         clearance, near = self.scene.clearance()
         return np.array([clearance]), tip[None], [near]
 
+    def ahead(self, rows: np.ndarray, probes: np.ndarray, alpha: np.ndarray, pose_back: bool) -> np.ndarray:
+        """One probe after the other, then the scene posed back where the robot is (it is drawn)."""
+        out = np.stack([self.place(rows, probes[:, k])[0] for k in range(3)], axis=1)
+        if pose_back:
+            self.place(rows, alpha)
+        return out
+
 
 class DynamicWorld(SceneWorld):
     """One robot under PyBullet's dynamics: the motors chase the command for
@@ -188,11 +211,16 @@ class DynamicWorld(SceneWorld):
     def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
         super().__init__(scene)
         self.control_period = control_period
+        self.scene: CaPaManDynamicScene = scene
         self._moved = False
         #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism), per robot
         self.broken = np.zeros(1, bool)
         self._checker: CaPaManScene | None = None
         self._probe: SceneWorld | None = None
+
+    def ahead(self, rows: np.ndarray, probes: np.ndarray, alpha: np.ndarray, pose_back: bool) -> np.ndarray:
+        """The probes in the simulated scene, never posed back: the simulation holds where the robot is."""
+        return super().ahead(rows, probes, alpha, False)
 
     def checker(self) -> CaPaManScene:
         """A second, kinematic scene that generates and checks scenarios (built on first use)."""
