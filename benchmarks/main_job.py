@@ -30,8 +30,8 @@ PARAGRAPH = (
     "The README's first command in a fresh clone of the committed tree, in a new venv, part by part: the install "
     "and the first run of the quick leaderboard, which compiles the kernels. Two things move these times, and "
     "each row says how they stood: pip's cache (the packages the install downloaded, against those it took from "
-    "the cache; a first install downloads about 400 MB) and the machine's load (the highest one-minute load "
-    "average seen, against the cores; a load above the cores slows every part in proportion)."
+    "the cache) and the machine's load (the highest one-minute load average seen, against the cores; a load "
+    "above the cores slows every part)."
 )
 
 
