@@ -17,6 +17,7 @@ import importlib
 import inspect
 import re
 import warnings
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -106,7 +107,13 @@ VERSIONS_PAGE = Path(__file__).resolve().parent / "versions.md"
 
 def _why_labels(name: str) -> list[str]:
     """The labels of :data:`VERSIONS_PAGE`'s sections on the id named ``name`` (its name without "paragym/")."""
-    return re.findall(rf"^\((why-{re.escape(name.lower())}-[a-z0-9-]+)\)=$", VERSIONS_PAGE.read_text(), flags=re.M)
+    return [label for label in _versions_labels() if label.startswith(f"why-{name.lower()}-")]
+
+
+@lru_cache(maxsize=1)
+def _versions_labels() -> tuple[str, ...]:
+    """Every section label of :data:`VERSIONS_PAGE`, read once."""
+    return tuple(re.findall(r"^\((why-[a-z0-9-]+)\)=$", VERSIONS_PAGE.read_text(), flags=re.M))
 
 
 def _rst(text: str) -> list[str]:

@@ -207,11 +207,11 @@ class DynamicWorld(SceneWorld):
 
     #: it moves the robots itself (the transition asks :meth:`move` where they got)
     moves = True
+    scene: CaPaManDynamicScene
 
     def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
         super().__init__(scene)
         self.control_period = control_period
-        self.scene: CaPaManDynamicScene = scene
         self._moved = False
         #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism), per robot
         self.broken = np.zeros(1, bool)
