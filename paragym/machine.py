@@ -79,10 +79,12 @@ def _cpu_model() -> str:
 
 def _isa() -> dict[str, Any]:
     """The instruction-set extensions numpy found at run time (its names, cross-platform), and its baseline."""
+    import importlib
+
     try:
-        from numpy._core import _multiarray_umath as umath
+        umath = importlib.import_module("numpy._core._multiarray_umath")
     except ImportError:  # numpy < 2
-        from numpy.core import _multiarray_umath as umath
+        umath = importlib.import_module("numpy.core._multiarray_umath")
     found = getattr(umath, "__cpu_features__", {})
     return {"found": sorted(k for k, v in found.items() if v), "baseline": list(getattr(umath, "__cpu_baseline__", [])),
             "dispatch": list(getattr(umath, "__cpu_dispatch__", []))}

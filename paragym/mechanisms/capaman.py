@@ -155,14 +155,15 @@ class CaPaManPose:
         quaternion: the same orientation as (x, y, z, w), shape (N, 4).
         yaw: psi of R = Rz(psi) R0 (R0 the minimal tilt), shape (N,).
         geometry: the dimensions it was computed with.
+        tip: the tool tip H - L_tool R z, shape (N, 3).
     """
 
     position: np.ndarray
     rotation: np.ndarray
     quaternion: np.ndarray
     yaw: np.ndarray
-    geometry: CaPaManGeometry = DEFAULT_GEOMETRY
-    tip: np.ndarray | None = None  # the tool tip H - L_tool R z (N, 3)
+    geometry: CaPaManGeometry
+    tip: np.ndarray
 
     @property
     def ball_joints(self) -> np.ndarray:
@@ -496,7 +497,8 @@ def _leg_part_table(g: CaPaManGeometry) -> SimpleNamespace:
 
 
 @lru_cache(maxsize=32)
-def part_table(g: CaPaManGeometry) -> tuple[np.ndarray, ...]:
+def part_table(g: CaPaManGeometry) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                            np.ndarray, np.float64]:
     """The leg parts' affine table (:func:`_leg_part_table`) as :func:`k_part_frames` takes it: c0, c1, c2
     (15, 3) m, qc, qs (15, 4), the leg of each part (15,) and whether it is a crank (15,); and L_tool / 2 (m)."""
     t = _leg_part_table(g)

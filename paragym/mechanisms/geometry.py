@@ -28,7 +28,7 @@ def quat_multiply(q1: np.ndarray, q2: np.ndarray) -> np.ndarray:
 def quat_to_matrix(q: np.ndarray) -> np.ndarray:
     """Rotation matrices (..., 3, 3) of unit (x, y, z, w) quaternions (..., 4)."""
     if q.ndim == 1 and q.dtype == np.float64:  # one (a simulated link's): the same sums in floats, 10x faster
-        x, y, z, w = (float(v) for v in q)
+        x, y, z, w = q.tolist()
         return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                          [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                          [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])

@@ -271,8 +271,8 @@ class CaPaManDynamicScene:
             alpha[i] = self.alpha
             if i % 100 == 0:
                 closure = max(closure, self.closure_error())
-        acc = np.gradient(vel, d.time_step, axis=0)
-        ang_acc = np.gradient(omega, d.time_step, axis=0)
+        acc = np.asarray(np.gradient(vel, d.time_step, axis=0))  # (stubs read a 2-D input's gradient as a tuple)
+        ang_acc = np.asarray(np.gradient(omega, d.time_step, axis=0))
         return ExecutedMotion(t, pos, quat_to_matrix(orn), vel, omega, acc, ang_acc, alpha, closure)
 
     # --- the interface of CaPaManScene, for an environment in dynamic fidelity ------------

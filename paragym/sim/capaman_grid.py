@@ -150,7 +150,8 @@ def _prisms(obstacles: Sequence[Obstacle], resolution: float, margin: float | No
     pad = max(2 * resolution, margin or 0.0)
     lo = np.min([np.subtract(o.center, o.half_extents) for o in obstacles], axis=0) - pad
     hi = np.max([np.add(o.center, o.half_extents) for o in obstacles], axis=0) + pad
-    shape = tuple(int(v) for v in np.ceil((hi - lo) / resolution))
+    nx, ny, nz = (int(v) for v in np.ceil((hi - lo) / resolution))
+    shape = (nx, ny, nz)
     axes = [lo[i] + (np.arange(shape[i]) + 0.5) * resolution for i in range(3)]
     plane = np.stack(np.meshgrid(axes[0], axes[1], [0.0], indexing="ij"), axis=-1)[:, :, 0]  # (nx, ny, 3)
     column = np.zeros((shape[2], 3))
@@ -273,7 +274,7 @@ def joint_matrix(grid: OccupancyGrid, clusters: ClusterPoints, points_per_axis: 
     theta = np.zeros(len(alpha), bool)
     for p in reachable_parts(grid, g):  # a loop over parts, each vectorised over the grid
         if len(alpha) * np.count_nonzero(clusters.part == p) > 20_000_000:  # too big to hold at once
-            theta |= grid_collision(alpha, grid, clusters.subset([p]), g)
+            theta |= grid_collision(alpha, grid, clusters.subset(np.array([p])), g)
         else:
             theta |= _grid_hits(grid, *clusters.on_joint_grid(p, alpha, g, (g, points_per_axis)))
     return theta.reshape((points_per_axis,) * 3), axis

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numba import njit, prange
@@ -253,7 +254,7 @@ _NO_POSES = np.empty((0, 12))
 
 
 @lru_cache(maxsize=8)
-def kernel_constants(geometry: capaman.CaPaManGeometry) -> tuple[np.ndarray, ...]:
+def kernel_constants(geometry: capaman.CaPaManGeometry) -> tuple[Any, ...]:
     """The geometry as :func:`k_post_clearance` takes it (its ``model``), gathered once: :func:`capaman.kernel_consts`,
     :func:`capaman.part_table` and :func:`part_capsules`' radii and half lengths, in that order."""
     return (capaman.kernel_consts(geometry), *capaman.part_table(geometry), *part_capsules(geometry)[:2])

@@ -19,6 +19,7 @@ from paragym.mechanisms import capaman
 from paragym.mechanisms.geometry import matrix_to_quat, quat_to_matrix
 from paragym.sim.client import LinkSpec, PyBulletSim
 from paragym.sim.obstacles import Cylinder, Obstacle
+from paragym.sim.recipes import Vector
 
 __all__ = ["CaPaManScene", "capaman_links"]
 
@@ -132,7 +133,7 @@ class CaPaManScene:
         self._query_links = [self.sim.link_index(self.ROBOT, names[i])
                              for i in np.flatnonzero(gap <= self.clearance_cap + _SWEEP_MARGIN)]
 
-    def set_configuration(self, alpha: Sequence[float]) -> np.ndarray:
+    def set_configuration(self, alpha: Vector) -> np.ndarray:
         """Place every part for crank angles ``alpha`` (rad, trusted: the caller
         validated them); returns the tool tip (m)."""
         a1, a2, a3 = (float(a) for a in alpha)

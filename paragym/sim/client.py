@@ -26,7 +26,7 @@ import numpy as np
 
 from paragym.mechanisms.geometry import PartShape, quat_to_matrix
 from paragym.sim.obstacles import Capsule, Cylinder, Obstacle
-from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, VisualBody
+from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, Vector, VisualBody
 
 __all__ = ["LinkBook", "LinkSpec", "Motors", "PyBulletSim", "depth_first", "divides", "exact_time_step", "motors_of",
            "physics_steps", "refined"]
@@ -163,7 +163,7 @@ class LinkBook:
                 return name, links[link]
         raise ValueError(f"no link named {link!r}")
 
-    def _in_link_frame(self, name: str, link: int, point: Sequence[float]) -> tuple[float, ...]:
+    def _in_link_frame(self, name: str, link: int, point: Vector) -> tuple[float, ...]:
         """A point given in a link's centre-of-mass frame, in its link frame (the two differ by the link's
         ``shape_offset``, their axes aligned): a base's two frames are one."""
         tree = self._recipe[name]
@@ -172,14 +172,14 @@ class LinkBook:
                       (0.0, 0.0, 0.0))
         return tuple(float(p + o) for p, o in zip(point, offset, strict=True))
 
-    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+    def reset_base(self, name: str, position: Vector, quaternion: Vector) -> None:
         raise NotImplementedError
 
-    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+    def reset_joint(self, name: str, joint: int, value: float | Vector) -> None:
         raise NotImplementedError
 
-    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
-                   quaternion: Sequence[float]) -> None:
+    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Vector,
+                   quaternion: Vector) -> None:
         """Put a free rigid part at ``position`` (m), turned by the xyzw ``quaternion``, at rest: ``part`` is
         (body, link), either a free body's base (link -1, ``floats`` empty) or a link on a spherical joint
         at the end of the three prismatic joints ``floats`` (x, y, z; each (body, joint)) of a tree."""
@@ -266,8 +266,8 @@ class PyBulletSim(LinkBook):
             pass
 
     # --- building ---------------------------------------------------------------------
-    def _shape(self, shape: PartShape | Obstacle, rgba: Sequence[float],
-               offset: Sequence[float] = (0.0, 0.0, 0.0)) -> tuple[int, int]:
+    def _shape(self, shape: PartShape | Obstacle, rgba: Vector,
+               offset: Vector = (0.0, 0.0, 0.0)) -> tuple[int, int]:
         c = self._client
         frame = {"collisionFramePosition": list(offset)}
         vframe = {"visualFramePosition": list(offset)}
@@ -299,7 +299,7 @@ class PyBulletSim(LinkBook):
                                            **vframe)
         return col, vis
 
-    def add_static(self, name: str, shape: Obstacle, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+    def add_static(self, name: str, shape: Obstacle, rgba: Vector = (0.7, 0.3, 0.3, 1.0)) -> None:
         """Add a fixed body (an obstacle or a base plate) named ``name``."""
         self._draw(False)
         self._check_new(name)
@@ -309,7 +309,7 @@ class PyBulletSim(LinkBook):
                                                 physicsClientId=self._client)
 
     def add_static_group(self, name: str, shapes: Sequence[Obstacle],
-                         rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+                         rgba: Vector = (0.7, 0.3, 0.3, 1.0)) -> None:
         """Add fixed shapes (obstacles) as one body named ``name``: one
         ``getClosestPoints`` call then answers for all of them."""
         self._draw(False)
@@ -324,9 +324,9 @@ class PyBulletSim(LinkBook):
             linkInertialFrameOrientations=[_IDENTITY] * n, linkParentIndices=[0] * n,
             linkJointTypes=[pb.JOINT_FIXED] * n, linkJointAxis=[(0, 0, 1)] * n, physicsClientId=self._client)
 
-    def add_visual(self, name: str, shape: PartShape | Obstacle, rgba: Sequence[float],
-                   position: Sequence[float] = (0.0, 0.0, 0.0),
-                   quaternion: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> None:
+    def add_visual(self, name: str, shape: PartShape | Obstacle, rgba: Vector,
+                   position: Vector = (0.0, 0.0, 0.0),
+                   quaternion: Vector = (0.0, 0.0, 0.0, 1.0)) -> None:
         """Add a body named ``name`` that is only drawn (no collision, no
         mass), at ``position`` (m) turned by the xyzw ``quaternion``."""
         self._draw(False)
@@ -335,8 +335,8 @@ class PyBulletSim(LinkBook):
         self._bodies[name] = pb.createMultiBody(0.0, -1, self._shape(shape, rgba)[1], basePosition=list(position),
                                                 baseOrientation=list(quaternion), physicsClientId=self._client)
 
-    def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Sequence[float],
-                        rgba: Sequence[float]) -> None:
+    def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Vector,
+                        rgba: Vector) -> None:
         """Add ground named ``name``: ``heights`` (rows along y, columns along
         x; m) on a grid of ``cell`` (m), its centre at ``position``."""
         self._draw(False)
@@ -351,7 +351,7 @@ class PyBulletSim(LinkBook):
         pb.changeVisualShape(body, -1, rgbaColor=list(rgba), physicsClientId=c)
         self._bodies[name] = body
 
-    def add_plane(self, name: str, rgba: Sequence[float]) -> None:
+    def add_plane(self, name: str, rgba: Vector) -> None:
         """Add flat ground named ``name``: the plane z = 0 (cheaper to collide with than a flat heightfield)."""
         self._draw(False)
         self._check_new(name)
@@ -362,7 +362,7 @@ class PyBulletSim(LinkBook):
                                       visualFramePosition=[11.0, 0.0, -0.001], physicsClientId=c)
         self._bodies[name] = pb.createMultiBody(0, shape, visual, physicsClientId=c)
 
-    def place(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+    def place(self, name: str, position: Vector, quaternion: Vector) -> None:
         """Move body ``name``'s base to ``position`` (m), turned by the xyzw ``quaternion``."""
         if not self._drawing:
             self._draw(True)
@@ -371,7 +371,7 @@ class PyBulletSim(LinkBook):
 
     def add_tree_body(self, name: str, links: Sequence[LinkSpec], base_mass: float = 0.0,
                       base_shape: PartShape | None = None,
-                      base_rgba: Sequence[float] = (0.5, 0.5, 0.5, 1.0)) -> None:
+                      base_rgba: Vector = (0.5, 0.5, 0.5, 1.0)) -> None:
         """Add a multibody whose base sits at the world origin and whose
         ``links`` form a tree; a link is addressed by its name, its parent by
         name (None: the base, link index -1). Link frames are placed by the
@@ -410,7 +410,7 @@ class PyBulletSim(LinkBook):
         self._links[name] = index
         self._link_names[name] = {i: link for link, i in index.items()}
 
-    def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Sequence[float]]) -> None:
+    def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Vector]) -> None:
         """Set joint positions of body ``name``: one list per joint (``[q]`` for
         revolute/prismatic, an xyzw quaternion for spherical)."""
         if not self._drawing:
@@ -423,7 +423,8 @@ class PyBulletSim(LinkBook):
 
     def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and xyzw quaternion of a link's frame (the link by name or index)."""
-        return self.link_motion(name, link)[:2]
+        frame = self.link_motion(name, link)
+        return frame[0], frame[1]
 
     def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
         """A link's frame: world position (m), xyzw quaternion and, with
@@ -476,8 +477,8 @@ class PyBulletSim(LinkBook):
             pb.setJointMotorControlMultiDof(body, joint, pb.POSITION_CONTROL, targetPosition=[0, 0, 0, 1],
                                             force=[0.0, 0.0, 0.0], physicsClientId=c)
 
-    def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int,
-                   pivot_b: Sequence[float], other: str | None = None) -> None:
+    def ball_joint(self, name: str, link_a: int, pivot_a: Vector, link_b: int,
+                   pivot_b: Vector, other: str | None = None) -> None:
         """Close a loop: a ball joint (point-to-point constraint) between a
         point of ``link_a`` of body ``name`` and a point of ``link_b`` of body
         ``other`` (default: the same body; -1: a base), each in its link's
@@ -525,13 +526,13 @@ class PyBulletSim(LinkBook):
         :meth:`friction` set it (PyBullet's default, 0.5, where nothing did)."""
         return float(pb.getDynamicsInfo(self._bodies[name], link, physicsClientId=self._client)[1])
 
-    def push(self, name: str, link: int, force: Sequence[float]) -> None:
+    def push(self, name: str, link: int, force: Vector) -> None:
         """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step."""
         pos = self.link_frame(name, link)[0]
         pb.applyExternalForce(self._bodies[name], link, list(force), list(pos), pb.WORLD_FRAME,
                               physicsClientId=self._client)
 
-    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+    def reset_joint(self, name: str, joint: int, value: float | Vector) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint), at rest."""
         body, c = self._bodies[name], self._client
         if isinstance(value, int | float | np.floating):
@@ -546,7 +547,7 @@ class PyBulletSim(LinkBook):
             for joint in joints:
                 self.servo_settings[name, joint] = (force, position_gain, velocity_gain)
 
-    def drive(self, motors: Motors, targets: Sequence[float], rates: Sequence[float]) -> None:
+    def drive(self, motors: Motors, targets: Vector, rates: Vector) -> None:
         """The servos of ``motors`` (:meth:`servos`) chase ``targets`` at ``rates`` from the next step on."""
         start, c = 0, self._client
         targets, rates = [float(v) for v in targets], [float(v) for v in rates]  # one conversion, not per body
@@ -602,7 +603,7 @@ class PyBulletSim(LinkBook):
         return np.array([s[3] for name, joints in motors
                          for s in pb.getJointStates(self._bodies[name], list(joints), physicsClientId=c)])
 
-    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+    def reset_base(self, name: str, position: Vector, quaternion: Vector) -> None:
         """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``, at rest."""
         body, c = self._bodies[name], self._client
         pb.resetBasePositionAndOrientation(body, list(position), list(quaternion), physicsClientId=c)
@@ -717,7 +718,7 @@ class PyBulletSim(LinkBook):
             return max_distance, None
         return best, name if where < 0 else self._link_names[name][where]
 
-    def render(self, width: int, height: int, target: Sequence[float], distance: float,
+    def render(self, width: int, height: int, target: Vector, distance: float,
                yaw: float, pitch: float, fov: float = 45.0) -> np.ndarray:
         """An RGB image (height, width, 3) uint8 from an orbit camera (degrees),
         drawn by the TinyRenderer (no display needed)."""

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from paragym.sim.client import LinkBook, LinkSpec, depth_first
-from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, VisualBody
+from paragym.sim.recipes import Heightfield, Plane, Recipe, StaticBody, StaticGroup, TreeBody, Vector, VisualBody
 
 __all__ = ["SceneDescription"]
 
@@ -65,7 +65,7 @@ class SceneDescription(LinkBook):
         self._recipe[recipe.name] = recipe
 
     def add_tree_body(self, name: str, links: Sequence[LinkSpec], base_mass: float = 0.0,
-                      base_shape: Any = None, base_rgba: Sequence[float] = (0.5, 0.5, 0.5, 1.0)) -> None:
+                      base_shape: Any = None, base_rgba: Vector = (0.5, 0.5, 0.5, 1.0)) -> None:
         """A tree of ``links`` (as :meth:`PyBulletSim.add_tree_body <paragym.sim.client.PyBulletSim.add_tree_body>`),
         every joint at zero, a free base (``base_mass`` > 0) at the origin."""
         ordered = depth_first(links)
@@ -77,26 +77,26 @@ class SceneDescription(LinkBook):
         if base_mass > 0:
             self._bases[name] = (np.zeros(3), np.array([0.0, 0.0, 0.0, 1.0]))
 
-    def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+    def add_static(self, name: str, shape: Any, rgba: Vector = (0.7, 0.3, 0.3, 1.0)) -> None:
         """A fixed part named ``name``."""
         self._add(StaticBody(name, shape, rgba))
 
-    def add_static_group(self, name: str, shapes: Sequence[Any], rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)
+    def add_static_group(self, name: str, shapes: Sequence[Any], rgba: Vector = (0.7, 0.3, 0.3, 1.0)
                          ) -> None:
         """Fixed parts (obstacles) as one body named ``name``."""
         self._add(StaticGroup(name, shapes, rgba))
 
-    def add_visual(self, name: str, shape: Any, rgba: Sequence[float], position: Sequence[float] = (0.0, 0.0, 0.0),
-                   quaternion: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> None:
+    def add_visual(self, name: str, shape: Any, rgba: Vector, position: Vector = (0.0, 0.0, 0.0),
+                   quaternion: Vector = (0.0, 0.0, 0.0, 1.0)) -> None:
         """A part that is only drawn."""
         self._add(VisualBody(name, shape, rgba, position, quaternion))
 
-    def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Sequence[float],
-                        rgba: Sequence[float]) -> None:
+    def add_heightfield(self, name: str, heights: np.ndarray, cell: float, position: Vector,
+                        rgba: Vector) -> None:
         """Ground named ``name`` on a grid of ``heights`` (m)."""
         self._add(Heightfield(name, heights, cell, position, rgba))
 
-    def add_plane(self, name: str, rgba: Sequence[float]) -> None:
+    def add_plane(self, name: str, rgba: Vector) -> None:
         """Flat ground named ``name``: the plane z = 0."""
         self._add(Plane(name, rgba))
 
@@ -137,7 +137,7 @@ class SceneDescription(LinkBook):
     def no_collision(self, name: str) -> None:
         """Kept by the scene's export as it is: nothing to write down here."""
 
-    def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int, pivot_b: Sequence[float],
+    def ball_joint(self, name: str, link_a: int, pivot_a: Vector, link_b: int, pivot_b: Vector,
                    other: str | None = None) -> None:
         """A loop closure between a point of ``link_a`` of ``name`` and one of ``link_b`` of ``other`` (default:
         the same body; -1 a base), each in its link's centre-of-mass frame (m)."""
@@ -168,18 +168,18 @@ class SceneDescription(LinkBook):
         return tuple(self._recipe)
 
     # --- the pose ---------------------------------------------------------------------------------------
-    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+    def reset_joint(self, name: str, joint: int, value: float | Vector) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion for a spherical joint)."""
         if isinstance(value, int | float | np.floating):
             self._values[name][joint] = (float(value),)
         else:
             self._values[name][joint] = tuple(float(v) for v in value)
 
-    def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Sequence[float]]) -> None:
+    def set_joints(self, name: str, joints: Sequence[int], values: Sequence[Vector]) -> None:
         for joint, value in zip(joints, values, strict=True):
             self._values[name][joint] = tuple(float(v) for v in value)
 
-    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+    def reset_base(self, name: str, position: Vector, quaternion: Vector) -> None:
         """Put the free base of body ``name`` at ``position`` (m), turned by the xyzw ``quaternion``."""
         self._bases[name] = (np.array(position, float), np.array(quaternion, float))
 

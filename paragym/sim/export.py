@@ -202,14 +202,14 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     root = ET.Element("mujoco", model=model)
     ET.SubElement(root, "compiler", angle="radian", autolimits="true")
     h = mujoco_time_step(d.time_step) if time_step is None else float(time_step)
-    ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
-                  iterations=str(int(d.solver_iterations if iterations is None else iterations)))
+    option = ET.SubElement(root, "option", timestep=_num(h), gravity=_num([0.0, 0.0, -d.gravity]),
+                           iterations=str(int(d.solver_iterations if iterations is None else iterations)))
     world = ET.SubElement(root, "worldbody")
     ground = _ground(root, world, scene.sim, h)
     if ground:  # friction that holds below its limit: MuJoCo's pyramid cone at an impratio of 1 lets a loaded
         # wheel creep; the elliptic cone at 10 holds it (the dynamics guide)
-        root.find("option").set("cone", "elliptic")
-        root.find("option").set("impratio", "10")
+        option.set("cone", "elliptic")
+        option.set("impratio", "10")
     _fixed_geoms(world, fixed, h)
     stops = getattr(scene.sim, "stops", {})
     for body, links, base_mass, base_shape in trees:
@@ -224,7 +224,7 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
             ET.SubElement(base, "freejoint", name=f"{body}_free")
             _mjcf_geom(base, base_shape, (0.0, 0.0, 0.0), robot=True, mass=base_mass,
                        friction=scene.sim.contact_friction(body, -1) if ground else None)
-        elements = {None: base}
+        elements: dict[str | None, ET.Element] = {None: base}
         for link in depth_first(links):
             pos, rot = np.asarray(link.position, float), quat_to_matrix(np.asarray(link.orientation, float))
             kind = {"revolute": "hinge", "prismatic": "slide", "spherical": "ball"}.get(link.joint)
@@ -257,7 +257,7 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
     sites = []
     for k, ((body_a, link_a, body_b, link_b), (point_a, point_b)) in enumerate(scene.sim.loops.items()):
         for side, body, link, point in (("a", body_a, link_a, point_a), ("b", body_b, link_b, point_b)):
-            owner = root.find(f".//body[@name='{model_name(body, link, len(trees)) if link else body}']")
+            owner = _element(root, f".//body[@name='{model_name(body, link, len(trees)) if link else body}']")
             ET.SubElement(owner, "site", name=f"loop{k}_{side}", pos=_num(point), size="0.005")
         sites.append((f"loop{k}_a", f"loop{k}_b"))
     if sites:
@@ -269,15 +269,16 @@ def mjcf(scene: Any, model: str = "paragym", time_step: float | None = None, ban
         actuator = ET.SubElement(root, "actuator")
         if bandwidth is None:
             bandwidth = getattr(scene, "EXPORT_SERVO_BANDWIDTH", SERVO_BANDWIDTH)
-        posed = {}  # body -> its links in PyBullet's order and their frames now: once per body, not per motor
+        # body -> its links in PyBullet's order and their frames now: once per body, not per motor
+        trees_now: dict[str, tuple[list[LinkSpec], dict[str, tuple[np.ndarray, np.ndarray]]]] = {}
         for body, links, _, _ in trees:
             ordered = depth_first(links)
-            posed[body] = ordered, tree_frames(ordered, scene.sim.joint_values(body))
-        for (body, link), limit in motors.items():
-            joint = f"{model_name(body, link, len(trees))}_joint"
-            kp, kv = servo_gains(*posed[body], link, h, bandwidth)
+            trees_now[body] = ordered, tree_frames(ordered, scene.sim.joint_values(body))
+        for (body, driven), limit in motors.items():
+            joint = f"{model_name(body, driven, len(trees))}_joint"
+            kp, kv = servo_gains(*trees_now[body], driven, h, bandwidth)
             if home:  # ctrl: the target's displacement from home, so that a ctrl of zero holds the home pose
-                ref = float(root.find(f".//joint[@name='{joint}']").get("ref", "0"))
+                ref = float(_element(root, f".//joint[@name='{joint}']").get("ref", "0"))
                 ET.SubElement(actuator, "general", name=f"{joint}_motor", joint=joint, gainprm=_num(kp),
                               biastype="affine", biasprm=_num([kp * ref, -kp, -kv]),
                               forcerange=_num([-limit, limit]))
@@ -372,12 +373,20 @@ def with_fixed_parts(text: str, fixed: list[tuple[str, Any]]) -> str:
     """The MJCF ``text`` with its fixed parts (the world geoms that the robot collides with) replaced by
     ``fixed`` (:func:`fixed_parts`): a scene's new obstacles in a model whose robot stays as it was written."""
     root = ET.fromstring(text)
-    world = root.find("worldbody")
+    world = _element(root, "worldbody")
     for geom in world.findall("geom"):
         if geom.get("contype") == "1" and geom.get("type") not in ("plane", "hfield"):  # the ground stays
             world.remove(geom)
-    _fixed_geoms(world, fixed, float(root.find("option").get("timestep")))
+    _fixed_geoms(world, fixed, float(_element(root, "option").get("timestep", "")))
     return ET.tostring(root, encoding="unicode") + "\n"
+
+
+def _element(root: ET.Element, path: str) -> ET.Element:
+    """The element at ``path`` (ElementTree's XPath subset) under ``root``, which a model this module wrote has."""
+    found = root.find(path)
+    if found is None:
+        raise ValueError(f"the model has no element at {path!r}: not one paragym.sim.export wrote")
+    return found
 
 
 def model_name(body: str, link: str, n_trees: int) -> str:
@@ -396,7 +405,8 @@ def _rpy(xyzw: Any) -> tuple[float, float, float]:
 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="Gimbal lock")
-        return tuple(float(v) for v in Rotation.from_quat(np.asarray(xyzw, float)).as_euler("xyz"))
+        roll, pitch, yaw = Rotation.from_quat(np.asarray(xyzw, float)).as_euler("xyz")
+    return float(roll), float(pitch), float(yaw)
 
 
 def _inertia(shape: PartShape | None, mass: float) -> tuple[float, float, float]:
@@ -538,8 +548,7 @@ def tree_frames(links: list[LinkSpec], values: list[tuple[float, ...]]) -> dict[
         elif link.joint == "spherical":
             rot = rot @ quat_to_matrix(np.asarray(value, float))
         frames[link.name] = (pos, rot)
-    del frames[None]
-    return frames
+    return {name: frame for name, frame in frames.items() if name is not None}
 
 
 def _gaps(frames: dict[str, tuple[np.ndarray, np.ndarray]], got: Any) -> dict[str, float]:

@@ -113,12 +113,13 @@ class HybridRun:
     closure_error: float
 
 
-def _quat_z_to(d: np.ndarray) -> tuple[float, ...]:
+def _quat_z_to(d: np.ndarray) -> tuple[float, float, float, float]:
     z = np.array([0.0, 0.0, 1.0])
     axis = np.cross(z, d)
     s, c = np.linalg.norm(axis), float(np.dot(z, d))
     half = np.arctan2(s, c) / 2
-    return tuple(np.append(axis / max(s, 1e-12) * np.sin(half), np.cos(half)))
+    x, y, z = axis / max(s, 1e-12) * np.sin(half)
+    return x, y, z, np.cos(half)
 
 
 class HybridDynamicScene:
@@ -211,9 +212,9 @@ class HybridDynamicScene:
         for body, link in (self.a_platform, self.e_platform):
             if link >= 0:
                 sim.passive(body, [], [link])
-        for leg, (body, link) in enumerate(self.actuators):  # ball joints: leg tip (COM offset -0.025) to its joint
-            platform, joint = ((self.a_platform, g.platform_joints[leg]) if leg < 6 else
-                               (self.e_platform, g.tripod_top[leg - 6]))
+        for k, (body, link) in enumerate(self.actuators):  # ball joints: leg tip (COM offset -0.025) to its joint
+            platform, joint = ((self.a_platform, g.platform_joints[k]) if k < 6 else
+                               (self.e_platform, g.tripod_top[k - 6]))
             sim.ball_joint(body, link, [0, 0, 0.025], platform[1], list(joint), other=platform[0])
         self.reset(np.zeros(6), 0.5)
         simulate_in(self, engine)
@@ -318,8 +319,9 @@ class HybridDynamicScene:
             measured[i] = sim.motor_positions(self.motors)
             if i % 200 == 0:
                 closure = max(closure, self.closure_error())
-        return HybridRun(t, pos, quat_to_matrix(orn), vel, omega, np.gradient(vel, d.time_step, axis=0),
-                         np.gradient(omega, d.time_step, axis=0), a_pos, measured, closure)
+        acc = np.asarray(np.gradient(vel, d.time_step, axis=0))  # (stubs read a 2-D input's gradient as a tuple)
+        ang_acc = np.asarray(np.gradient(omega, d.time_step, axis=0))
+        return HybridRun(t, pos, quat_to_matrix(orn), vel, omega, acc, ang_acc, a_pos, measured, closure)
 
     def close(self) -> None:
         """Disconnect PyBullet."""

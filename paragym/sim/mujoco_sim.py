@@ -51,7 +51,7 @@ from paragym.kernels import thread_count
 from paragym.sim import export
 from paragym.sim.client import depth_first, physics_steps
 from paragym.sim.description import SceneDescription
-from paragym.sim.recipes import Recipe
+from paragym.sim.recipes import Recipe, Vector
 
 __all__ = ["ENGINES", "MAX_STEP", "MuJoCoSettings", "MuJoCoSim", "RolloutPool", "check_engine", "ramp_together",
            "read_together", "rollout_pool", "scene_sim", "simulate_in", "vector_engine"]
@@ -268,8 +268,8 @@ class MuJoCoSim:
                     self._joints[name, i] = (b, int(model.jnt_type[j]), int(model.jnt_qposadr[j]))
                 else:
                     self._joints[name, i] = (b, -1, -1)
-        for (name, link), lateral in self._friction.items():
-            self._set_friction(name, link, lateral)
+        for (name, index), lateral in self._friction.items():
+            self._set_friction(name, index, lateral)
 
     def _ready(self) -> None:
         """Load the source's state into MuJoCo if a reset put it there (recompiling for new fixed parts): before
@@ -366,8 +366,8 @@ class MuJoCoSim:
         name, joints = motors[0]
         return self.source.servo_settings[name, joints[0]][0]
 
-    def drive(self, motors: Sequence[tuple[str, Sequence[int]]], targets: Sequence[float],
-              rates: Sequence[float]) -> None:
+    def drive(self, motors: Sequence[tuple[str, Sequence[int]]], targets: Vector,
+              rates: Vector) -> None:
         """The servos of ``motors`` (:meth:`servos`) chase ``targets`` at ``rates`` from the next step on."""
         self._ready()
         ids, _, ratio = self._motors(motors)
@@ -392,10 +392,11 @@ class MuJoCoSim:
             return
         # nothing between the steps: step() without its bookkeeping, the same calls in the same order
         model, data, step2, step1, h = self.model, self.data, self._mj.mj_step2, self._mj.mj_step1, self.time_step
+        columns: np.ndarray | slice = ids
         if len(ids) == len(ctrl) and np.array_equal(ids, np.arange(len(ctrl))):
-            ids = slice(None)
+            columns = slice(None)
         for row in inputs:
-            ctrl[ids] = row
+            ctrl[columns] = row
             step2(model, data)
             step1(model, data)
             self.elapsed += h
@@ -416,7 +417,7 @@ class MuJoCoSim:
         self.model.actuator_forcerange[ids] = (-force, force)
         return ids, inputs
 
-    def push(self, name: str, link: int, force: Sequence[float]) -> None:
+    def push(self, name: str, link: int, force: Vector) -> None:
         """Apply ``force`` (N, world frame) at the centre of mass of ``link`` of body ``name`` for the next step
         (MuJoCo's ``xfrc_applied``, cleared after it), as :meth:`PyBulletSim.push`."""
         self._ready()
@@ -443,7 +444,8 @@ class MuJoCoSim:
 
     def link_frame(self, name: str, link: str | int) -> tuple[np.ndarray, np.ndarray]:
         """World position (m) and xyzw quaternion of a link's frame (the link by name or index; -1 the base)."""
-        return self.link_motion(name, link)[:2]
+        frame = self.link_motion(name, link)
+        return frame[0], frame[1]
 
     def link_motion(self, name: str, link: str | int, velocity: bool = False) -> tuple[np.ndarray, ...]:
         """A link's frame: world position (m), xyzw quaternion and, with ``velocity``, the linear (m/s) and
@@ -500,26 +502,26 @@ class MuJoCoSim:
         """:meth:`PyBulletSim.clearance` at MuJoCo's state (the mirror's geometry)."""
         return self._geometry().clearance(name, others, max_distance, links)
 
-    def render(self, width: int, height: int, target: Sequence[float], distance: float, yaw: float, pitch: float,
+    def render(self, width: int, height: int, target: Vector, distance: float, yaw: float, pitch: float,
                fov: float = 45.0) -> np.ndarray:
         """:meth:`PyBulletSim.render` of the mirror at MuJoCo's state."""
         return self._geometry().render(width, height, target, distance, yaw, pitch, fov)
 
     # --- resets: the mirror is posed, MuJoCo loads it before it runs --------------------------------
-    def reset_joint(self, name: str, joint: int, value: float | Sequence[float]) -> None:
+    def reset_joint(self, name: str, joint: int, value: float | Vector) -> None:
         """Put a joint at ``value`` (a number, or an xyzw quaternion), the mechanism at rest."""
         self._pose_mirror()
         self.source.reset_joint(name, joint, value)
         self._need_load = True
 
-    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Sequence[float],
-                   quaternion: Sequence[float]) -> None:
+    def place_free(self, part: tuple[str, int], floats: Sequence[tuple[str, int]], position: Vector,
+                   quaternion: Vector) -> None:
         """:meth:`PyBulletSim.place_free`, the mechanism at rest."""
         self._pose_mirror()
         self.source.place_free(part, floats, position, quaternion)
         self._need_load = True
 
-    def reset_base(self, name: str, position: Sequence[float], quaternion: Sequence[float]) -> None:
+    def reset_base(self, name: str, position: Vector, quaternion: Vector) -> None:
         """:meth:`PyBulletSim.reset_base`, the mechanism at rest."""
         self._pose_mirror()
         self.source.reset_base(name, position, quaternion)
@@ -548,13 +550,13 @@ class MuJoCoSim:
         self._need_load, self._mirror_stale = True, False
 
     # --- the world's bodies: the mirror's (fixed parts reach MuJoCo at the next load) ---------------------
-    def add_static(self, name: str, shape: Any, rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+    def add_static(self, name: str, shape: Any, rgba: Vector = (0.7, 0.3, 0.3, 1.0)) -> None:
         self._pose_mirror()
         self.source.add_static(name, shape, rgba)
         self._need_load = True
 
     def add_static_group(self, name: str, shapes: Sequence[Any],
-                         rgba: Sequence[float] = (0.7, 0.3, 0.3, 1.0)) -> None:
+                         rgba: Vector = (0.7, 0.3, 0.3, 1.0)) -> None:
         self._pose_mirror()
         self.source.add_static_group(name, shapes, rgba)
         self._need_load = True
@@ -607,7 +609,7 @@ class MuJoCoSim:
     def passive(self, name: str, joints: Sequence[int], spherical: Sequence[int] = ()) -> None:
         self.source.passive(name, joints, spherical)
 
-    def ball_joint(self, name: str, link_a: int, pivot_a: Sequence[float], link_b: int, pivot_b: Sequence[float],
+    def ball_joint(self, name: str, link_a: int, pivot_a: Vector, link_b: int, pivot_b: Vector,
                    other: str | None = None) -> None:
         self.source.ball_joint(name, link_a, pivot_a, link_b, pivot_b, other)
 
@@ -686,12 +688,12 @@ def ramp_together(sims: Sequence[MuJoCoSim], motors: Sequence[tuple[str, Sequenc
     mj = _import_mujoco()
     spec = int(mj.mjtState.mjSTATE_FULLPHYSICS)  # what rollout takes and gives
     alone = np.array([bool(sim.after_step or sim._pushed or not sim.cold_periods) for sim in sims])
-    for k in np.flatnonzero(alone):
+    for k in np.flatnonzero(alone).tolist():
         sims[k].ramp(motors, starts[k], goals[k], duration)
     rows = np.flatnonzero(~alone)
     if not rows.size:
         return
-    batch = [sims[k] for k in rows]
+    batch = [sims[k] for k in rows.tolist()]
     force = batch[0]._force(motors)  # a world's robots: one mechanism, one servo force
     ids, inputs = batch[0]._ramp_inputs(motors, starts[rows], goals[rows], duration, force)
     models = [sim.model for sim in batch]

@@ -24,7 +24,8 @@ def _vec3(value, name: str) -> tuple[float, float, float]:
     arr = np.asarray(value, dtype=float)
     if arr.shape != (3,) or not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} must be 3 finite numbers; got {value!r}")
-    return tuple(float(v) for v in arr)
+    x, y, z = arr.tolist()
+    return x, y, z
 
 
 @dataclass(frozen=True)

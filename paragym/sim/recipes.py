@@ -15,7 +15,10 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["GROUND", "Heightfield", "Plane", "Recipe", "StaticBody", "StaticGroup", "TreeBody", "VisualBody"]
+__all__ = ["GROUND", "Heightfield", "Plane", "Recipe", "StaticBody", "StaticGroup", "TreeBody", "Vector", "VisualBody"]
+
+#: a point, direction, quaternion or colour as the scenes' methods take it: a sequence of floats or a 1-D array
+Vector = Sequence[float] | np.ndarray
 
 
 @dataclass(frozen=True, eq=False)
@@ -27,7 +30,7 @@ class TreeBody:
     links: Sequence[Any]
     base_mass: float
     base_shape: Any
-    base_rgba: Sequence[float]
+    base_rgba: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_tree_body(self.name, self.links, self.base_mass, self.base_shape, self.base_rgba)
@@ -39,7 +42,7 @@ class StaticBody:
 
     name: str
     shape: Any
-    rgba: Sequence[float]
+    rgba: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_static(self.name, self.shape, self.rgba)
@@ -51,7 +54,7 @@ class StaticGroup:
 
     name: str
     shapes: Sequence[Any]
-    rgba: Sequence[float]
+    rgba: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_static_group(self.name, self.shapes, self.rgba)
@@ -63,9 +66,9 @@ class VisualBody:
 
     name: str
     shape: Any
-    rgba: Sequence[float]
-    position: Sequence[float]
-    quaternion: Sequence[float]
+    rgba: Vector
+    position: Vector
+    quaternion: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_visual(self.name, self.shape, self.rgba, self.position, self.quaternion)
@@ -78,8 +81,8 @@ class Heightfield:
     name: str
     heights: np.ndarray
     cell: float
-    position: Sequence[float]
-    rgba: Sequence[float]
+    position: Vector
+    rgba: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_heightfield(self.name, self.heights, self.cell, self.position, self.rgba)
@@ -90,7 +93,7 @@ class Plane:
     """Flat ground: the plane z = 0."""
 
     name: str
-    rgba: Sequence[float]
+    rgba: Vector
 
     def build_in(self, holder: Any) -> None:
         holder.add_plane(self.name, self.rgba)

@@ -4,13 +4,12 @@ from the drive's true state (the scene is what ``render`` draws)."""
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
 from paragym.mechanisms import tripod as mt
 from paragym.sim.client import PyBulletSim
 from paragym.sim.obstacles import Box, Cylinder
+from paragym.sim.recipes import Vector
 from paragym.sim.tripod_drive import Terrain
 
 __all__ = ["TripodScene"]
@@ -30,7 +29,7 @@ class TripodScene:
         self._target = np.zeros(3)
 
     def _visual(self, shape: Box | Cylinder, rgba: tuple, position: np.ndarray,
-                quaternion: Sequence[float] = (0.0, 0.0, 0.0, 1.0)) -> None:
+                quaternion: Vector = (0.0, 0.0, 0.0, 1.0)) -> None:
         name = f"part{len(self._bodies)}"
         self.sim.add_visual(name, shape, rgba, position, quaternion)
         self._bodies.append(name)
