@@ -10,11 +10,18 @@ import numpy as np
 __all__ = ["ConstantPolicy", "RandomPolicy", "ZeroPolicy", "best_constant"]
 
 
+def _box(action_space: gym.spaces.Space) -> gym.spaces.Box:
+    """``action_space``, which these policies need to be a Box (every paragym env's is)."""
+    if not isinstance(action_space, gym.spaces.Box):
+        raise TypeError(f"action_space must be a gymnasium Box; got {type(action_space).__name__}")
+    return action_space
+
+
 class RandomPolicy:
     """Uniform samples of the action space, seeded (``seed``) for repeatability."""
 
-    def __init__(self, action_space: gym.spaces.Box, seed: int | None = None) -> None:
-        self.action_space = action_space
+    def __init__(self, action_space: gym.spaces.Space, seed: int | None = None) -> None:
+        self.action_space = _box(action_space)
         self.rng = np.random.default_rng(seed)
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
@@ -28,8 +35,8 @@ class RandomPolicy:
 class ZeroPolicy:
     """Always the zero action (stand still, for joint-increment actions)."""
 
-    def __init__(self, action_space: gym.spaces.Box) -> None:
-        self.action_space = action_space
+    def __init__(self, action_space: gym.spaces.Space) -> None:
+        self.action_space = _box(action_space)
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
         pass

@@ -12,13 +12,13 @@ for bit.
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
 
 from paragym.mechanisms.geometry import pose6
-from paragym.tasks.base import check_control_period
+from paragym.tasks.base import SimulatedWorld, Task, check_control_period
 
 __all__ = ["ActionCheck", "ParagymEnv", "TaskShell", "box", "check_action", "check_control_period", "check_copyable",
            "check_options", "check_seed", "check_train_scenarios", "env_signature", "pose6"]
@@ -120,8 +120,11 @@ class ActionCheck:
 
     def __init__(self, space: gym.spaces.Box) -> None:
         self.space, self.shape = space, space.shape
-        low, high = set(space.low.astype(float).ravel().tolist()), set(space.high.astype(float).ravel().tolist())
-        self.low, self.high = (low.pop(), high.pop()) if len(low) == len(high) == 1 else (None, None)
+        low: set[float] = set(space.low.astype(float).ravel().tolist())
+        high: set[float] = set(space.high.astype(float).ravel().tolist())
+        #: the Box's one bound on every component, where it has one (then a quick check does), else None
+        self.low: float | None = low.pop() if len(low) == len(high) == 1 else None
+        self.high: float | None = high.pop() if self.low is not None else None
 
     def __call__(self, action: Any) -> np.ndarray:
         if self.low is not None and type(action) is np.ndarray and action.shape == self.shape \
@@ -240,13 +243,18 @@ class ParagymEnv(TaskShell, gym.Env):
 
     metadata: dict[str, Any] = {"render_modes": ["human", "rgb_array"], "render_fps": 25}
 
-    #: the task (``paragym.tasks.<task>_task.TASK``) and this id's rules (a value of ``task.Rules``)
-    task: Any = None
-    rules: Any = None
+    #: the task (``paragym.tasks.<task>_task.TASK``) and this id's rules (a value of ``task.Rules``): set by the
+    #: env id's class
+    task: ClassVar[Task[Any, Any, Any, Any]]
+    rules: ClassVar[Any]
+    #: the env's arguments as ``inspect.signature`` and the docs show them (:func:`env_signature`)
+    __signature__: ClassVar[inspect.Signature]
+    action_space: gym.spaces.Box
+    observation_space: gym.spaces.Box
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        if cls.task is not None:
+        if "task" in cls.__dict__:
             cls.__signature__ = env_signature(cls.task)
 
     def __init__(self, render_mode: str | None = None, train_scenarios: int | None = None, **kwargs: Any) -> None:
@@ -343,13 +351,17 @@ class ParagymEnv(TaskShell, gym.Env):
         ``paragym.validation.sensors.AccelerometerArray.paper_layout`` (the task's)."""
         return self.task.sensor_layout
 
+    def _simulated(self) -> SimulatedWorld:
+        """The world, which simulates the robot (the dynamic fidelity's): a ValueError in another."""
+        if self.params.fidelity != "dynamic" or not isinstance(self.world, SimulatedWorld):
+            raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
+                             "fidelity='dynamic'")
+        return self.world
+
     def _dynamic_body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """The validated body: (sim client, robot, link, the judged point in the link's frame (m), the
         dynamics' physics step (s)), read from the dynamic world."""
-        if self.params.fidelity != "dynamic":
-            raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
-                             "fidelity='dynamic'")
-        return self.world.body()
+        return self._simulated().body()
 
     @property
     def body_point(self) -> np.ndarray:
@@ -375,10 +387,8 @@ class ParagymEnv(TaskShell, gym.Env):
 
     def commanded_pose(self) -> np.ndarray:
         """The pose of the validated body that the last action commanded: x, y, z (m), roll, pitch, yaw (rad)."""
-        self._dynamic_body()
-        return self.world.commanded_pose(self.state, self.params)
+        return self._simulated().commanded_pose(self.state, self.params)
 
     def step_duration(self) -> float:
         """Simulated seconds of the step just taken (whole physics steps)."""
-        self._dynamic_body()
-        return self.world.step_duration(self.state, self.params)
+        return self._simulated().step_duration(self.state, self.params)

@@ -268,7 +268,7 @@ class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
     rules = LADDER_RULES[0]
 
 
-CaPaManCollisionFreeEasyEnv.__doc__ = CaPaManCollisionFreeEasyEnv.__doc__.format(knobs=knob_table("    "))
+CaPaManCollisionFreeEasyEnv.__doc__ = (CaPaManCollisionFreeEasyEnv.__doc__ or "").format(knobs=knob_table("    "))
 
 
 class CaPaManCollisionFreeMediumEnv(CaPaManCollisionFreeEasyEnv):

@@ -265,7 +265,7 @@ class HybridSingularityFreeEasyEnv(HybridSingularityFreeV2Env):
     rules = LADDER_RULES[0]
 
 
-HybridSingularityFreeEasyEnv.__doc__ = HybridSingularityFreeEasyEnv.__doc__.format(knobs=knob_table("    "))
+HybridSingularityFreeEasyEnv.__doc__ = (HybridSingularityFreeEasyEnv.__doc__ or "").format(knobs=knob_table("    "))
 
 
 class HybridSingularityFreeMediumEnv(HybridSingularityFreeEasyEnv):
@@ -375,7 +375,8 @@ class HybridSingularityFreeEasyV1Env(HybridSingularityFreeV2Env):
     rules = SPLIT_LADDER_RULES[0]
 
 
-HybridSingularityFreeEasyV1Env.__doc__ = HybridSingularityFreeEasyV1Env.__doc__.format(knobs=split_knob_table("    "))
+HybridSingularityFreeEasyV1Env.__doc__ = (HybridSingularityFreeEasyV1Env.__doc__ or "").format(
+    knobs=split_knob_table("    "))
 
 
 class HybridSingularityFreeMediumV1Env(HybridSingularityFreeEasyV1Env):
@@ -444,7 +445,7 @@ class HybridSingularityFreeEasyV2Env(HybridSingularityFreeEasyV1Env):
     rules = SPLIT_LADDER_RULES_V2[0]
 
 
-HybridSingularityFreeEasyV2Env.__doc__ = HybridSingularityFreeEasyV2Env.__doc__.format(
+HybridSingularityFreeEasyV2Env.__doc__ = (HybridSingularityFreeEasyV2Env.__doc__ or "").format(
     knobs=split_knob_table("    ", SPLIT_LADDER_V2))
 
 

@@ -254,7 +254,7 @@ class Orthoglide2PRRKappaEasyEnv(Orthoglide2PRRKappaV1Env):
     rules = LADDER_RULES[0]
 
 
-Orthoglide2PRRKappaEasyEnv.__doc__ = Orthoglide2PRRKappaEasyEnv.__doc__.format(knobs=knob_table("    "))
+Orthoglide2PRRKappaEasyEnv.__doc__ = (Orthoglide2PRRKappaEasyEnv.__doc__ or "").format(knobs=knob_table("    "))
 
 
 class Orthoglide2PRRKappaMediumEnv(Orthoglide2PRRKappaEasyEnv):

@@ -293,7 +293,7 @@ class MobileTripodOdometryEasyEnv(MobileTripodOdometryV2Env):
     rules = LADDER_RULES[0]
 
 
-MobileTripodOdometryEasyEnv.__doc__ = MobileTripodOdometryEasyEnv.__doc__.format(knobs=knob_table("    "))
+MobileTripodOdometryEasyEnv.__doc__ = (MobileTripodOdometryEasyEnv.__doc__ or "").format(knobs=knob_table("    "))
 
 
 class MobileTripodOdometryMediumEnv(MobileTripodOdometryEasyEnv):

@@ -34,9 +34,10 @@ single env draws its robot.
 from __future__ import annotations
 
 import inspect
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
+from gymnasium.spaces import Box
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -50,6 +51,7 @@ from paragym.envs.base import (
     check_train_scenarios,
     env_signature,
 )
+from paragym.tasks.base import Task
 
 __all__ = ["ParagymVectorEnv", "SameStepVectorEnv"]
 
@@ -70,12 +72,15 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
     metadata: dict[str, Any] = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": ["rgb_array"]}
 
     #: the task and this id's rules, the single env's
-    task: Any = None
-    rules: Any = None
+    task: ClassVar[Task[Any, Any, Any, Any]]
+    rules: ClassVar[Any]
+    __signature__: ClassVar[inspect.Signature]
+    single_action_space: Box
+    single_observation_space: Box
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
-        if cls.task is not None:
+        if "task" in cls.__dict__:
             own = [inspect.Parameter("num_envs", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation="int"),
                    *(inspect.Parameter(n, inspect.Parameter.KEYWORD_ONLY, default=d)
                      for n, d in (("max_episode_steps", None), ("render_index", 0)))]
@@ -98,7 +103,8 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
         self.observation_space = batch_space(self.single_observation_space, self.num_envs)
         self.action_space = batch_space(self.single_action_space, self.num_envs)
         self.max_episode_steps = max_episode_steps
-        self._rngs: list[np.random.Generator | None] = [None] * self.num_envs
+        #: each robot's generator: seeded by a reset's seed, else from the OS's entropy (as gymnasium's envs)
+        self._rngs = [seeding.np_random()[0] for _ in range(self.num_envs)]
         self.state = self.task.State.empty(self.num_envs, self.params)
         self.world = self.task.make_world(self.params, self.num_envs, render_mode)
         self._render: dict[str, Any] = {}
@@ -128,7 +134,8 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
         if seed is None:
             seeds: list[int | None] = [None] * self.num_envs
         elif isinstance(seed, int | np.integer) and not isinstance(seed, bool):
-            seeds = [check_seed(seed) + i for i in range(self.num_envs)]
+            check_seed(seed)
+            seeds = [int(seed) + i for i in range(self.num_envs)]
         elif isinstance(seed, list | tuple | np.ndarray):
             seeds = list(seed)
             if len(seeds) != self.num_envs:
@@ -149,7 +156,7 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
         rows = np.flatnonzero(mask)
         saved = [self._rngs[i] for i in rows]
         for i in rows:
-            if seeds[i] is not None or self._rngs[i] is None:
+            if seeds[i] is not None:
                 self._rngs[i], _ = seeding.np_random(seeds[i])
         try:
             self._start(rows, [self._rngs[i] for i in rows], options)
@@ -199,8 +206,9 @@ class ParagymVectorEnv(TaskShell, VectorEnv):
             self._autoreset[rows] = False
         return rows, self.state.obs[rows].copy()
 
-    def render(self) -> np.ndarray | None:
-        """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``)."""
+    def render(self) -> np.ndarray | None:  # type: ignore[override]  # one robot's frame, not one per robot
+        """Robot ``render_index`` drawn by PyBullet (``render_mode="rgb_array"``): one frame (gymnasium's
+        vector envs give a tuple of every env's)."""
         if self.render_mode != "rgb_array" or not self._started:
             return None
         return self.task.render(self._render, self.state, self.params, self.world, self.render_index, False)
@@ -268,7 +276,7 @@ class SameStepVectorEnv(VectorEnv):
         return obs, reward, terminated, truncated, {**self.venv._infos(), "final_obs": final, "_final_obs": done,
                                                     "final_info": info, "_final_info": done}
 
-    def render(self) -> np.ndarray | None:
+    def render(self) -> np.ndarray | None:  # type: ignore[override]  # as ParagymVectorEnv.render
         return self.venv.render()
 
     def close(self, **kwargs: Any) -> None:

@@ -20,7 +20,7 @@ import paragym
 from paragym import registry
 from paragym.baselines import RandomPolicy, ZeroPolicy
 from paragym.baselines.tasks import bench_of
-from paragym.rollout import run_episode
+from paragym.rollout import frame_of, run_episode
 
 __all__ = ["main"]
 
@@ -140,9 +140,9 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     env_id = paragym.check_env_id(args.env_id)
     env = gym.make(env_id, scenario=_scenario(env_id, args), render_mode="rgb_array")
     bench = bench_of(env_id)
-    best_name, plot = bench.demo, bench.plot_episode
-    if plot is None:
-        from paragym.plots import plot_episode as plot
+    from paragym.plots import plot_episode
+
+    best_name, plot = bench.demo, bench.plot_episode or plot_episode
     policy = {"best": lambda: get_policy(env_id, bench.reference).factory(env, args.seed),
               "random": lambda: RandomPolicy(env.action_space, args.seed),
               "zero": lambda: ZeroPolicy(env.action_space)}[args.policy]()
@@ -150,7 +150,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     print(f"{env_id}: {args.scenario} scenario, seed {args.seed}, policy {name}")
     ep = run_episode(env, policy, seed=args.seed, frame_every=args.frame_every if args.gif else 0)
     if not ep.frames:  # the picture's first panel
-        ep.frames.append(env.render())
+        ep.frames.append(frame_of(env))
     env.close()
     out = Path(args.out)
     stem = env_id.split("/")[1] + f"_{args.scenario}_seed{args.seed}_{args.policy}"
@@ -184,14 +184,15 @@ def _cmd_train(args: argparse.Namespace) -> int:
 
         if args.timesteps is not None:
             raise ValueError("--timesteps does not apply to cem: it searches for --budget seconds")
-        res = train_cem(args.env_id, seed=args.seed, settings=CemSettings(budget_seconds=args.budget,
-                                                                              generations=args.generations),
-                        models_dir=args.models, force=args.force, echo=None if args.no_progress else print)
-        meta = res.meta
+        found = train_cem(args.env_id, seed=args.seed, settings=CemSettings(budget_seconds=args.budget,
+                                                                                generations=args.generations),
+                          models_dir=args.models, force=args.force, echo=None if args.no_progress else print)
+        meta = found.meta
         print(f"CEM seed {meta['seed']} on {meta['env_id']}: {meta['generations']} generations, "
               f"{meta['episodes_played']:,} episodes in {meta['train_seconds']:.0f} s; the mean's last generation "
               f"{meta['curve']['mean_success'][-1]:.0%} success")
-        print(f"wrote {res.model} and {res.model.with_suffix('.json').name}")
+        if found.model is not None:
+            print(f"wrote {found.model} and {found.model.with_suffix('.json').name}")
         return 0
     from paragym.baselines.training import LOADABLE, check_algo, train
 

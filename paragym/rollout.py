@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["Episode", "run_episode"]
+__all__ = ["Episode", "frame_of", "run_episode"]
 
 
 @dataclass
@@ -38,6 +38,15 @@ class Episode:
         return bool(self.infos[-1].get("is_success", False))
 
 
+def frame_of(env: gym.Env) -> np.ndarray:
+    """``env.render()``, which must be an RGB image (an env made with ``render_mode="rgb_array"``)."""
+    frame = env.render()
+    if not isinstance(frame, np.ndarray):
+        raise ValueError(f"env must be made with render_mode='rgb_array' to record frames; its render gave "
+                         f"{type(frame).__name__}")
+    return frame
+
+
 def run_episode(env: gym.Env, policy: Any, seed: int | None = None, frame_every: int = 0) -> Episode:
     """Reset ``env`` with ``seed``, let ``policy`` (``reset``/``act``) act until
     the episode ends. ``frame_every > 0`` keeps ``env.render()`` every that
@@ -50,7 +59,7 @@ def run_episode(env: gym.Env, policy: Any, seed: int | None = None, frame_every:
     ep.observations.append(obs)
     ep.infos.append(info)
     if frame_every:
-        ep.frames.append(env.render())
+        ep.frames.append(frame_of(env))
     t0 = time.perf_counter()
     while not (ep.terminated or ep.truncated):
         action = policy.act(obs, info)
@@ -60,6 +69,6 @@ def run_episode(env: gym.Env, policy: Any, seed: int | None = None, frame_every:
         ep.rewards.append(float(reward))
         ep.infos.append(info)
         if frame_every and (len(ep.actions) % frame_every == 0 or ep.terminated or ep.truncated):
-            ep.frames.append(env.render())
+            ep.frames.append(frame_of(env))
     ep.step_seconds = time.perf_counter() - t0
     return ep

@@ -15,7 +15,6 @@ from typing import Any
 
 import gymnasium as gym
 import numpy as np
-from gymnasium import spaces
 
 import paragym
 from paragym.baselines.tasks import Bench, BuiltIn, Column, Target, zero_factory
@@ -23,7 +22,7 @@ from paragym.envs.base import ParagymEnv
 from paragym.envs.vector import ParagymVectorEnv
 from paragym.registry import EnvRow
 from paragym.rollout import Episode
-from paragym.tasks.base import Evaluation, TaskBase, check_number, refuse_unknown, resolve_scenario
+from paragym.tasks.base import BoxSpec, Evaluation, Task, TaskBase, check_number, refuse_unknown, resolve_scenario
 
 STEP = 0.05  # m per step at full action
 REACH = 0.05  # m: success within this of the goal
@@ -113,20 +112,20 @@ class PointTask(TaskBase):
         validate_scenario(scenario)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: PointParams,
-                       world: Any) -> list[PointScenario]:
+                       world: None) -> list[PointScenario]:
         choice = resolve_scenario(choice, self.scenario_names, PointScenario, validate_scenario)
         if choice == "random":
             return [random_scenario(rng) for rng in rngs]
         return [paper_scenario() if choice == "paper" else choice] * len(rngs)
 
-    def spaces(self, params: PointParams) -> tuple[spaces.Box, spaces.Box]:
-        return spaces.Box(-3.0, 3.0, (4,), np.float32), spaces.Box(-1.0, 1.0, (2,), np.float32)
+    def spaces(self, params: PointParams) -> tuple[BoxSpec, BoxSpec]:
+        return BoxSpec(-3.0, 3.0, (4,)), BoxSpec(-1.0, 1.0, (2,))
 
     def make_world(self, params: PointParams, n: int, render_mode: str | None) -> None:
         return None  # the kinematic model is all there is
 
     def reset(self, state: PointState, params: PointParams, rows: np.ndarray, scenarios: list[PointScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
+              rngs: list[np.random.Generator], world: None) -> None:
         s = state
         for row, sc in zip(rows, scenarios, strict=True):
             s.pos[row], s.goal[row], s.scenarios[row] = sc.start, sc.goal, sc
@@ -134,7 +133,7 @@ class PointTask(TaskBase):
         _observe(s, rows)
 
     def step(self, state: PointState, params: PointParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
+             world: None) -> None:
         s = state
         before = np.linalg.norm(s.goal - s.pos, axis=1)
         s.pos[active] = np.clip(s.pos[active] + STEP * actions[active], -1.5, 1.5)
@@ -143,15 +142,15 @@ class PointTask(TaskBase):
         s.terminated[active] = after[active] < params.reach
         _observe(s, np.flatnonzero(active))
 
-    def evaluate(self, state: PointState, params: PointParams, world: Any) -> Evaluation:
+    def evaluate(self, state: PointState, params: PointParams, world: None) -> Evaluation:
         s = state
         return Evaluation(s.terminated.copy(), np.zeros(len(s.pos), np.int64),
                           {"distance": np.linalg.norm(s.goal - s.pos, axis=1)})
 
-    def details(self, state: PointState, params: PointParams, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: PointState, params: PointParams, world: None, i: int) -> dict[str, Any]:
         return {"position": state.pos[i].copy()}
 
-    def render(self, cache: dict[str, Any], state: PointState, params: PointParams, world: Any, i: int,
+    def render(self, cache: dict[str, Any], state: PointState, params: PointParams, world: None, i: int,
                gui: bool) -> np.ndarray:
         img = np.full((64, 64, 3), 255, np.uint8)
         for xy, colour in ((state.goal[i], (0, 160, 0)), (state.pos[i], (200, 0, 0))):
@@ -164,7 +163,7 @@ def _observe(s: PointState, rows: np.ndarray) -> None:
     s.obs[rows] = np.concatenate([s.pos[rows], s.goal[rows] - s.pos[rows]], axis=1)
 
 
-TASK = PointTask()
+TASK: Task[PointState, PointParams, PointScenario, None] = PointTask()
 
 
 class PointReachEnv(ParagymEnv):

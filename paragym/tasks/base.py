@@ -15,19 +15,28 @@ checks it, with one message for every task.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from typing import Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkable
+from collections.abc import Callable, Sequence
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple, Protocol, TypeVar, runtime_checkable
 
 import numpy as np
 
 from paragym.registry import RUNG_NAMES
 from paragym.sim.mujoco_sim import vector_engine
 
-__all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "Task", "TaskBase", "TaskParams", "TaskState", "World",
-           "check_choice", "check_control_period", "check_instance", "check_number", "knob_table", "refuse_unknown",
-           "renamed", "reward_terms", "resolve_scenario"]
+if TYPE_CHECKING:
+    from paragym.sim.engine import Sim
+
+__all__ = ["BROKEN_GAP", "BoxSpec", "Evaluation", "SimulatedWorld", "Task", "TaskBase", "TaskParams", "TaskState",
+           "World", "check_choice", "check_control_period", "check_instance", "check_number", "knob_table",
+           "refuse_unknown", "renamed", "reward_terms", "resolve_scenario", "started"]
 
 S = TypeVar("S")
+#: a task's state, parameters, scenario and world (:class:`Task`'s type parameters); the state is only ever
+#: handed to the task, the others also come from it
+StateT = TypeVar("StateT", contravariant=True)
+ParamsT = TypeVar("ParamsT")
+ScenarioT = TypeVar("ScenarioT")
+WorldT = TypeVar("WorldT")
 
 
 def resolve_scenario(choice: Any, names: tuple[str, ...], custom: type[S],
@@ -49,6 +58,14 @@ def resolve_scenario(choice: Any, names: tuple[str, ...], custom: type[S],
 #: a loop of a closed chain open by more than this (m) in dynamic fidelity is a broken mechanism: the episode ends
 #: as a failure ("broken") in the ids whose rules say so (the presets hold their loops within 1 mm under contact)
 BROKEN_GAP = 0.005
+
+
+def started(scenarios: list[S | None], i: int) -> S:
+    """Robot ``i``'s scenario (a state's ``scenarios``), which its reset set: a RuntimeError before it."""
+    scenario = scenarios[i]
+    if scenario is None:
+        raise RuntimeError(f"robot {i} has no scenario yet: call reset() first")
+    return scenario
 
 
 def renamed(module: str, old_to_new: dict[str, str]) -> Callable[[str], Any]:
@@ -100,7 +117,10 @@ class Evaluation(NamedTuple):
 class TaskParams(Protocol):
     """A task's parameters: every argument of its env, checked once (:meth:`from_kwargs`)."""
 
-    fidelity: str
+    @property
+    def fidelity(self) -> str:
+        """The env's ``fidelity`` argument: "kinematic" or "dynamic"."""
+        ...
 
     @classmethod
     def from_kwargs(cls, rules: Any, **kwargs: Any) -> TaskParams:
@@ -118,7 +138,16 @@ class TaskState(Protocol):
     obs: np.ndarray
     reward: np.ndarray
     terminated: np.ndarray
-    scenarios: list[Any]
+
+    @property
+    def scenarios(self) -> Sequence[Any]:
+        """Each robot's scenario (None before its first reset)."""
+        ...
+
+    @classmethod
+    def empty(cls, n: int, params: Any) -> TaskState:
+        """The state of ``n`` robots under ``params``, before any reset."""
+        ...
 
 
 @runtime_checkable
@@ -133,8 +162,34 @@ class World(Protocol):
 
 
 @runtime_checkable
-class Task(Protocol):
-    """Everything a task supplies, each once. One object per task (``paragym.tasks.<task>_task.TASK``).
+class SimulatedWorld(World, Protocol):
+    """A world that simulates one robot (robot 0) under a physics engine's dynamics: what episode validation
+    reads (:mod:`paragym.validation.episode`, through the env's ``body_motion``, ``commanded_pose`` and
+    ``step_duration``). ``state`` and ``params`` are its task's."""
+
+    #: robot 0's scene: what KF validation judges, and draws
+    scene: Any
+
+    def body(self) -> tuple[Sim, str, int, np.ndarray, float]:
+        """The validated body: (its engine, body name, link index, the judged point in the link's frame (m), the
+        engine's physics step (s))."""
+        ...
+
+    def commanded_pose(self, state: Any, params: Any) -> np.ndarray:
+        """The validated body's pose that the last action commanded: x, y, z (m), roll, pitch, yaw (rad)."""
+        ...
+
+    def step_duration(self, state: Any, params: Any) -> float:
+        """Simulated seconds of the step just taken (whole physics steps)."""
+        ...
+
+
+@runtime_checkable
+class Task(Protocol[StateT, ParamsT, ScenarioT, WorldT]):
+    """Everything a task supplies, each once. One object per task (``paragym.tasks.<task>_task.TASK``),
+    generic over its state, parameters, scenario and world (``WorldT``: a :class:`World`, or None where the
+    kinematic model is all there is): ``TASK: Task[MyState, MyParams, MyScenario, MyWorld | None]`` has the type
+    checker hold the task to this contract (``.ci/typecheck``).
 
     Attributes:
         name: the task's name, as the registry rows and the bench name it.
@@ -151,65 +206,85 @@ class Task(Protocol):
             (:meth:`paragym.validation.sensors.AccelerometerArray.paper_layout`'s arguments).
     """
 
-    name: str
-    scenario_names: tuple[str, ...]
-    failures: tuple[str | None, ...]
-    Scenario: ClassVar[type]
-    Params: ClassVar[type]
-    Rules: ClassVar[type]
-    State: ClassVar[type]
-    vector_fidelities: tuple[str, ...]
-    engines: tuple[str, ...]
-    sensor_layout: dict[str, float]
+    # (read-only: a task's constants, class attributes of its class)
+    @property
+    def name(self) -> str: ...
+    @property
+    def scenario_names(self) -> tuple[str, ...]: ...
+    @property
+    def failures(self) -> tuple[str | None, ...]: ...
+    @property
+    def Scenario(self) -> type[ScenarioT]: ...  # noqa: N802 (a class, named as one)
+    @property
+    def Params(self) -> type[TaskParams]: ...  # noqa: N802
+    @property
+    def Rules(self) -> type: ...  # noqa: N802
+    @property
+    def State(self) -> type[TaskState]: ...  # noqa: N802
+    @property
+    def vector_fidelities(self) -> tuple[str, ...]: ...
+    @property
+    def engines(self) -> tuple[str, ...]: ...
+    @property
+    def sensor_layout(self) -> dict[str, float]: ...
 
-    def paper_scenario(self) -> Any:
+    def paper_scenario(self) -> ScenarioT:
         """The paper's case."""
         ...
 
-    def random_scenario(self, rng: np.random.Generator, params: Any) -> Any:
+    def random_scenario(self, rng: np.random.Generator, params: ParamsT) -> ScenarioT:
         """One random scenario drawn from ``rng`` that the task can run."""
         ...
 
-    def validate_scenario(self, scenario: Any, params: Any) -> None:
+    def validate_scenario(self, scenario: ScenarioT, params: ParamsT) -> None:
         """Raise a ValueError or TypeError naming the field of a custom ``scenario`` that cannot run."""
         ...
 
-    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: Any, world: Any) -> list[Any]:
+    def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: ParamsT,
+                       world: WorldT) -> list[ScenarioT]:
         """One checked scenario per generator for the ``scenario`` argument ``choice`` (a name or a custom
         scenario): what ``reset`` starts."""
         ...
 
-    def spaces(self, params: Any) -> tuple[BoxSpec, BoxSpec]:
+    def spaces(self, params: ParamsT) -> tuple[BoxSpec, BoxSpec]:
         """The observation and action spaces of one robot."""
         ...
 
-    def make_world(self, params: Any, n: int, render_mode: str | None) -> Any:
+    def vector_params(self, rules: Any, kwargs: dict[str, Any]) -> ParamsT:
+        """The native vector env's parameters for an env id with ``rules`` made with ``kwargs``: the single env's
+        (``Params.from_kwargs``), refused (ValueError) in a fidelity the native vector env does not run
+        (:class:`TaskBase` has the usual rule)."""
+        ...
+
+    def make_world(self, params: ParamsT, n: int, render_mode: str | None) -> WorldT:
         """The :class:`World` of ``n`` robots that ``params.fidelity`` asks for, or None."""
         ...
 
-    def reset(self, state: Any, params: Any, rows: np.ndarray, scenarios: list[Any],
-              rngs: list[np.random.Generator], world: Any) -> None:
+    def reset(self, state: StateT, params: ParamsT, rows: np.ndarray, scenarios: list[ScenarioT],
+              rngs: list[np.random.Generator], world: WorldT) -> None:
         """Start robots ``rows`` (integer indices) on ``scenarios`` (one generator each) and evaluate them."""
         ...
 
-    def step(self, state: Any, params: Any, actions: np.ndarray, active: np.ndarray, world: Any) -> None:
+    def step(self, state: StateT, params: ParamsT, actions: np.ndarray, active: np.ndarray, world: WorldT) -> None:
         """Step the ``active`` robots (an (N,) mask) with ``actions`` (N, ...) inside the action space."""
         ...
 
-    def evaluate(self, state: Any, params: Any, world: Any) -> Evaluation:
+    def evaluate(self, state: StateT, params: ParamsT, world: WorldT) -> Evaluation:
         """Success, failure and the info's numbers of every robot: what every consumer reads. paragym's tasks
         decide success in one compiled ``decide()`` their transition calls and report its buffers here; a task
         without kernels may decide here."""
         ...
 
-    def details(self, state: Any, params: Any, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: StateT, params: ParamsT, world: WorldT, i: int) -> dict[str, Any]:
         """The single env's further info of robot ``i`` (arrays, names: what is not an (N,) number), as a new
         dict: the single env adds the numbers and the outcome to it. Its names differ from the numbers'."""
         ...
 
-    def render(self, cache: dict[str, Any], state: Any, params: Any, world: Any, i: int, gui: bool) -> np.ndarray:
-        """Robot ``i`` drawn by PyBullet (an RGB array). ``cache`` is the env's: a scene built on the first
-        call is kept there (``cache["scene"]``) and closed with the env."""
+    def render(self, cache: dict[str, Any], state: StateT, params: ParamsT, world: WorldT, i: int,
+               gui: bool) -> np.ndarray | None:
+        """Robot ``i`` drawn by PyBullet (an RGB array); None with ``gui``, where the GUI's window shows it.
+        ``cache`` is the env's: a scene built on the first call is kept there (``cache["scene"]``) and closed
+        with the env."""
         ...
 
 
@@ -218,7 +293,7 @@ class TaskBase:
     kinematic fidelity with the single env's arguments; no further info; no accelerometer layout."""
 
     name: str = ""
-    Params: ClassVar[type]
+    Params: ClassVar[type[TaskParams]]
     vector_fidelities: tuple[str, ...] = ("kinematic",)
     engines: tuple[str, ...] = ("pybullet",)
     sensor_layout: dict[str, float] = {}

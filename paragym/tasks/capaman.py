@@ -73,7 +73,7 @@ class CaPaManScenario:
     seed: int | None = None
 
     @classmethod
-    def from_tool_tips(cls, tips: Sequence[Sequence[float]], obstacles: Sequence[Obstacle],
+    def from_tool_tips(cls, tips: Sequence[Sequence[float]] | np.ndarray, obstacles: Sequence[Obstacle],
                        name: str = "custom", geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
                        ) -> CaPaManScenario:
         """Build a scenario from three tool-tip positions (m); the task points
@@ -135,7 +135,7 @@ def validate_scenario(scenario: CaPaManScenario, scene: CaPaManScene, max_obstac
         return
     highest = post_ceiling(scene.geometry)
     for k, o in enumerate(scenario.obstacles):
-        if o.top > highest:
+        if isinstance(o, Capsule) and o.top > highest:  # (every one is: posts_of took them)
             raise ValueError(f"obstacle {k}'s top is at {o.top * 1000:.1f} mm: a rung's posts end below "
                              f"{highest * 1000:.1f} mm, the clearance cap under the plate's lowest reach")
     clearance = scene_clearance(alpha, posts, scene.geometry)

@@ -349,9 +349,10 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     old = state.alpha.copy()
     actions = np.ascontiguousarray(actions, np.float64)
     command = state.call(_command, (state.command, actions, params.kernel_args), params, (actions.ndim,))
-    moves = world.moves  # the dynamics: the world moves the robots, checked by contact
-    if moves:
+    broken: np.ndarray | bool = False
+    if world.moves:  # the dynamics: the world moves the robots, checked by contact
         new = world.move(rows, command[rows])
+        broken = world.broken[rows]
     else:
         n = params.substeps
         moving = rows
@@ -369,7 +370,7 @@ def step(state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active
     else:
         state.command[rows], state.alpha[rows] = command[rows], new
     _place(state, world, rows, new)
-    state.broken[rows] = world.broken[rows] if moves else False  # what the world measured, before the decision
+    state.broken[rows] = broken  # what the world measured, before the decision
     _look_ahead(state, params, world if probe is None else probe, rows, pose_back=probe is None)
     _finish(state, params, active, old, True)
 

@@ -12,7 +12,7 @@ import numpy as np
 from paragym.sim.capaman_dynamic import CaPaManDynamicScene
 from paragym.sim.capaman_scene import CaPaManScene
 from paragym.tasks import capaman as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
+from paragym.tasks.base import BoxSpec, Evaluation, Task, TaskBase, reward_terms, started
 from paragym.tasks.capaman import CaPaManScenario
 from paragym.tasks.capaman_step import (
     ENGINES,
@@ -30,9 +30,9 @@ from paragym.tasks.capaman_worlds import (
     DynamicWorld,
     GridWorld,
     MuJoCoWorld,
-    NativeWorld,
     PostWorld,
     SceneWorld,
+    World,
     _clusters,
 )
 
@@ -57,18 +57,21 @@ class CaPaManTask(TaskBase):
     def paper_scenario(self) -> CaPaManScenario:
         return scenarios_module.paper_scenario()
 
-    def random_scenario(self, rng: np.random.Generator, params: CaPaManParams, world: Any = None) -> CaPaManScenario:
+    def random_scenario(self, rng: np.random.Generator, params: CaPaManParams) -> CaPaManScenario:
+        """One scenario of the paper's generator (a kinematic PyBullet scene of its own checks it), or the
+        rung's."""
         if params.rules.rung is not None:  # the rung's generator, which needs no scene
-            return self.draw_scenarios("random", [rng], params, world)[0]
-        with _checker(params, world) as scene:
+            return scenarios_module.ladder_scenarios([rng], params.rules.rung, params.geometry)[0]
+        with _checker(params, None) as scene:
             return scenarios_module.random_scenario(rng, scene, _clusters(params.geometry))
 
-    def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams, world: Any = None) -> None:
-        with _checker(params, world) as scene:
+    def validate_scenario(self, scenario: CaPaManScenario, params: CaPaManParams) -> None:
+        """A custom scenario's check, in a kinematic PyBullet scene of its own."""
+        with _checker(params, None) as scene:
             scenarios_module.validate_scenario(scenario, scene, rung=params.rules.rung)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: CaPaManParams,
-                       world: Any) -> list[CaPaManScenario]:
+                       world: World) -> list[CaPaManScenario]:
         if params.rules.rung is None:
             return scenarios_module.draw_scenarios(choice, rngs, world.checker(), _clusters(params.geometry))
         if scenarios_module.resolve_scenario(choice) == "random":
@@ -77,7 +80,8 @@ class CaPaManTask(TaskBase):
         if choice == "paper":
             raise ValueError("a rung's scenarios are its own: scenario 'random' or a CaPaManScenario of capsule "
                              "posts (the paper's case stands a cylinder, which the capsule model does not take)")
-        self.validate_scenario(choice, params, world)
+        with _checker(params, world) as scene:  # the world's checker scene
+            scenarios_module.validate_scenario(choice, scene, rung=params.rules.rung)
         return [choice for _ in rngs]
 
     def vector_params(self, rules: CaPaManRules, kwargs: dict[str, Any]) -> CaPaManParams:
@@ -90,7 +94,7 @@ class CaPaManTask(TaskBase):
     def spaces(self, params: CaPaManParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-1.0, 1.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (3,)))
 
-    def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> Any:
+    def make_world(self, params: CaPaManParams, n: int, render_mode: str | None) -> World:
         """The grid or the posts (N robots; the checker scene comes when asked), in the dynamic fidelity under
         MuJoCo's dynamics (N robots); the kinematic PyBullet scene or PyBullet's dynamics (one robot)."""
         gui, g = render_mode == "human", params.geometry
@@ -114,21 +118,19 @@ class CaPaManTask(TaskBase):
                             params.control_period)
 
     @staticmethod
-    def _probe(params: CaPaManParams, world: Any) -> Any:
+    def _probe(params: CaPaManParams, world: World) -> World | None:
         """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
-        if params.version == 0 or isinstance(world, NativeWorld):
-            return None if params.version == 0 else world
-        return world.probe()
+        return None if params.version == 0 else world.probe()
 
     def reset(self, state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
+              rngs: list[np.random.Generator], world: World) -> None:
         reset(state, params, rows, scenarios, world, self._probe(params, world))
 
     def step(self, state: CaPaManState, params: CaPaManParams, actions: np.ndarray, active: np.ndarray,
-             world: Any) -> None:
+             world: World) -> None:
         step(state, params, actions, active, world, self._probe(params, world))
 
-    def evaluate(self, state: CaPaManState, params: CaPaManParams, world: Any) -> Evaluation:
+    def evaluate(self, state: CaPaManState, params: CaPaManParams, world: World) -> Evaluation:
         """Success: the tour T.C.1 -> 2 -> 3 -> 1 complete with no collision (and, in dynamic fidelity, the
         mechanism whole), as :func:`paragym.tasks.capaman_step.decide` decided it for every robot the transition
         evaluated."""
@@ -140,24 +142,16 @@ class CaPaManTask(TaskBase):
             s.evaluation = Evaluation(s.success, s.failure, numbers)
         return s.evaluation
 
-    def details(self, state: CaPaManState, params: CaPaManParams, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: CaPaManState, params: CaPaManParams, world: World, i: int) -> dict[str, Any]:
         return {"nearest_part": state.near[i], "alpha": state.alpha[i].copy(), "tool_tip": state.tip[i].copy()}
 
-    def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: Any, i: int,
+    def render(self, cache: dict[str, Any], state: CaPaManState, params: CaPaManParams, world: World, i: int,
                gui: bool) -> np.ndarray | None:
-        if isinstance(world, MuJoCoWorld):  # the robot as MuJoCo has it, drawn in PyBullet
-            return None if gui else world.robots[i].render()
-        if isinstance(world, NativeWorld):  # a native world does not pose the scene: render does
-            scene = world.checker()
-            scene.set_obstacles(state.scenarios[i].obstacles)
-            scene.set_configuration(state.alpha[i])
-        elif gui:  # PyBullet keeps the GUI's scene posed
-            return None
-        return world.checker().render() if isinstance(world, NativeWorld) else world.scene.render()
+        return world.draw(i, started(state.scenarios, i), state.alpha[i], gui)
 
 
 @contextmanager
-def _checker(params: CaPaManParams, world: Any) -> Iterator[CaPaManScene]:
+def _checker(params: CaPaManParams, world: World | None) -> Iterator[CaPaManScene]:
     """The kinematic scene that checks scenarios: the world's, or one of its own for the call (then closed)."""
     if world is not None:
         yield world.checker()
@@ -170,6 +164,6 @@ def _checker(params: CaPaManParams, world: Any) -> Iterator[CaPaManScene]:
 
 
 #: the CaPaMan task (paper 000)
-TASK = CaPaManTask()
+TASK: Task[CaPaManState, CaPaManParams, CaPaManScenario, World] = CaPaManTask()
 
 

@@ -21,7 +21,7 @@ the kinematic scene that generates and checks scenarios.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any, Protocol
+from typing import Any, Literal, Protocol, Self
 
 import numpy as np
 
@@ -41,17 +41,33 @@ from paragym.tasks.capaman import CaPaManScenario, posts_of
 
 #: the state and parameters the worlds read are the transition's (paragym.tasks.capaman_step), typed Any
 #: here: the transition imports the worlds, not the other way
-__all__ = ["DynamicWorld", "GridWorld", "MuJoCoWorld", "NativeWorld", "PostWorld", "SceneWorld", "World"]
+__all__ = ["DynamicWorld", "GridWorld", "KinematicWorld", "MovingWorld", "MuJoCoWorld", "NativeWorld", "PostWorld",
+           "SceneWorld", "World", "WorldBase"]
 
 
-class World(base.World, Protocol):
-    """The CaPaMan's world (:class:`paragym.tasks.base.World`): where the parts are and how far they are from the
-    obstacles."""
+class WorldBase(base.World, Protocol):
+    """What every CaPaMan world answers (:class:`paragym.tasks.base.World`): where the parts are and how far they
+    are from the obstacles."""
 
-    #: whether it moves the robots itself (the dynamics), writing what it measured (:attr:`broken`)
+    #: whether it moves the robots itself (the dynamics: :class:`MovingWorld`) or the transition does
     moves: bool
 
-    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None: ...
+    def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
+        """Robot ``i``'s obstacles are ``scenario``'s from now on."""
+        ...
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic PyBullet scene that generates and checks scenarios (built on first use)."""
+        ...
+
+    def probe(self) -> KinematicWorld | MovingWorld:
+        """v1's look-ahead world: itself, or for the dynamics the kinematic one at the encoders' angles."""
+        ...
+
+    def draw(self, i: int, scenario: CaPaManScenario, alpha: np.ndarray, gui: bool) -> np.ndarray | None:
+        """Robot ``i`` (its ``scenario``'s obstacles, at crank angles ``alpha`` (3,)) as an RGB array; None in
+        the GUI, where PyBullet shows the scene as it runs."""
+        ...
 
     def place(self, rows: np.ndarray, alpha: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str | None]]:
         """Clearance (M,), tool tip (M, 3) and nearest part of robots ``rows`` at crank angles ``alpha`` (M, 3)."""
@@ -61,6 +77,29 @@ class World(base.World, Protocol):
         """v1's look-ahead: the clearance (M, 3) of robots ``rows`` at ``probes`` (M, 3, 3), crank k moved in
         ``probes[:, k]``; a drawn scene posed back at ``alpha`` (M, 3) after, when ``pose_back``."""
         ...
+
+
+class KinematicWorld(WorldBase, Protocol):
+    """A world that only measures: the transition moves the robots, checking the way (the kinematic fidelity)."""
+
+    moves: Literal[False]
+
+
+class MovingWorld(WorldBase, Protocol):
+    """A world that moves the robots itself under a physics engine (the dynamic fidelity) and writes what it
+    measured."""
+
+    moves: Literal[True]
+    #: whether the last move left a loop open by more than BROKEN_GAP (a broken mechanism), per robot
+    broken: np.ndarray
+
+    def move(self, rows: np.ndarray, command: np.ndarray) -> np.ndarray:
+        """Where the cranks of robots ``rows`` got (M, 3) chasing ``command`` (M, 3) for a control period."""
+        ...
+
+
+#: a CaPaMan world: the transition tells the two kinds apart by :attr:`WorldBase.moves`
+World = KinematicWorld | MovingWorld
 
 
 @lru_cache(maxsize=4)
@@ -75,7 +114,6 @@ class NativeWorld:
 
     #: it holds no simulation: a copy builds its own checker scene when it needs one
     live = False
-    moves = False
 
     def __init__(self, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False, gui: bool = False
                  ) -> None:
@@ -97,6 +135,17 @@ class NativeWorld:
             self.scene.close()
             self.scene = None
 
+    def probe(self) -> Self:
+        """v1's look-ahead world: itself (it answers the probes in one call, :meth:`ahead`)."""
+        return self
+
+    def draw(self, i: int, scenario: CaPaManScenario, alpha: np.ndarray, gui: bool) -> np.ndarray | None:
+        """The checker scene posed as robot ``i`` (a native world does not pose it as it goes), drawn."""
+        scene = self.checker()
+        scene.set_obstacles(scenario.obstacles)
+        scene.set_configuration(alpha)
+        return scene.render()
+
     def clearance(self, rows: np.ndarray, alpha: np.ndarray) -> np.ndarray:
         """The clearance (m) alone of robots ``rows`` at ``alpha`` (M, 3), as :meth:`place` gives it."""
         raise NotImplementedError
@@ -110,6 +159,8 @@ class GridWorld(NativeWorld):
     """Paper 000's own test for N robots: the occupancy grid Psi of each
     robot's obstacles as signed distances, read at the cluster points of eq 2
     (10 mm apart) placed by the closed-form kinematics."""
+
+    moves: Literal[False] = False
 
     def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, draws: bool = False,
                  gui: bool = False) -> None:
@@ -133,6 +184,8 @@ class PostWorld(NativeWorld):
     """The difficulty ladder's test for N robots: every part but the plate as the capsule that holds it, the
     obstacles as capsule posts, the distance between them exact and in closed form
     (:func:`paragym.sim.capaman_posts.post_clearance`); up to ``max_obstacles`` posts per robot."""
+
+    moves: Literal[False] = False
 
     def __init__(self, n: int, geometry: capaman.CaPaManGeometry, cap: float, max_obstacles: int,
                  draws: bool = False, gui: bool = False) -> None:
@@ -165,25 +218,20 @@ class PostWorld(NativeWorld):
         return post_clearance(alpha, self.posts, self.counts, rows, self.geometry, self.cap, self.reach)[0]
 
 
-class SceneWorld:
-    """One robot in the kinematic PyBullet scene: its exact signed distance."""
+class _OneScene:
+    """One robot in a PyBullet scene (:class:`SceneWorld`, :class:`DynamicWorld`): its exact signed distance."""
 
     live = True
-    moves = False
 
-    def __init__(self, scene: CaPaManScene) -> None:
+    def __init__(self, scene: CaPaManScene | CaPaManDynamicScene) -> None:
         self.scene = scene
-
-    def checker(self) -> CaPaManScene:
-        """The kinematic scene that generates and checks scenarios: its own."""
-        return self.scene
-
-    def probe(self) -> SceneWorld:
-        """v1's look-ahead world: itself."""
-        return self
 
     def close(self) -> None:
         self.scene.close()
+
+    def draw(self, i: int, scenario: CaPaManScenario, alpha: np.ndarray, gui: bool) -> np.ndarray | None:
+        """The scene, which the transition keeps posed (PyBullet's GUI shows it)."""
+        return None if gui else self.scene.render()
 
     def set_obstacles(self, i: int, scenario: CaPaManScenario) -> None:
         self.scene.set_obstacles(scenario.obstacles)
@@ -201,12 +249,30 @@ class SceneWorld:
         return out
 
 
-class DynamicWorld(SceneWorld):
+class SceneWorld(_OneScene):
+    """One robot in the kinematic PyBullet scene: its exact signed distance."""
+
+    moves: Literal[False] = False
+    scene: CaPaManScene
+
+    def __init__(self, scene: CaPaManScene) -> None:
+        super().__init__(scene)
+
+    def checker(self) -> CaPaManScene:
+        """The kinematic scene that generates and checks scenarios: its own."""
+        return self.scene
+
+    def probe(self) -> SceneWorld:
+        """v1's look-ahead world: itself."""
+        return self
+
+
+class DynamicWorld(_OneScene):
     """One robot under PyBullet's dynamics: the motors chase the command for
     ``control_period`` s; the obstacles are rigid bodies."""
 
     #: it moves the robots itself (the transition asks :meth:`move` where they got)
-    moves = True
+    moves: Literal[True] = True
     scene: CaPaManDynamicScene
 
     def __init__(self, scene: CaPaManDynamicScene, control_period: float) -> None:
@@ -284,7 +350,7 @@ class MuJoCoWorld(NativeWorld):
     stops the parts; the kernel's capsules hold the parts, so it calls a collision before MuJoCo's parts touch.
     """
 
-    moves = True
+    moves: Literal[True] = True
     #: it holds a simulation (each robot's MuJoCo state and the threads that step them): not copied
     live = True
 
@@ -304,8 +370,12 @@ class MuJoCoWorld(NativeWorld):
         self._tips = np.zeros((n, 3))  # where the last move left each tool tip
         self._pool = rollout_pool(n)
 
-    def checker(self) -> Any:
+    def checker(self) -> CaPaManScene:
         return self.kinematic.checker()
+
+    def draw(self, i: int, scenario: CaPaManScenario, alpha: np.ndarray, gui: bool) -> np.ndarray | None:
+        """The robot as MuJoCo has it, drawn in PyBullet."""
+        return None if gui else self.robots[i].render()
 
     def close(self) -> None:
         if self._pool is not None:

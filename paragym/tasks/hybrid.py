@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from collections import OrderedDict
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from types import SimpleNamespace
@@ -403,7 +404,7 @@ def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limi
 _SPLIT_DRAWS: dict[tuple[Any, ...], Any] = {}
 #: the last :data:`_SPLIT_MEMO_SIZE` draws of this process: (rung, geometry, path step, rate limit, blocks, the
 #: generator's state before) -> (the pair, the generator's state after), oldest first
-_SPLIT_MEMO: OrderedDict[tuple[Any, ...], tuple[np.ndarray, dict[str, Any]]] = OrderedDict()
+_SPLIT_MEMO: OrderedDict[tuple[Any, ...], tuple[np.ndarray, Mapping[str, Any]]] = OrderedDict()
 _SPLIT_MEMO_SIZE = 4096
 
 
@@ -549,9 +550,9 @@ def draw_scenarios(choice: Any, rngs: list[np.random.Generator],
     or :data:`SPLIT_LADDER`) "random" is the rung's pair (:func:`ladder_scenarios`,
     :func:`split_ladder_scenarios` with the split's rate and the path's step)."""
     choice = resolve_scenario(choice)
-    if choice == "random" and isinstance(rung, SplitRung):
-        return split_ladder_scenarios(rngs, rung, geometry, max_delta_step, tau)
     if choice == "random" and rung is not None:
+        if isinstance(rung, SplitRung):
+            return split_ladder_scenarios(rngs, rung, geometry, max_delta_step, tau)
         return ladder_scenarios(rngs, rung, geometry)
     if choice == "random":
         return random_scenarios(rngs, geometry)

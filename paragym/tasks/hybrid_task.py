@@ -9,7 +9,7 @@ import numpy as np
 
 from paragym.mechanisms import hybrid
 from paragym.tasks import hybrid as scenarios_module
-from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, TaskBase, reward_terms
+from paragym.tasks.base import BROKEN_GAP, BoxSpec, Evaluation, Task, TaskBase, reward_terms
 from paragym.tasks.hybrid import HybridScenario
 from paragym.tasks.hybrid_step import (
     ENGINES,
@@ -26,6 +26,9 @@ from paragym.tasks.hybrid_step import (
     step,
 )
 from paragym.tasks.hybrid_worlds import DynamicWorld, MuJoCoWorld
+
+#: the task's world: the dynamics, or None (the kinematic model is all there is)
+World = DynamicWorld | None
 
 __all__ = ["LADDER_RULES", "RULES", "SPLIT_LADDER_RULES", "SPLIT_LADDER_RULES_V2", "TASK", "HybridTask"]
 
@@ -56,14 +59,14 @@ class HybridTask(TaskBase):
         scenarios_module.validate_scenario(scenario)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: HybridParams,
-                       world: Any) -> list[HybridScenario]:
+                       world: World) -> list[HybridScenario]:
         return scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung, params.max_delta_step,
                                                params.tau)
 
     def spaces(self, params: HybridParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-10.0, 10.0, (params.obs_size,)), BoxSpec(-1.0, 1.0, (1 if params.rules.split_only else 4,)))
 
-    def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+    def make_world(self, params: HybridParams, n: int, render_mode: str | None) -> World:
         """None in the kinematic fidelity (the kernels are the world); the dynamics of one robot (PyBullet's, or
         MuJoCo's over the PyBullet scene), or of N in MuJoCo alone (``engine.mirror`` False)."""
         if params.fidelity != "dynamic":
@@ -79,7 +82,7 @@ class HybridTask(TaskBase):
             BROKEN_GAP if strict else None)
 
     def reset(self, state: HybridState, params: HybridParams, rows: np.ndarray, scenarios: list[HybridScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
+              rngs: list[np.random.Generator], world: World) -> None:
         reset(state, params, rows, scenarios)
         if world is not None:
             world.reset(state, rows)
@@ -87,7 +90,7 @@ class HybridTask(TaskBase):
     #: the transition itself (:func:`paragym.tasks.hybrid_step.step`: the contract's signature)
     step = staticmethod(step)
 
-    def evaluate(self, state: HybridState, params: HybridParams, world: Any) -> Evaluation:
+    def evaluate(self, state: HybridState, params: HybridParams, world: World) -> Evaluation:
         """Success: u = 1 reached with every pose singularity-free and within the leg limits (eq 14) and, in
         dynamic fidelity, tracked (and the mechanism whole, v2), as :func:`paragym.tasks.hybrid_step.decide`
         decided it for every robot the transition evaluated."""
@@ -99,13 +102,13 @@ class HybridTask(TaskBase):
             s.evaluation = Evaluation(s.success, s.reason, numbers)
         return s.evaluation
 
-    def details(self, state: HybridState, params: HybridParams, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: HybridState, params: HybridParams, world: World, i: int) -> dict[str, Any]:
         return {"u": float(state.u[state.k[i]]), "offset": state.offset[i].copy(), "lengths": state.lengths[i].copy(),
                 "max_delta_step": params.max_delta_step, "j_bar": params.j_bar,
                 "tracking_error": 0.0 if world is None else float(world.tracking_error[i]),
                 "orientation_error": 0.0 if world is None else float(world.orientation_error[i])}
 
-    def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: Any, i: int,
+    def render(self, cache: dict[str, Any], state: HybridState, params: HybridParams, world: World, i: int,
                gui: bool) -> np.ndarray | None:
         from paragym.sim.hybrid_scene import HybridScene
 
@@ -117,6 +120,6 @@ class HybridTask(TaskBase):
 
 
 #: the hybrid task (paper 002)
-TASK = HybridTask()
+TASK: Task[HybridState, HybridParams, HybridScenario, World] = HybridTask()
 
 

@@ -79,7 +79,7 @@ def servable(points: np.ndarray, geometry: og.OrthoglideGeometry = og.DEFAULT_GE
     r1 = np.linspace(g.rho_min[0], g.rho_max[0], samples)
 
     def any_of(table: np.ndarray, pts: np.ndarray) -> np.ndarray:
-        return _sweep(table, pts, g)[3].reshape(len(pts), len(table)).any(axis=1)
+        return np.asarray(_sweep(table, pts, g)[3].reshape(len(pts), len(table)).any(axis=1))
 
     chunk = 2 ** 16 // samples  # points per pass: arrays that stay in the cache
     out = np.concatenate([any_of(r1[::25], points[lo:lo + chunk]) for lo in range(0, len(points), chunk)])
@@ -139,11 +139,11 @@ def random_scenarios(rngs: list[np.random.Generator], geometry: og.OrthoglideGeo
     101 table positions, :func:`servable`). Each generator draws exactly what
     it would alone (a candidate, then the test); the candidates of all
     pending generators are tested in one batch."""
-    tasks: list[OrthoglideScenario] = [None] * len(rngs)
+    tasks: list[OrthoglideScenario | None] = [None] * len(rngs)
     pending = np.arange(len(rngs))
     for _ in range(max_tries):
         if not pending.size:
-            return tasks
+            return [task for task in tasks if task is not None]  # every one by now
         drawn = [_draw_path(rngs[i]) for i in pending]
         every_tenth = np.concatenate([_path(kind, q, 10)[0] for kind, q in drawn])
         ok = servable(every_tenth, geometry).reshape(len(drawn), -1).all(axis=1)
@@ -247,9 +247,9 @@ def start_table_position(points: np.ndarray, geometry: og.OrthoglideGeometry = o
         ok = np.flatnonzero(admissible)
         k = np.full(len(rr), np.inf)  # kappa where admissible (element-wise: the same as sweeping all)
         k[ok] = og.kappa_at(rr[ok], px[ok], py[ok], g)
-        k = np.where(np.isfinite(k), k, np.inf).reshape(len(pts), samples)
-        best[lo:lo + chunk] = k.argmin(axis=1)
-        kap[lo:lo + chunk] = k[np.arange(len(pts)), best[lo:lo + chunk]]
+        table = np.where(np.isfinite(k), k, np.inf).reshape(len(pts), samples)
+        best[lo:lo + chunk] = table.argmin(axis=1)
+        kap[lo:lo + chunk] = table[np.arange(len(pts)), best[lo:lo + chunk]]
     return kap, r1[best]
 
 

@@ -363,7 +363,10 @@ def kappa_bounds(params: OrthoglideParams, scenarios: list[OrthoglideScenario]) 
     """A rung's highest mean kappa of a success on each of ``scenarios``: the rung's ``share`` of the way from 1
     (an isotropic mechanism) to the least-norm motion's mean kappa (:func:`least_norm_kappa`), so that the zero
     action never meets it and a table placed well does."""
-    share = params.rules.rung.share
+    rung = params.rules.rung
+    if rung is None:
+        raise ValueError("kappa bounds are a rung's: these rules have none")
+    share = rung.share
     return 1.0 + share * (least_norm_kappa(params, scenarios) - 1.0)
 
 

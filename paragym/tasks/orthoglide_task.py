@@ -10,7 +10,7 @@ import numpy as np
 
 from paragym.sim.client import divides, physics_steps
 from paragym.tasks import orthoglide as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
+from paragym.tasks.base import BoxSpec, Evaluation, Task, TaskBase, reward_terms, started
 from paragym.tasks.orthoglide import OrthoglideScenario
 from paragym.tasks.orthoglide_step import (
     ENGINES,
@@ -26,6 +26,9 @@ from paragym.tasks.orthoglide_step import (
     step,
 )
 from paragym.tasks.orthoglide_worlds import DynamicWorld, MuJoCoWorld
+
+#: the task's world: the dynamics, or None (the kinematic model is all there is)
+World = DynamicWorld | None
 
 __all__ = ["LADDER_RULES", "LADDER_RULES_V1", "RULES", "TASK", "OrthoglideTask"]
 
@@ -57,7 +60,7 @@ class OrthoglideTask(TaskBase):
         scenarios_module.validate_scenario(scenario, params.geometry)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: OrthoglideParams,
-                       world: Any) -> list[OrthoglideScenario]:
+                       world: World) -> list[OrthoglideScenario]:
         drawn = scenarios_module.draw_scenarios(choice, rngs, params.geometry, params.rules.rung)
         if world is not None and not world.exact_time:
             _warn_rounded_time(drawn, world)
@@ -67,7 +70,7 @@ class OrthoglideTask(TaskBase):
         return (BoxSpec(-10.0, 10.0, (params.obs_size,)),
                 BoxSpec(-1.0, 1.0, (3 if params.joint_mode else 1,)))
 
-    def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+    def make_world(self, params: OrthoglideParams, n: int, render_mode: str | None) -> World:
         if params.fidelity != "dynamic":
             return None
         from paragym.sim.orthoglide_dynamic import OrthoglideDynamicScene
@@ -79,7 +82,7 @@ class OrthoglideTask(TaskBase):
         return (MuJoCoWorld if alone else DynamicWorld)(scenes, exact_time=params.rules.exact_time)
 
     def reset(self, state: OrthoglideState, params: OrthoglideParams, rows: np.ndarray,
-              scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: Any) -> None:
+              scenarios: list[OrthoglideScenario], rngs: list[np.random.Generator], world: World) -> None:
         reset(state, params, rows, scenarios)
         if world is not None:
             world.reset(state, rows)
@@ -87,7 +90,7 @@ class OrthoglideTask(TaskBase):
     #: the transition itself (:func:`paragym.tasks.orthoglide_step.step`: the contract's signature)
     step = staticmethod(step)
 
-    def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: Any) -> Evaluation:
+    def evaluate(self, state: OrthoglideState, params: OrthoglideParams, world: World) -> Evaluation:
         """Success: the path's end reached without a failure (a joint limit, the working mode, a singularity;
         in v1 the tracking, and a broken mechanism), as :func:`paragym.tasks.orthoglide_step.decide` decided it
         for every robot the transition evaluated."""
@@ -100,15 +103,15 @@ class OrthoglideTask(TaskBase):
             s.evaluation = Evaluation(s.success, s.reason, numbers)
         return s.evaluation
 
-    def details(self, state: OrthoglideState, params: OrthoglideParams, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: OrthoglideState, params: OrthoglideParams, world: World, i: int) -> dict[str, Any]:
         return {"rho": state.rho[i].copy()}
 
-    def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: Any, i: int,
+    def render(self, cache: dict[str, Any], state: OrthoglideState, params: OrthoglideParams, world: World, i: int,
                gui: bool) -> np.ndarray | None:
         from paragym.sim.orthoglide_scene import OrthoglideScene
 
         return self.drawn(cache, world, gui, lambda: OrthoglideScene(params.geometry, gui=gui),
-                          lambda scene: scene.set_state(state.rho[i].copy(), state.scenarios[i].points), i)
+                          lambda scene: scene.set_state(state.rho[i].copy(), started(state.scenarios, i).points), i)
 
 
 def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> None:
@@ -125,6 +128,6 @@ def _warn_rounded_time(drawn: list[OrthoglideScenario], world: DynamicWorld) -> 
 
 
 #: the Orthoglide task (paper 003)
-TASK = OrthoglideTask()
+TASK: Task[OrthoglideState, OrthoglideParams, OrthoglideScenario, World] = OrthoglideTask()
 
 

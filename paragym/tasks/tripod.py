@@ -143,8 +143,9 @@ def drive_scenario(name: str, rng: np.random.Generator) -> TripodScenario:
         if rng.random() < 0.5 else None
     bumps = tuple((float(rng.uniform(2, 18)), float(rng.uniform(-2, 2)), float(rng.choice([-1, 1]) * 0.06), 0.4)
                   for _ in range(int(rng.integers(0, 5))))
-    return TripodScenario(name, heading=float(rng.uniform(-math.pi, math.pi)), heading_error=tuple(errors),
-                         push=push, slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
+    return TripodScenario(name, heading=float(rng.uniform(-math.pi, math.pi)),
+                          heading_error=(errors[0], errors[1], errors[2]), push=push,
+                          slip=float(rng.uniform(0, 0.01)), terrain=Terrain(bumps))
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,7 @@ import numpy as np
 
 from paragym.mechanisms import tripod as mt
 from paragym.tasks import tripod as scenarios_module
-from paragym.tasks.base import BoxSpec, Evaluation, TaskBase, reward_terms
+from paragym.tasks.base import BoxSpec, Evaluation, Task, TaskBase, reward_terms
 from paragym.tasks.tripod import TripodScenario
 from paragym.tasks.tripod_step import (
     ENGINES,
@@ -25,6 +25,9 @@ from paragym.tasks.tripod_step import (
     step,
 )
 from paragym.tasks.tripod_worlds import DynamicWorld
+
+#: the task's world: the dynamics, or None (the kinematic model is all there is)
+World = DynamicWorld | None
 
 __all__ = ["LADDER_RULES", "LADDER_RULES_V1", "RULES", "TASK", "TripodTask", "detected_fault"]
 
@@ -54,14 +57,14 @@ class TripodTask(TaskBase):
         scenarios_module.validate_scenario(scenario)
 
     def draw_scenarios(self, choice: Any, rngs: list[np.random.Generator], params: TripodParams,
-                       world: Any) -> list[TripodScenario]:
+                       world: World) -> list[TripodScenario]:
         return scenarios_module.draw_scenarios(choice, rngs, params.rules.rung)
 
     def spaces(self, params: TripodParams) -> tuple[BoxSpec, BoxSpec]:
         return (BoxSpec(-100.0, 100.0, (params.obs_size,)),
                 BoxSpec(-1.0, 1.0, (params.action_size,)))
 
-    def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> DynamicWorld | None:
+    def make_world(self, params: TripodParams, n: int, render_mode: str | None) -> World:
         if params.fidelity != "dynamic":
             return None
         return DynamicWorld(params.geometry, params.dynamics, gui=render_mode == "human",
@@ -69,7 +72,7 @@ class TripodTask(TaskBase):
                             on_wheels=params.rules.converged)
 
     def reset(self, state: TripodState, params: TripodParams, rows: np.ndarray, scenarios: list[TripodScenario],
-              rngs: list[np.random.Generator], world: Any) -> None:
+              rngs: list[np.random.Generator], world: World) -> None:
         reset(state, params, rows, scenarios, rngs)
         if world is not None:
             world.reset(state)
@@ -77,7 +80,7 @@ class TripodTask(TaskBase):
     #: the transition itself (:func:`paragym.tasks.tripod_step.step`: the contract's signature)
     step = staticmethod(step)
 
-    def evaluate(self, state: TripodState, params: TripodParams, world: Any) -> Evaluation:
+    def evaluate(self, state: TripodState, params: TripodParams, world: World) -> Evaluation:
         """Success: the drive's end reached with the estimate's mean unit error below ``success_error`` (and,
         in v2, the mechanism never folded), as :func:`paragym.tasks.tripod_step.decide` decided it for every robot
         the transition evaluated."""
@@ -88,7 +91,7 @@ class TripodTask(TaskBase):
             s.evaluation = Evaluation(s.success, s.failure, numbers)
         return s.evaluation
 
-    def details(self, state: TripodState, params: TripodParams, world: Any, i: int) -> dict[str, Any]:
+    def details(self, state: TripodState, params: TripodParams, world: World, i: int) -> dict[str, Any]:
         s, d = state, state.drive
         info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
                 "eta": s.eta_read[i].copy(), "detected_fault": detected_fault(state, params, i)}
@@ -96,7 +99,7 @@ class TripodTask(TaskBase):
             info["encoder_distances"] = s.smoothed[i].copy()
         return info
 
-    def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: Any, i: int,
+    def render(self, cache: dict[str, Any], state: TripodState, params: TripodParams, world: World, i: int,
                gui: bool) -> np.ndarray | None:
         from paragym.sim.tripod_scene import TripodScene
 
@@ -125,6 +128,6 @@ def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[in
 
 
 #: the mobile tripod task (paper 004)
-TASK = TripodTask()
+TASK: Task[TripodState, TripodParams, TripodScenario, World] = TripodTask()
 
 
