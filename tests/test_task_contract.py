@@ -281,3 +281,26 @@ def test_kernels_take_named_tuples_not_dozens_of_arguments():
                 seen[f"{module.__name__}.{name}"] = len(inspect.signature(obj.py_func).parameters)
     assert len(seen) >= 10, seen
     assert max(seen.values()) <= 14, {k: v for k, v in seen.items() if v > 14}
+
+
+@pytest.mark.parametrize("row", [r for r in registry.ROWS if r.task in {"capaman", "hybrid", "orthoglide", "tripod"}],
+                         ids=lambda r: r.name)
+def test_parameters_carry_the_rules_flags_not_a_version_number(row):
+    """A version is its Rules' named flags: the parameters copy the flags the transition reads and hold no
+    version number for a kernel to branch on."""
+    from dataclasses import fields
+
+    single = _cls(row.entry_point)
+    params = single.task.Params.from_kwargs(single.rules)
+    names = {f.name for f in fields(params)}
+    assert "version" not in names, row.id
+    flags = [f.name for f in fields(single.rules) if isinstance(getattr(single.rules, f.name), bool)]
+    shared = [name for name in flags if name in names]
+    assert shared, row.id  # each task's version flag reaches its parameters by name
+    for name in shared:
+        assert getattr(params, name) == getattr(single.rules, name), (row.id, name)
+
+
+def test_no_transition_branches_on_a_version_number():
+    for path in (ROOT / "paragym" / "tasks").glob("*.py"):
+        assert not re.search(r"\bversion\s*(==|>=|<=|!=|>|<)\s*\d|\bversion\)", path.read_text()), path

@@ -98,7 +98,7 @@ class StraightLine:
 
     def __init__(self, env: gym.Env) -> None:
         params = env.unwrapped.params
-        self.offset = (slice(6, 9), slice(0, 3)) if params.version == 0 else (slice(3, 6), None)
+        self.offset = (slice(6, 9), slice(0, 3)) if not params.goal_relative else (slice(3, 6), None)
         self.gain = 45 * DEG / params.max_joint_step
 
     def reset(self, obs: np.ndarray, info: dict[str, Any]) -> None:
@@ -128,7 +128,7 @@ class SlideRule(StraightLine):
 
     def __init__(self, env: gym.Env, threshold: float = 0.1, push: float = 0.25) -> None:
         super().__init__(env)
-        if env.unwrapped.params.version == 0:
+        if not env.unwrapped.params.goal_relative:
             raise ValueError("slide-rule reads v1's clearance look-ahead; v0's observation has none")
         self.threshold, self.push = threshold, push
 

@@ -30,7 +30,7 @@ target T.P. (the tour T.C.1 -> 2 -> 3 -> 1):
   < delta] + reach_bonus [target reached] - collision_penalty [collision].
   Terminated on collision or when the tour is complete.
 
-Version 1 (``CaPaManParams.version == 1``) keeps the motion, the collision
+Version 1 (``CaPaManRules.goal_relative``) keeps the motion, the collision
 test and the episode's end, and changes what the agent sees and earns
 (:data:`OBS_SIZE_V1`): goal-relative coordinates, the obstacles relative to
 the tool tip, and a look-ahead of the clearance: how the clearance would
@@ -166,7 +166,8 @@ class CaPaManParams:
     collision_penalty: float = 5.0
     clearance_cap: float = 0.05
     geometry: capaman.CaPaManGeometry = capaman.DEFAULT_GEOMETRY
-    version: int = 0
+    #: v1's observation and look-ahead (:attr:`CaPaManRules.goal_relative`)
+    goal_relative: bool = False
     time_penalty: float = 0.0
     scenario: Any = "random"
     fidelity: str = "kinematic"
@@ -220,7 +221,7 @@ class CaPaManParams:
                 check_control_period(control_period, engine.time_step, refuse=True)
         return cls(float(max_joint_step), float(reach_tolerance), float(delta), float(beta), float(w_length),
                    float(w_progress), float(reach_bonus), float(collision_penalty), float(clearance_cap), geometry,
-                   1 if rules.goal_relative else 0, time_penalty, scenario, fidelity, collision, control_period,
+                   rules.goal_relative, time_penalty, scenario, fidelity, collision, control_period,
                    dynamics, rules, engine)
 
     @property
@@ -231,7 +232,7 @@ class CaPaManParams:
     @property
     def obs_size(self) -> int:
         """v0: :data:`OBS_SIZE`; v1: :data:`OBS_SIZE_V1`; a rung: v1's with its own number of post slots."""
-        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1 + (self.max_obstacles - MAX_OBSTACLES) * ENCODING_SIZE
+        return OBS_SIZE_V1 + (self.max_obstacles - MAX_OBSTACLES) * ENCODING_SIZE if self.goal_relative else OBS_SIZE
 
     @property
     def substeps(self) -> int:
@@ -382,7 +383,7 @@ def _look_ahead(state: CaPaManState, params: CaPaManParams, world: World, rows: 
     clearance is under the cap (elsewhere 0). A kinematic PyBullet scene is
     posed back where the robot is when ``pose_back`` (it is the env's own and
     is drawn; a probe that only answers the look-ahead is not)."""
-    if params.version == 0:
+    if not params.goal_relative:
         return
     state.lookahead[rows] = 0.0
     near = rows[state.clearance[rows] < params.clearance_cap]
@@ -407,7 +408,7 @@ def _finish(state: CaPaManState, params: CaPaManParams, rows: np.ndarray, old: n
     arrays, rows = state.kernel_arrays(), np.ascontiguousarray(rows, np.bool_)
     old, key = np.ascontiguousarray(old, np.float64), (old.ndim, rows.ndim)
     state.call(_finish_kernel, (arrays, old, rows, move, params.kernel_args, _TOUR), params, key)
-    if params.version == 1:
+    if params.goal_relative:
         state.call(_observe_v1, (arrays, rows, params.kernel_args, _TOUR), params, key)
 
 

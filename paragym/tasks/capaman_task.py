@@ -120,7 +120,7 @@ class CaPaManTask(TaskBase):
     @staticmethod
     def _probe(params: CaPaManParams, world: World) -> World | None:
         """v1's look-ahead world: the kinematic one (for the dynamics, the kinematic checker scene)."""
-        return None if params.version == 0 else world.probe()
+        return world.probe() if params.goal_relative else None
 
     def reset(self, state: CaPaManState, params: CaPaManParams, rows: np.ndarray, scenarios: list[CaPaManScenario],
               rngs: list[np.random.Generator], world: World) -> None:

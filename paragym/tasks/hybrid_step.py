@@ -20,7 +20,7 @@ Reward: -w_offset |o| / j_bar - w_delta |dDelta| / max_delta_step
 - w_singular * sum of max(0, 2 thr - mu) / (2 thr) over both stages
 - w_limit * (legs outside their limits). Terminated at u = 1.
 
-Version 1 (``HybridParams.version == 1``) keeps the step, the reward, the
+Version 1 (``HybridRules.sees_the_end``) keeps the step, the reward, the
 success and the end. In v0 a policy sees one step ahead only, and the learned
 agents failed exactly the scenarios where the split must move well before the
 end for P1's legs to be within their limits. v1 shows where the path ends and
@@ -158,7 +158,8 @@ class HybridParams:
     w_limit: float = 1.0
     geometry: hybrid.HybridGeometry = hybrid.DEFAULT_GEOMETRY
     tau: float = 0.01
-    version: int = 0
+    #: v1's observation of the path's end (:attr:`HybridRules.sees_the_end`)
+    sees_the_end: bool = False
     w_end: float = 0.0
     scenario: Any = "random"
     fidelity: str = "kinematic"
@@ -206,13 +207,13 @@ class HybridParams:
         if engine is not None:  # a new fidelity: nothing released to keep
             check_control_period(control_period, engine.time_step, refuse=True)
         return cls(float(max_delta_step), float(j_bar), float(w_offset), float(w_delta), float(w_singular),
-                   float(w_limit), geometry, float(tau), 1 if rules.sees_the_end else 0, w_end, scenario, fidelity,
+                   float(w_limit), geometry, float(tau), rules.sees_the_end, w_end, scenario, fidelity,
                    dynamics, control_period, track_tolerance, angle, rules, engine)
 
     @property
     def obs_size(self) -> int:
         """The observation's length in this version."""
-        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
+        return OBS_SIZE_V1 if self.sees_the_end else OBS_SIZE
 
     @cached_property
     def kernel_args(self) -> tuple:
@@ -328,12 +329,12 @@ def decide(terminated: bool, all_free: bool) -> bool:
 def _advance(state: HybridState, params: HybridParams, actions: np.ndarray, rows: np.ndarray,
              move: bool, stage: int = _ALL) -> None:
     actions, rows = np.ascontiguousarray(actions, np.float64), np.ascontiguousarray(rows, np.bool_)
-    state.call_split(_advance_kernel, (state.kernel_arrays(), actions, rows, move, params.version, stage,
+    state.call_split(_advance_kernel, (state.kernel_arrays(), actions, rows, move, params.sees_the_end, stage,
                                        *params.kernel_args), 2, params, (actions.ndim, rows.ndim))
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scale):
+def _advance_kernel(arrays, actions, rows, move, sees_the_end, stage, consts, w, scale):
     """The transition of every robot with ``rows[i]`` (module docstring). ``arrays``: the state's, in
     ``KERNEL_FIELDS``' order; ``consts``: the geometry, :func:`paragym.mechanisms.hybrid.kernel_consts`.
     ``w``: max_delta_step, j_bar, w_offset, w_delta, w_singular, w_limit,
@@ -346,7 +347,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
     base, plat, top, axes, tri_base, pinv_t, home, sc = consts
     last = len(u) - 1
     work = np.empty((7, 6, 6))
-    paired = stage == 0 and version == 1  # the whole step, and the observation shows P1
+    paired = stage == 0 and sees_the_end  # the whole step, and the observation shows P1
     mu_h_end, mu_t_end = 0.0, 0.0
     size = obs.shape[1]
     row = np.empty(size)  # one robot's observation before the clip, reused
@@ -408,7 +409,7 @@ def _advance_kernel(arrays, actions, rows, move, version, stage, consts, w, scal
         row[23], row[24] = mu_h[i], mu_t[i]
         for c in range(3):
             row[25 + c] = offset[i, c] / w.j_bar
-        if version == 1:  # where the path ends: P1 solved at the current split, its excess, the shaping
+        if sees_the_end:  # where the path ends: P1 solved at the current split, its excess, the shaping
             if not paired:
                 mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
                                                     pinv_t, home, sc, True, end_lengths, work)

@@ -115,8 +115,8 @@ class OrthoglideParams:
     w_track: float = 1.0
     limit_penalty: float = 10.0
     geometry: og.OrthoglideGeometry = og.DEFAULT_GEOMETRY
-    #: 1: the task's rules of Orthoglide2PRRKappa-v1 (module docstring)
-    version: int = 0
+    #: success requires tracking (:attr:`OrthoglideRules.tracking`, v1's rules; module docstring)
+    tracking: bool = False
     #: v1: the largest tracking error (m) of a step that counts as tracking; beyond it the robot fails
     track_tolerance: float = 0.005
     scenario: Any = "random"
@@ -153,7 +153,7 @@ class OrthoglideParams:
             raise ValueError(f"action_mode: this rung of the ladder fixes it to {fixed!r}; got {action_mode!r}")
         scenario = scenarios_module.resolve_scenario(scenario, geometry)
         return cls(action_mode == "joint_velocity", float(max_null_rate), float(max_joint_rate), float(w_track),
-                   float(limit_penalty), geometry, 1 if rules.tracking else 0, track_tolerance, scenario,
+                   float(limit_penalty), geometry, rules.tracking, track_tolerance, scenario,
                    action_mode, fidelity, dynamics, rules, engine)
 
     def __getstate__(self) -> dict[str, Any]:
@@ -166,7 +166,7 @@ class OrthoglideParams:
         """These parameters for the least-norm motion (null-space mode, kinematic, v1's rules): what the zero
         action does in null-space mode, paper 003's case (b); made once."""
         return replace(self, joint_mode=False, action_mode="null_space", fidelity="kinematic", dynamics=None,
-                       version=1, rules=RULES[1])
+                       tracking=RULES[1].tracking, rules=RULES[1])
 
     @property
     def obs_size(self) -> int:
@@ -181,7 +181,7 @@ class OrthoglideParams:
         g = self.geometry
         return tuple(KernelParams(og.params(g), np.array(g.rho_min), np.array(g.rho_max), self.joint_mode,
                                   self.max_null_rate, self.max_joint_rate, self.w_track, self.limit_penalty,
-                                  self.left_penalty, self.version, self.track_tolerance))
+                                  self.left_penalty, self.tracking, self.track_tolerance))
 
     @property
     def left_penalty(self) -> float:
@@ -193,7 +193,7 @@ class OrthoglideParams:
 class KernelParams(NamedTuple):
     """The parameters :func:`_advance_kernel` reads, by name (numba compiles a NamedTuple): the geometry's
     numbers (``og.params``), the joint limits (m), the action mode and scales, the reward's weights, the
-    rules' version and the tracking tolerance (m)."""
+    rules' tracking flag and the tracking tolerance (m)."""
 
     p: Any
     lo: np.ndarray
@@ -204,7 +204,7 @@ class KernelParams(NamedTuple):
     w_track: float
     limit_penalty: float
     left_penalty: float
-    version: int
+    tracking: bool
     track_tolerance: float
 
 
@@ -430,11 +430,11 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
     whole step; 1 the move only (the motors' command); 2 the evaluation only,
     of joints a simulation measured (:class:`DynamicWorld`): J and kappa at
     the tool point those joints give, and the tracking error in either mode.
-    ``version`` 1: J and kappa at the tool point in joint-velocity mode too,
+    ``tracking`` (v1): J and kappa at the tool point in joint-velocity mode too,
     and a tracking error beyond ``track_tolerance`` fails the robot."""
     rho, k, last, path, dt, j, n, kappa, err, failed, reason, terminated, obs, reward, terms, success, kappa_sum, \
         mean_kappa, bound, broken = arrays
-    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, left_penalty, version, \
+    p, lo, hi, joint_mode, max_null_rate, max_joint_rate, w_track, limit_penalty, left_penalty, tracking, \
         track_tolerance = params
     for i in range(len(k)):
         if not rows[i]:
@@ -461,7 +461,7 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
         if track:
             tx, ty = og.k_forward(rho[i, 0], rho[i, 1], rho[i, 2], p)
             err[i] = math.hypot(tx - px, ty - py)
-            if stage == 2 or version >= 1:  # evaluated where the joints put the tool
+            if stage == 2 or tracking:  # evaluated where the joints put the tool
                 px, py = tx, ty
         mode = og.k_inverse(rho[i, 0], px, py, p)[2]
         inside = True
@@ -481,11 +481,11 @@ def _advance_kernel(arrays, actions, rows, move, stage, params):
             failed[i] = True
             if reason[i] == 0:
                 reason[i] = _MODE if inside else _LIMIT
-        if version >= 1 and track and not err[i] <= track_tolerance:
+        if tracking and track and not err[i] <= track_tolerance:
             failed[i] = True
             if reason[i] == 0:
                 reason[i] = _TRACKING
-        if stage == 2 and version >= 1 and broken[i] and not failed[i]:  # the mechanism came apart
+        if stage == 2 and tracking and broken[i] and not failed[i]:  # the mechanism came apart
             failed[i], reason[i] = True, _BROKEN
         terminated[i] = failed[i] or k[i] >= last[i]
         kappa_sum[i] += kappa[i]

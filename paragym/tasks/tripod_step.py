@@ -15,7 +15,7 @@ height from the terrain; the encoders read the true eta plus noise. Reward:
 -10 (mean unit error + plate centre error), m, the estimate's horizontal unit
 positions against the true ones. Terminated at the drive's end.
 
-Version 1 (``TripodParams.version == 1``) changes what the agent does and
+Version 1 (``TripodRules.trust_action``) changes what the agent does and
 sees and earns; the drive and the end are v0's. Before the drive advances,
 each unit u of the estimate moves the fraction ``trust_rate * clip(a_u, 0, 1)``
 of the way
@@ -125,7 +125,8 @@ class TripodParams:
     encoder_noise: float = math.radians(1.0)
     max_correction: float = 0.05
     geometry: mt.TripodGeometry = mt.DEFAULT_GEOMETRY
-    version: int = 0
+    #: v1's action, observation and reward (:attr:`TripodRules.trust_action`)
+    trust_action: bool = False
     smoothing: float = 0.1
     trust_rate: float = 0.2
     relative_reward: bool = True
@@ -165,7 +166,7 @@ class TripodParams:
         if fidelity == "dynamic":
             check_control_period(DriveState.empty(1).dt, (dynamics or TripodDynamics()).time_step,
                                  refuse=rules.fold_ends, later="paragym/MobileTripodOdometry-v2")
-        return cls(encoder_noise, float(max_correction), geometry, 1 if rules.trust_action else 0,
+        return cls(encoder_noise, float(max_correction), geometry, rules.trust_action,
                    trust_rate=trust_rate, relative_reward=bool(relative_reward), fold_ends=rules.fold_ends,
                    success_error=success_error, scenario=scenario, fidelity=fidelity, dynamics=dynamics, rules=rules,
                    engine=engine)
@@ -179,11 +180,11 @@ class TripodParams:
 
     @property
     def obs_size(self) -> int:
-        return OBS_SIZE if self.version == 0 else OBS_SIZE_V1
+        return OBS_SIZE_V1 if self.trust_action else OBS_SIZE
 
     @property
     def action_size(self) -> int:
-        return 6 if self.version == 0 else 3
+        return 3 if self.trust_action else 6
 
 
 @dataclass
@@ -277,7 +278,7 @@ def _advance(state: TripodState, params: TripodParams, actions: np.ndarray, rows
     geo = mt.kernel_consts(params.geometry)
     judge, trust = params.kernel_args
     key = (actions.ndim, rows.ndim, moved.ndim, increment.ndim)
-    if params.version == 1:
+    if params.trust_action:
         state.call(_advance_v1_kernel, (state.kernel_arrays(), actions, rows, move, trust, external, moved, increment,
                                         d.steps, d.noise, geo, d.kernel_arrays(), judge), params, key)
         return

@@ -95,7 +95,7 @@ class TripodTask(TaskBase):
         s, d = state, state.drive
         info = {"true_units": d.true[i].copy(), "estimate": s.estimate[i].copy(), "odometry": d.odometry[i].copy(),
                 "eta": s.eta_read[i].copy(), "detected_fault": detected_fault(state, params, i)}
-        if params.version == 1:  # the smoothed encoder distances that v1's correction steers to
+        if params.trust_action:  # the smoothed encoder distances that v1's correction steers to
             info["encoder_distances"] = s.smoothed[i].copy()
         return info
 
