@@ -167,8 +167,10 @@ class SimulatedWorld(World, Protocol):
     reads (:mod:`paragym.validation.episode`, through the env's ``body_motion``, ``commanded_pose`` and
     ``step_duration``). ``state`` and ``params`` are its task's."""
 
-    #: robot 0's scene: what KF validation judges, and draws
-    scene: Any
+    @property
+    def scene(self) -> Any:
+        """Robot 0's scene: what KF validation judges, and draws."""
+        ...
 
     def body(self) -> tuple[Sim, str, int, np.ndarray, float]:
         """The validated body: (its engine, body name, link index, the judged point in the link's frame (m), the

@@ -21,7 +21,7 @@ the kinematic scene that generates and checks scenarios.
 from __future__ import annotations
 
 from functools import lru_cache
-from typing import Any, Literal, Protocol, Self
+from typing import TYPE_CHECKING, Any, Literal, Protocol, Self
 
 import numpy as np
 
@@ -36,7 +36,7 @@ from paragym.sim.client import physics_steps
 from paragym.sim.mujoco_sim import rollout_pool
 from paragym.sim.obstacles import Box
 from paragym.tasks import base
-from paragym.tasks.base import BROKEN_GAP
+from paragym.tasks.base import BROKEN_GAP, SimulatedWorld
 from paragym.tasks.capaman import CaPaManScenario, posts_of
 
 #: the state and parameters the worlds read are the transition's (paragym.tasks.capaman_step), typed Any
@@ -440,3 +440,8 @@ def _commanded_pose(state: Any, params: Any) -> np.ndarray:
 
 #: a fixed part that fills an unused obstacle slot of a robot's model: far below, out of every part's reach
 _NOWHERE = Box((0.0, 0.0, -10.0), (0.01, 0.01, 0.01))
+
+
+if TYPE_CHECKING:  # the type checker holds the worlds that simulate to what episode validation reads
+    _dynamicworld: type[SimulatedWorld] = DynamicWorld
+    _mujocoworld: type[SimulatedWorld] = MuJoCoWorld

@@ -8,7 +8,7 @@ where it got. Episode validation reads the validated body from it.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -124,3 +124,10 @@ class MuJoCoWorld(DynamicWorld):
             self._pool.close()
             self._pool = None
         super().close()
+
+
+if TYPE_CHECKING:  # the type checker holds the worlds that simulate to what episode validation reads
+    from paragym.tasks.base import SimulatedWorld
+
+    _dynamicworld: type[SimulatedWorld] = DynamicWorld
+    _mujocoworld: type[SimulatedWorld] = MuJoCoWorld

@@ -9,7 +9,7 @@ the validated body from it.
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -160,3 +160,7 @@ class DynamicWorld:
         return h * physics_steps(state.drive.dt, h)
 
 
+if TYPE_CHECKING:  # the type checker holds the worlds that simulate to what episode validation reads
+    from paragym.tasks.base import SimulatedWorld
+
+    _dynamicworld: type[SimulatedWorld] = DynamicWorld
