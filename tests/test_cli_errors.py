@@ -105,7 +105,12 @@ def test_policies_lists_every_registered_ids_policies_by_the_names_the_other_com
         assert any(line.split()[1] == "reference" for line in out.splitlines() if line.strip()), row.id
 
 
-@pytest.mark.parametrize("row", [r for r in registry.ROWS if r.kinematic_as is None], ids=lambda r: r.name)
+#: the ids whose demo and plan run: a task's released versions in the quick suite, its rungs among the slow tests
+DEMO_IDS = [pytest.param(r, marks=[pytest.mark.slow] if r.rung is not None else [], id=r.name)
+            for r in registry.ROWS if r.kinematic_as is None]
+
+
+@pytest.mark.parametrize("row", DEMO_IDS)
 def test_demo_and_plan_work_on_every_registered_id(row, tmp_path, capsys):
     """Every id (but a kinematic twin, whose demo and plan are its source's episodes: ``EnvRow.kinematic_as``)
     through the generic CLI, as its env page tells a new user to run it: ``demo`` with the id's
