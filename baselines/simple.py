@@ -66,19 +66,52 @@ def best_constant(env_id: str, levels: tuple[float, ...] = (0.0, 0.5, 1.0), seed
     """The best constant action of ``env_id`` among every action whose components are ``levels``, each played
     on the episodes reset with ``seeds`` (disjoint from the leaderboard's, 100000 and up): the most successes,
     then the highest mean return, then the first in order. Returns the action, its successes and its mean
-    return. How a task's best-constant floor was chosen (its bench names the result)."""
+    return. How a task's best-constant floor was chosen (its bench names the result).
+
+    Where the id's native vector env has the single env's parameters, its episodes are the single env's, bit
+    for bit, and each action's episodes run there together (one robot per seed); else (the CaPaMan's released
+    ids, whose native env checks collisions on the grid) one after the other in the single env."""
     import itertools
 
-    from paragym.rollout import run_episode
-
-    env = gym.make(env_id)
-    space = env.action_space
+    single = gym.make(env_id)
+    native = gym.make_vec(env_id, num_envs=len(seeds), vectorization_mode="vector_entry_point")
+    together = native.unwrapped.params == single.unwrapped.params
+    space = single.action_space
     best: tuple[int, float, tuple[float, ...]] | None = None
     for action in itertools.product(levels, repeat=int(np.prod(space.shape))):
-        policy = ConstantPolicy(space, np.reshape(action, space.shape))
-        episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
-        wins, mean = sum(bool(e.success) for e in episodes), float(np.mean([e.episode_return for e in episodes]))
+        constant = ConstantPolicy(space, np.reshape(action, space.shape))
+        returns, wins = _constant_episodes(native, constant.action, seeds) if together else \
+            _one_by_one(single, constant, seeds)
+        mean = float(np.mean(returns))
         if best is None or (wins, mean) > best[:2]:
             best = (wins, mean, action)
-    env.close()
+    single.close()
+    native.close()
+    assert best is not None  # levels and the space are not empty
     return best[2], best[0], best[1]
+
+
+def _one_by_one(env: gym.Env, policy: ConstantPolicy, seeds: range) -> tuple[list[float], int]:
+    """Each seed's episode of ``env`` under ``policy``: their returns and how many succeeded."""
+    from paragym.rollout import run_episode
+
+    episodes = [run_episode(env, policy, seed=seed) for seed in seeds]
+    return [e.episode_return for e in episodes], sum(bool(e.success) for e in episodes)
+
+
+def _constant_episodes(envs: Any, action: np.ndarray, seeds: range) -> tuple[list[float], int]:
+    """One episode per seed of the native vector env ``envs`` (a robot each) under ``action``: each episode's
+    return (summed as :attr:`paragym.rollout.Episode.episode_return` sums it) and how many succeeded."""
+    envs.reset(seed=list(seeds))
+    n = len(seeds)
+    actions = np.repeat(action[None], n, axis=0)
+    rewards: list[list[float]] = [[] for _ in range(n)]
+    running, success = np.ones(n, bool), np.zeros(n, bool)
+    while running.any():
+        _, reward, terminated, truncated, info = envs.step(actions)
+        for i in np.flatnonzero(running).tolist():
+            rewards[i].append(float(reward[i]))
+        ended = running & (terminated | truncated)
+        success[ended] = np.asarray(info["is_success"])[ended]
+        running &= ~ended
+    return [float(np.sum(r)) for r in rewards], int(success.sum())

@@ -49,6 +49,22 @@ def test_greedy_split_steps_toward_the_lower_end_excess():
         np.testing.assert_array_equal(policy.act(obs, {}), [step, 0, 0, 0])
 
 
+@pytest.mark.parametrize("env_id", ["paragym/MobileTripodOdometry-v2", "paragym/CaPaManCollisionFree-Easy-v0",
+                                    "paragym/HybridSingularityFree-Medium-v2"])
+def test_the_searchs_episodes_together_are_the_single_envs(env_id):
+    """The search plays an action's episodes together in the native vector env: each return and success is the
+    single env's on the same seed."""
+    from paragym.baselines.simple import ConstantPolicy, _constant_episodes, _one_by_one
+
+    single = gym.make(env_id)
+    native = gym.make_vec(env_id, num_envs=4, vectorization_mode="vector_entry_point")
+    assert native.unwrapped.params == single.unwrapped.params
+    constant = ConstantPolicy(single.action_space, np.full(single.action_space.shape, 0.5))
+    assert _constant_episodes(native, constant.action, range(7, 11)) == _one_by_one(single, constant, range(7, 11))
+    single.close()
+    native.close()
+
+
 @pytest.mark.slow
 def test_the_best_constant_is_what_its_search_finds():
     """The shipped constant is re-derived, not typed: the search over {0, 0.5, 1}^3 on reset seeds 0-29."""
