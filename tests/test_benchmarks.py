@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.slow  # every test here starts processes or runs a benchmark
+pytestmark = pytest.mark.slow  # every test here runs a benchmark
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -20,10 +20,39 @@ def _recorded(folder: Path, name: str) -> dict:
     return data
 
 
-def _run(*args: str) -> str:
-    res = subprocess.run([sys.executable, *args], cwd=ROOT, capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr[-2000:]
-    return res.stdout
+def _run(script: str, *args: str) -> str:
+    """What ``python <script> <args>`` prints, run from the repository's root as a user runs it, but in this
+    process: the script is executed as ``__main__`` with its folder first on the path, so it pays neither an
+    interpreter's start nor the imports and compiled kernels this worker already holds (32 cold starts were a
+    third of this module's time). What a script sets for the process (the cores it may run on, the SIGTERM
+    handler, torch's threads) is put back after it."""
+    import contextlib
+    import io
+    import os
+    import runpy
+    import signal
+
+    import torch
+
+    argv, path, cwd = sys.argv[:], sys.path[:], os.getcwd()
+    handler, threads = signal.getsignal(signal.SIGTERM), torch.get_num_threads()
+    cores = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+    out = io.StringIO()
+    sys.argv, sys.path[:0] = [script, *args], [str(ROOT / Path(script).parent)]
+    os.chdir(ROOT)
+    try:
+        with contextlib.redirect_stdout(out):
+            runpy.run_path(str(ROOT / script), run_name="__main__")
+    except SystemExit as stop:
+        assert stop.code in (None, 0), f"{script} exited with {stop.code!r}:\n{out.getvalue()[-2000:]}"
+    finally:
+        sys.argv, sys.path[:] = argv, path
+        os.chdir(cwd)
+        signal.signal(signal.SIGTERM, handler)
+        torch.set_num_threads(threads)
+        if cores is not None:
+            os.sched_setaffinity(0, cores)
+    return out.getvalue()
 
 
 def test_env_speed_prints_its_rows(tmp_path):
