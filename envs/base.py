@@ -352,11 +352,18 @@ class ParagymEnv(TaskShell, gym.Env):
         return self.task.sensor_layout
 
     def _simulated(self) -> SimulatedWorld:
-        """The world, which simulates the robot (the dynamic fidelity's): a ValueError in another."""
-        if self.params.fidelity != "dynamic" or not isinstance(self.world, SimulatedWorld):
-            raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
-                             "fidelity='dynamic'")
-        return self.world
+        """The world, which simulates the robot (the dynamic fidelity's): a ValueError in another. Validation
+        asks at every physics step, so the answer is kept for the world it was given for (a check against a
+        runtime protocol inspects the class's members each time)."""
+        world = self.world
+        if world is not self._simulated_world:
+            if self.params.fidelity != "dynamic" or not isinstance(world, SimulatedWorld):
+                raise ValueError("the executed body is simulated in the dynamic fidelity only: make the env with "
+                                 "fidelity='dynamic'")
+            self._simulated_world = world
+        return world
+
+    _simulated_world: Any = None
 
     def _dynamic_body(self) -> tuple[Any, str, int, np.ndarray, float]:
         """The validated body: (sim client, robot, link, the judged point in the link's frame (m), the
