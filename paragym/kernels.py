@@ -31,11 +31,12 @@ from __future__ import annotations
 import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
+from functools import cached_property
 from typing import Any, ClassVar
 
 import numpy as np
 
-__all__ = ["SPLIT_MIN_ROWS", "KernelArrays", "concurrently", "entry", "shares", "thread_count"]
+__all__ = ["SPLIT_MIN_ROWS", "KernelArrays", "KernelOwner", "concurrently", "entry", "shares", "thread_count"]
 
 #: the fewest robots a kernel runs before they are shared among threads (:func:`shares`): below, waking the
 #: threads costs more than they save
@@ -104,6 +105,21 @@ def concurrently(run: Callable[..., Any], calls: list[tuple[Any, ...]]) -> None:
     finally:
         for done in pending:
             done.result()
+
+
+class KernelOwner:
+    """A parameters class that makes its kernels' arguments once (``functools.cached_property``): a copy or a
+    pickle of it leaves out what its cached properties made, and those named in ``not_pickled``, to be made
+    again where they are next read. The arguments hold read-only arrays, so that numba compiles each kernel for
+    one signature; an array comes back from a pickle writable, and a process that a pool or Ray sends the
+    parameters to would compile every kernel a second time for it."""
+
+    not_pickled: ClassVar[tuple[str, ...]] = ()
+
+    def __getstate__(self) -> dict[str, Any]:
+        made = {name for cls in type(self).__mro__ for name, value in vars(cls).items()
+                if isinstance(value, cached_property)}
+        return {k: v for k, v in self.__dict__.items() if k not in made and k not in self.not_pickled}
 
 
 class KernelArrays:

@@ -94,3 +94,24 @@ def test_a_kernel_unpacks_a_state_in_its_declared_order(module, variable, first,
                                           f"its fields are {len(fields)}"
     assert tuple(n.rstrip("_") for n in names) == fields[first:first + len(names)], \
         f"{module}: {variable} unpacked as {names}, declared {fields[first:first + len(names)]}"
+
+
+@pytest.mark.parametrize("task", ["capaman", "hybrid", "orthoglide", "tripod"])
+def test_a_pickled_params_types_its_kernel_arguments_as_the_original(task):
+    """The kernels' arguments a task's parameters make once (``kernel_args``) hold read-only arrays, so that numba
+    compiles each kernel for one signature. A pickle (a process pool's job, a Ray task, a deep copy) that carried
+    them would bring them back writable: every process it reaches would compile the task's kernels a second time
+    (9 s for the hybrid's step on a fresh install)."""
+    import copy
+    import pickle
+
+    import gymnasium as gym
+    import numba
+
+    from paragym import registry
+
+    env_id = next(r.id for r in registry.rows() if r.task == task and r.rung is None)
+    params = gym.make(env_id).unwrapped.params
+    params.kernel_args  # noqa: B018 (made, and cached on the parameters, before the copy)
+    for copied in (pickle.loads(pickle.dumps(params)), copy.deepcopy(params)):
+        assert numba.typeof(copied.kernel_args) == numba.typeof(params.kernel_args)

@@ -52,7 +52,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from paragym.kernels import KernelArrays
+from paragym.kernels import KernelArrays, KernelOwner
 from paragym.mechanisms import capaman
 from paragym.sim import mujoco_sim
 from paragym.sim.obstacles import ENCODING_SIZE
@@ -153,7 +153,7 @@ LADDER_RULES = {k: CaPaManRules(0, goal_relative=True, reach_tolerance=3 * DEG, 
 
 
 @dataclass(frozen=True)
-class CaPaManParams:
+class CaPaManParams(KernelOwner):
     """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     max_joint_step: float = 2 * DEG

@@ -51,7 +51,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
-from paragym.kernels import KernelArrays
+from paragym.kernels import KernelArrays, KernelOwner
 from paragym.mechanisms import hybrid
 from paragym.sim import mujoco_sim
 from paragym.tasks import hybrid as scenarios_module
@@ -147,7 +147,7 @@ SPLIT_LADDER_RULES_V2 = {k: HybridRules(2, sees_the_end=True, strict_dynamics=Tr
 
 
 @dataclass(frozen=True)
-class HybridParams:
+class HybridParams(KernelOwner):
     """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     max_delta_step: float = 0.05

@@ -29,12 +29,12 @@ import math
 import weakref
 from dataclasses import dataclass, field, replace
 from functools import cached_property
-from typing import Any, NamedTuple
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from paragym.kernels import KernelArrays
+from paragym.kernels import KernelArrays, KernelOwner
 from paragym.mechanisms import orthoglide as og
 from paragym.sim import mujoco_sim
 from paragym.tasks import orthoglide as scenarios_module
@@ -106,7 +106,7 @@ LADDER_RULES_V1 = {k: OrthoglideRules(1, tracking=True, exact_time=True, rung=ru
 
 
 @dataclass(frozen=True)
-class OrthoglideParams:
+class OrthoglideParams(KernelOwner):
     """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     joint_mode: bool = False
@@ -156,10 +156,9 @@ class OrthoglideParams:
                    float(limit_penalty), geometry, rules.tracking, track_tolerance, scenario,
                    action_mode, fidelity, dynamics, rules, engine)
 
-    def __getstate__(self) -> dict[str, Any]:
-        """A copy or a pickle leaves out the starts the parameters remember (:func:`_starts`): weak references,
-        which do not pickle, to the scenarios of this process."""
-        return {k: v for k, v in self.__dict__.items() if k != "_starts"}
+    #: a copy or a pickle leaves out the starts the parameters remember (:func:`_starts`): weak references, which
+    #: do not pickle, to the scenarios of this process
+    not_pickled: ClassVar[tuple[str, ...]] = ("_starts",)
 
     @cached_property
     def least_norm(self) -> OrthoglideParams:

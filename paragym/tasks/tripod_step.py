@@ -41,7 +41,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from paragym.kernels import KernelArrays
+from paragym.kernels import KernelArrays, KernelOwner
 from paragym.mechanisms import tripod as mt
 from paragym.sim import mujoco_sim
 from paragym.sim.tripod_drive import DriveState, k_drive_step, k_terrain
@@ -119,7 +119,7 @@ LADDER_RULES_V1 = {k: TripodRules(1, trust_action=True, fold_ends=True, rung=run
 
 
 @dataclass(frozen=True)
-class TripodParams:
+class TripodParams(KernelOwner):
     """The env's arguments (see the env's docstring), checked by :meth:`from_kwargs`."""
 
     encoder_noise: float = math.radians(1.0)
