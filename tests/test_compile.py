@@ -31,6 +31,12 @@ _SCRIPT = textwrap.dedent("""
     hybrid.kernel_consts(hybrid.HybridGeometry())  # hybrid._solve_all
     eta0 = np.radians([[60.0, 60.0, 60.0]])
     tripod.eta(tripod.plate_frame_units(eta0), eta0)  # tripod._eta_all
+    from paragym.mechanisms.capaman import DEFAULT_GEOMETRY
+    from paragym.sim import capaman_clearance, capaman_grid
+
+    grids = capaman_clearance.DistanceGrids(1)
+    capaman_clearance.grid_clearance(np.zeros((1, 3)), grids, capaman_grid.cluster_points(DEFAULT_GEOMETRY,
+                                     spacing=0.01))  # capaman_clearance._clearance_one, in _clearance_serial
     print("\\n".join(sorted(set(compiled))))
 """)
 
@@ -43,5 +49,5 @@ def test_the_kernels_compile_no_shape_checked_slice_copy(tmp_path):
     out = subprocess.run([sys.executable, "-c", _SCRIPT], env=env, capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     compiled = out.stdout.split()
-    assert "_solve_all" in compiled and "_eta_all" in compiled, out.stdout  # the check saw them compile
+    assert {"_solve_all", "_eta_all", "_clearance_one"} <= set(compiled), out.stdout  # the check saw them compile
     assert not [name for name in compiled if "raise_with_shape_context" in name], compiled

@@ -204,7 +204,8 @@ def _clearance_one(trig, position, quat, g, grid):
     sy, sz = shape[g, 1], shape[g, 2]
     base = g * slot
     box = np.empty((2, 3), np.float32)
-    box[0], box[1] = lo[g], hi[g]
+    for k in range(3):  # by element: a slice copy compiles a shape check that costs seconds
+        box[0, k], box[1, k] = lo[g, k], hi[g, k]
     frame = np.empty((3, 4), np.float32)  # a part's centre and rotation, float32: the culling's frame
     origin_point = np.zeros(3, np.float32)
     for p in range(n_parts):
