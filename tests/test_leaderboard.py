@@ -170,9 +170,15 @@ LEARNS = {"paragym/HybridSingularityFree-v0", "paragym/Orthoglide2PRRKappa-v0",
           "paragym/CaPaManCollisionFree-v1", "paragym/MobileTripodOdometry-v1", "paragym/HybridSingularityFree-v1"}
 
 
+#: the episodes a test plays again of each reference and floor (of the committed 50 an id), and of each shipped model:
+#: enough to hold the replay and the ranking, few enough for the suite's 10 minutes on 2 cores
+REPLAYED, LEARNED_EPISODES = 5, 3
+
+
 @pytest.fixture(scope="module")
 def references(shared_folder):
-    """``references(env_id)``: the reference, random and zero on evaluation seed 0 x 10 episodes of one env id, as
+    """``references(env_id)``: the reference, random and zero on evaluation seed 0 x :data:`REPLAYED` episodes of one
+    env id, as
     summaries and as episode rows, run where its test runs (each env in a database of its own: an xdist worker
     waits only for an env another worker is running, never for all of them)."""
     cache: dict[str, tuple[dict, list]] = {}
@@ -180,7 +186,7 @@ def references(shared_folder):
     def of(env_id: str) -> tuple[dict, list]:
         if env_id not in cache:
             with shared_folder(f"references-{registry.row(env_id).name}.sqlite") as db:
-                run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 10), out=None, env_ids=[env_id],
+                run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), REPLAYED), out=None, env_ids=[env_id],
                                       policies=[bench_of(env_id).reference, "random", "zero"], validate=False,
                                       progress=False, echo=lambda s: None)
                 with ResultStore(db) as store:
@@ -202,13 +208,13 @@ def _committed() -> dict:
 @pytest.mark.parametrize("env_id", KINEMATIC_IDS)
 @pytest.mark.slow
 def test_each_reference_plays_the_committed_episodes_and_beats_the_floors(references, env_id):
-    """One id per kinematic fidelity (tests/env_ids.py): the reference's and the floors' first 10 episodes of the
-    committed leaderboard, played again here, end as committed (success and length exactly, the return to the
-    results file's tolerance), and the reference's return beats both floors'. The success threshold is held on
-    the committed 50 episodes of every id (below)."""
+    """One id per kinematic fidelity (tests/env_ids.py): the reference's and the floors' first episodes of the
+    committed leaderboard (:data:`REPLAYED`), played again here, end as committed (success and length exactly, the
+    return to the results file's tolerance), and the reference's return beats both floors'. The success threshold
+    is held on the committed 50 episodes of every id (below)."""
     summaries, episodes = references(env_id)
     committed, tolerance = _committed(), tolerance_of(env_id, "kinematic")
-    assert len(episodes) == 30
+    assert len(episodes) == 3 * REPLAYED
     for policy, seed, k, success, length, ret in episodes:
         assert committed[env_id, policy, seed, k][:2] == (success, length), (policy, k)
         assert ret == pytest.approx(committed[env_id, policy, seed, k][2], rel=tolerance["rtol"],
@@ -219,7 +225,7 @@ def test_each_reference_plays_the_committed_episodes_and_beats_the_floors(refere
 
 
 def test_every_id_s_reference_meets_its_threshold_in_the_committed_leaderboard():
-    """Every id, its twins too: the reference's success over the committed table's 50 episodes (whose first 10
+    """Every id, its twins too: the reference's success over the committed table's 50 episodes (whose first ones
     each test above plays again on one id per kinematic fidelity)."""
     import csv
 
@@ -244,14 +250,13 @@ OWN_MODELS = [r.id for r in registry.ROWS if r.models_from is None]
 
 @pytest.fixture(scope="module")
 def learned(shared_folder):
-    """Every shipped model, random and zero on evaluation seed 0 x 5 episodes (run once per session, as
-    :func:`references`)."""
+    """Every shipped model, random and zero on evaluation seed 0 x :data:`LEARNED_EPISODES` episodes (run once per
+    session, as :func:`references`)."""
     wanted = sorted({name for env in OWN_MODELS for name, spec in policies_for(env).items()
                      if spec.kind in ("learned", "floor")})  # the planners' episodes are the references fixture's
     with shared_folder("learned.sqlite") as db:
-        run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), 5), out=None, validate=False, progress=False,
-                              echo=lambda s: None, policies=wanted,
-                              env_ids=OWN_MODELS)
+        run = run_leaderboard(db=db, suite=EvalSuite("test", (0,), LEARNED_EPISODES), out=None, validate=False,
+                              progress=False, echo=lambda s: None, policies=wanted, env_ids=OWN_MODELS)
     return {env: {s.policy: s for s in ss if s.kind in ("learned", "floor")} for env, ss in run.summaries.items()}
 
 
@@ -284,7 +289,7 @@ def test_the_shipped_models_load_act_and_beat_both_floors_where_learning_works(l
         models = [s for s in rows.values() if s.kind == "learned"]
         assert sorted(s.policy for s in models) == sorted(SHIPPED.get(env_id, [f"{a}-seed{k}" for a in ("ppo", "sac")
                                                                               for k in range(3)]))
-        assert all(math.isfinite(s.return_mean) and s.episodes == 5 for s in models)
+        assert all(math.isfinite(s.return_mean) and s.episodes == LEARNED_EPISODES for s in models)
         if env_id in LEARNS:
             best = max(s.return_mean for s in models)
             assert best > rows["zero"].return_mean and best > rows["random"].return_mean, env_id
