@@ -135,3 +135,30 @@ def test_units_the_legs_cannot_reach_give_the_least_squares_reading():
     mt._eta_least_squares(*target, eta0, mt.kernel_consts(mt.DEFAULT_GEOMETRY), 300, best)
     for step in np.eye(3) * 1e-4:
         assert cost(best) <= cost(best + step) + 1e-15 and cost(best) <= cost(best - step) + 1e-15
+
+
+def test_the_single_fault_reading_names_the_unit_whose_estimate_alone_is_off():
+    """``info["detected_fault"]``, the paper's reading of eq 4 against eq 5: an estimate at the encoders' own
+    units singles out none; one unit moved 5 cm (both distances through it off, the third exact) is singled
+    out, with the way eta moved; two units moved, or one by 3 cm (its distances off by 2.6 cm), single out none."""
+    import gymnasium as gym
+
+    import paragym  # noqa: F401
+    from paragym.tasks.tripod_task import detected_fault
+
+    env = gym.make("paragym/MobileTripodOdometry-v3")
+    env.reset(seed=0)
+    env.step(np.zeros(env.action_space.shape, np.float32))
+    u = env.unwrapped
+    s, p = u.state, u.params
+    truth = mt.plate_frame_units(s.eta_read[0], p.geometry)[0]
+    cases = {"none": ({}, None), "unit 2 by 5 cm": ({2: 0.05}, 2), "unit 0 by 5 cm": ({0: -0.05}, 0),
+             "unit 1 by 3 cm": ({1: 0.03}, None), "units 0 and 1": ({0: 0.05, 1: 0.05}, None)}
+    for name, (moved, singled) in cases.items():
+        s.estimate[0] = truth
+        for k, dr in moved.items():  # along the unit's radius: both distances through it change, by 0.87 dr
+            s.estimate[0, k, :2] += dr * truth[k, :2] / np.linalg.norm(truth[k, :2])
+        found = detected_fault(s, p, 0)
+        assert (None if found is None else found[0]) == singled, (name, found)
+        assert found is None or found[1] in ("inward (bump or push)", "outward (hole or slip)")
+    env.close()

@@ -236,6 +236,29 @@ def k_eta(units, eta0, c, iterations, tol, out):
 
 
 @njit(cache=True, error_model="numpy")
+def k_singled_out(eta, estimate, c, tolerance):
+    """The paper's single-fault reading of eq 4 against eq 5: the distances l_i of the units at encoder angles
+    ``eta`` (3,) (eqs 1-4) against those of the ``estimate`` (3, 3) (eq 5). One unit is faulty when exactly the
+    two distances through it differ by more than ``tolerance`` (m): the one distance that agrees is the one that
+    leaves it out. Its index, else -1 (the lowest index among equal differences)."""
+    units = np.empty((3, 3))
+    for i in range(3):
+        units[i, 0], units[i, 1], units[i, 2] = k_unit(eta[i], i, c)
+    t0, t1, t2 = k_distances(units)
+    e0, e1, e2 = k_distances(estimate)
+    d = (abs(e0 - t0), abs(e1 - t1), abs(e2 - t2))
+    low = 0  # the smallest difference, then the second smallest (a stable order of the three)
+    for i in (1, 2):
+        if d[i] < d[low]:
+            low = i
+    second = -1
+    for i in range(3):
+        if i != low and (second < 0 or d[i] < d[second]):
+            second = i
+    return low if d[second] > tolerance and d[low] < tolerance else -1
+
+
+@njit(cache=True, error_model="numpy")
 def _eta_all(units, eta0, c, iterations, tol, out, converged):
     for i in range(units.shape[0]):
         converged[i] = k_eta(units[i], eta0[i], c, iterations, tol, out[i])

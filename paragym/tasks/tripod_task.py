@@ -113,17 +113,16 @@ class TripodTask(TaskBase):
 
 
 def detected_fault(state: TripodState, params: TripodParams, i: int) -> tuple[int, str] | None:
-    """The paper's reading of eq 4 against eq 5 for robot ``i``'s current estimate: which unit looks faulty,
-    and whether eta says it went inward or outward."""
+    """The paper's reading of eq 4 against eq 5 for robot ``i``'s current estimate
+    (:func:`paragym.mechanisms.tripod.k_singled_out`, 3 cm): which unit looks faulty, and whether eta says it went
+    inward or outward."""
     s = state
     if s.drive.k[i] == 0:
         return None
-    target = mt.distances(mt.plate_frame_units(s.eta_read[i], params.geometry))[0]
-    diff = np.abs(mt.distances(s.estimate[i])[0] - target)
-    order = np.argsort(diff, kind="stable")
-    if diff[order[1]] <= 0.03 or diff[order[0]] >= 0.03:
+    k = mt.k_singled_out(s.eta_read[i], s.estimate[i], mt.kernel_consts(params.geometry), 0.03)
+    if k < 0:
         return None
-    k = int(order[0])  # eta grows when a unit moves inward (eta measured down from the plate)
+    # eta grows when a unit moves inward (eta measured down from the plate)
     return k, "inward (bump or push)" if s.eta_read[i, k] > s.last_eta[i, k] else "outward (hole or slip)"
 
 
