@@ -227,7 +227,7 @@ class CaPaManCollisionFreeEasyEnv(CaPaManCollisionFreeV1Env):
 {knobs}
 
     That a collision-free tour exists is checked over 1,000 seeds per rung on a 2 deg (else 1.5 deg) grid of
-    the joint range (:func:`paragym.tasks.capaman.solvable`; ``benchmarks/capaman_solvable.py``, and 250 seeds in
+    the joint range (:func:`paragym.tasks.capaman.solvable`; ``benchmarks/capaman_solvable.py``, and 100 seeds in
     the tests).
 
     ## Collision

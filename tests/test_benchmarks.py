@@ -417,7 +417,7 @@ def test_convergence_sweeps_one_model_more_finely(tmp_path):
 
 
 def test_capaman_solvable_finds_a_tour_in_each_rung_s_scenes(tmp_path):
-    """A smoke run over three seeds a rung (the tests check 250; the recorded run 1,000)."""
+    """A smoke run over three seeds a rung (the tests check 100; the recorded run 1,000)."""
     _run("benchmarks/capaman_solvable.py", "--seeds", "3", "--record", str(tmp_path))
     rows = _recorded(tmp_path, "capaman_solvable")["rows"]
     assert [r[0] for r in rows] == [f"paragym/CaPaManCollisionFree-{n}-v0" for n in ("Easy", "Medium", "Hard")]

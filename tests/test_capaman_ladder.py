@@ -154,9 +154,10 @@ def test_each_rung_draws_its_knobs_and_blocks_its_legs(rung):
 
 @pytest.mark.parametrize("rung", range(3))
 @pytest.mark.slow
-def test_every_scene_of_the_first_250_seeds_has_a_collision_free_tour(rung):
-    """250 seeds a rung (about 10 s); ``benchmarks/capaman_solvable.py`` checks as many as asked."""
-    scenarios = ladder_scenarios([np.random.default_rng(s) for s in range(250)], LADDER[rung])
+def test_every_scene_of_the_first_100_seeds_has_a_collision_free_tour(rung):
+    """100 seeds a rung (about 4 s); ``benchmarks/capaman_solvable.py`` checks as many as asked (its recorded run
+    1,000 a rung)."""
+    scenarios = ladder_scenarios([np.random.default_rng(s) for s in range(100)], LADDER[rung])
     assert [s for s, scenario in enumerate(scenarios) if not solvable(scenario)] == []
 
 

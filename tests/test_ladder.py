@@ -199,9 +199,10 @@ def test_a_hybrid_rung_separates_its_floors_from_the_papers_method(env_id):
         except PlanningError:  # the reference found no plan: a failure, as the leaderboard counts it
             return False
 
-    wins = {name: sum(success(name, k) for k in range(20)) for name in ("zero", "greedy-split", "polynomial-detour")}
+    # 10 episodes: the floors won none of 20 when this was written; the committed leaderboard plays 50
+    wins = {name: sum(success(name, k) for k in range(10)) for name in ("zero", "greedy-split", "polynomial-detour")}
     # the reference plans every drawn path (its step-4 detours where the split cannot follow)
-    assert wins["zero"] == 0 and wins["greedy-split"] <= 2 and wins["polynomial-detour"] == 20, wins
+    assert wins["zero"] == 0 and wins["greedy-split"] <= 1 and wins["polynomial-detour"] == 10, wins
     vec = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
     vec.reset(seed=3000)
     assert vec.unwrapped.state.scenarios[0] == env.reset(seed=3000)[1]["scenario"]

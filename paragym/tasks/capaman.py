@@ -385,7 +385,7 @@ def ladder_scenarios(rngs: list[np.random.Generator], rung: CaPaManRung,
     of :data:`_BLOCK` attempts of uniforms until :func:`_ladder_kernel` makes one of them a scenario (the
     stream is numpy's, so the same on every machine; one compiled call per generator, :func:`_ladder_draw`).
     The posts are :class:`~paragym.sim.obstacles.Capsule` s standing on the fixed plate (their segment from
-    z = 0). That a collision-free tour exists is checked by :func:`solvable` over 250 seeds per
+    z = 0). That a collision-free tour exists is checked by :func:`solvable` over 100 seeds per
     rung in the tests, and as many as asked by ``benchmarks/capaman_solvable.py`` (1,000 when the ladder was made)."""
     n = len(rngs)
     args = _ladder_args(rung, geometry)
