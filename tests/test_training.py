@@ -127,7 +127,8 @@ def test_vectorized_training_runs_for_every_env_with_its_yml(tmp_path, env_id, r
     counts its steps truthfully and draws a curve, for every env id (issue 15, item 5)."""
     import warnings
 
-    small = {"n_steps": 32, "batch_size": 64, "n_epochs": 1, "eval_freq": 64, "n_eval_episodes": 1}
+    # one rollout of 4 x 32 steps, evaluated once at its end (an evaluation is a whole episode)
+    small = {"n_steps": 32, "batch_size": 64, "n_epochs": 1, "eval_freq": 128, "n_eval_episodes": 1}
     with warnings.catch_warnings():
         warnings.simplefilter("error", UserWarning)
         res = train(env_id, "ppo", seed=0, timesteps=100, models_dir=tmp_path, progress_bar=False,
