@@ -42,6 +42,7 @@ from paragym import __version__
 from paragym.baselines.actor import MlpActor
 from paragym.baselines.run_files import writable_models_dir
 from paragym.baselines.training import check_env_id, env_name
+from paragym.rollout import first_episodes
 
 __all__ = ["CemResult", "CemSettings", "linear_actor", "read_linear", "train_cem"]
 
@@ -124,23 +125,14 @@ def _play(vec: Any, params: np.ndarray, seeds: list[int], n_obs: int, low: np.nd
           ) -> tuple[np.ndarray, np.ndarray, int]:
     """Successes and returns (R,) of each robot's first episode, robot r acting with ``params[r]``
     ((actions, observations + 1): W beside b), reset with ``seeds[r]``; and the steps those episodes took."""
-    obs, _ = vec.reset(seed=seeds)
-    n = len(seeds)
-    done = np.zeros(n, bool)
-    success = np.zeros(n, bool)
-    returns = np.zeros(n)
-    steps = 0
     W, b = params[:, :, :n_obs].astype(np.float32), params[:, :, n_obs].astype(np.float32)
-    while not done.all():
-        actions = np.clip(np.einsum("rao,ro->ra", W, obs.astype(np.float32)) + b, low, high).astype(np.float32)
-        obs, reward, terminated, truncated, info = vec.step(actions)
-        live = ~done
-        steps += int(live.sum())
-        returns[live] += reward[live]
-        ended = live & (terminated | truncated)
-        success[ended] = np.asarray(info["is_success"], bool)[ended]
-        done |= ended
-    return success, returns, steps
+
+    def act(obs: np.ndarray) -> np.ndarray:
+        return np.clip(np.einsum("rao,ro->ra", W, obs.astype(np.float32)) + b, low, high).astype(np.float32)
+
+    rewards, length, success = first_episodes(vec, act, seeds)
+    returns = np.cumsum(rewards, axis=0)[-1]  # step by step, as the search has always summed them
+    return success, returns, int(length.sum())
 
 
 def train_cem(env_id: str, seed: int = 0, settings: CemSettings | None = None, models_dir: str | Path | None = None,

@@ -102,16 +102,8 @@ def _one_by_one(env: gym.Env, policy: ConstantPolicy, seeds: range) -> tuple[lis
 def _constant_episodes(envs: Any, action: np.ndarray, seeds: range) -> tuple[list[float], int]:
     """One episode per seed of the native vector env ``envs`` (a robot each) under ``action``: each episode's
     return (summed as :attr:`paragym.rollout.Episode.episode_return` sums it) and how many succeeded."""
-    envs.reset(seed=list(seeds))
-    n = len(seeds)
-    actions = np.repeat(action[None], n, axis=0)
-    rewards: list[list[float]] = [[] for _ in range(n)]
-    running, success = np.ones(n, bool), np.zeros(n, bool)
-    while running.any():
-        _, reward, terminated, truncated, info = envs.step(actions)
-        for i in np.flatnonzero(running).tolist():
-            rewards[i].append(float(reward[i]))
-        ended = running & (terminated | truncated)
-        success[ended] = np.asarray(info["is_success"])[ended]
-        running &= ~ended
-    return [float(np.sum(r)) for r in rewards], int(success.sum())
+    from paragym.rollout import first_episodes
+
+    actions = np.repeat(action[None], len(seeds), axis=0)
+    rewards, length, success = first_episodes(envs, lambda obs: actions, seeds)
+    return [float(np.sum(rewards[:k, i].copy())) for i, k in enumerate(length.tolist())], int(success.sum())

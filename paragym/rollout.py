@@ -9,7 +9,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-__all__ = ["Episode", "frame_of", "run_episode"]
+__all__ = ["Episode", "first_episodes", "frame_of", "run_episode"]
 
 
 @dataclass
@@ -72,3 +72,22 @@ def run_episode(env: gym.Env, policy: Any, seed: int | None = None, frame_every:
             ep.frames.append(frame_of(env))
     ep.step_seconds = time.perf_counter() - t0
     return ep
+
+
+def first_episodes(envs: Any, act: Any, seeds: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Each robot's first episode of a native vector env ``envs`` (one robot per seed, reset with ``seeds``), robot
+    r acting with row r of ``act(obs)`` (``obs``: every robot's observation): the rewards (T, R), 0 after a robot's
+    episode ended, each episode's length (R,) and whether it succeeded (R,). A robot's
+    :attr:`Episode.episode_return` is ``np.sum`` of its first ``length`` rewards."""
+    obs, _ = envs.reset(seed=list(seeds))
+    n = len(seeds)
+    rows: list[np.ndarray] = []
+    running, success, length = np.ones(n, bool), np.zeros(n, bool), np.zeros(n, np.int64)
+    while running.any():
+        obs, reward, terminated, truncated, info = envs.step(act(obs))
+        rows.append(np.where(running, reward, 0.0))
+        length += running
+        ended = running & (terminated | truncated)
+        success[ended] = np.asarray(info["is_success"], bool)[ended]
+        running &= ~ended
+    return np.array(rows), length, success
