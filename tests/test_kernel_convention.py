@@ -115,3 +115,94 @@ def test_a_pickled_params_types_its_kernel_arguments_as_the_original(task):
     params.kernel_args  # noqa: B018 (made, and cached on the parameters, before the copy)
     for copied in (pickle.loads(pickle.dumps(params)), copy.deepcopy(params)):
         assert numba.typeof(copied.kernel_args) == numba.typeof(params.kernel_args)
+
+
+def _module_constants(tree: ast.Module) -> dict[str, object]:
+    """The module's top-level names bound to a bool or int literal (numba freezes them as literals)."""
+    out: dict[str, object] = {}
+    for node in tree.body:
+        if not isinstance(node, ast.Assign):
+            continue
+        for target in node.targets:
+            pairs = ([(target, node.value)] if isinstance(target, ast.Name) else
+                     list(zip(getattr(target, "elts", []), getattr(node.value, "elts", []), strict=False)))
+            for name, value in pairs:
+                if isinstance(name, ast.Name) and isinstance(value, ast.Constant) \
+                        and isinstance(value.value, (bool, int)):
+                    out[name.id] = value.value
+    return out
+
+
+def _literal(arg: ast.expr, constants: dict[str, object]) -> str | None:
+    """What numba types ``arg`` as a literal, or None: a bool or int constant, or a module-level one."""
+    if isinstance(arg, ast.UnaryOp) and isinstance(arg.operand, ast.Constant):
+        return ast.unparse(arg)
+    if isinstance(arg, ast.Constant) and isinstance(arg.value, (bool, int)):
+        return repr(arg.value)
+    if isinstance(arg, ast.Name) and arg.id in constants:
+        return repr(constants[arg.id])
+    return None
+
+
+def _kernel_arguments() -> dict[str, dict[int, set[str]]]:
+    """Each kernel ("module.name") -> each parameter's position -> the forms its callers give it: a literal's
+    value, "omitted" (its default), or "typed" (a variable, or any call from Python, which numba types by value
+    and never as a literal)."""
+    kernels = {f"{m}.{k.name}": k for m, tree in MODULES for k in _kernels(tree)}
+    by_name: dict[str, list[str]] = {}
+    for full in kernels:
+        by_name.setdefault(full.rsplit(".", 1)[1], []).append(full)
+
+    def resolve(module: str, node: ast.expr) -> str | None:
+        name = node.id if isinstance(node, ast.Name) else node.attr if isinstance(node, ast.Attribute) else None
+        found = by_name.get(name or "", [])
+        if f"{module}.{name}" in found:
+            return f"{module}.{name}"
+        if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name):
+            found = [f for f in found if f.rsplit(".", 2)[-2] == node.value.id]
+        return found[0] if len(found) == 1 else None
+
+    forms: dict[str, dict[int, set[str]]] = {k: {} for k in kernels}
+    for module, tree in MODULES:
+        constants = _module_constants(tree)
+        inside = {id(n) for k in _kernels(tree) for n in ast.walk(k)}
+        called = set()
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and id(node) in inside:
+                kernel = resolve(module, node.func)
+                if kernel is None:
+                    continue
+                called.add(id(node.func))
+                params = kernels[kernel].args.args
+                given = [_literal(a, constants) or "typed" for a in node.args]
+                given += ["omitted"] * (len(params) - len(given))
+                for kw in node.keywords:
+                    given[[p.arg for p in params].index(kw.arg)] = _literal(kw.value, constants) or "typed"
+                for position, form in enumerate(given):
+                    forms[kernel].setdefault(position, set()).add(form)
+        for node in ast.walk(tree):  # a kernel named outside a kernel's call: called from Python
+            if isinstance(node, (ast.Name, ast.Attribute)) and id(node) not in called \
+                    and not (id(node) in inside and isinstance(node, ast.Name) and node.id in constants):
+                kernel = resolve(module, node)
+                if kernel is not None and id(node) not in inside:
+                    for position in range(len(kernels[kernel].args.args)):
+                        forms[kernel].setdefault(position, set()).add("typed")
+    return forms
+
+
+#: (kernel, argument) compiled for a literal beside a typed value on purpose, and why
+ON_PURPOSE = {("paragym.mechanisms.geometry._jacobi_lanes", 3): "the hybrid's n = 6 known to the compiler unrolls "
+                                                                "its loops, 1.3x faster"}
+
+
+def test_a_kernel_is_compiled_for_one_kind_of_each_argument():
+    """numba types a literal argument of a call between kernels (``True``, ``0``, a module-level constant, an
+    omitted default) as a type of its own: a kernel that is also called with a variable, from Python or from
+    another kernel, is compiled once for each, seconds of a fresh install's first run apiece. Such a call passes
+    a typed value instead (``np.bool_(True)``, ``np.int64(0)``, or a module constant made so)."""
+    forms = _kernel_arguments()
+    mixed = sorted(f"{kernel} argument {position}: {sorted(f)}" for kernel, by_position in forms.items()
+                   for position, f in by_position.items() if len(f) > 1 and (kernel, position) not in ON_PURPOSE)
+    assert "typed" in forms["paragym.mechanisms.hybrid.k_solve"][10]  # the scan sees calls from Python too
+    assert not mixed, "kernels compiled for a literal and for a typed argument:\n" + "\n".join(mixed)
+

@@ -50,13 +50,18 @@ def k_quat_to_matrix(q: np.ndarray, out: np.ndarray) -> None:
     out[2, 0], out[2, 1], out[2, 2] = 2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)
 
 
+#: :func:`k_jacobi`'s lane count, typed as a call from Python types it (a literal 1 would compile
+#: :func:`k_jacobi_lanes` a second time)
+_ONE_LANE = np.int64(1)
+
+
 @njit(cache=True, error_model="numpy")
 def k_jacobi(a, v):
     """The eigen-decomposition of the symmetric ``a`` (n, n) in place: the eigenvalues end on ``a``'s diagonal,
     the eigenvectors in ``v``'s columns (a ``v`` of shape (0, 0) asks for the eigenvalues only).
     :func:`k_jacobi_lanes` of one matrix."""
     n = a.shape[0]
-    k_jacobi_lanes(a.reshape(1, n, n), v.reshape(1, v.shape[0], v.shape[1]), 1)
+    k_jacobi_lanes(a.reshape(1, n, n), v.reshape(1, v.shape[0], v.shape[1]), _ONE_LANE)
 
 
 @njit(cache=True, error_model="numpy")

@@ -61,9 +61,9 @@ from paragym.mechanisms.geometry import euler_matrix, k_jacobi_lanes, matrix_eul
 from paragym.units import DEG
 
 __all__ = [
-    "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward", "hexapod_lengths",
-    "hexapod_matrix", "is_singularity_free", "k_measure", "k_solve", "k_solve_pair", "kernel_consts", "pose_matrix",
-    "solve", "split", "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
+    "LEGS_ONLY", "MEASURES", "HybridGeometry", "HybridState", "euler_matrix", "forward", "hexapod_forward",
+    "hexapod_lengths", "hexapod_matrix", "is_singularity_free", "k_measure", "k_solve", "k_solve_pair", "kernel_consts",
+    "pose_matrix", "solve", "split", "tripod_forward", "tripod_lengths", "tripod_pose", "within_limits",
 ]
 
 
@@ -120,6 +120,10 @@ class HybridGeometry:
 
 
 DEFAULT_GEOMETRY = HybridGeometry()
+
+#: :func:`k_solve`'s ``measures`` for a kernel that calls it: typed as a variable is (``bool``), where a literal
+#: ``True`` would be compiled for apart from the calls that pass a variable
+MEASURES, LEGS_ONLY = np.bool_(True), np.bool_(False)
 
 
 def pose_matrix(pose: np.ndarray) -> np.ndarray:
@@ -266,16 +270,16 @@ def k_solve_pair(pose, other, delta, base, plat, top, axes, tri_base, pinv_t, ho
     numbers are :func:`k_solve`'s, bit for bit. ``work``: (7, 6, 6) scratch."""
     ra, pa, rt, pt, re = work[0, :3, :3], work[0, 3, :3], work[1, :3, :3], work[1, 3, :3], work[2, :3, :3]
     _stages(pose, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
-    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, work[3], work[4])
+    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, work[3], work[4], MEASURES)
     _stages(other, delta, top, axes, pinv_t, home, sc[0], re, rt, pt, ra, pa)
-    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, other_lengths, work[5], work[6])
+    _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, other_lengths, work[5], work[6], MEASURES)
     sigma = np.empty(4)
     _sigma_mins(work[3:7], sigma)
     return sigma[0] / sc[3], sigma[1] / sc[4], sigma[2] / sc[3], sigma[3] / sc[4]
 
 
 @njit(cache=True, error_model="numpy")
-def _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, h, t, measures=True):
+def _rows(ra, pa, rt, pt, base, plat, top, axes, tri_base, sc, lengths, h, t, measures):
     """The nine leg lengths into ``lengths`` (9,) (eqs 1, 4), and eq 11's matrices (transposed) of the
     hexapod into ``h`` and of the tripod into ``t`` (6, 6): its legs' rows, and its constraints' if
     ``measures``."""
@@ -330,7 +334,7 @@ def _stage_all(r, pos, joints, bases, inv_scale, constraint_top, constraint_axes
 
 @njit(cache=True, error_model="numpy")
 def _tripod_all(z, roll, pitch, top, axes, pinv_t, out):
-    rt, pt = np.empty((3, 3)), np.empty(3)
+    rt, pt = np.empty((4, 4))[:3, :3], np.empty(3)  # a view, as :func:`_stages` passes: one _tripod_stage compiled
     for i in range(z.shape[0]):
         yaw = _tripod_stage(z[i], roll[i], pitch[i], top, axes, pinv_t, rt, pt)
         out[i, 0], out[i, 1], out[i, 2], out[i, 3], out[i, 4], out[i, 5] = pt[0], pt[1], z[i], roll[i], pitch[i], yaw

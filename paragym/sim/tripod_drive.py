@@ -234,9 +234,14 @@ def k_drive_step(i, geo, drive):
     return ox, oy
 
 
+#: :func:`_step_one`'s robot, typed as a call from Python types it (a literal 0 would compile :func:`k_drive_step`
+#: a second time)
+_FIRST = np.int64(0)
+
+
 @njit(cache=True, error_model="numpy")
 def _step_one(geo, drive):
-    return k_drive_step(0, geo, drive)
+    return k_drive_step(_FIRST, geo, drive)
 
 
 class TripodDrive:

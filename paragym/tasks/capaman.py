@@ -267,6 +267,11 @@ def knob_table(indent: str = "") -> str:
                                     "spread_deg": "T.P.s apart (deg)", "gap": "posts apart (m)"}, indent)
 
 
+#: one post at a time for :func:`_ladder_kernel`, typed as a call from Python types a count (a literal 1 would
+#: compile :func:`~paragym.sim.capaman_posts.k_post_clearance` a second time)
+_ONE_POST = np.int64(1)
+
+
 @njit(cache=True, error_model="numpy")
 def _ladder_kernel(u, knobs, model, cap, tp, tips, posts):
     """The first attempt (a row of ``u``, uniforms in [0, 1)) that makes a scenario of the rung; writes its T.P.s
@@ -329,12 +334,12 @@ def _ladder_kernel(u, knobs, model, cap, tp, tips, posts):
                     placed = placed and (apart >= gap or apart <= 0.0)
                 for i in range(3):
                     if placed:
-                        d, _ = k_post_clearance(tp[i, 0], tp[i, 1], tp[i, 2], poses[i], posts[b:b + 1], 1, every,
-                                                model, cap, tip)
+                        d, _ = k_post_clearance(tp[i, 0], tp[i, 1], tp[i, 2], poses[i], posts[b:b + 1], _ONE_POST,
+                                                every, model, cap, tip)
                         placed = d >= min_clearance
                 if placed and b < blocked:
-                    d, _ = k_post_clearance(mids[b, 0], mids[b, 1], mids[b, 2], f, posts[b:b + 1], 1, every, model,
-                                            cap, tip)
+                    d, _ = k_post_clearance(mids[b, 0], mids[b, 1], mids[b, 2], f, posts[b:b + 1], _ONE_POST, every,
+                                            model, cap, tip)
                     placed = d < 0.0
                 if placed:
                     break

@@ -248,7 +248,8 @@ def _margin(pose, delta, consts, limits, lengths, work):
     exactly). ``limits``: L_min, L_max (m), the singularity threshold."""
     base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
     l_min, l_max, thr = limits
-    mu_h, mu_t = hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, True, lengths, work)
+    mu_h, mu_t = hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, hybrid.MEASURES,
+                                lengths, work)
     half, mid = 0.5 * (l_max - l_min), 0.5 * (l_max + l_min)
     margin, within = min(mu_h - thr, mu_t - thr), True
     for c in range(9):
@@ -261,7 +262,7 @@ def _margin(pose, delta, consts, limits, lengths, work):
 def _within(pose, delta, consts, limits, lengths, work):
     """Whether the nine legs are within their limits at one pose (6,) and split (eq 13: the legs alone)."""
     base_, plat, top, axes, tri_base, pinv_t, home, sc = consts
-    hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, False, lengths, work)
+    hybrid.k_solve(pose, delta, base_, plat, top, axes, tri_base, pinv_t, home, sc, hybrid.LEGS_ONLY, lengths, work)
     for c in range(9):
         if not limits[0] <= lengths[c] <= limits[1]:
             return False

@@ -371,7 +371,7 @@ def _advance_kernel(arrays, actions, rows, move, sees_the_end, stage, consts, w,
                     lengths[i], end_lengths, work)
             else:
                 mu_h[i], mu_t[i] = hybrid.k_solve(pose[i], delta[i], base, plat, top, axes, tri_base, pinv_t, home,
-                                                  sc, True, lengths[i], work)
+                                                  sc, hybrid.MEASURES, lengths[i], work)
             if stage == 1:
                 continue
         out = 0
@@ -412,7 +412,7 @@ def _advance_kernel(arrays, actions, rows, move, sees_the_end, stage, consts, w,
         if sees_the_end:  # where the path ends: P1 solved at the current split, its excess, the shaping
             if not paired:
                 mu_h_end, mu_t_end = hybrid.k_solve(nominal[i, last], delta[i], base, plat, top, axes, tri_base,
-                                                    pinv_t, home, sc, True, end_lengths, work)
+                                                    pinv_t, home, sc, hybrid.MEASURES, end_lengths, work)
             excess = _excess(end_lengths, w)
             new_phi = 0.0 if at_end else -excess
             if move:
@@ -427,8 +427,8 @@ def _advance_kernel(arrays, actions, rows, move, sees_the_end, stage, consts, w,
             row[45] = 10 * excess
             for j, sign in ((46, 1.0), (47, -1.0)):
                 moved = min(1.0, max(0.0, delta[i] + sign * w.max_delta_step))
-                hybrid.k_solve(nominal[i, last], moved, base, plat, top, axes, tri_base, pinv_t, home, sc, False,
-                               end_lengths, work)
+                hybrid.k_solve(nominal[i, last], moved, base, plat, top, axes, tri_base, pinv_t, home, sc,
+                               hybrid.LEGS_ONLY, end_lengths, work)
                 row[j] = 100 * (_excess(end_lengths, w) - excess)
         for c in range(size):
             obs[i, c] = min(10.0, max(-10.0, row[c]))

@@ -92,10 +92,10 @@ class DynamicWorld:
         for k, i in enumerate(rows.tolist()):
             t_a, t_e = t_as[k], t_es[k]
             t_t = np.linalg.solve(t_a, t_e)
+            # the rotations as views, as the step's kernel passes them: k_measure compiled once for both
             state.mu_h[i], state.mu_t[i] = hybrid.k_measure(
-                np.ascontiguousarray(t_a[:3, :3]), np.ascontiguousarray(t_a[:3, 3]),
-                np.ascontiguousarray(t_t[:3, :3]), np.ascontiguousarray(t_t[:3, 3]), *consts[:5], consts[-1], True,
-                np.empty(9), self._work)
+                t_a[:3, :3], np.ascontiguousarray(t_a[:3, 3]), t_t[:3, :3], np.ascontiguousarray(t_t[:3, 3]),
+                *consts[:5], consts[-1], True, np.empty(9), self._work)
             state.lengths[i] = strokes[k]
             state.pose[i, :3] = t_e[:3, 3] - consts[6][:3]
             state.pose[i, 3:] = matrix_euler(t_e[:3, :3])

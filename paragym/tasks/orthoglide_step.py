@@ -390,6 +390,9 @@ def step(state: OrthoglideState, params: OrthoglideParams, actions: np.ndarray, 
 
 
 _ALL, _COMMAND, _EVALUATE = 0, 1, 2  # the kernel's stages: all of a step, its command only, its evaluation only
+#: :func:`_run_to_end`'s move and stage for the transition, typed as a call from Python types them (literals would
+#: compile the transition a second time)
+_MOVE, _WHOLE_STEP = np.bool_(True), np.int64(_ALL)
 
 
 @njit(cache=True)
@@ -410,7 +413,7 @@ def _run_to_end(arrays, params):
     zeros = np.zeros((len(terminated), 1))
     active = ~terminated
     while active.any():
-        _advance_kernel(arrays, zeros, active, True, _ALL, params)
+        _advance_kernel(arrays, zeros, active, _MOVE, _WHOLE_STEP, params)
         active = ~terminated
     return 0
 
