@@ -206,3 +206,27 @@ def test_a_kernel_is_compiled_for_one_kind_of_each_argument():
     assert "typed" in forms["paragym.mechanisms.hybrid.k_solve"][10]  # the scan sees calls from Python too
     assert not mixed, "kernels compiled for a literal and for a typed argument:\n" + "\n".join(mixed)
 
+
+def _array_copies(kernel: ast.FunctionDef) -> list[str]:
+    """Where ``kernel`` copies an array it made (``np.empty`` and the like, or a slice of one) into a slice of
+    another: ``out[0] = row``."""
+    made = set()
+    for node in ast.walk(kernel):
+        if isinstance(node, ast.Assign):
+            for target, value in ((t, v) for t in node.targets for t, v in (
+                    zip(t.elts, node.value.elts, strict=False) if isinstance(t, ast.Tuple)
+                    and isinstance(node.value, ast.Tuple) else [(t, node.value)])):
+                if isinstance(target, ast.Name) and isinstance(value, ast.Call) \
+                        and ast.unparse(value.func) in ("np.empty", "np.zeros", "np.ones", "np.full", "np.array"):
+                    made.add(target.id)
+    return [ast.unparse(node) for node in ast.walk(kernel) if isinstance(node, ast.Assign)
+            and any(isinstance(t, ast.Subscript) for t in node.targets)
+            and isinstance(node.value, ast.Name) and node.value.id in made]
+
+
+def test_no_kernel_copies_an_array_into_a_slice():
+    """An array copied into a slice (``pair[0] = p0``) makes numba compile a shape check whose error message
+    formats tuples and strings: seconds of a fresh install's first run per kernel (``tests/test_compile.py``
+    watches it compile for some). The kernels copy by element."""
+    copies = [f"{name}.{k.name}: {c}" for name, tree in MODULES for k in _kernels(tree) for c in _array_copies(k)]
+    assert not copies, copies

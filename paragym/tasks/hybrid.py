@@ -395,8 +395,8 @@ def _split_draw(rng, max_blocks, low, high, shape, lookahead, step, consts, limi
                 p0[c] = low[c] + (high[c] - low[c]) * u[i, c]
                 p1[c] = low[c] + (high[c] - low[c]) * u[i, 6 + c]
             if _split_pair(p0, p1, shape, lookahead, step, consts, limits, certified, lengths, work, path):
-                pair[0] = p0
-                pair[1] = p1
+                for c in range(6):  # by element: a row copied whole compiles numba's shape check (seconds)
+                    pair[0, c], pair[1, c] = p0[c], p1[c]
                 return True
     return False
 
