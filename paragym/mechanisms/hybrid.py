@@ -121,8 +121,8 @@ class HybridGeometry:
 
 DEFAULT_GEOMETRY = HybridGeometry()
 
-#: :func:`k_solve`'s ``measures`` for a kernel that calls it: typed as a variable is (``bool``), where a literal
-#: ``True`` would be compiled for apart from the calls that pass a variable
+#: :func:`k_solve`'s ``measures`` for a kernel that calls it, typed as numba types a variable (``bool``): a literal
+#: ``True`` would compile k_solve a second time, apart from the calls that pass a variable
 MEASURES, LEGS_ONLY = np.bool_(True), np.bool_(False)
 
 
