@@ -7,6 +7,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from paragym.rollout import first_episodes
+
 __all__ = ["ConstantPolicy", "RandomPolicy", "ZeroPolicy", "best_constant"]
 
 
@@ -102,8 +104,6 @@ def _one_by_one(env: gym.Env, policy: ConstantPolicy, seeds: range) -> tuple[lis
 def _constant_episodes(envs: Any, action: np.ndarray, seeds: range) -> tuple[list[float], int]:
     """One episode per seed of the native vector env ``envs`` (a robot each) under ``action``: each episode's
     return (summed as :attr:`paragym.rollout.Episode.episode_return` sums it) and how many succeeded."""
-    from paragym.rollout import first_episodes
-
     actions = np.repeat(action[None], len(seeds), axis=0)
     rewards, length, success = first_episodes(envs, lambda obs: actions, seeds)
     return [float(np.sum(rewards[:k, i].copy())) for i, k in enumerate(length.tolist())], int(success.sum())

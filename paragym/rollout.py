@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import time
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -74,7 +75,8 @@ def run_episode(env: gym.Env, policy: Any, seed: int | None = None, frame_every:
     return ep
 
 
-def first_episodes(envs: Any, act: Any, seeds: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def first_episodes(envs: Any, act: Callable[[np.ndarray], np.ndarray], seeds: Sequence[int]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Each robot's first episode of a native vector env ``envs`` (one robot per seed, reset with ``seeds``), robot
     r acting with row r of ``act(obs)`` (``obs``: every robot's observation): the rewards (T, R), 0 after a robot's
     episode ended, each episode's length (R,) and whether it succeeded (R,). A robot's
