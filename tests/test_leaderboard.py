@@ -178,9 +178,8 @@ REPLAYED, LEARNED_EPISODES = 5, 3
 @pytest.fixture(scope="module")
 def references(shared_folder):
     """``references(env_id)``: the reference, random and zero on evaluation seed 0 x :data:`REPLAYED` episodes of one
-    env id, as
-    summaries and as episode rows, run where its test runs (each env in a database of its own: an xdist worker
-    waits only for an env another worker is running, never for all of them)."""
+    env id, as summaries and as episode rows, run where its test runs (each env in a database of its own: an xdist
+    worker waits only for an env another worker is running, never for all of them)."""
     cache: dict[str, tuple[dict, list]] = {}
 
     def of(env_id: str) -> tuple[dict, list]:
